@@ -1,0 +1,161 @@
+# sidx — build, test, demo, bench.
+#
+#   make            library (build/lib), programs (build/bin), lessons (build/lessons)
+#   make demo       install missing Debian packages, build, run the guided tour
+#   make test       install missing Debian packages, build, run every cmocka suite
+#   make test SAN=1 the same under AddressSanitizer + UndefinedBehaviorSanitizer (build/san)
+#   make valgrind   the suites under valgrind memcheck
+#   make bench      the benchmark table (build/bench/)
+#   make install PREFIX=/usr/local
+#
+# Everything is found by wildcard: a new lib/*.c joins the library, a new
+# tests/test_*.c becomes a suite, a new lessons/*.c a lesson, a new
+# viz/sidx_*.c a program.
+
+DEBS := pkg-config libcmocka-dev libgraphviz-dev libsdl2-dev libsdl2-image-dev libembree-dev gnuplot-nox
+
+PREFIX ?= /usr/local
+OPT ?= -O2
+SAN ?= 0
+
+ifeq ($(SAN),1)
+BUILD := build/san
+SANFLAGS := -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
+else
+BUILD := build
+SANFLAGS :=
+endif
+
+PKGS := libcgraph libgvc sdl2 SDL2_image
+PKG_CFLAGS = $(shell pkg-config --cflags $(PKGS) 2>/dev/null)
+PKG_LIBS = $(shell pkg-config --libs $(PKGS) 2>/dev/null)
+
+WARN := -Wall -Wextra -Wpedantic -Werror
+CFLAGS := -std=c11 $(OPT) -g $(WARN) -fPIC -D_DEFAULT_SOURCE -Ilib/include -Ilib $(SANFLAGS) $(EXTRA_CFLAGS)
+LDFLAGS := $(SANFLAGS) -pthread
+LDLIBS := -lm
+
+LIB_SRC := $(wildcard lib/*.c)
+LIB_OBJ := $(LIB_SRC:%.c=$(BUILD)/obj/%.o)
+VIZ_PROG_SRC := $(wildcard viz/sidx_*.c)
+VIZ_LIB_SRC := $(filter-out $(VIZ_PROG_SRC),$(wildcard viz/*.c))
+VIZ_OBJ := $(VIZ_LIB_SRC:%.c=$(BUILD)/obj/%.o)
+TEST_SRC := $(wildcard tests/test_*.c)
+TEST_COMMON_SRC := $(wildcard tests/common/*.c)
+TEST_COMMON_OBJ := $(TEST_COMMON_SRC:%.c=$(BUILD)/obj/%.o)
+TESTS := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
+LESSON_SRC := $(filter-out lessons/tour.c,$(wildcard lessons/*.c))
+LESSONS := $(LESSON_SRC:lessons/%.c=$(BUILD)/lessons/%)
+BENCH_SRC := $(wildcard tests/bench/*.c)
+BENCH_OBJ := $(BENCH_SRC:%.c=$(BUILD)/obj/%.o)
+VIZ_PROGS := $(VIZ_PROG_SRC:viz/sidx_%.c=$(BUILD)/bin/sidx-%)
+
+LIBA := $(BUILD)/lib/libsidx.a
+LIBSO := $(BUILD)/lib/libsidx.so
+VIZA := $(BUILD)/lib/libsidxviz.a
+PROGS := $(VIZ_PROGS) $(if $(wildcard lessons/tour.c),$(BUILD)/bin/sidx-tour) \
+         $(if $(BENCH_SRC),$(BUILD)/bin/sidx-bench)
+ALL_LIBS = $(VIZA) $(LIBA) $(PKG_LIBS) $(LDLIBS)
+
+.PHONY: all deps build demo test test-run valgrind bench install clean docs
+
+all: deps
+	@$(MAKE) --no-print-directory build
+
+build: $(LIBA) $(LIBSO) $(VIZA) $(PROGS) $(LESSONS) $(TESTS)
+
+# Installs what is missing (as root), else prints the exact command and stops.
+deps:
+	@missing=""; for p in $(DEBS); do dpkg -s $$p >/dev/null 2>&1 || missing="$$missing $$p"; done; \
+	if [ -n "$$missing" ]; then \
+	  if [ "$$(id -u)" = 0 ]; then \
+	    echo "deps: installing$$missing"; \
+	    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq$$missing >/dev/null || exit 1; \
+	  else \
+	    echo "deps: missing Debian packages:$$missing"; \
+	    echo "deps: run: sudo apt-get install -y$$missing"; exit 1; \
+	  fi; \
+	fi
+
+$(BUILD)/obj/%.o: %.c
+	@mkdir -p $(dir $@)
+	$(CC) $(CFLAGS) $(PKG_CFLAGS) -MMD -MP -c $< -o $@
+
+$(LIBA): $(LIB_OBJ)
+	@mkdir -p $(dir $@)
+	rm -f $@ && ar rcs $@ $^
+
+$(LIBSO): $(LIB_OBJ)
+	@mkdir -p $(dir $@)
+	$(CC) -shared $(LDFLAGS) -o $@ $^ $(LDLIBS)
+
+$(VIZA): $(VIZ_OBJ)
+	@mkdir -p $(dir $@)
+	rm -f $@ && ar rcs $@ $^
+
+$(BUILD)/bin/sidx-%: $(BUILD)/obj/viz/sidx_%.o $(VIZA) $(LIBA)
+	@mkdir -p $(dir $@)
+	$(CC) $(LDFLAGS) -o $@ $< $(ALL_LIBS)
+
+$(BUILD)/bin/sidx-tour: $(BUILD)/obj/lessons/tour.o $(VIZA) $(LIBA)
+	@mkdir -p $(dir $@)
+	$(CC) $(LDFLAGS) -o $@ $< $(ALL_LIBS)
+
+$(BUILD)/bin/sidx-bench: $(BENCH_OBJ) $(VIZA) $(LIBA)
+	@mkdir -p $(dir $@)
+	$(CC) $(LDFLAGS) -o $@ $(BENCH_OBJ) $(ALL_LIBS) -lembree3
+
+$(BUILD)/lessons/%: $(BUILD)/obj/lessons/%.o $(VIZA) $(LIBA)
+	@mkdir -p $(dir $@)
+	$(CC) $(LDFLAGS) -o $@ $< $(ALL_LIBS)
+
+$(BUILD)/tests/%: $(BUILD)/obj/tests/%.o $(TEST_COMMON_OBJ) $(VIZA) $(LIBA)
+	@mkdir -p $(dir $@)
+	$(CC) $(LDFLAGS) -o $@ $< $(TEST_COMMON_OBJ) $(ALL_LIBS) -lcmocka
+
+demo: deps
+	@$(MAKE) --no-print-directory build
+	$(BUILD)/bin/sidx-tour
+
+# Each suite runs from the repository root; all run even if one fails.
+test: deps
+	@$(MAKE) --no-print-directory build
+	@$(MAKE) --no-print-directory test-run
+
+test-run:
+	@failed=0; for t in $(TESTS); do \
+	  echo "== $$t"; \
+	  $$t || { echo "!! FAILED: $$t"; failed=$$((failed+1)); }; \
+	done; \
+	if [ -x tests/run_lessons.sh ]; then \
+	  echo "== lessons"; BUILD=$(BUILD) sh tests/run_lessons.sh || { echo "!! FAILED: lessons"; failed=$$((failed+1)); }; \
+	fi; \
+	if [ $$failed -ne 0 ]; then echo "$$failed suite(s) failed"; exit 1; fi; \
+	echo "all suites passed"
+
+valgrind: deps
+	@$(MAKE) --no-print-directory build
+	@failed=0; for t in $(TESTS); do \
+	  echo "== valgrind $$t"; \
+	  SIDX_FAST_TESTS=1 valgrind -q --error-exitcode=99 --leak-check=full --show-leak-kinds=definite,indirect,possible \
+	    --errors-for-leak-kinds=definite,indirect,possible $$t >/dev/null || { echo "!! FAILED: $$t"; failed=1; }; \
+	done; exit $$failed
+
+bench: deps
+	@$(MAKE) --no-print-directory build
+	@mkdir -p $(BUILD)/bench
+	$(BUILD)/bin/sidx-bench run --csv $(BUILD)/bench/table.csv --plot $(BUILD)/bench/error_vs_speed.svg \
+	  $(if $(wildcard ../shared/scenes),--scenes ../shared/scenes) | tee $(BUILD)/bench/table.txt
+
+install: all
+	install -d $(DESTDIR)$(PREFIX)/include/sidx $(DESTDIR)$(PREFIX)/lib/pkgconfig $(DESTDIR)$(PREFIX)/bin
+	install -m 644 lib/include/sidx/*.h $(DESTDIR)$(PREFIX)/include/sidx/
+	install -m 644 $(LIBA) $(VIZA) $(DESTDIR)$(PREFIX)/lib/
+	install -m 755 $(LIBSO) $(DESTDIR)$(PREFIX)/lib/
+	install -m 755 $(PROGS) $(DESTDIR)$(PREFIX)/bin/
+	sed -e 's|@PREFIX@|$(PREFIX)|g' sidx.pc.in > $(DESTDIR)$(PREFIX)/lib/pkgconfig/sidx.pc
+
+clean:
+	rm -rf build
+
+-include $(shell find build -name '*.d' 2>/dev/null)

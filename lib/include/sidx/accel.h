@@ -1,0 +1,127 @@
+/* sidx/accel.h — the common interface of every acceleration structure.
+ *
+ * Every structure is built, queried, measured and destroyed the same way
+ * and picked by name ("brute", "bvh", "kdtree", "grid", ...):
+ *
+ *     sidx_accel *a;
+ *     if (sidx_accel_build("bvh", &mesh, NULL, &a, &err) != SIDX_OK) ...
+ *     sidx_ray r; sidx_ray_init(&r, org, dir, 0.0f, INFINITY);
+ *     sidx_hit h; sidx_accel_intersect(a, &r, NULL, &h);
+ *     sidx_accel_destroy(a);
+ *
+ * Ownership: the structure keeps a pointer to the mesh, which must outlive
+ * it.  A built structure is immutable (except sidx_accel_refit), so any
+ * number of threads may query it at once; hooks receive their events on the
+ * querying thread, with the sidx_hook.user of that query.
+ *
+ * Zero-initialized option structs mean "defaults" everywhere. */
+#ifndef SIDX_ACCEL_H
+#define SIDX_ACCEL_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include "hook.h"
+#include "intersect.h"
+#include "mesh.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct sidx_accel sidx_accel;
+
+/* Optional custom allocator (e.g. to inject failures in tests).  alloc
+ * returns NULL on failure; free accepts NULL. */
+typedef struct sidx_allocator {
+    void *(*alloc)(size_t size, void *user);
+    void (*free)(void *ptr, void *user);
+    void *user;
+} sidx_allocator;
+
+typedef struct sidx_build_options {
+    const sidx_hook *hook;        /* receives build events; NULL = none */
+    const sidx_allocator *alloc;  /* NULL = malloc/free */
+    sidx_tri_method tri;          /* triangle test used by queries (default: watertight) */
+    sidx_box_method box;          /* box test used by queries (default: robust, Ize 2013) */
+    float c_trav, c_tri;          /* SAH constants; 0 = the structure's default (BVH: 1, 1) */
+    uint32_t leaf_size;           /* make a leaf at or below this many primitives; 0 = default */
+    uint32_t max_depth;           /* 0 = the structure's default */
+    uint32_t bins;                /* binned builders; 0 = 32 */
+    uint32_t every_b;             /* every-B sweep; 0 = 32 */
+    float grid_density;           /* λ of the grid resolution formula; 0 = default */
+    float empty_bonus;            /* kd-tree empty-space bonus in [0,1); 0 = default */
+    int no_mailbox;               /* 1 = switch mailboxing off (grids, kd-tree) */
+    uint32_t threads;             /* build threads; 0 = 1 */
+} sidx_build_options;
+
+typedef enum sidx_traversal {
+    SIDX_TRAVERSE_DEFAULT = 0,    /* the structure's fast path */
+    SIDX_TRAVERSE_STACK,          /* iterative ordered traversal with an explicit stack */
+    SIDX_TRAVERSE_ORDERED,        /* recursive, nearer child first (the deck's ordered traversal) */
+    SIDX_TRAVERSE_NAIVE,          /* recursive, both children always (the deck's naive traversal) */
+    SIDX_TRAVERSE_COUNT
+} sidx_traversal;
+const char *sidx_traversal_name(sidx_traversal t); /* "default", "stack", "ordered", "naive" */
+sidx_status sidx_traversal_parse(const char *name, sidx_traversal *out);
+
+#define SIDX_QUERY_UV     1u  /* fill hit.u, hit.v */
+#define SIDX_QUERY_NORMAL 2u  /* fill hit.ng */
+
+typedef struct sidx_query {
+    uint32_t flags;               /* SIDX_QUERY_* */
+    sidx_traversal traversal;     /* structures without the variant use their default */
+    const sidx_hook *hook;        /* receives traversal events; NULL = none (fast path) */
+    uint32_t ray_id;              /* copied into events */
+} sidx_query;
+
+typedef struct sidx_accel_stats {
+    const char *name;             /* registered name */
+    uint32_t nodes, leaves, max_depth;
+    uint64_t prim_refs;           /* primitive references stored (> triangles when duplicated) */
+    size_t bytes;                 /* memory held by the structure, mesh excluded */
+    double sah_cost;              /* expected cost under the SAH, 0 if not applicable */
+    double mean_leaf_prims;       /* over non-empty leaves / cells */
+    uint32_t empty_leaves;
+    uint32_t res[3];              /* grids: resolution; 0 otherwise */
+} sidx_accel_stats;
+
+/* Builds structure `name` over mesh.  opt may be NULL.  On failure *out is
+ * NULL and nothing is leaked.  Errors: SIDX_ERR_INVALID_ARG (NULL args),
+ * SIDX_ERR_UNKNOWN_ACCEL, SIDX_ERR_BAD_GEOMETRY (mesh fails
+ * sidx_mesh_validate), SIDX_ERR_NOMEM, SIDX_ERR_LIMIT. */
+sidx_status sidx_accel_build(const char *name, const sidx_mesh *mesh, const sidx_build_options *opt,
+                             sidx_accel **out, sidx_error *err);
+
+/* "auto": picks structure and builder from the mesh's statistics and says
+ * why through a NOTE event on opt->hook; same contract as sidx_accel_build. */
+sidx_status sidx_accel_auto(const sidx_mesh *mesh, const sidx_build_options *opt, sidx_accel **out, sidx_error *err);
+
+/* Closest hit in [ray.tmin, ray.tmax).  q may be NULL.  *hit is always
+ * written (sidx_hit_none() on a miss).  Fails only on NULL arguments. */
+sidx_status sidx_accel_intersect(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit);
+/* Any hit in [tmin, tmax): *occluded = 1 if there is one; stops at the first. */
+sidx_status sidx_accel_occluded(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, int *occluded);
+/* n rays at once (same query for all); ray ids are q->ray_id + i. */
+sidx_status sidx_accel_intersect_n(const sidx_accel *a, const sidx_ray *rays, size_t n, const sidx_query *q,
+                                   sidx_hit *hits);
+
+sidx_status sidx_accel_stats_get(const sidx_accel *a, sidx_accel_stats *s);
+/* After moving vertices of the mesh in place: update bounds bottom-up.
+ * SIDX_ERR_UNSUPPORTED for structures that must be rebuilt instead. */
+sidx_status sidx_accel_refit(sidx_accel *a, sidx_error *err);
+void sidx_accel_destroy(sidx_accel *a);            /* NULL is fine */
+
+const char *sidx_accel_name(const sidx_accel *a);
+const sidx_mesh *sidx_accel_mesh(const sidx_accel *a);
+const sidx_build_options *sidx_accel_options(const sidx_accel *a);
+
+/* The registry, in registration order. */
+size_t sidx_accel_registered_count(void);
+const char *sidx_accel_registered_name(size_t i);        /* NULL past the end */
+const char *sidx_accel_registered_description(size_t i);
+int sidx_accel_is_registered(const char *name);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,277 @@
+/* sidx_internal.h — what every structure's source file shares, not public.
+ *
+ *  1. the accelerator vtable and the registry entry,
+ *  2. SIDX_EMIT: the hook call that compiles away in untraced instances,
+ *  3. the elementary tests as static inline functions for the hot loops,
+ *  4. checked allocation through the build's allocator.
+ *
+ * How a structure keeps hooks free when unused: its traversal is a
+ * `static SIDX_INLINE` function taking `const int traced`; the vtable entry
+ * calls it with traced = 0 when q->hook is NULL and with traced = 1
+ * otherwise.  Each call is a separate instantiation, so in the traced = 0
+ * copy every SIDX_EMIT is dead code the compiler removes.  Building with
+ * -DSIDX_NO_HOOKS removes them from both copies (the bench compares). */
+#ifndef SIDX_INTERNAL_H
+#define SIDX_INTERNAL_H
+
+#include <stdlib.h>
+#include <string.h>
+#include <float.h>
+#include "sidx/sidx.h"
+
+#if defined(__GNUC__)
+#define SIDX_INLINE inline __attribute__((always_inline))
+#define SIDX_NOINLINE __attribute__((noinline))
+#define SIDX_LIKELY(x) __builtin_expect(!!(x), 1)
+#define SIDX_UNLIKELY(x) __builtin_expect(!!(x), 0)
+#else
+#define SIDX_INLINE inline
+#define SIDX_NOINLINE
+#define SIDX_LIKELY(x) (x)
+#define SIDX_UNLIKELY(x) (x)
+#endif
+
+/* ---- 1. accelerator vtable ------------------------------------------- */
+
+typedef struct sidx_accel_vtable {
+    /* Build a->impl from a->mesh and a->opt.  On failure free everything
+     * allocated and leave a->impl NULL. */
+    sidx_status (*build)(sidx_accel *a, sidx_error *err);
+    /* Closest hit: set hit->t and hit->prim (ORIGINAL triangle index) only.
+     * hit arrives with prim = SIDX_NO_HIT and t = r->tmax: use hit->t as
+     * the current upper bound and accept only t < hit->t.
+     * The core fills u, v, ng afterwards when asked, and emits RAY_BEGIN /
+     * RAY_END around this call. */
+    void (*intersect)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit);
+    /* Any hit: return 1 at the first hit found in [tmin, tmax). */
+    int (*occluded)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q);
+    void (*stats)(const sidx_accel *a, sidx_accel_stats *s);
+    void (*destroy)(sidx_accel *a);        /* free a->impl (not a) */
+    sidx_status (*refit)(sidx_accel *a, sidx_error *err);   /* may be NULL */
+} sidx_accel_vtable;
+
+struct sidx_accel {
+    const sidx_accel_vtable *vt;
+    const char *name;          /* registered name (static) */
+    int variant;               /* registry entry's variant (builder choice etc.) */
+    const sidx_mesh *mesh;
+    sidx_build_options opt;    /* copy; opt.hook is only valid during build */
+    sidx_allocator alloc;      /* resolved allocator (never NULL fns) */
+    void *impl;
+};
+
+/* Registry entries live in accel_registry.def as
+ *   SIDX_ACCEL("name", vtable_symbol, variant, "one-line description")
+ * Adding a structure = one line there + one source file defining
+ * `const sidx_accel_vtable vtable_symbol`. */
+#define SIDX_ACCEL(name, vt, variant, desc) extern const sidx_accel_vtable vt;
+#include "accel_registry.def"
+#undef SIDX_ACCEL
+
+/* ---- 2. hook emission ------------------------------------------------- */
+
+static SIDX_INLINE int sidx__hook_wants(const sidx_hook *h, sidx_event_type t)
+{
+    return h && h->fn && (h->mask == 0 || (h->mask & SIDX_EVMASK(t)));
+}
+
+/* SIDX_EMIT(traced, hook, TYPE, field assignments on e_ ...);
+ * e.g. SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.node = i; e_.depth = d);
+ * `structure` is filled from SIDX_STRUCTURE_NAME, which each source file
+ * defines before using the macro. */
+#ifdef SIDX_NO_HOOKS
+#define SIDX_EMIT(traced, hook, type, ...) do { (void)(traced); } while (0)
+#else
+#define SIDX_EMIT(traced, hook, type, ...)                                  \
+    do {                                                                    \
+        if ((traced) && sidx__hook_wants((hook), (type))) {                 \
+            sidx_event e_ = sidx_event_blank(type);                         \
+            e_.structure = SIDX_STRUCTURE_NAME;                             \
+            __VA_ARGS__;                                                    \
+            (hook)->fn(&e_, (hook)->user);                                  \
+        }                                                                   \
+    } while (0)
+#endif
+
+/* Is this query traced?  (Always 0 when hooks are compiled out.) */
+#ifdef SIDX_NO_HOOKS
+#define SIDX_QUERY_TRACED(q) 0
+#else
+#define SIDX_QUERY_TRACED(q) ((q) && (q)->hook && (q)->hook->fn)
+#endif
+
+/* ---- 3. elementary tests, inline ------------------------------------- */
+
+/* Woop, Benthin, Wald 2013, "Watertight Ray/Triangle Intersection".
+ * Translate the vertices to the ray origin, shear so the ray runs along
+ * +z, and evaluate the 2D edge functions U, V, W.  Edges shared by two
+ * triangles get bit-identical edge functions of opposite sign, so a ray
+ * cannot slip between them.  When an edge function is exactly 0 it is
+ * recomputed in double, as the paper advises, so the sign is exact. */
+static SIDX_INLINE int sidx__tri_watertight(const sidx_ray *r, sidx_vec3 a, sidx_vec3 b, sidx_vec3 c, float tmax,
+                                            float *t_out, float *u_out, float *v_out)
+{
+    const float *o = &r->org.x;
+    const float *pa = &a.x, *pb = &b.x, *pc = &c.x;
+    const int kx = r->kx, ky = r->ky, kz = r->kz;
+    const float ax = pa[kx] - o[kx], ay = pa[ky] - o[ky], az = pa[kz] - o[kz];
+    const float bx = pb[kx] - o[kx], by = pb[ky] - o[ky], bz = pb[kz] - o[kz];
+    const float cx = pc[kx] - o[kx], cy = pc[ky] - o[ky], cz = pc[kz] - o[kz];
+    const float Ax = ax - r->sx * az, Ay = ay - r->sy * az;
+    const float Bx = bx - r->sx * bz, By = by - r->sy * bz;
+    const float Cx = cx - r->sx * cz, Cy = cy - r->sy * cz;
+    float U = Cx * By - Cy * Bx;
+    float V = Ax * Cy - Ay * Cx;
+    float W = Bx * Ay - By * Ax;
+    if (SIDX_UNLIKELY(U == 0.0f || V == 0.0f || W == 0.0f)) {
+        U = (float)((double)Cx * (double)By - (double)Cy * (double)Bx);
+        V = (float)((double)Ax * (double)Cy - (double)Ay * (double)Cx);
+        W = (float)((double)Bx * (double)Ay - (double)By * (double)Ax);
+    }
+    if ((U < 0.0f || V < 0.0f || W < 0.0f) && (U > 0.0f || V > 0.0f || W > 0.0f)) return 0;
+    const float det = U + V + W;
+    if (det == 0.0f) return 0; /* degenerate triangle, or ray parallel to its plane */
+    const float Az = r->sz * az, Bz = r->sz * bz, Cz = r->sz * cz;
+    const float T = U * Az + V * Bz + W * Cz;
+    /* t = T/det must lie in [tmin, tmax): compare without dividing first. */
+    const float t = T / det;
+    if (!(t >= r->tmin && t < tmax)) return 0;
+    *t_out = t;
+    if (u_out) { const float inv = 1.0f / det; *u_out = V * inv; *v_out = W * inv; }
+    return 1;
+}
+
+/* Möller & Trumbore 1997, as derived on the slides with Cramer's rule:
+ * s = o − p0, e1 = p1 − p0, e2 = p2 − p0, D = (d × e2)·e1.
+ * D = 0 ("What if D = 0?"): the ray is parallel to the plane, or the
+ * triangle is degenerate — a miss.  No epsilon: an epsilon on D is
+ * scale-dependent and would drop small but valid triangles. */
+static SIDX_INLINE int sidx__tri_moller(const sidx_ray *r, sidx_vec3 a, sidx_vec3 b, sidx_vec3 c, float tmax,
+                                        float *t_out, float *u_out, float *v_out)
+{
+    const sidx_vec3 e1 = sidx_v3_sub(b, a), e2 = sidx_v3_sub(c, a);
+    const sidx_vec3 p = sidx_v3_cross(r->dir, e2);
+    const float det = sidx_v3_dot(e1, p);
+    if (det == 0.0f) return 0;
+    const float inv = 1.0f / det;
+    const sidx_vec3 s = sidx_v3_sub(r->org, a);
+    const float u = sidx_v3_dot(s, p) * inv;
+    if (u < 0.0f || u > 1.0f) return 0;
+    const sidx_vec3 qv = sidx_v3_cross(s, e1);
+    const float v = sidx_v3_dot(r->dir, qv) * inv;
+    if (v < 0.0f || u + v > 1.0f) return 0;
+    const float t = sidx_v3_dot(e2, qv) * inv;
+    if (!(t >= r->tmin && t < tmax)) return 0;
+    *t_out = t;
+    if (u_out) { *u_out = u; *v_out = v; }
+    return 1;
+}
+
+/* The deck's two-step method: (i) ray–plane with N = e1 × e2, c = N·p0,
+ * t = (c − N·o)/(N·d); (ii) barycentric point-in-triangle test of
+ * p = o + t·d by the dot-product formulation (Ericson 2005, 3.4). */
+static SIDX_INLINE int sidx__tri_two_step(const sidx_ray *r, sidx_vec3 a, sidx_vec3 b, sidx_vec3 c, float tmax,
+                                          float *t_out, float *u_out, float *v_out)
+{
+    const sidx_vec3 e1 = sidx_v3_sub(b, a), e2 = sidx_v3_sub(c, a);
+    const sidx_vec3 n = sidx_v3_cross(e1, e2);
+    const float nd = sidx_v3_dot(n, r->dir);
+    if (nd == 0.0f) return 0;
+    const float t = (sidx_v3_dot(n, a) - sidx_v3_dot(n, r->org)) / nd;
+    if (!(t >= r->tmin && t < tmax)) return 0;
+    const sidx_vec3 w = sidx_v3_sub(sidx_ray_at(r, t), a);
+    const float d00 = sidx_v3_dot(e1, e1), d01 = sidx_v3_dot(e1, e2), d11 = sidx_v3_dot(e2, e2);
+    const float d20 = sidx_v3_dot(w, e1), d21 = sidx_v3_dot(w, e2);
+    const float den = d00 * d11 - d01 * d01;
+    if (den == 0.0f) return 0;
+    const float u = (d11 * d20 - d01 * d21) / den;
+    const float v = (d00 * d21 - d01 * d20) / den;
+    if (!(u >= 0.0f && v >= 0.0f && u + v <= 1.0f)) return 0;
+    *t_out = t;
+    if (u_out) { *u_out = u; *v_out = v; }
+    return 1;
+}
+
+static SIDX_INLINE int sidx__tri_test(sidx_tri_method m, const sidx_ray *r, sidx_vec3 a, sidx_vec3 b, sidx_vec3 c,
+                                      float tmax, float *t, float *u, float *v)
+{
+    switch (m) {
+    case SIDX_TRI_MOLLER_TRUMBORE: return sidx__tri_moller(r, a, b, c, tmax, t, u, v);
+    case SIDX_TRI_TWO_STEP: return sidx__tri_two_step(r, a, b, c, tmax, t, u, v);
+    default: return sidx__tri_watertight(r, a, b, c, tmax, t, u, v);
+    }
+}
+
+/* Triangle `tri` of mesh m, tested with method m (t only). */
+static SIDX_INLINE int sidx__mesh_tri_test(const sidx_mesh *mesh, sidx_tri_method m, uint32_t tri,
+                                           const sidx_ray *r, float tmax, float *t)
+{
+    const uint32_t *ix = mesh->indices + 3u * tri;
+    return sidx__tri_test(m, r, mesh->positions[ix[0]], mesh->positions[ix[1]], mesh->positions[ix[2]], tmax, t,
+                          NULL, NULL);
+}
+
+/* 1 + 2γ₃ with γ_n = nε/(1 − nε), ε = 2⁻²⁴ (Ize 2013; pbrt-v3 3.9.2):
+ * widening t_far by this factor makes the float slab test conservative. */
+#define SIDX_ROBUST_TFAR_SCALE 1.0000003576278687f
+
+/* Slab test over [tmin, tmax].  A ±0 direction gives inv_dir = ±inf, and
+ * (bound − o)·inv_dir is ±inf, or NaN when the origin lies exactly on the
+ * slab plane; the comparisons below are written so a NaN never narrows
+ * the interval (x > NaN is false), i.e. a ray on the plane counts as in. */
+static SIDX_INLINE int sidx__box_test(int robust, const sidx_ray *r, const sidx_aabb *b, float tmin, float tmax,
+                                      float *t_near, float *t_far)
+{
+    const float *bmin = &b->min.x, *bmax = &b->max.x, *o = &r->org.x, *inv = &r->inv_dir.x;
+    float t0 = tmin, t1 = tmax;
+    for (int i = 0; i < 3; ++i) {
+        float tn = (bmin[i] - o[i]) * inv[i];
+        float tf = (bmax[i] - o[i]) * inv[i];
+        if (r->sign[i]) { float tmp = tn; tn = tf; tf = tmp; }
+        if (robust) tf *= SIDX_ROBUST_TFAR_SCALE;
+        if (tn > t0) t0 = tn;
+        if (tf < t1) t1 = tf;
+    }
+    if (t0 > t1) return 0;
+    *t_near = t0;
+    *t_far = t1;
+    return 1;
+}
+
+/* ---- 4. allocation ----------------------------------------------------- */
+
+/* size × count with overflow check; NULL on overflow or failure. */
+static inline void *sidx__alloc(const sidx_accel *a, size_t count, size_t size)
+{
+    if (size != 0 && count > SIZE_MAX / size) return NULL;
+    size_t bytes = count * size;
+    return a->alloc.alloc(bytes ? bytes : 1, a->alloc.user);
+}
+static inline void *sidx__calloc(const sidx_accel *a, size_t count, size_t size)
+{
+    void *p = sidx__alloc(a, count, size);
+    if (p && count && size) memset(p, 0, count * size);
+    return p;
+}
+static inline void sidx__free(const sidx_accel *a, void *p)
+{
+    if (p) a->alloc.free(p, a->alloc.user);
+}
+/* Grow *buf (elements of `size`) to hold at least `need`; capacity doubles.
+ * Returns 0 on failure, leaving *buf and *cap unchanged. */
+int sidx__grow(const sidx_accel *a, void **buf, size_t *cap, size_t need, size_t size);
+
+/* ---- 5. small shared helpers ------------------------------------------ */
+
+/* Writes a formatted message into err (if non-NULL) and returns status. */
+sidx_status sidx__fail(sidx_error *err, sidx_status s, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+
+/* Triangle bounds and centroids for all triangles (allocated with a's
+ * allocator); returns SIDX_ERR_NOMEM on failure. */
+sidx_status sidx__prim_boxes(const sidx_accel *a, sidx_aabb **boxes, sidx_vec3 **centroids);
+
+#endif
