@@ -57,7 +57,7 @@ PROGS := $(VIZ_PROGS) $(if $(wildcard lessons/tour.c),$(BUILD)/bin/sidx-tour) \
          $(if $(BENCH_SRC),$(BUILD)/bin/sidx-bench)
 ALL_LIBS = $(VIZA) $(LIBA) $(PKG_LIBS) $(LDLIBS)
 
-.PHONY: all deps build demo test test-run valgrind bench install clean docs
+.PHONY: all deps build demo test test-run valgrind bench install clean docs fuzz
 
 all: deps
 	@$(MAKE) --no-print-directory build
@@ -146,6 +146,30 @@ bench: deps
 	@mkdir -p $(BUILD)/bench
 	$(BUILD)/bin/sidx-bench run --csv $(BUILD)/bench/table.csv --plot $(BUILD)/bench/error_vs_speed.svg \
 	  $(if $(wildcard ../shared/scenes),--scenes ../shared/scenes) | tee $(BUILD)/bench/table.txt
+
+# Fuzzing with libFuzzer (clang): every tests/fuzz/fuzz_*.c target runs for
+# FUZZ_SECONDS, starting from the checked-in seeds in tests/fuzz/corpus/<name>
+# (copied, so the checked-in corpus stays small); crashes go to build/fuzz/.
+FUZZ_SECONDS ?= 60
+FUZZ_CC ?= clang
+FUZZ_FLAGS := -std=c11 -O1 -g -D_DEFAULT_SOURCE -Ilib/include -Ilib -fsanitize=address,undefined -fno-sanitize-recover=all
+FUZZ_SRC := $(wildcard tests/fuzz/fuzz_*.c)
+FUZZ_BINS := $(FUZZ_SRC:tests/fuzz/%.c=build/fuzz/%)
+
+build/fuzz/fuzz_%: tests/fuzz/fuzz_%.c $(LIB_SRC) $(wildcard lib/*.h lib/include/sidx/*.h lib/*.def)
+	@mkdir -p $(dir $@)
+	$(FUZZ_CC) $(FUZZ_FLAGS) -fsanitize=fuzzer -o $@ $< $(LIB_SRC) -lm -pthread
+
+fuzz: $(FUZZ_BINS)
+	@for f in $(FUZZ_BINS); do \
+	  name=$$(basename $$f | sed 's/^fuzz_//'); \
+	  mkdir -p build/fuzz/corpus/$$name build/fuzz/crashes/$$name; \
+	  cp -n tests/fuzz/corpus/$$name/* build/fuzz/corpus/$$name/ 2>/dev/null || true; \
+	  echo "== fuzz $$name for $(FUZZ_SECONDS) s"; \
+	  $$f -max_total_time=$(FUZZ_SECONDS) -print_final_stats=1 -artifact_prefix=build/fuzz/crashes/$$name/ \
+	    build/fuzz/corpus/$$name 2>&1 | grep -E "^(#[0-9]+.*DONE|stat::number_of_executed_units|stat::peak_rss|==[0-9]+==ERROR|SUMMARY)|cov:" | tail -4 \
+	    || exit 1; \
+	done
 
 install: all
 	install -d $(DESTDIR)$(PREFIX)/include/sidx $(DESTDIR)$(PREFIX)/lib/pkgconfig $(DESTDIR)$(PREFIX)/bin

@@ -67,7 +67,15 @@ int sidx_trace_triangle(const sidx_hook *hook, sidx_tri_method m, uint32_t prim,
         if (u) *u = uu;
         if (v) *v = vv;
     }
-    SIDX_EMIT(1, hook, SIDX_EV_PRIM_TEST, e_.prim = prim; e_.result = hit; e_.t = hit ? tt : INFINITY);
+    /* These exist to trace, so they emit even in a -DSIDX_NO_HOOKS build. */
+    if (sidx__hook_wants(hook, SIDX_EV_PRIM_TEST)) {
+        sidx_event e = sidx_event_blank(SIDX_EV_PRIM_TEST);
+        e.structure = SIDX_STRUCTURE_NAME;
+        e.prim = prim;
+        e.result = hit;
+        e.t = hit ? tt : INFINITY;
+        hook->fn(&e, hook->user);
+    }
     return hit;
 }
 
@@ -80,7 +88,15 @@ int sidx_trace_aabb(const sidx_hook *hook, sidx_box_method m, uint32_t node, con
         if (t_near) *t_near = tn;
         if (t_far) *t_far = tf;
     }
-    SIDX_EMIT(1, hook, SIDX_EV_BOX_TEST, e_.node = node; if (box) e_.bounds = *box; e_.result = hit; e_.t_near = tn;
-              e_.t_far = tf);
+    if (sidx__hook_wants(hook, SIDX_EV_BOX_TEST)) {
+        sidx_event e = sidx_event_blank(SIDX_EV_BOX_TEST);
+        e.structure = SIDX_STRUCTURE_NAME;
+        e.node = node;
+        if (box) e.bounds = *box;
+        e.result = hit;
+        e.t_near = tn;
+        e.t_far = tf;
+        hook->fn(&e, hook->user);
+    }
     return hit;
 }

@@ -80,7 +80,7 @@ static SIDX_INLINE int sidx__hook_wants(const sidx_hook *h, sidx_event_type t)
  * `structure` is filled from SIDX_STRUCTURE_NAME, which each source file
  * defines before using the macro. */
 #ifdef SIDX_NO_HOOKS
-#define SIDX_EMIT(traced, hook, type, ...) do { (void)(traced); } while (0)
+#define SIDX_EMIT(traced, hook, type, ...) do { (void)(traced); (void)(hook); } while (0)
 #else
 #define SIDX_EMIT(traced, hook, type, ...)                                  \
     do {                                                                    \

@@ -167,7 +167,6 @@ static void errors_are_values(void **state)
     sidx_ray r;
     sidx_ray_init(&r, sidx_v3(0, 0, 1), sidx_v3(0, 0, -1), 0, INFINITY);
     sidx_hit h;
-    int occ;
     sidx_accel_stats st;
     assert_int_equal(sidx_accel_intersect(NULL, &r, NULL, &h), SIDX_ERR_INVALID_ARG);
     assert_int_equal(sidx_accel_intersect(a, NULL, NULL, &h), SIDX_ERR_INVALID_ARG);

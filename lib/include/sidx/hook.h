@@ -38,7 +38,8 @@ typedef enum sidx_event_type {
     SIDX_EV_HIT_UPDATE,      /* prim, t: the closest hit so far changed */
     SIDX_EV_MAILBOX_HIT,     /* prim: already tested for this ray, skipped */
     SIDX_EV_TERMINATE,       /* reason (sidx_term_reason), t = best hit, count = nodes/cells visited */
-    SIDX_EV_RAY_END,         /* prim, t of the final hit (SIDX_NO_HIT / inf on a miss) */
+    SIDX_EV_RAY_END,         /* prim, t of the final hit (SIDX_NO_HIT / inf on a miss); result = 1 if
+                                hit / occluded (occlusion queries fill only result) */
     SIDX_EV_NOTE,            /* free text: a decision that is not one of the above (text) */
     SIDX_EV_COUNT
 } sidx_event_type;
@@ -78,7 +79,8 @@ typedef struct sidx_event {
     uint32_t node;         /* node or cell id; UINT32_MAX when not applicable.  The same id in
                               build and traversal events (the index in the final node array) */
     uint32_t parent;       /* BUILD_NODE: parent node id; UINT32_MAX for the root */
-    uint32_t depth;        /* tree depth, or stack size for push/pop */
+    uint32_t depth;        /* tree depth, or stack size for push/pop; structures also fill it on
+                              BOX_TEST, CANDIDATE, SPLIT, PRIM_TEST where known (printer indent) */
     uint32_t prim;         /* original primitive index; UINT32_MAX when not applicable */
     uint32_t count;        /* primitive count / N_left / nodes visited, by type */
     uint32_t aux;          /* N_right for candidates and splits */

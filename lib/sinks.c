@@ -1,0 +1,793 @@
+/* sinks.c — the ready-made hooks of sinks.h: printer, JSON Lines,
+ * recorder, counters and tee.
+ *
+ * The printer and the JSON writer share one small output abstraction
+ * (sink_out) that either appends to a caller's buffer with snprintf
+ * semantics or streams to a FILE.  That way sidx_event_format and the
+ * printer produce the very same text from the very same code, and the
+ * FILE sinks never truncate a long NOTE text and never allocate.
+ *
+ * docs/events.md is the reference for what each event carries and for the
+ * exact printer and JSON layout; keep the two in step. */
+#include <inttypes.h>
+#include <limits.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include "sidx/sinks.h"
+
+/* ---- output: a buffer with snprintf semantics, or a FILE ------------- */
+
+typedef struct sink_out {
+    FILE *file;   /* non-NULL: stream here; buf/size unused */
+    char *buf;    /* else: write here, always NUL-terminated when size > 0 */
+    size_t size;
+    size_t len;   /* characters produced so far, truncated or not (what snprintf returns) */
+    int error;    /* an encoding / stream error occurred */
+} sink_out;
+
+static sink_out out_to_buffer(char *buf, size_t size)
+{
+    sink_out o = {NULL, buf, size, 0, 0};
+    if (buf && size > 0) buf[0] = '\0';
+    if (!buf) o.size = 0; /* count only, like snprintf(NULL, 0, ...) */
+    return o;
+}
+
+static sink_out out_to_file(FILE *f)
+{
+    sink_out o = {f, NULL, 0, 0, 0};
+    return o;
+}
+
+#if defined(__GNUC__)
+__attribute__((format(printf, 2, 3)))
+#endif
+static void out_printf(sink_out *o, const char *fmt, ...)
+{
+    va_list ap;
+    int n;
+    va_start(ap, fmt);
+    if (o->file) {
+        n = vfprintf(o->file, fmt, ap);
+    } else {
+        /* Once the buffer is full keep counting with a NULL destination, so
+         * the final length is what an unbounded buffer would have held. */
+        char *dst = NULL;
+        size_t room = 0;
+        if (o->len < o->size) {
+            dst = o->buf + o->len;
+            room = o->size - o->len;
+        }
+        n = vsnprintf(dst, room, fmt, ap);
+    }
+    va_end(ap);
+    if (n < 0)
+        o->error = 1;
+    else
+        o->len += (size_t)n;
+}
+
+static void out_puts(sink_out *o, const char *s) { out_printf(o, "%s", s); }
+
+/* The snprintf-style return value of a buffer formatter. */
+static int out_result(const sink_out *o)
+{
+    if (o->error || o->len > (size_t)INT_MAX) return -1;
+    return (int)o->len;
+}
+
+/* ---- printer ------------------------------------------------------------ */
+
+#define PRINT_MAX_LEVEL 40 /* deeper lines stop indenting: stays readable, bounded */
+
+static const char *axis_name(int32_t axis)
+{
+    switch (axis) {
+    case 0: return "x";
+    case 1: return "y";
+    case 2: return "z";
+    default: return "?";
+    }
+}
+
+/* An id, or "none" for UINT32_MAX (the blank value). */
+static void out_id(sink_out *o, uint32_t id)
+{
+    if (id == UINT32_MAX)
+        out_puts(o, "none");
+    else
+        out_printf(o, "%" PRIu32, id);
+}
+
+static void out_interval(sink_out *o, float a, float b)
+{
+    out_printf(o, "t=[%g, %g]", (double)a, (double)b);
+}
+
+static void out_box(sink_out *o, const sidx_aabb *b)
+{
+    out_printf(o, "box [(%g, %g, %g), (%g, %g, %g)]", (double)b->min.x, (double)b->min.y, (double)b->min.z,
+               (double)b->max.x, (double)b->max.y, (double)b->max.z);
+}
+
+static int has_cell(const sidx_event *ev) { return ev->cell[0] >= 0; }
+
+static void out_cell(sink_out *o, const sidx_event *ev)
+{
+    out_printf(o, "cell (%" PRId32 ",%" PRId32 ",%" PRId32 ")", ev->cell[0], ev->cell[1], ev->cell[2]);
+}
+
+/* Free text on one line: control characters (a stray newline) would break
+ * the one-line-per-event promise, so they print as spaces. */
+static void out_text_line(sink_out *o, const char *s)
+{
+    char chunk[64];
+    size_t n = 0;
+    for (; *s; ++s) {
+        unsigned char c = (unsigned char)*s;
+        chunk[n++] = (c < 0x20 || c == 0x7f) ? ' ' : (char)c;
+        if (n == sizeof chunk - 1) {
+            chunk[n] = '\0';
+            out_puts(o, chunk);
+            n = 0;
+        }
+    }
+    chunk[n] = '\0';
+    if (n) out_puts(o, chunk);
+}
+
+/* "x at 0.25" for an axis-aligned plane; BSP planes (axis -1) keep their
+ * normal in bounds.min and their offset in pos. */
+static void out_plane(sink_out *o, const sidx_event *ev)
+{
+    if (ev->axis >= 0 && ev->axis <= 2)
+        out_printf(o, "axis %s at %g", axis_name(ev->axis), (double)ev->pos);
+    else
+        out_printf(o, "plane n=(%g, %g, %g) d=%g", (double)ev->bounds.min.x, (double)ev->bounds.min.y,
+                   (double)ev->bounds.min.z, (double)ev->pos);
+}
+
+static void out_left_right(sink_out *o, const sidx_event *ev)
+{
+    out_printf(o, "  cost %g  (L %" PRIu32 " | R %" PRIu32 ")", (double)ev->cost, ev->count, ev->aux);
+}
+
+/* Indentation level of a line, two spaces each.  Ray and build begin/end
+ * sit at column 0; node lines sit one level per tree depth below them;
+ * the decisions taken at a node (candidates, split, leaf) and the
+ * primitive work one level deeper still.  Emitters that know the depth at
+ * a box or primitive test may fill `depth` and get the nesting for free;
+ * a blank depth (0) just means "top level".  Push and pop carry the stack
+ * size in `depth`, not a tree depth, so they do not indent by it (the line
+ * says the size instead). */
+static unsigned indent_level(const sidx_event *ev)
+{
+    unsigned base;
+    switch (ev->type) {
+    case SIDX_EV_BUILD_BEGIN:
+    case SIDX_EV_BUILD_END:
+    case SIDX_EV_RAY_BEGIN:
+    case SIDX_EV_RAY_END:
+    case SIDX_EV_TERMINATE:
+        return 0;
+    case SIDX_EV_STACK_PUSH:
+    case SIDX_EV_STACK_POP:
+        return 1;
+    case SIDX_EV_BUILD_NODE:
+    case SIDX_EV_NODE_ENTER:
+    case SIDX_EV_BOX_TEST:
+    case SIDX_EV_NOTE:
+        base = 1;
+        break;
+    default: /* candidate, split, leaf, prim test, hit update, mailbox */
+        base = 2;
+        break;
+    }
+    if (ev->depth == UINT32_MAX) return base;
+    uint32_t level = base + (ev->depth < PRINT_MAX_LEVEL ? ev->depth : PRINT_MAX_LEVEL);
+    return (unsigned)level;
+}
+
+static void format_event(sink_out *o, const sidx_event *ev, int show_bounds)
+{
+    static const char spaces[] = "                                                                "
+                                 "                          "; /* >= 2 * (PRINT_MAX_LEVEL + 2) */
+    unsigned level = indent_level(ev);
+    out_printf(o, "%.*s", (int)(2 * level), spaces);
+
+    const char *structure = (ev->structure && ev->structure[0]) ? ev->structure : NULL;
+
+    switch (ev->type) {
+    case SIDX_EV_BUILD_BEGIN:
+        out_puts(o, "build begin");
+        if (structure) out_printf(o, " (%s)", structure);
+        out_printf(o, ": %" PRIu32 " prims  ", ev->count);
+        out_box(o, &ev->bounds); /* the scene box: always worth seeing */
+        break;
+    case SIDX_EV_BUILD_NODE:
+        out_puts(o, "build node ");
+        out_id(o, ev->node);
+        out_printf(o, "  depth %" PRIu32 "  prims %" PRIu32, ev->depth, ev->count);
+        if (ev->parent == UINT32_MAX)
+            out_puts(o, "  (root)");
+        else
+            out_printf(o, "  (parent %" PRIu32 ")", ev->parent);
+        if (has_cell(ev)) { out_puts(o, "  "); out_cell(o, ev); }
+        if (show_bounds) { out_puts(o, "  "); out_box(o, &ev->bounds); }
+        break;
+    case SIDX_EV_BUILD_CANDIDATE:
+        out_puts(o, "candidate ");
+        out_plane(o, ev);
+        out_left_right(o, ev);
+        break;
+    case SIDX_EV_BUILD_SPLIT:
+        out_puts(o, "split node ");
+        out_id(o, ev->node);
+        out_puts(o, " ");
+        out_plane(o, ev);
+        out_left_right(o, ev);
+        break;
+    case SIDX_EV_BUILD_LEAF:
+        out_puts(o, "leaf node ");
+        out_id(o, ev->node);
+        out_printf(o, "  prims %" PRIu32, ev->count);
+        if (!isnan(ev->cost)) out_printf(o, "  cost %g", (double)ev->cost);
+        out_printf(o, "  (%s)", sidx_leaf_reason_name(ev->reason));
+        if (has_cell(ev)) { out_puts(o, "  "); out_cell(o, ev); }
+        break;
+    case SIDX_EV_BUILD_END:
+        out_puts(o, "build end");
+        if (structure) out_printf(o, " (%s)", structure);
+        out_printf(o, ": %" PRIu32 " nodes  %" PRIu32 " prim refs  max depth %" PRIu32, ev->node, ev->count,
+                   ev->depth);
+        break;
+    case SIDX_EV_RAY_BEGIN:
+        out_printf(o, "ray %" PRIu32 " begin", ev->ray_id);
+        if (structure) out_printf(o, " (%s)", structure);
+        out_puts(o, "  ");
+        out_interval(o, ev->t_near, ev->t_far);
+        break;
+    case SIDX_EV_NODE_ENTER:
+        if (has_cell(ev)) {
+            /* grids: the coordinates say more than the linear cell id */
+            out_cell(o, ev);
+            out_puts(o, " enter  ");
+        } else {
+            out_puts(o, "node ");
+            out_id(o, ev->node);
+            out_printf(o, " enter  depth %" PRIu32 "  ", ev->depth);
+        }
+        out_interval(o, ev->t_near, ev->t_far);
+        break;
+    case SIDX_EV_BOX_TEST:
+        out_puts(o, "box node ");
+        out_id(o, ev->node);
+        if (ev->result == 1) {
+            out_puts(o, " hit  ");
+            out_interval(o, ev->t_near, ev->t_far);
+        } else {
+            out_puts(o, " miss");
+        }
+        if (show_bounds) { out_puts(o, "  "); out_box(o, &ev->bounds); }
+        break;
+    case SIDX_EV_STACK_PUSH:
+    case SIDX_EV_STACK_POP: {
+        const int push = ev->type == SIDX_EV_STACK_PUSH;
+        out_puts(o, push ? "push node " : "pop node ");
+        out_id(o, ev->node);
+        out_puts(o, "  ");
+        out_interval(o, ev->t_near, ev->t_far);
+        /* depth is the size after a push and before a pop: show both ends */
+        if (ev->depth == UINT32_MAX)
+            ;
+        else if (push && ev->depth > 0)
+            out_printf(o, "  (stack %" PRIu32 " -> %" PRIu32 ")", ev->depth - 1, ev->depth);
+        else if (!push && ev->depth > 0)
+            out_printf(o, "  (stack %" PRIu32 " -> %" PRIu32 ")", ev->depth, ev->depth - 1);
+        else
+            out_printf(o, "  (stack %" PRIu32 ")", ev->depth);
+        break;
+    }
+    case SIDX_EV_PRIM_TEST:
+        out_puts(o, "prim ");
+        out_id(o, ev->prim);
+        if (ev->result == 1)
+            out_printf(o, " test: hit t=%g", (double)ev->t);
+        else
+            out_puts(o, " test: miss");
+        break;
+    case SIDX_EV_HIT_UPDATE:
+        out_puts(o, "closest hit -> prim ");
+        out_id(o, ev->prim);
+        out_printf(o, " t=%g", (double)ev->t);
+        break;
+    case SIDX_EV_MAILBOX_HIT:
+        out_puts(o, "mailbox: prim ");
+        out_id(o, ev->prim);
+        out_puts(o, " already tested, skipped");
+        break;
+    case SIDX_EV_TERMINATE:
+        out_printf(o, "terminate: %s  visited %" PRIu32 "  best t=%g", sidx_term_reason_name(ev->reason), ev->count,
+                   (double)ev->t);
+        break;
+    case SIDX_EV_RAY_END:
+        out_printf(o, "ray %" PRIu32 " end: ", ev->ray_id);
+        if (ev->prim != UINT32_MAX)
+            out_printf(o, "hit prim %" PRIu32 " t=%g", ev->prim, (double)ev->t);
+        else if (ev->result == 1) /* an occlusion query: a hit, no closest primitive */
+            out_puts(o, "occluded");
+        else
+            out_puts(o, "miss");
+        break;
+    case SIDX_EV_NOTE:
+        out_puts(o, "note: ");
+        if (ev->text) out_text_line(o, ev->text);
+        break;
+    default:
+        out_printf(o, "unknown event %d", (int)ev->type);
+        break;
+    }
+}
+
+int sidx_event_format(const sidx_event *ev, char *buf, size_t size)
+{
+    sink_out o = out_to_buffer(buf, size);
+    if (!ev) return -1;
+    format_event(&o, ev, 0);
+    return out_result(&o);
+}
+
+/* Writes one line.  Short lines (nearly all) are formatted on the stack
+ * and written with a single call, so lines from several threads sharing a
+ * FILE do not interleave mid-line; longer ones stream in pieces. */
+static void write_line(FILE *f, const sidx_event *ev, int show_bounds,
+                       void (*fmt)(sink_out *, const sidx_event *, int))
+{
+    char line[512];
+    sink_out o = out_to_buffer(line, sizeof line);
+    fmt(&o, ev, show_bounds);
+    if (!o.error && o.len < sizeof line - 1) {
+        line[o.len] = '\n';
+        fwrite(line, 1, o.len + 1, f);
+    } else {
+        sink_out fo = out_to_file(f);
+        fmt(&fo, ev, show_bounds);
+        fputc('\n', f);
+    }
+}
+
+static void printer_fn(const sidx_event *ev, void *user)
+{
+    sidx_printer *p = user;
+    if (!p || !p->out || !ev) return;
+    /* The emitter already honours the hook's mask; checking p->mask here
+     * too lets a caller narrow it on the fly or call the function directly. */
+    if (p->mask && ((unsigned)ev->type >= 32u || !(p->mask & SIDX_EVMASK(ev->type)))) return;
+    write_line(p->out, ev, p->show_bounds, format_event);
+    p->lines++;
+}
+
+void sidx_printer_init(sidx_printer *p, FILE *out)
+{
+    if (!p) return;
+    p->out = out;
+    p->mask = 0;
+    p->show_bounds = 0;
+    p->lines = 0;
+}
+
+sidx_hook sidx_printer_hook(sidx_printer *p)
+{
+    sidx_hook h = {printer_fn, p, p ? p->mask : 0};
+    return h;
+}
+
+/* ---- JSON Lines ----------------------------------------------------------- */
+
+/* A JSON string literal.  Bytes >= 0x80 pass through: event strings are
+ * ASCII or UTF-8. */
+static void out_json_string(sink_out *o, const char *s)
+{
+    char chunk[72];
+    size_t n = 0;
+    chunk[n++] = '"';
+    for (; *s; ++s) {
+        unsigned char c = (unsigned char)*s;
+        const char *esc = NULL;
+        char uesc[8];
+        switch (c) {
+        case '"': esc = "\\\""; break;
+        case '\\': esc = "\\\\"; break;
+        case '\n': esc = "\\n"; break;
+        case '\r': esc = "\\r"; break;
+        case '\t': esc = "\\t"; break;
+        case '\b': esc = "\\b"; break;
+        case '\f': esc = "\\f"; break;
+        default:
+            if (c < 0x20) {
+                snprintf(uesc, sizeof uesc, "\\u%04x", (unsigned)c);
+                esc = uesc;
+            }
+            break;
+        }
+        if (esc) {
+            size_t el = strlen(esc);
+            memcpy(chunk + n, esc, el);
+            n += el;
+        } else {
+            chunk[n++] = (char)c;
+        }
+        if (n >= sizeof chunk - 8) { /* room for the longest escape (6) + NUL */
+            chunk[n] = '\0';
+            out_puts(o, chunk);
+            n = 0;
+        }
+    }
+    chunk[n++] = '"';
+    chunk[n] = '\0';
+    out_puts(o, chunk);
+}
+
+/* A float as JSON.  JSON has no inf or NaN, so those become the strings
+ * "inf", "-inf" and "nan".  Finite values use the fewest significant
+ * digits (6 to 9) that read back as the same float: short for people,
+ * exact for tools. */
+static void out_json_float(sink_out *o, float f)
+{
+    if (isnan(f)) { out_puts(o, "\"nan\""); return; }
+    if (isinf(f)) { out_puts(o, f > 0 ? "\"inf\"" : "\"-inf\""); return; }
+    char tmp[32];
+    for (int prec = 6; prec <= 9; ++prec) {
+        snprintf(tmp, sizeof tmp, "%.*g", prec, (double)f);
+        if (strtof(tmp, NULL) == f) break; /* 9 digits always round-trip a float */
+    }
+    out_puts(o, tmp);
+}
+
+static void json_key(sink_out *o, const char *key) { out_printf(o, ",\"%s\":", key); }
+
+/* An id field; the blank value UINT32_MAX ("none") is null. */
+static void json_id(sink_out *o, const char *key, uint32_t v)
+{
+    json_key(o, key);
+    if (v == UINT32_MAX)
+        out_puts(o, "null");
+    else
+        out_printf(o, "%" PRIu32, v);
+}
+
+static void json_u32(sink_out *o, const char *key, uint32_t v)
+{
+    json_key(o, key);
+    out_printf(o, "%" PRIu32, v);
+}
+
+static void json_i32(sink_out *o, const char *key, int32_t v)
+{
+    json_key(o, key);
+    out_printf(o, "%" PRId32, v);
+}
+
+static void json_float(sink_out *o, const char *key, float v)
+{
+    json_key(o, key);
+    out_json_float(o, v);
+}
+
+static void json_vec3(sink_out *o, sidx_vec3 v)
+{
+    out_puts(o, "[");
+    out_json_float(o, v.x);
+    out_puts(o, ",");
+    out_json_float(o, v.y);
+    out_puts(o, ",");
+    out_json_float(o, v.z);
+    out_puts(o, "]");
+}
+
+static void json_bounds(sink_out *o, const sidx_aabb *b)
+{
+    json_key(o, "bounds");
+    out_puts(o, "{\"min\":");
+    json_vec3(o, b->min);
+    out_puts(o, ",\"max\":");
+    json_vec3(o, b->max);
+    out_puts(o, "}");
+}
+
+static void json_reason(sink_out *o, const char *name)
+{
+    json_key(o, "reason");
+    out_json_string(o, name);
+}
+
+/* Which fields each type carries mirrors the comments in hook.h; the table
+ * in docs/events.md is the same list. */
+static void json_event(sink_out *o, const sidx_event *ev, int unused)
+{
+    (void)unused;
+    out_puts(o, "{\"type\":");
+    out_json_string(o, sidx_event_type_name(ev->type));
+    out_puts(o, ",\"structure\":");
+    if (ev->structure)
+        out_json_string(o, ev->structure);
+    else
+        out_puts(o, "null");
+    json_u32(o, "ray", ev->ray_id);
+
+    switch (ev->type) {
+    case SIDX_EV_BUILD_BEGIN:
+        json_u32(o, "count", ev->count);
+        json_bounds(o, &ev->bounds);
+        break;
+    case SIDX_EV_BUILD_NODE:
+        json_id(o, "node", ev->node);
+        json_id(o, "parent", ev->parent);
+        json_id(o, "depth", ev->depth);
+        json_u32(o, "count", ev->count);
+        json_bounds(o, &ev->bounds);
+        break;
+    case SIDX_EV_BUILD_CANDIDATE:
+    case SIDX_EV_BUILD_SPLIT:
+        json_id(o, "node", ev->node);
+        json_i32(o, "axis", ev->axis);
+        json_float(o, "pos", ev->pos);
+        json_float(o, "cost", ev->cost);
+        json_u32(o, "count", ev->count);
+        json_u32(o, "aux", ev->aux);
+        if (ev->axis < 0) json_bounds(o, &ev->bounds); /* BSP: plane normal in bounds.min */
+        break;
+    case SIDX_EV_BUILD_LEAF:
+        json_id(o, "node", ev->node);
+        json_id(o, "depth", ev->depth);
+        json_u32(o, "count", ev->count);
+        json_float(o, "cost", ev->cost);
+        json_reason(o, sidx_leaf_reason_name(ev->reason));
+        break;
+    case SIDX_EV_BUILD_END:
+        json_u32(o, "node", ev->node); /* a node count here, not an id */
+        json_u32(o, "count", ev->count);
+        json_u32(o, "depth", ev->depth);
+        break;
+    case SIDX_EV_RAY_BEGIN:
+        json_float(o, "t_near", ev->t_near);
+        json_float(o, "t_far", ev->t_far);
+        break;
+    case SIDX_EV_NODE_ENTER:
+        json_id(o, "node", ev->node);
+        json_id(o, "depth", ev->depth);
+        json_float(o, "t_near", ev->t_near);
+        json_float(o, "t_far", ev->t_far);
+        break;
+    case SIDX_EV_BOX_TEST:
+        json_id(o, "node", ev->node);
+        json_i32(o, "result", ev->result);
+        json_bounds(o, &ev->bounds);
+        if (ev->result == 1) { /* a missed box has no interval */
+            json_float(o, "t_near", ev->t_near);
+            json_float(o, "t_far", ev->t_far);
+        }
+        break;
+    case SIDX_EV_STACK_PUSH:
+    case SIDX_EV_STACK_POP:
+        json_id(o, "node", ev->node);
+        json_id(o, "depth", ev->depth);
+        json_float(o, "t_near", ev->t_near);
+        json_float(o, "t_far", ev->t_far);
+        break;
+    case SIDX_EV_PRIM_TEST:
+        json_id(o, "prim", ev->prim);
+        json_i32(o, "result", ev->result);
+        if (ev->result == 1) json_float(o, "t", ev->t);
+        break;
+    case SIDX_EV_HIT_UPDATE:
+        json_id(o, "prim", ev->prim);
+        json_float(o, "t", ev->t);
+        break;
+    case SIDX_EV_MAILBOX_HIT:
+        json_id(o, "prim", ev->prim);
+        break;
+    case SIDX_EV_TERMINATE:
+        json_reason(o, sidx_term_reason_name(ev->reason));
+        json_float(o, "t", ev->t);
+        json_u32(o, "count", ev->count);
+        break;
+    case SIDX_EV_RAY_END:
+        json_id(o, "prim", ev->prim);
+        json_float(o, "t", ev->t);
+        json_i32(o, "result", ev->result); /* the answer of an occlusion query */
+        break;
+    case SIDX_EV_NOTE:
+        json_key(o, "text");
+        if (ev->text)
+            out_json_string(o, ev->text);
+        else
+            out_puts(o, "null");
+        break;
+    default:
+        break;
+    }
+    /* Grid cells may appear on any event (node_enter above all). */
+    if (has_cell(ev)) {
+        json_key(o, "cell");
+        out_printf(o, "[%" PRId32 ",%" PRId32 ",%" PRId32 "]", ev->cell[0], ev->cell[1], ev->cell[2]);
+    }
+    out_puts(o, "}");
+}
+
+int sidx_event_to_json(const sidx_event *ev, char *buf, size_t size)
+{
+    sink_out o = out_to_buffer(buf, size);
+    if (!ev) return -1;
+    json_event(&o, ev, 0);
+    return out_result(&o);
+}
+
+static void jsonl_fn(const sidx_event *ev, void *user)
+{
+    sidx_jsonl *j = user;
+    if (!j || !j->out || !ev) return;
+    write_line(j->out, ev, 0, json_event);
+    j->lines++;
+}
+
+void sidx_jsonl_init(sidx_jsonl *j, FILE *out)
+{
+    if (!j) return;
+    j->out = out;
+    j->lines = 0;
+}
+
+sidx_hook sidx_jsonl_hook(sidx_jsonl *j)
+{
+    sidx_hook h = {jsonl_fn, j, 0};
+    return h;
+}
+
+/* ---- recorder ------------------------------------------------------------- */
+
+#define RECORDER_FIRST_CAPACITY 256
+
+static void recorder_fn(const sidx_event *ev, void *user)
+{
+    sidx_recorder *r = user;
+    if (!r || !ev) return;
+    /* After the first drop the recording has a hole; keeping later events
+     * would make a stepper show a history that never happened. */
+    if (r->overflow) return;
+    if (r->limit && r->count >= r->limit) {
+        r->overflow = 1;
+        return;
+    }
+    if (r->count == r->capacity) {
+        const size_t max_cap = SIZE_MAX / sizeof(sidx_event);
+        size_t cap = r->capacity ? r->capacity : RECORDER_FIRST_CAPACITY;
+        if (r->capacity) cap = r->capacity <= max_cap / 2 ? r->capacity * 2 : max_cap;
+        if (cap <= r->capacity) { /* cannot grow any further */
+            r->overflow = 1;
+            return;
+        }
+        sidx_event *grown = realloc(r->events, cap * sizeof(sidx_event));
+        if (!grown) { /* the old array is still valid and still ours */
+            r->overflow = 1;
+            return;
+        }
+        r->events = grown;
+        r->capacity = cap;
+    }
+    r->events[r->count++] = *ev;
+}
+
+void sidx_recorder_init(sidx_recorder *r)
+{
+    if (!r) return;
+    r->events = NULL;
+    r->count = 0;
+    r->capacity = 0;
+    r->limit = 0;
+    r->overflow = 0;
+}
+
+void sidx_recorder_clear(sidx_recorder *r)
+{
+    if (!r) return;
+    r->count = 0;
+    r->overflow = 0;
+}
+
+void sidx_recorder_free(sidx_recorder *r)
+{
+    if (!r) return;
+    free(r->events);
+    r->events = NULL;
+    r->count = 0;
+    r->capacity = 0;
+    r->overflow = 0; /* limit is a setting, not contents: kept */
+}
+
+sidx_hook sidx_recorder_hook(sidx_recorder *r)
+{
+    sidx_hook h = {recorder_fn, r, 0};
+    return h;
+}
+
+/* ---- counters ------------------------------------------------------------- */
+
+static void counters_fn(const sidx_event *ev, void *user)
+{
+    sidx_counters *c = user;
+    if (!c || !ev || (unsigned)ev->type >= SIDX_EV_COUNT) return;
+    c->n[ev->type]++;
+    if (ev->type == SIDX_EV_PRIM_TEST && ev->result == 1) c->prim_hits++;
+    if (ev->type == SIDX_EV_BOX_TEST && ev->result == 1) c->box_hits++;
+    if (ev->type == SIDX_EV_RAY_BEGIN) c->rays++;
+}
+
+void sidx_counters_init(sidx_counters *c)
+{
+    if (c) memset(c, 0, sizeof *c);
+}
+
+sidx_hook sidx_counters_hook(sidx_counters *c)
+{
+    sidx_hook h = {counters_fn, c, 0};
+    return h;
+}
+
+void sidx_counters_print(const sidx_counters *c, FILE *out)
+{
+    if (!c || !out) return;
+    for (int t = 0; t < SIDX_EV_COUNT; ++t)
+        if (c->n[t]) fprintf(out, "%s: %" PRIu64 "\n", sidx_event_type_name((sidx_event_type)t), c->n[t]);
+    if (c->prim_hits) fprintf(out, "prim_hits: %" PRIu64 "\n", c->prim_hits);
+    if (c->box_hits) fprintf(out, "box_hits: %" PRIu64 "\n", c->box_hits);
+    if (c->rays) fprintf(out, "rays: %" PRIu64 "\n", c->rays);
+}
+
+/* ---- tee ------------------------------------------------------------------ */
+
+#define TEE_MAX ((int)(sizeof(((sidx_tee *)0)->hooks) / sizeof(sidx_hook)))
+
+static int tee_size(const sidx_tee *t)
+{
+    if (t->n < 0) return 0;
+    return t->n < TEE_MAX ? t->n : TEE_MAX;
+}
+
+static int hook_wants(const sidx_hook *h, sidx_event_type type)
+{
+    return h->fn && (h->mask == 0 || ((unsigned)type < 32u && (h->mask & SIDX_EVMASK(type))));
+}
+
+static void tee_fn(const sidx_event *ev, void *user)
+{
+    const sidx_tee *t = user;
+    if (!t || !ev) return;
+    const int n = tee_size(t);
+    for (int i = 0; i < n; ++i)
+        if (hook_wants(&t->hooks[i], ev->type)) t->hooks[i].fn(ev, t->hooks[i].user);
+}
+
+/* The tee's own mask is the union of its hooks' masks, so emitters skip
+ * events nobody downstream wants.  It is computed now: fill t->hooks and
+ * t->n before asking for the hook. */
+sidx_hook sidx_tee_hook(sidx_tee *t)
+{
+    sidx_hook h = {tee_fn, t, 0};
+    if (!t) return h;
+    uint32_t mask = 0;
+    const int n = tee_size(t);
+    for (int i = 0; i < n; ++i) {
+        if (!t->hooks[i].fn) continue;
+        if (t->hooks[i].mask == 0) { /* one hook wants everything */
+            mask = 0;
+            break;
+        }
+        mask |= t->hooks[i].mask;
+    }
+    h.mask = mask;
+    return h;
+}
