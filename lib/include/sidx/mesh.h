@@ -10,6 +10,7 @@
 #ifndef SIDX_MESH_H
 #define SIDX_MESH_H
 
+#include <stddef.h>
 #include <stdint.h>
 #include "math.h"
 
@@ -40,23 +41,38 @@ sidx_status sidx_mesh_validate(const sidx_mesh *m, sidx_error *err);
 /* Wavefront OBJ: `v x y z [w]` and `f` with any of the forms i, i/t, i//n,
  * i/t/n, negative (relative) indices; polygons are fan-triangulated.
  * Other statements (vt, vn, o, g, s, usemtl, mtllib, l, p) are ignored.
- * Malformed numbers, out-of-range indices, faces with fewer than 3
- * vertices and NaN/Inf coordinates fail with SIDX_ERR_PARSE or
- * SIDX_ERR_BAD_GEOMETRY and a message "file:line: what". */
+ * Malformed numbers, index 0 and faces with fewer than 3 vertices fail
+ * with SIDX_ERR_PARSE; out-of-range indices and NaN/Inf coordinates
+ * (including literals that overflow a float) with SIDX_ERR_BAD_GEOMETRY;
+ * the message reads "file:line: what".  Positive indices may refer to
+ * vertices defined later in the file.
+ *
+ * All loaders: a file with no faces (even an empty file) is not an error
+ * but an empty mesh (0 triangles, non-NULL arrays).  On failure *out is
+ * left untouched; arrays are allocated with malloc. */
 sidx_status sidx_mesh_load_obj(const char *path, sidx_mesh *out, sidx_error *err);
-/* PLY, ascii and binary_little_endian: vertex x y z (float or double, other
- * properties skipped) and face vertex_indices (list of any int type). */
+/* PLY, ascii, binary_little_endian and binary_big_endian: vertex x y z
+ * (float or double, other properties and elements skipped) and face
+ * vertex_indices or vertex_index (list of any int type).  Truncated data
+ * fails with SIDX_ERR_PARSE ("file:line: ..." for ascii, "file: byte N:
+ * ..." for binary). */
 sidx_status sidx_mesh_load_ply(const char *path, sidx_mesh *out, sidx_error *err);
 /* Picks the loader by extension (.obj, .ply), else by content. */
 sidx_status sidx_mesh_load(const char *path, sidx_mesh *out, sidx_error *err);
-/* Same, from memory (for fuzzing and tests); name is used in messages. */
+/* Same, from memory (for fuzzing and tests); name is used in messages
+ * (NULL: "<memory>").  data need not be NUL-terminated. */
 sidx_status sidx_mesh_parse_obj(const char *data, size_t size, const char *name, sidx_mesh *out, sidx_error *err);
 sidx_status sidx_mesh_parse_ply(const void *data, size_t size, const char *name, sidx_mesh *out, sidx_error *err);
 
-/* Writes an OBJ (used by tests and to export built-in scenes). */
+/* Writes an OBJ (used by tests and to export built-in scenes).  Floats
+ * are written with 9 significant digits, so loading gives back the same
+ * mesh bit for bit.  On failure the partial file is removed. */
 sidx_status sidx_mesh_save_obj(const sidx_mesh *m, const char *path, sidx_error *err);
 
+/* Box of the vertices the triangles use (vertices no triangle uses are
+ * ignored); the empty box for a mesh without triangles. */
 sidx_aabb sidx_mesh_bounds(const sidx_mesh *m);
+/* The empty box if tri is out of range. */
 sidx_aabb sidx_mesh_triangle_bounds(const sidx_mesh *m, uint32_t tri);
 static inline sidx_vec3 sidx_mesh_vertex(const sidx_mesh *m, uint32_t tri, int k)
 {
@@ -64,17 +80,28 @@ static inline sidx_vec3 sidx_mesh_vertex(const sidx_mesh *m, uint32_t tri, int k
 }
 
 /* Built-in procedural scenes, so every test and lesson runs without files.
- * detail scales the triangle count (0 = the scene's default).
+ * detail scales the triangle count (0 = the scene's default).  Y is up
+ * except in flat2d.  Closed objects (icosphere, teapot parts, menger cubes,
+ * flat2d prisms) share vertices along edges and face outward.
  *   "icosphere"  closed sphere, subdivided icosahedron (detail = levels, default 3: 1280 tris)
- *   "teapot"     a recognisable closed teapot-like object (body, lid, spout, handle) (~2–4k tris)
+ *   "teapot"     a recognisable closed teapot-like object (body, lid, spout, handle) (~2–4k tris;
+ *                detail = segments around the body, default 40: 3412 tris)
  *   "stadium"    teapot in a stadium: a small teapot in the middle of a huge ring + floor
- *   "soup"       random triangle soup in the unit cube (detail = count, default 2000; fixed seed)
- *   "menger"     Menger sponge of cubes (detail = level, default 2), many coplanar faces
+ *                (teapot ~1 unit wide at the origin, stands of radius 800..1000; detail =
+ *                segments around the stands, default 128)
+ *   "soup"       random triangle soup in the unit cube (detail = count, default 2000; fixed seed;
+ *                corners within 0.05 of each triangle's centre)
+ *   "menger"     Menger sponge of cubes in [-1,1]^3 (detail = level, default 2: 4800 tris),
+ *                many coplanar faces
  *   "flat2d"     the 2D lecture scene: 2D triangles in the xy plane extruded along z into
- *                thin prisms (z in [-0.05, 0.05]), viewed from +z
- *   "cornell"    the Cornell box (walls, two blocks)
- *   "grid"       tessellated plane, detail x detail quads (default 64)
- * Unknown names fail with SIDX_ERR_INVALID_ARG. */
+ *                thin prisms (z in [-0.05, 0.05]), viewed from +z; 8 triangles per prism;
+ *                detail = number of 2D triangles (default 16 hand-placed; more are random)
+ *   "cornell"    the Cornell box (walls, light, two closed blocks: 36 tris), the published
+ *                measurements in mm scaled by 0.01; walls face into the room; detail ignored
+ *   "grid"       tessellated plane y = 0, x,z in [-1,1], facing +y, detail x detail quads
+ *                (default 64)
+ * Unknown names fail with SIDX_ERR_INVALID_ARG, a detail above the scene's
+ * maximum (e.g. icosphere 10, menger 5, grid 4096) with SIDX_ERR_LIMIT. */
 sidx_status sidx_scene_make(const char *name, uint32_t detail, sidx_mesh *out, sidx_error *err);
 /* Names of the built-in scenes, NULL-terminated. */
 const char *const *sidx_scene_names(void);
