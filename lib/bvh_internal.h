@@ -1,0 +1,200 @@
+/* bvh_internal.h — the BVH's private data layout, shared by bvh_build.c,
+ * bvh_traverse.c and bvh_obb.c.  Not part of the library's interface.
+ *
+ * Layout (the deck's "After re-indexing (sorting) based on leaf nodes ...
+ * Only need to store 2 integers per leaf node!"):
+ *
+ *   nodes[]    flattened 32-byte nodes in depth-first (pre-)order.  An inner
+ *              node's left child is the next node (index + 1), its right
+ *              child index is stored; a leaf stores (first, count) into
+ *   prim_id[]  the primitive index array reordered so each leaf's
+ *              primitives are contiguous: prim_id[i] = ORIGINAL triangle
+ *              index, which is what hits report;
+ *   tris[]     a copy of the three vertices of prim_id[i], in the same
+ *              order, so a leaf test reads one contiguous run of memory
+ *              instead of chasing mesh->indices -> mesh->positions.
+ *
+ * Node ids in build and traversal events are indices into nodes[]. */
+#ifndef SIDX_BVH_INTERNAL_H
+#define SIDX_BVH_INTERNAL_H
+
+#include "sidx_internal.h"
+
+/* Deepest tree a build may produce; it also sizes the traversal's fixed
+ * stack (an ordered descent keeps at most one deferred sibling per level),
+ * so the traversal never allocates and never overflows.  opt.max_depth
+ * above this is clamped to it. */
+#define BVH_DEPTH_LIMIT 64u
+
+/* The deck: "Recurse until few primitives (< 4) left in node".  A node of
+ * at most BVH_DEFAULT_LEAF_SIZE primitives becomes a leaf (opt.leaf_size
+ * overrides: leaf when count <= leaf_size). */
+#define BVH_DEFAULT_LEAF_SIZE 3u
+
+/* SAH termination ("split only while splitting helps") may leave a node
+ * as a leaf only up to this many primitives (or leaf_size if larger);
+ * above it the best split is taken even when the SAH says it does not pay,
+ * so leaves stay small enough that no ray tests thousands of triangles
+ * because of one pessimistic estimate (pbrt-v3 does the same with its
+ * maxPrimsInNode). */
+#define BVH_MAX_LEAF 16u
+
+/* Node count field: low 30 bits = primitive count (0 for an inner node),
+ * top 2 bits = split axis of an inner node (for sign-based ordering and
+ * the viewers). */
+#define BVH_COUNT_MASK 0x3FFFFFFFu
+#define BVH_AXIS_SHIFT 30
+
+typedef struct bvh_node {
+    float bmin[3];
+    uint32_t left_or_first; /* inner: right child index; leaf: first index into prim_id/tris */
+    float bmax[3];
+    uint32_t count_axis;    /* leaf: count (> 0); inner: axis << 30 */
+} bvh_node;
+_Static_assert(sizeof(bvh_node) == 32, "two BVH nodes per 64-byte cache line");
+
+/* The three vertices of one triangle, packed: a run of tris[] is also a
+ * run of 3·count sidx_vec3, which the OBB fit reads directly. */
+typedef struct bvh_tri {
+    sidx_vec3 v[3];
+} bvh_tri;
+_Static_assert(sizeof(bvh_tri) == 9 * sizeof(float), "bvh_tri must be three packed vec3");
+
+/* An oriented box as three slabs: lo[k] <= axis[k]·x <= hi[k]. */
+typedef struct bvh_obb {
+    sidx_vec3 axis[3];
+    float lo[3], hi[3];
+} bvh_obb;
+
+typedef enum bvh_builder {
+    BVH_BINNED = 0, /* "bvh":        binned SAH (Wald 2007) */
+    BVH_SWEEP,      /* "bvh-sweep":  full SAH sweep over sorted centroids */
+    BVH_EVERYB,     /* "bvh-everyb": SAH sweep evaluated every B-th position */
+    BVH_MEDIAN,     /* "bvh-median": equal counts on the largest centroid axis */
+    BVH_MIDDLE,     /* "bvh-middle": middle of the centroid extent */
+    BVH_OBB,        /* "bvh-obb":    binned SAH topology + PCA oriented boxes */
+    BVH_BUILDER_COUNT
+} bvh_builder;
+
+typedef struct bvh {
+    bvh_node *nodes;        /* 64-byte aligned inside nodes_mem */
+    void *nodes_mem;
+    uint32_t num_nodes;
+    uint32_t num_leaves;
+    uint32_t max_depth;     /* deepest node built */
+    uint32_t num_prims;
+    uint32_t *prim_id;      /* reordered original triangle indices */
+    bvh_tri *tris;          /* vertices in prim_id order */
+    bvh_obb *obbs;          /* bvh-obb only: one per node; NULL otherwise */
+    double sah_cost;
+    float obb_pad;          /* absolute padding of the oriented slabs (bvh-obb) */
+} bvh;
+
+/* bvh_traverse.c */
+void sidx__bvh_intersect(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit);
+int sidx__bvh_occluded(const sidx_accel *a, const sidx_ray *r, const sidx_query *q);
+
+/* bvh_obb.c: fit one oriented box per node (after nodes/tris are final). */
+sidx_status sidx__bvh_fit_obbs(const sidx_accel *a, bvh *b);
+
+static SIDX_INLINE int bvh_is_leaf(const bvh_node *n) { return (n->count_axis & BVH_COUNT_MASK) != 0; }
+static SIDX_INLINE uint32_t bvh_count(const bvh_node *n) { return n->count_axis & BVH_COUNT_MASK; }
+static SIDX_INLINE int bvh_axis(const bvh_node *n) { return (int)(n->count_axis >> BVH_AXIS_SHIFT); }
+
+static inline sidx_aabb bvh_node_box(const bvh_node *n)
+{
+    sidx_aabb b = {{n->bmin[0], n->bmin[1], n->bmin[2]}, {n->bmax[0], n->bmax[1], n->bmax[2]}};
+    return b;
+}
+
+/* What the fast slab test needs from a ray, computed once per query. */
+typedef struct bvh_ray {
+    float org[3], inv[3];
+    /* Byte offsets of the near / far plane of each axis inside a node:
+     * bmin sits at offset 0 and bmax at offset 16, so a negative
+     * direction simply reads the planes the other way round.  This is the
+     * ray's sign[] turned into addresses: no branch and no swap per box. */
+    uint32_t near_off[3], far_off[3];
+} bvh_ray;
+
+static SIDX_INLINE void bvh_ray_setup(bvh_ray *br, const sidx_ray *r)
+{
+    const float *o = &r->org.x, *inv = &r->inv_dir.x;
+    for (int k = 0; k < 3; ++k) {
+        br->org[k] = o[k];
+        br->inv[k] = inv[k];
+        br->near_off[k] = (uint32_t)(r->sign[k] ? 16 + 4 * k : 4 * k);
+        br->far_off[k] = (uint32_t)(r->sign[k] ? 4 * k : 16 + 4 * k);
+    }
+}
+
+/* Slab test of one node over [tmin, tmax] (Kay & Kajiya 1986), the same
+ * arithmetic as sidx__box_test: t = (plane − o)·(1/d).  Written as
+ * `x > y ? x : y` on purpose: that is exactly the x86 maxss/minss operand
+ * order, so the compiler emits branch-free min/max, and a NaN slab value
+ * (origin exactly on a plane of an axis the ray is parallel to: 0·inf)
+ * never narrows the interval, as in the reference test.  tf_scale is
+ * SIDX_ROBUST_TFAR_SCALE for the robust test (Ize 2013: t_far times
+ * 1 + 2γ₃ so float rounding never loses a hit) and exactly 1 for the plain
+ * one: a multiply by 1 is exact, so one copy of the loop serves both. */
+static SIDX_INLINE int bvh_slab(const bvh_ray *br, const bvh_node *n, const float tf_scale, float tmin, float tmax,
+                                float *t_near, float *t_far)
+{
+    const char *base = (const char *)n;
+    float tn0, tn1, tn2, tf0, tf1, tf2;
+    float p;
+    memcpy(&p, base + br->near_off[0], sizeof p);
+    tn0 = (p - br->org[0]) * br->inv[0];
+    memcpy(&p, base + br->near_off[1], sizeof p);
+    tn1 = (p - br->org[1]) * br->inv[1];
+    memcpy(&p, base + br->near_off[2], sizeof p);
+    tn2 = (p - br->org[2]) * br->inv[2];
+    memcpy(&p, base + br->far_off[0], sizeof p);
+    tf0 = (p - br->org[0]) * br->inv[0];
+    memcpy(&p, base + br->far_off[1], sizeof p);
+    tf1 = (p - br->org[1]) * br->inv[1];
+    memcpy(&p, base + br->far_off[2], sizeof p);
+    tf2 = (p - br->org[2]) * br->inv[2];
+    tf0 *= tf_scale;
+    tf1 *= tf_scale;
+    tf2 *= tf_scale;
+    float t0 = tmin, t1 = tmax;
+    t0 = tn0 > t0 ? tn0 : t0;
+    t0 = tn1 > t0 ? tn1 : t0;
+    t0 = tn2 > t0 ? tn2 : t0;
+    t1 = tf0 < t1 ? tf0 : t1;
+    t1 = tf1 < t1 ? tf1 : t1;
+    t1 = tf2 < t1 ? tf2 : t1;
+    *t_near = t0;
+    *t_far = t1;
+    return t0 <= t1;
+}
+
+/* Ray against an oriented box: clip [tmin, tmax] by its three slabs.  A
+ * ray parallel to a slab (axis·d = 0) is inside it or never.  The slabs
+ * are padded when fitted (bvh_obb.c), which is what keeps this test from
+ * losing hits to rounding; it costs two dot products and a division per
+ * axis against the AABB's one subtraction and multiply — the deck's
+ * "larger intersection cost for non-aligned bboxes". */
+static SIDX_INLINE int bvh_obb_test(const sidx_ray *r, const bvh_obb *b, float tmin, float tmax, float *t_near,
+                                    float *t_far)
+{
+    float t0 = tmin, t1 = tmax;
+    for (int k = 0; k < 3; ++k) {
+        const float nd = sidx_v3_dot(b->axis[k], r->dir), no = sidx_v3_dot(b->axis[k], r->org);
+        if (nd == 0.0f) { /* outside a slab it runs parallel to: never inside the box */
+            if (no < b->lo[k] || no > b->hi[k]) { t0 = INFINITY; t1 = -INFINITY; }
+            continue;
+        }
+        const float inv = 1.0f / nd;
+        float ta = (b->lo[k] - no) * inv, tb = (b->hi[k] - no) * inv;
+        if (ta > tb) { const float tmp = ta; ta = tb; tb = tmp; }
+        t0 = ta > t0 ? ta : t0;
+        t1 = tb < t1 ? tb : t1;
+    }
+    *t_near = t0;
+    *t_far = t1;
+    return t0 <= t1;
+}
+
+#endif

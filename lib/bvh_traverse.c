@@ -1,0 +1,336 @@
+/* bvh_traverse.c — walking the BVH, three ways (q->traversal):
+ *
+ *   naive    the deck's first "BVH Traversal": test the node's box, give
+ *            up if it is missed or lies behind the best hit so far, else
+ *            recurse into BOTH children, left then right;
+ *   ordered  the deck's "Better BVH Traversal": test both children's
+ *            boxes, recurse into the nearer first and into the farther
+ *            only if its entry distance is still below the best hit
+ *            ("Only check far bbox if closest primitive in the near bbox
+ *            is farther than the closest point intersected in the far
+ *            bbox");
+ *   stack    (the default) the same ordered descent without recursion:
+ *            go to the nearer child, push the farther with its entry
+ *            distance, pop when a leaf is done and drop popped nodes whose
+ *            entry is no longer closer than the best hit.  The stack is a
+ *            fixed array of BVH_DEPTH_LIMIT entries: the build never makes
+ *            a deeper tree and a descent defers at most one sibling per
+ *            level, so it cannot overflow and nothing is allocated.
+ *
+ * Each is written once with a `const int traced` parameter and
+ * instantiated twice (docs/adding-a-structure.md §3): in the traced = 0
+ * copies every SIDX_EMIT is dead code.  The stack walk is additionally
+ * instantiated per box kind (AABB / oriented) and per query kind (closest
+ * / any hit) so the fast path has no per-node branch on either. */
+#include "bvh_internal.h"
+
+#define SIDX_STRUCTURE_NAME (a->name)
+
+static SIDX_INLINE int node_box(const bvh *b, const bvh_ray *br, const sidx_ray *r, uint32_t i, float tf_scale,
+                                float tmin, float tmax, float *tn, float *tf, const int obb)
+{
+    if (obb) return bvh_obb_test(r, &b->obbs[i], tmin, tmax, tn, tf);
+    return bvh_slab(br, &b->nodes[i], tf_scale, tmin, tmax, tn, tf);
+}
+
+/* Test a leaf's triangles (contiguous copies, original ids in prim_id).
+ * The same sidx__tri_test on the same vertices as brute force, so a hit
+ * has bit-identical t.  Returns 1 when an any-hit query may stop. */
+static SIDX_INLINE int leaf_test(const sidx_accel *a, const bvh *b, const bvh_node *n, const sidx_ray *r,
+                                 const sidx_query *q, float *best, uint32_t *prim,
+                                 const int anyhit, const int traced)
+{
+    const sidx_tri_method m = a->opt.tri;
+    const uint32_t first = n->left_or_first, end = first + bvh_count(n);
+    for (uint32_t i = first; i < end; ++i) {
+        const bvh_tri *tr = &b->tris[i];
+        float t;
+const int h = sidx__tri_test(m, r, tr->v[0], tr->v[1], tr->v[2], *best, &t, NULL, NULL);
+        SIDX_EMIT(traced, q->hook, SIDX_EV_PRIM_TEST, e_.ray_id = q->ray_id; e_.node = (uint32_t)(n - b->nodes);
+                  e_.prim = b->prim_id[i]; e_.result = h; e_.t = h ? t : INFINITY);
+        if (h) {
+            *prim = b->prim_id[i];
+            if (anyhit) return 1;
+            *best = t;
+            SIDX_EMIT(traced, q->hook, SIDX_EV_HIT_UPDATE, e_.ray_id = q->ray_id; e_.prim = *prim; e_.t = t);
+        }
+    }
+    return 0;
+}
+
+#define EMIT_BOX(node_, res_, tn_, tf_)                                                                     \
+    SIDX_EMIT(traced, q->hook, SIDX_EV_BOX_TEST, e_.ray_id = q->ray_id; e_.node = (node_);                 \
+              e_.bounds = bvh_node_box(&b->nodes[(node_)]); e_.result = (res_);                            \
+              e_.t_near = (res_) ? (tn_) : NAN; e_.t_far = (res_) ? (tf_) : NAN)
+
+/* ---- stack (the fast path) -------------------------------------------- */
+
+
+static SIDX_INLINE int stack_walk(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit,
+                                  const int traced, const int anyhit, const int obb)
+{
+    const bvh *b = a->impl;
+    const bvh_node *nodes = b->nodes;
+    const float scale = a->opt.box == SIDX_BOX_ROBUST ? SIDX_ROBUST_TFAR_SCALE : 1.0f;
+    const float tmin = r->tmin;
+    float best = anyhit ? r->tmax : hit->t;
+    uint32_t prim = SIDX_NO_HIT, visited = 0;
+    bvh_ray br;
+    bvh_ray_setup(&br, r);
+    if (b->num_nodes == 0) {
+        SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = SIDX_TERM_MISS_ROOT;
+                  e_.count = 0);
+        return 0;
+    }
+    float tn, tf;
+    const int hroot = node_box(b, &br, r, 0, scale, tmin, best, &tn, &tf, obb);
+    EMIT_BOX(0u, hroot, tn, tf);
+    if (!hroot) {
+        SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = SIDX_TERM_MISS_ROOT;
+                  e_.count = 0);
+        return 0;
+    }
+    /* Deferred far children and their entry distances; depth and exit
+     * distance only for the events (dead stores in the untraced copy). */
+    uint32_t stk[BVH_DEPTH_LIMIT], stk_depth[BVH_DEPTH_LIMIT];
+    float stk_tn[BVH_DEPTH_LIMIT], stk_tf[BVH_DEPTH_LIMIT];
+    uint32_t sp = 0, node = 0, depth = 0;
+    for (;;) {
+        ++visited;
+        SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id; e_.node = node; e_.depth = depth;
+                  e_.t_near = tn; e_.t_far = tf);
+        const bvh_node *n = &nodes[node];
+        if (bvh_is_leaf(n)) {
+            if (leaf_test(a, b, n, r, q, &best, &prim, anyhit, traced)) {
+                SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id;
+                          e_.reason = SIDX_TERM_ANY_HIT; e_.count = visited);
+                return 1;
+            }
+        } else {
+            const uint32_t l = node + 1, rc = n->left_or_first;
+            float ln, lf, rn, rf;
+            const int hl = node_box(b, &br, r, l, scale, tmin, best, &ln, &lf, obb);
+            const int hr = node_box(b, &br, r, rc, scale, tmin, best, &rn, &rf, obb);
+            EMIT_BOX(l, hl, ln, lf);
+            EMIT_BOX(rc, hr, rn, rf);
+            if (hl && hr) {
+                /* Both: nearer entry first (ties: left), the other waits.
+                 * (A branch-free version of this choice measured no
+                 * faster with gcc -O2; this one reads like the slide.) */
+                uint32_t near = l, far = rc;
+                float fn = rn, ff = rf;
+                tn = ln;
+                tf = lf;
+                if (rn < ln) {
+                    near = rc;
+                    far = l;
+                    fn = ln;
+                    ff = lf;
+                    tn = rn;
+                    tf = rf;
+                }
+                stk[sp] = far;
+                stk_tn[sp] = fn;
+                if (traced) {
+                    stk_depth[sp] = depth + 1;
+                    stk_tf[sp] = ff;
+                }
+                ++sp;
+                SIDX_EMIT(traced, q->hook, SIDX_EV_STACK_PUSH, e_.ray_id = q->ray_id; e_.node = far; e_.depth = sp;
+                          e_.t_near = fn; e_.t_far = ff);
+                node = near;
+                ++depth;
+                continue;
+            }
+            if (hl | hr) {
+                node = hl ? l : rc;
+                tn = hl ? ln : rn;
+                tf = hl ? lf : rf;
+                ++depth;
+                continue;
+            }
+        }
+        /* Pop the next deferred node that can still hold a closer hit. */
+        for (;;) {
+            if (sp == 0) {
+                SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id;
+                          e_.reason = SIDX_TERM_STACK_EMPTY; e_.t = best; e_.count = visited);
+                if (!anyhit && prim != SIDX_NO_HIT) {
+                    hit->t = best;
+                    hit->prim = prim;
+                }
+                return 0;
+            }
+            --sp;
+            SIDX_EMIT(traced, q->hook, SIDX_EV_STACK_POP, e_.ray_id = q->ray_id; e_.node = stk[sp];
+                      e_.depth = sp + 1; e_.t_near = stk_tn[sp]; e_.t_far = stk_tf[sp]);
+            if (stk_tn[sp] < best) {
+                node = stk[sp];
+                tn = stk_tn[sp];
+                if (traced) {
+                    tf = stk_tf[sp];
+                    depth = stk_depth[sp];
+                }
+                break;
+            }
+        }
+    }
+}
+
+/* ---- recursive: naive and ordered --------------------------------------- */
+
+typedef struct walk {
+    const sidx_accel *a;
+    const bvh *b;
+    const sidx_ray *r;
+    const sidx_query *q;
+    bvh_ray br;
+    float scale, best;
+    uint32_t prim, visited;
+    int anyhit, obb;
+} walk;
+
+static int naive_rec0(walk *w, uint32_t node, uint32_t depth);
+static int naive_rec1(walk *w, uint32_t node, uint32_t depth);
+static int ordered_rec0(walk *w, uint32_t node, uint32_t depth, float tn, float tf);
+static int ordered_rec1(walk *w, uint32_t node, uint32_t depth, float tn, float tf);
+
+static SIDX_INLINE int walk_box(walk *w, uint32_t i, float *tn, float *tf)
+{
+    return w->obb ? node_box(w->b, &w->br, w->r, i, w->scale, w->r->tmin, w->best, tn, tf, 1)
+                  : node_box(w->b, &w->br, w->r, i, w->scale, w->r->tmin, w->best, tn, tf, 0);
+}
+
+static SIDX_INLINE int walk_leaf(walk *w, const bvh_node *n, const int traced)
+{
+    return w->anyhit ? leaf_test(w->a, w->b, n, w->r, w->q, &w->best, &w->prim, 1, traced)
+                     : leaf_test(w->a, w->b, n, w->r, w->q, &w->best, &w->prim, 0, traced);
+}
+
+/* The deck's hit(ray, node, best): "test if ray hits node's bbox ... if
+ * (hit.prim == NULL || hit.t > best.t) return" — the box is clipped to
+ * [tmin, best], so a box behind the best hit is a miss — then leaves test
+ * their primitives and inner nodes "traverse BOTH children". */
+static SIDX_INLINE int naive_body(walk *w, uint32_t node, uint32_t depth, const int traced)
+{
+    const sidx_accel *a = w->a;
+    const bvh *b = w->b;
+    const sidx_query *q = w->q;
+    float tn, tf;
+    const int h = walk_box(w, node, &tn, &tf);
+    EMIT_BOX(node, h, tn, tf);
+    if (!h) return 0;
+    ++w->visited;
+    SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id; e_.node = node; e_.depth = depth;
+              e_.t_near = tn; e_.t_far = tf);
+    const bvh_node *n = &b->nodes[node];
+    if (bvh_is_leaf(n)) return walk_leaf(w, n, traced);
+    const uint32_t right = n->left_or_first;
+    if (traced ? naive_rec1(w, node + 1, depth + 1) : naive_rec0(w, node + 1, depth + 1)) return 1;
+    return traced ? naive_rec1(w, right, depth + 1) : naive_rec0(w, right, depth + 1);
+}
+static int naive_rec0(walk *w, uint32_t node, uint32_t depth) { return naive_body(w, node, depth, 0); }
+static int naive_rec1(walk *w, uint32_t node, uint32_t depth) { return naive_body(w, node, depth, 1); }
+
+/* The deck's better hit(): the node's own box was tested by its parent
+ * (or by the caller for the root), so test both children, visit the one
+ * with the smaller entry t first, the other only if it can still win. */
+static SIDX_INLINE int ordered_body(walk *w, uint32_t node, uint32_t depth, float tn, float tf, const int traced)
+{
+    const sidx_accel *a = w->a;
+    const bvh *b = w->b;
+    const sidx_query *q = w->q;
+    ++w->visited;
+    SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id; e_.node = node; e_.depth = depth;
+              e_.t_near = tn; e_.t_far = tf);
+    const bvh_node *n = &b->nodes[node];
+    if (bvh_is_leaf(n)) return walk_leaf(w, n, traced);
+    uint32_t c1 = node + 1, c2 = n->left_or_first;
+    float n1, f1, n2, f2;
+    int h1 = walk_box(w, c1, &n1, &f1);
+    int h2 = walk_box(w, c2, &n2, &f2);
+    EMIT_BOX(c1, h1, n1, f1);
+    EMIT_BOX(c2, h2, n2, f2);
+    if (h2 && (!h1 || n2 < n1)) { /* the right child is the nearer one */
+        uint32_t tc = c1; c1 = c2; c2 = tc;
+        int th = h1; h1 = h2; h2 = th;
+        float t = n1; n1 = n2; n2 = t;
+        t = f1; f1 = f2; f2 = t;
+    }
+    if (h1 && (traced ? ordered_rec1(w, c1, depth + 1, n1, f1) : ordered_rec0(w, c1, depth + 1, n1, f1)))
+        return 1;
+    if (h2 && n2 < w->best)
+        return traced ? ordered_rec1(w, c2, depth + 1, n2, f2) : ordered_rec0(w, c2, depth + 1, n2, f2);
+    return 0;
+}
+static int ordered_rec0(walk *w, uint32_t node, uint32_t depth, float tn, float tf)
+{
+    return ordered_body(w, node, depth, tn, tf, 0);
+}
+static int ordered_rec1(walk *w, uint32_t node, uint32_t depth, float tn, float tf)
+{
+    return ordered_body(w, node, depth, tn, tf, 1);
+}
+
+static SIDX_INLINE int recursive_walk(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit,
+                                      const int anyhit, const int ordered, const int traced)
+{
+    const bvh *b = a->impl;
+    walk w;
+    w.a = a;
+    w.b = b;
+    w.r = r;
+    w.q = q;
+    bvh_ray_setup(&w.br, r);
+    w.scale = a->opt.box == SIDX_BOX_ROBUST ? SIDX_ROBUST_TFAR_SCALE : 1.0f;
+    w.best = anyhit ? r->tmax : hit->t;
+    w.prim = SIDX_NO_HIT;
+    w.visited = 0;
+    w.anyhit = anyhit;
+    w.obb = b->obbs != NULL;
+    int found = 0, missed_root = b->num_nodes == 0;
+    if (!missed_root) {
+        if (ordered) {
+            float tn, tf;
+            const int h = walk_box(&w, 0, &tn, &tf);
+            EMIT_BOX(0u, h, tn, tf);
+            if (h) found = traced ? ordered_rec1(&w, 0, 0, tn, tf) : ordered_rec0(&w, 0, 0, tn, tf);
+            else missed_root = 1;
+        } else {
+            found = traced ? naive_rec1(&w, 0, 0) : naive_rec0(&w, 0, 0);
+            missed_root = w.visited == 0;
+        }
+    }
+    SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id;
+              e_.reason = found ? SIDX_TERM_ANY_HIT : missed_root ? SIDX_TERM_MISS_ROOT : SIDX_TERM_STACK_EMPTY;
+              e_.t = anyhit ? INFINITY : w.best; e_.count = w.visited);
+    if (!anyhit && w.prim != SIDX_NO_HIT) {
+        hit->t = w.best;
+        hit->prim = w.prim;
+    }
+    return found;
+}
+
+/* ---- entry points ---------------------------------------------------------- */
+
+static SIDX_INLINE int dispatch(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit,
+                                const int anyhit, const int traced)
+{
+    const int obb = ((const bvh *)a->impl)->obbs != NULL;
+    switch (q->traversal) {
+    case SIDX_TRAVERSE_NAIVE: return recursive_walk(a, r, q, hit, anyhit, 0, traced);
+    case SIDX_TRAVERSE_ORDERED: return recursive_walk(a, r, q, hit, anyhit, 1, traced);
+    default: return obb ? stack_walk(a, r, q, hit, traced, anyhit, 1) : stack_walk(a, r, q, hit, traced, anyhit, 0);
+    }
+}
+
+void sidx__bvh_intersect(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
+{
+    if (SIDX_QUERY_TRACED(q)) dispatch(a, r, q, hit, 0, 1);
+    else dispatch(a, r, q, hit, 0, 0);
+}
+
+int sidx__bvh_occluded(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
+{
+    return SIDX_QUERY_TRACED(q) ? dispatch(a, r, q, NULL, 1, 1) : dispatch(a, r, q, NULL, 1, 0);
+}
