@@ -133,7 +133,9 @@ static void finish_hit(const sidx_accel *a, const sidx_ray *r, const sidx_query 
         *hit = sidx_hit_none();
         return;
     }
-    hit->instance = SIDX_NO_HIT;
+    /* Aggregates (instance.c) set the instance and fill u, v, ng in world
+     * space themselves: their a->mesh is not where the hit lies. */
+    if (hit->instance != SIDX_NO_HIT) return;
     if (!(q->flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL))) return;
     const sidx_mesh *m = a->mesh;
     const sidx_vec3 p0 = sidx_mesh_vertex(m, hit->prim, 0), p1 = sidx_mesh_vertex(m, hit->prim, 1),

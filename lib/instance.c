@@ -1,0 +1,424 @@
+/* instance.c — the aggregate object and instancing (see sidx/instance.h).
+ *
+ * Build: invert every transform (the ray goes into object space, not the
+ * geometry into world space), transform the child's bounds into a world
+ * box (the 8 corners: an affine map of a box is bounded by the box of its
+ * corners), and build a small BVH over the world boxes (boxtree.c) — the
+ * issue's "top level is a BVH over instances".
+ *
+ * Query: walk the top BVH nearer child first, skipping boxes that begin
+ * beyond the best hit; at an instance, o' = M⁻¹·o, d' = M⁻¹₃·d (not
+ * renormalized, so the t of a hit is the same in both spaces) and the
+ * child's own traversal runs with the best t so far as its bound.  Events
+ * of the child flow to the same hook, bracketed by a NOTE naming the
+ * instance. */
+#include <stdio.h>
+#include "sidx_internal.h"
+#include "boxtree.h"
+#include "sidx/instance.h"
+
+#define SIDX_STRUCTURE_NAME "aggregate"
+
+typedef struct agg_inst {
+    const sidx_accel *accel;
+    float m[12];            /* object to world */
+    float inv[12];          /* world to object */
+    uint32_t leaf_base;     /* first leaf instance id */
+    int nested;             /* child is an aggregate */
+} agg_inst;
+
+typedef struct agg_impl {
+    agg_inst *inst;
+    uint32_t n;
+    uint32_t leaves;        /* leaf instances in total */
+    sidx__boxtree tree;
+    sidx_aabb box;
+} agg_impl;
+
+static const sidx_mesh agg_no_mesh = {NULL, NULL, 0, 0};
+extern const sidx_accel_vtable sidx__aggregate_vtable;
+
+int sidx_accel_is_aggregate(const sidx_accel *a) { return a && a->vt == &sidx__aggregate_vtable; }
+
+/* ---- affine helpers ------------------------------------------------------------ */
+
+static sidx_vec3 xf_point(const float *m, sidx_vec3 p)
+{
+    return sidx_v3(m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3], m[4] * p.x + m[5] * p.y + m[6] * p.z + m[7],
+                   m[8] * p.x + m[9] * p.y + m[10] * p.z + m[11]);
+}
+static sidx_vec3 xf_vector(const float *m, sidx_vec3 v)
+{
+    return sidx_v3(m[0] * v.x + m[1] * v.y + m[2] * v.z, m[4] * v.x + m[5] * v.y + m[6] * v.z,
+                   m[8] * v.x + m[9] * v.y + m[10] * v.z);
+}
+/* normals go by the inverse transpose: n_world = (M⁻¹)ᵀ·n */
+static sidx_vec3 xf_normal(const float *inv, sidx_vec3 n)
+{
+    return sidx_v3(inv[0] * n.x + inv[4] * n.y + inv[8] * n.z, inv[1] * n.x + inv[5] * n.y + inv[9] * n.z,
+                   inv[2] * n.x + inv[6] * n.y + inv[10] * n.z);
+}
+/* a∘b (apply b first), both 3×4 */
+static void xf_compose(const float *a, const float *b, float *out)
+{
+    for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 4; ++c) {
+            double s = c == 3 ? a[4 * r + 3] : 0.0;
+            for (int k = 0; k < 3; ++k) s += (double)a[4 * r + k] * b[4 * k + c];
+            out[4 * r + c] = (float)s;
+        }
+    }
+}
+/* Inverse of an affine 3×4 in double; 0 if singular or not finite. */
+static int xf_invert(const float *m, float *inv)
+{
+    double a[9];
+    for (int r = 0; r < 3; ++r) for (int c = 0; c < 3; ++c) a[3 * r + c] = m[4 * r + c];
+    const double c0 = a[4] * a[8] - a[5] * a[7], c1 = a[5] * a[6] - a[3] * a[8], c2 = a[3] * a[7] - a[4] * a[6];
+    const double det = a[0] * c0 + a[1] * c1 + a[2] * c2;
+    if (!(fabs(det) > 0.0) || !isfinite(det)) return 0;
+    const double id = 1.0 / det;
+    double b[9] = {c0 * id, (a[2] * a[7] - a[1] * a[8]) * id, (a[1] * a[5] - a[2] * a[4]) * id,
+                   c1 * id, (a[0] * a[8] - a[2] * a[6]) * id, (a[2] * a[3] - a[0] * a[5]) * id,
+                   c2 * id, (a[1] * a[6] - a[0] * a[7]) * id, (a[0] * a[4] - a[1] * a[3]) * id};
+    for (int r = 0; r < 3; ++r) {
+        double t = 0.0;
+        for (int k = 0; k < 3; ++k) t -= b[3 * r + k] * m[4 * k + 3];
+        for (int c = 0; c < 3; ++c) inv[4 * r + c] = (float)b[3 * r + c];
+        inv[4 * r + 3] = (float)t;
+    }
+    for (int i = 0; i < 12; ++i) if (!isfinite(inv[i])) return 0;
+    return 1;
+}
+
+static sidx_aabb child_bounds(const sidx_accel *c)
+{
+    if (sidx_accel_is_aggregate(c)) return ((const agg_impl *)c->impl)->box;
+    return sidx_mesh_bounds(c->mesh);
+}
+
+static sidx_aabb xf_box(const float *m, sidx_aabb b)
+{
+    sidx_aabb out = sidx_aabb_empty();
+    if (sidx_aabb_is_empty(b)) return out;
+    for (int i = 0; i < 8; ++i) {
+        const sidx_vec3 p = sidx_v3(i & 1 ? b.max.x : b.min.x, i & 2 ? b.max.y : b.min.y, i & 4 ? b.max.z : b.min.z);
+        out = sidx_aabb_grow(out, xf_point(m, p));
+    }
+    return out;
+}
+
+/* ---- build ------------------------------------------------------------------------ */
+
+static void agg_destroy(sidx_accel *a)
+{
+    agg_impl *g = a->impl;
+    if (!g) return;
+    sidx__boxtree_free(&g->tree);
+    sidx__free(a, g->inst);
+    sidx__free(a, g);
+    a->impl = NULL;
+}
+
+static void *agg_malloc(size_t size, void *user) { (void)user; return malloc(size); }
+static void agg_mfree(void *p, void *user) { (void)user; free(p); }
+
+sidx_status sidx_aggregate_build(const sidx_instance *instances, uint32_t n, const sidx_build_options *opt,
+                                 sidx_accel **out, sidx_error *err)
+{
+    if (err) { err->status = SIDX_OK; err->message[0] = '\0'; }
+    if (!out) return sidx__fail(err, SIDX_ERR_INVALID_ARG, "aggregate: out is NULL");
+    *out = NULL;
+    if (n && !instances) return sidx__fail(err, SIDX_ERR_INVALID_ARG, "aggregate: instances is NULL");
+    sidx_allocator al = {agg_malloc, agg_mfree, NULL};
+    if (opt && opt->alloc) {
+        if (!opt->alloc->alloc || !opt->alloc->free)
+            return sidx__fail(err, SIDX_ERR_INVALID_ARG, "aggregate: allocator needs alloc and free");
+        al = *opt->alloc;
+    }
+    uint64_t leaves = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        if (!instances[i].accel) return sidx__fail(err, SIDX_ERR_INVALID_ARG, "aggregate: instance %u has no structure", i);
+        float inv[12];
+        if (!xf_invert(instances[i].xform, inv))
+            return sidx__fail(err, SIDX_ERR_INVALID_ARG, "aggregate: instance %u has a singular or non-finite transform", i);
+        leaves += sidx_aggregate_leaf_count(instances[i].accel);
+    }
+    if (leaves >= UINT32_MAX - 1) return sidx__fail(err, SIDX_ERR_LIMIT, "aggregate: too many leaf instances");
+    sidx_accel *a = al.alloc(sizeof *a, al.user);
+    if (!a) return sidx__fail(err, SIDX_ERR_NOMEM, "aggregate: out of memory");
+    memset(a, 0, sizeof *a);
+    a->vt = &sidx__aggregate_vtable;
+    a->name = "aggregate";
+    a->mesh = &agg_no_mesh;
+    a->alloc = al;
+    if (opt) { a->opt = *opt; a->opt.hook = NULL; a->opt.alloc = NULL; }
+    const sidx_hook *hook = opt ? opt->hook : NULL;
+    agg_impl *g = sidx__calloc(a, 1, sizeof *g);
+    sidx_aabb *boxes = NULL;
+    if (g) {
+        a->impl = g;
+        g->inst = sidx__alloc(a, n, sizeof *g->inst);
+        boxes = sidx__alloc(a, n, sizeof *boxes);
+    }
+    if (!g || !g->inst || !boxes) {
+        sidx__free(a, boxes);
+        agg_destroy(a);
+        al.free(a, al.user);
+        return sidx__fail(err, SIDX_ERR_NOMEM, "aggregate: out of memory");
+    }
+    g->n = n;
+    g->box = sidx_aabb_empty();
+    uint32_t base = 0;
+    const sidx_accel *last_child = NULL;
+    sidx_aabb last_box = sidx_aabb_empty();
+    for (uint32_t i = 0; i < n; ++i) {
+        agg_inst *in = &g->inst[i];
+        in->accel = instances[i].accel;
+        memcpy(in->m, instances[i].xform, sizeof in->m);
+        xf_invert(in->m, in->inv);
+        in->nested = sidx_accel_is_aggregate(in->accel);
+        in->leaf_base = base;
+        base += sidx_aggregate_leaf_count(in->accel);
+        if (in->accel != last_child) { last_child = in->accel; last_box = child_bounds(in->accel); }
+        boxes[i] = xf_box(in->m, last_box);
+        g->box = sidx_aabb_union(g->box, boxes[i]);
+    }
+    g->leaves = base;
+    SIDX_EMIT(1, hook, SIDX_EV_BUILD_BEGIN, e_.count = n; e_.bounds = g->box);
+    const sidx_status s = sidx__boxtree_build(&g->tree, boxes, n, 2, &al);
+    sidx__free(a, boxes);
+    if (s != SIDX_OK) {
+        agg_destroy(a);
+        al.free(a, al.user);
+        return sidx__fail(err, s, "aggregate: out of memory");
+    }
+    SIDX_EMIT(1, hook, SIDX_EV_BUILD_NODE, e_.node = 0; e_.parent = UINT32_MAX; e_.depth = 0; e_.count = n;
+              e_.bounds = g->tree.nodes[0].box);
+    for (uint32_t i = 0; i < g->tree.num_nodes; ++i) {
+        const sidx__btnode *nd = &g->tree.nodes[i];
+        if (nd->count == SIDX_BT_INNER) {
+            SIDX_EMIT(1, hook, SIDX_EV_BUILD_NODE, e_.node = nd->first; e_.parent = i; e_.bounds = g->tree.nodes[nd->first].box);
+            SIDX_EMIT(1, hook, SIDX_EV_BUILD_NODE, e_.node = nd->first + 1; e_.parent = i;
+                      e_.bounds = g->tree.nodes[nd->first + 1].box);
+        } else {
+            SIDX_EMIT(1, hook, SIDX_EV_BUILD_LEAF, e_.node = i; e_.count = nd->count; e_.reason = SIDX_LEAF_FEW_PRIMS);
+        }
+    }
+    SIDX_EMIT(1, hook, SIDX_EV_BUILD_END, e_.node = g->tree.num_nodes; e_.count = n; e_.depth = g->tree.depth);
+    *out = a;
+    return SIDX_OK;
+}
+
+uint32_t sidx_aggregate_leaf_count(const sidx_accel *a)
+{
+    if (!a) return 0;
+    return sidx_accel_is_aggregate(a) ? ((const agg_impl *)a->impl)->leaves : 1u;
+}
+
+sidx_status sidx_aggregate_leaf(const sidx_accel *a, uint32_t leaf_id, const sidx_accel **leaf, float xform[12])
+{
+    if (!sidx_accel_is_aggregate(a) || !leaf || !xform) return SIDX_ERR_INVALID_ARG;
+    float acc[12] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
+    for (;;) {
+        const agg_impl *g = a->impl;
+        if (leaf_id >= g->leaves) return SIDX_ERR_INVALID_ARG;
+        /* the instance whose id range holds leaf_id: binary search on leaf_base */
+        uint32_t lo = 0, hi = g->n;
+        while (hi - lo > 1) {
+            const uint32_t mid = lo + (hi - lo) / 2;
+            if (g->inst[mid].leaf_base <= leaf_id) lo = mid;
+            else hi = mid;
+        }
+        const agg_inst *in = &g->inst[lo];
+        float tmp[12];
+        xf_compose(acc, in->m, tmp);
+        memcpy(acc, tmp, sizeof acc);
+        if (!in->nested) {
+            *leaf = in->accel;
+            memcpy(xform, acc, sizeof acc);
+            return SIDX_OK;
+        }
+        leaf_id -= in->leaf_base;
+        a = in->accel;
+    }
+}
+
+/* ---- queries ------------------------------------------------------------------------ */
+
+/* One walk for both queries.  Returns 1 on a hit (any_hit: at the first). */
+static SIDX_INLINE int agg_walk(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit,
+                                const int any_hit, const int traced)
+{
+    const agg_impl *g = a->impl;
+    const int robust = a->opt.box == SIDX_BOX_ROBUST;
+    float best = any_hit ? r->tmax : hit->t;
+    uint32_t best_inst = UINT32_MAX;
+    sidx_hit best_hit = sidx_hit_none();
+    sidx_ray best_local;
+    memset(&best_local, 0, sizeof best_local);
+    struct { uint32_t node; float tn; } stack[SIDX_BOXTREE_STACK];
+    int sp = 0;
+    uint32_t visited = 0;
+    float tn, tf;
+    if (g->n && sidx__box_test(robust, r, &g->tree.nodes[0].box, r->tmin, best, &tn, &tf)) {
+        stack[0].node = 0;
+        stack[0].tn = tn;
+        sp = 1;
+    }
+    while (sp > 0) {
+        --sp;
+        if (stack[sp].tn > best) continue;
+        const uint32_t node = stack[sp].node;
+        const sidx__btnode *nd = &g->tree.nodes[node];
+        ++visited;
+        SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id; e_.node = node; e_.t_near = stack[sp].tn);
+        if (nd->count == SIDX_BT_INNER) {
+            float t0[2], t1[2];
+            int h[2];
+            for (int c = 0; c < 2; ++c) {
+                h[c] = sidx__box_test(robust, r, &g->tree.nodes[nd->first + c].box, r->tmin, best, &t0[c], &t1[c]);
+                SIDX_EMIT(traced, q->hook, SIDX_EV_BOX_TEST, e_.ray_id = q->ray_id; e_.node = nd->first + (uint32_t)c;
+                          e_.bounds = g->tree.nodes[nd->first + c].box; e_.result = h[c];
+                          e_.t_near = h[c] ? t0[c] : NAN; e_.t_far = h[c] ? t1[c] : NAN);
+            }
+            /* push the farther first so the nearer is walked first */
+            const int first = (h[0] && h[1]) ? (t0[1] < t0[0] ? 1 : 0) : (h[0] ? 0 : 1);
+            for (int k = 1; k >= 0; --k) {
+                const int c = k ? 1 - first : first;
+                if (h[c] && sp < SIDX_BOXTREE_STACK) { stack[sp].node = nd->first + (uint32_t)c; stack[sp].tn = t0[c]; ++sp; }
+            }
+            continue;
+        }
+        for (uint32_t k = 0; k < nd->count; ++k) {
+            const uint32_t i = g->tree.items[nd->first + k];
+            const agg_inst *in = &g->inst[i];
+            sidx_ray lr;
+            if (sidx_ray_init(&lr, xf_point(in->inv, r->org), xf_vector(in->inv, r->dir), r->tmin, best) != SIDX_OK)
+                continue; /* direction collapsed to 0 by rounding: nothing to see */
+            SIDX_EMIT(traced, q->hook, SIDX_EV_NOTE, e_.ray_id = q->ray_id; e_.node = node; e_.count = i;
+                      e_.aux = in->leaf_base; e_.text = "aggregate: ray enters instance (count = instance)");
+            if (any_hit) {
+                if (in->accel->vt->occluded(in->accel, &lr, q)) {
+                    SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = SIDX_TERM_ANY_HIT;
+                              e_.count = visited);
+                    return 1;
+                }
+                continue;
+            }
+            sidx_hit h = sidx_hit_none();
+            h.t = best;
+            in->accel->vt->intersect(in->accel, &lr, q, &h);
+            if (h.prim == SIDX_NO_HIT || !(h.t < best)) continue;
+            best = h.t;
+            best_inst = i;
+            best_hit = h;
+            best_local = lr;
+            SIDX_EMIT(traced, q->hook, SIDX_EV_HIT_UPDATE, e_.ray_id = q->ray_id; e_.prim = h.prim; e_.t = h.t;
+                      e_.count = in->leaf_base + (in->nested ? h.instance : 0u));
+        }
+    }
+    SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = SIDX_TERM_STACK_EMPTY;
+              e_.t = best_inst == UINT32_MAX ? INFINITY : best; e_.count = visited);
+    if (any_hit || best_inst == UINT32_MAX) return 0;
+    const agg_inst *in = &g->inst[best_inst];
+    hit->t = best_hit.t;
+    hit->prim = best_hit.prim;
+    hit->instance = in->leaf_base + (in->nested ? best_hit.instance : 0u);
+    if (q->flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL)) {
+        if (in->nested) {
+            /* the child aggregate filled them in its own world space */
+            hit->u = best_hit.u;
+            hit->v = best_hit.v;
+            hit->ng = xf_normal(in->inv, best_hit.ng);
+        } else {
+            const sidx_mesh *m = in->accel->mesh;
+            const sidx_vec3 p0 = sidx_mesh_vertex(m, hit->prim, 0), p1 = sidx_mesh_vertex(m, hit->prim, 1),
+                            p2 = sidx_mesh_vertex(m, hit->prim, 2);
+            float t, u = 0.0f, v = 0.0f;
+            /* same test, same local ray, bound just past the hit: same t (as accel.c does) */
+            if ((q->flags & SIDX_QUERY_UV) &&
+                sidx__tri_test(in->accel->opt.tri, &best_local, p0, p1, p2, nextafterf(hit->t, INFINITY), &t, &u, &v)) {
+                hit->u = u;
+                hit->v = v;
+            }
+            if (q->flags & SIDX_QUERY_NORMAL)
+                hit->ng = xf_normal(in->inv, sidx_v3_cross(sidx_v3_sub(p1, p0), sidx_v3_sub(p2, p0)));
+        }
+    }
+    return 1;
+}
+
+static void agg_intersect(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
+{
+    if (SIDX_QUERY_TRACED(q)) agg_walk(a, r, q, hit, 0, 1);
+    else agg_walk(a, r, q, hit, 0, 0);
+}
+
+static int agg_occluded(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
+{
+    sidx_hit dummy = sidx_hit_none();
+    return SIDX_QUERY_TRACED(q) ? agg_walk(a, r, q, &dummy, 1, 1) : agg_walk(a, r, q, &dummy, 1, 0);
+}
+
+static size_t own_bytes(const sidx_accel *a)
+{
+    const agg_impl *g = a->impl;
+    return sizeof *a + sizeof *g + (size_t)g->n * sizeof *g->inst + sidx__boxtree_bytes(&g->tree);
+}
+
+static void agg_stats(const sidx_accel *a, sidx_accel_stats *s)
+{
+    const agg_impl *g = a->impl;
+    s->nodes = g->tree.num_nodes;
+    s->leaves = 0;
+    for (uint32_t i = 0; i < g->tree.num_nodes; ++i) s->leaves += g->tree.nodes[i].count != SIDX_BT_INNER;
+    s->max_depth = g->tree.depth;
+    s->prim_refs = g->n;
+    s->bytes = own_bytes(a); /* the children are shared: see sidx_aggregate_info_get */
+    s->mean_leaf_prims = s->leaves ? (double)g->n / s->leaves : 0.0;
+}
+
+sidx_status sidx_aggregate_info_get(const sidx_accel *a, sidx_aggregate_info *out)
+{
+    if (!sidx_accel_is_aggregate(a) || !out) return SIDX_ERR_INVALID_ARG;
+    const agg_impl *g = a->impl;
+    memset(out, 0, sizeof *out);
+    out->instances = g->n;
+    out->leaf_instances = g->leaves;
+    out->own_bytes = own_bytes(a);
+    for (uint32_t i = 0; i < g->n; ++i) {
+        const sidx_accel *c = g->inst[i].accel;
+        if (sidx_accel_is_aggregate(c)) {
+            sidx_aggregate_info ci;
+            sidx_aggregate_info_get(c, &ci);
+            out->world_triangles += ci.world_triangles;
+        } else {
+            out->world_triangles += c->mesh->num_triangles;
+        }
+        /* distinct: first occurrence (quadratic only in the number of distinct children seen so far) */
+        int seen = 0;
+        for (uint32_t j = 0; j < i && !seen; ++j) seen = g->inst[j].accel == c;
+        if (seen) continue;
+        out->distinct_children++;
+        if (sidx_accel_is_aggregate(c)) {
+            sidx_aggregate_info ci;
+            sidx_aggregate_info_get(c, &ci);
+            out->shared_bytes += ci.own_bytes + ci.shared_bytes;
+        } else {
+            sidx_accel_stats st;
+            sidx_accel_stats_get(c, &st);
+            out->shared_bytes += st.bytes;
+        }
+    }
+    return SIDX_OK;
+}
+
+static sidx_status agg_build_unused(sidx_accel *a, sidx_error *err)
+{
+    (void)a;
+    return sidx__fail(err, SIDX_ERR_UNSUPPORTED, "aggregates are built with sidx_aggregate_build");
+}
+
+const sidx_accel_vtable sidx__aggregate_vtable = {agg_build_unused, agg_intersect, agg_occluded, agg_stats, agg_destroy,
+                                                  NULL};
