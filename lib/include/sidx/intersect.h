@@ -10,7 +10,7 @@
  *
  *   test               edge / vertex      degenerate tri   parallel ray (D = 0)
  *   -----------------  -----------------  ---------------  --------------------
- *   watertight         hit (inclusive),   miss             miss, even when the
+ *   watertight         hit (inclusive),   miss (see below) miss, even when the
  *   (default)          never a leak:                       ray lies in the
  *                      a ray through a                     triangle's plane
  *                      shared edge hits
@@ -19,6 +19,13 @@
  *                      rounding allows;
  *                      may leak
  *   two_step           as moller          miss (N = 0)     miss (N·d = 0)
+ *
+ * Degenerate triangles: all three tests miss when two vertices coincide or
+ * for any ray that does not pass through the triangle's line.  For three
+ * distinct collinear vertices the watertight test's edge functions are all
+ * zero only in exact arithmetic; a ray aimed exactly at a point of that
+ * segment can therefore register a hit — at the correct t, on the segment
+ * (tests/test_accel_suite.c checks exactly that).  Everywhere else: miss.
  *
  * A negative t ("What if t is negative?" on the slides) is an intersection
  * behind the origin: every test reports it as a miss when t < tmin.
