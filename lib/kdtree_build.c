@@ -1,0 +1,894 @@
+/* kdtree_build.c — building kd-trees, the deck's way and the good way.
+ *
+ * The deck ("Building kD-trees"): given a cell and the primitives touching
+ * it, pick an axis-aligned plane, sift the geometry into two batches (with
+ * some duplication), recurse, and know when to stop.  Four builders share
+ * the node allocation, leaf writing and event emission below:
+ *
+ *   kdtree          SAH ("Building good kD-trees": C_trav + SA(L)/SA(c)·N_L·C_tri
+ *                   + SA(R)/SA(c)·N_R·C_tri) over every candidate plane, with the
+ *                   O(n log n) event sweep of Wald & Havran 2006, "On building
+ *                   fast kd-trees for ray tracing, and on doing that in
+ *                   O(N log N)": events are sorted once at the root and each
+ *                   node's sorted lists are split for its children in linear
+ *                   time; only the few straddling triangles get new events,
+ *                   which are sorted (small) and merged in.
+ *   kdtree-binned   SAH evaluated at opt.bins fixed planes per axis ("or
+ *                   predefined locations (fixed number of bins across bbox axis)").
+ *   kdtree-median   the deck's "intuitive" build: largest extent, median of geometry.
+ *   kdtree-middle   the same with the middle of the extent.
+ *
+ * All of them use "perfect splits" (Havran 2000; Wald & Havran 2006 §4.3):
+ * a triangle that straddles a plane is clipped to each child cell
+ * (Sutherland–Hodgman on the triangle polygon) and its candidate planes in
+ * the child come from the clipped box, not from the triangle's full box. */
+#include <stdio.h>
+#include "kdtree_internal.h"
+
+#define SIDX_STRUCTURE_NAME "kdtree"
+
+/* Look-ahead of the SAH termination ("Threshold of cost improvement — but
+ * stretch decision over multiple levels, to avoid local minima"): a path may
+ * take this many splits that do not beat the leaf cost before giving up,
+ * pbrt-v3's badRefines (Pharr, Jakob, Humphreys, 4.4.2). */
+#define KD_LOOKAHEAD 3u
+
+/* ---- builder state ------------------------------------------------------ */
+
+typedef struct kd_builder {
+    sidx_accel *a;
+    const sidx_hook *hook;
+    const char *name;
+    const kd_tri *tris;
+    kd_node *nodes;
+    size_t nodes_cap;
+    uint32_t num_nodes;
+    uint32_t *prims;
+    size_t prims_cap;
+    uint32_t num_refs;
+    uint8_t *cls;           /* WH06 per-triangle classification scratch */
+    float c_trav, c_tri, lambda; /* lambda = 1 − empty bonus */
+    uint32_t leaf_size, max_depth, bins;
+    int variant;
+    float inv_root_area;
+    uint32_t leaves, empty_leaves, depth;
+    double sah;
+} kd_builder;
+
+static float axis_of(sidx_vec3 v, uint32_t k) { return k == 0 ? v.x : k == 1 ? v.y : v.z; }
+static void set_axis(sidx_vec3 *v, uint32_t k, float x)
+{
+    if (k == 0) v->x = x;
+    else if (k == 1) v->y = x;
+    else v->z = x;
+}
+
+/* Probability of a random ray through the node hitting it, relative to
+ * the root ("proportional to surface area ... not the volume"). */
+static double rel_area(const kd_builder *b, uint32_t idx, sidx_aabb cell)
+{
+    return idx == 0 ? 1.0 : (double)sidx_aabb_area(cell) * b->inv_root_area;
+}
+
+static sidx_status alloc_pair(kd_builder *b, uint32_t *child)
+{
+    if (b->num_nodes > KD_INDEX_LIMIT - 2u) return SIDX_ERR_LIMIT;
+    void *p = b->nodes;
+    if (!sidx__grow(b->a, &p, &b->nodes_cap, (size_t)b->num_nodes + 2u, sizeof(kd_node))) return SIDX_ERR_NOMEM;
+    b->nodes = p;
+    *child = b->num_nodes;
+    b->num_nodes += 2u;
+    return SIDX_OK;
+}
+
+/* Reserve n slots of the primitive-index array for a leaf. */
+static sidx_status leaf_reserve(kd_builder *b, uint32_t n, uint32_t *offset)
+{
+    if (n > KD_INDEX_LIMIT - 1u - b->num_refs) return SIDX_ERR_LIMIT;
+    void *p = b->prims;
+    if (n && !sidx__grow(b->a, &p, &b->prims_cap, (size_t)b->num_refs + n, sizeof(uint32_t)))
+        return SIDX_ERR_NOMEM;
+    b->prims = p;
+    *offset = b->num_refs;
+    b->num_refs += n;
+    return SIDX_OK;
+}
+
+static void leaf_finish(kd_builder *b, uint32_t idx, uint32_t depth, sidx_aabb cell, uint32_t n, uint32_t offset,
+                        int reason)
+{
+    b->nodes[idx] = kd_make_leaf(n, n ? offset : 0u);
+    b->leaves++;
+    if (n == 0) b->empty_leaves++;
+    if (depth > b->depth) b->depth = depth;
+    const float cost = b->c_tri * (float)n;
+    b->sah += rel_area(b, idx, cell) * cost;
+    SIDX_EMIT(1, b->hook, SIDX_EV_BUILD_LEAF, e_.structure = b->name; e_.node = idx; e_.depth = depth; e_.count = n;
+              e_.cost = cost; e_.reason = reason; e_.bounds = cell);
+}
+
+static void inner_finish(kd_builder *b, uint32_t idx, uint32_t depth, sidx_aabb cell, uint32_t axis, float pos,
+                         uint32_t child, float cost, uint32_t nl, uint32_t nr)
+{
+    b->nodes[idx] = kd_make_inner(axis, pos, child);
+    if (depth > b->depth) b->depth = depth;
+    b->sah += rel_area(b, idx, cell) * b->c_trav;
+    SIDX_EMIT(1, b->hook, SIDX_EV_BUILD_SPLIT, e_.structure = b->name; e_.node = idx; e_.depth = depth;
+              e_.axis = (int32_t)axis; e_.pos = pos; e_.cost = cost; e_.count = nl; e_.aux = nr; e_.bounds = cell);
+}
+
+static void emit_node(kd_builder *b, uint32_t idx, uint32_t parent, uint32_t depth, sidx_aabb cell, uint32_t n)
+{
+    SIDX_EMIT(1, b->hook, SIDX_EV_BUILD_NODE, e_.structure = b->name; e_.node = idx; e_.parent = parent;
+              e_.depth = depth; e_.bounds = cell; e_.count = n);
+}
+
+static void split_cell(sidx_aabb cell, uint32_t axis, float pos, sidx_aabb *l, sidx_aabb *r)
+{
+    *l = cell;
+    *r = cell;
+    set_axis(&l->max, axis, pos);
+    set_axis(&r->min, axis, pos);
+}
+
+/* The SAH of one candidate (the deck's formula), with the empty-space
+ * bonus of Wald & Havran 2006 (λ = 1 − bonus when one side is empty): a
+ * split that cuts off empty space lets rays skip it cheaply and, in a
+ * kd-tree, lets them terminate early, which the plain SAH does not see. */
+static float sah_cost(const kd_builder *b, sidx_aabb cell, float inv_area, uint32_t axis, float pos, uint32_t nl,
+                      uint32_t nr)
+{
+    const float lo = axis_of(cell.min, axis), hi = axis_of(cell.max, axis);
+    const sidx_vec3 e = sidx_aabb_extent(cell);
+    const float ea = axis == 0 ? e.y : e.x, eb = axis == 2 ? e.y : e.z;
+    const float cross = ea * eb, perim = ea + eb;
+    const float pl = 2.0f * (cross + (pos - lo) * perim) * inv_area;
+    const float pr = 2.0f * (cross + (hi - pos) * perim) * inv_area;
+    float c = b->c_trav + b->c_tri * (pl * (float)nl + pr * (float)nr);
+    if (nl == 0 || nr == 0) c *= b->lambda;
+    return c;
+}
+
+/* ---- perfect splits: clip a triangle to a cell --------------------------- */
+
+#define CLIP_CAP 24
+
+/* Bounds of triangle ∩ cell (Sutherland–Hodgman against the six planes).
+ * The result is grown by a few ulps and then clamped to both the
+ * triangle's own box and the cell: rounding in the clipped vertices must
+ * never make the box smaller than the true intersection, or a triangle
+ * could miss a cell it pokes into (a leak).  If rounding clips everything
+ * away the caller already knows the triangle straddles, so we fall back to
+ * the always-conservative triangle box ∩ cell. */
+static sidx_aabb clip_bounds(const kd_tri *t, sidx_aabb cell)
+{
+    sidx_vec3 buf[2][CLIP_CAP];
+    int n = 3, cur = 0;
+    buf[0][0] = t->v0;
+    buf[0][1] = t->v1;
+    buf[0][2] = t->v2;
+    sidx_aabb tb = sidx_aabb_empty();
+    tb = sidx_aabb_grow(sidx_aabb_grow(sidx_aabb_grow(tb, t->v0), t->v1), t->v2);
+    int ok = 1;
+    for (uint32_t k = 0; k < 3 && ok; ++k) {
+        for (int side = 0; side < 2 && ok; ++side) {
+            const float plane = side ? axis_of(cell.max, k) : axis_of(cell.min, k);
+            const sidx_vec3 *in = buf[cur];
+            sidx_vec3 *out = buf[cur ^ 1];
+            int m = 0;
+            if (n > CLIP_CAP / 2) { ok = 0; break; }
+            for (int i = 0; i < n; ++i) {
+                const sidx_vec3 p = in[i], q = in[(i + 1) % n];
+                const float dp = side ? plane - axis_of(p, k) : axis_of(p, k) - plane;
+                const float dq = side ? plane - axis_of(q, k) : axis_of(q, k) - plane;
+                if (dp >= 0.0f) out[m++] = p;
+                if ((dp >= 0.0f) != (dq >= 0.0f)) {
+                    const float s = dp / (dp - dq);
+                    sidx_vec3 v = sidx_v3_add(p, sidx_v3_scale(sidx_v3_sub(q, p), s));
+                    set_axis(&v, k, plane);
+                    out[m++] = v;
+                }
+            }
+            n = m;
+            cur ^= 1;
+            if (n == 0) ok = 0;
+        }
+    }
+    sidx_aabb r = sidx_aabb_empty();
+    if (ok) {
+        for (int i = 0; i < n; ++i) r = sidx_aabb_grow(r, buf[cur][i]);
+        for (uint32_t k = 0; k < 3; ++k) {
+            const float lo = axis_of(r.min, k), hi = axis_of(r.max, k);
+            const float eps = (fabsf(lo) + fabsf(hi)) * 0x1p-21f;
+            set_axis(&r.min, k, lo - eps);
+            set_axis(&r.max, k, hi + eps);
+        }
+    } else {
+        r = tb;
+    }
+    /* clamp to triangle box and cell; a collapsed axis becomes a point
+     * inside both (never an empty interval). */
+    for (uint32_t k = 0; k < 3; ++k) {
+        float lo = axis_of(r.min, k), hi = axis_of(r.max, k);
+        const float clo = fmaxf(axis_of(tb.min, k), axis_of(cell.min, k));
+        const float chi = fminf(axis_of(tb.max, k), axis_of(cell.max, k));
+        lo = fmaxf(lo, clo);
+        hi = fminf(hi, chi);
+        if (lo > hi) { lo = clo; hi = chi; }
+        if (lo > hi) lo = hi = fminf(fmaxf(axis_of(tb.min, k), axis_of(cell.min, k)), axis_of(cell.max, k));
+        set_axis(&r.min, k, lo);
+        set_axis(&r.max, k, hi);
+    }
+    return r;
+}
+
+/* ==== the SAH builder: Wald & Havran 2006 event sweep ===================== */
+
+/* An event is one 64-bit key: the position as an order-preserving 32-bit
+ * integer, then the type, then the primitive.  Sorting the keys as
+ * integers gives exactly the paper's order: by position, and at equal
+ * positions ends before planars before starts (so the sweep sees a plane's
+ * "p−" events before its "p+" ones). */
+typedef uint64_t kd_event;
+enum { EV_END = 0, EV_PLANAR = 1, EV_START = 2 };
+#define EV_PRIM_MASK (KD_INDEX_LIMIT - 1u)
+
+static uint32_t float_key(float f)
+{
+    uint32_t u;
+    f += 0.0f; /* −0 → +0: one plane, one key */
+    memcpy(&u, &f, sizeof u);
+    return (u & 0x80000000u) ? ~u : (u | 0x80000000u);
+}
+static float key_float(uint32_t k)
+{
+    const uint32_t u = (k & 0x80000000u) ? (k & 0x7fffffffu) : ~k;
+    float f;
+    memcpy(&f, &u, sizeof f);
+    return f;
+}
+static kd_event make_event(float pos, uint32_t type, uint32_t prim)
+{
+    return ((uint64_t)float_key(pos) << 32) | ((uint64_t)type << 30) | prim;
+}
+static uint32_t ev_key(kd_event e) { return (uint32_t)(e >> 32); }
+static uint32_t ev_type(kd_event e) { return (uint32_t)(e >> 30) & 3u; }
+static uint32_t ev_prim(kd_event e) { return (uint32_t)e & EV_PRIM_MASK; }
+
+static void sort_events(kd_event *a, size_t n)
+{
+    /* Quicksort (median of three, Hoare partition, loop on the larger
+     * half) with insertion sort below 16: keys are unique, so no
+     * three-way partition is needed. */
+    while (n > 16) {
+        const size_t m = n / 2;
+        kd_event t;
+        if (a[m] < a[0]) { t = a[m]; a[m] = a[0]; a[0] = t; }
+        if (a[n - 1] < a[0]) { t = a[n - 1]; a[n - 1] = a[0]; a[0] = t; }
+        if (a[n - 1] < a[m]) { t = a[n - 1]; a[n - 1] = a[m]; a[m] = t; }
+        const kd_event p = a[m];
+        ptrdiff_t i = -1, j = (ptrdiff_t)n;
+        for (;;) {
+            do ++i; while (a[i] < p);
+            do --j; while (a[j] > p);
+            if (i >= j) break;
+            t = a[i]; a[i] = a[j]; a[j] = t;
+        }
+        const size_t nl = (size_t)j + 1, nr = n - nl;
+        if (nl < nr) {
+            sort_events(a, nl);
+            a += nl;
+            n = nr;
+        } else {
+            sort_events(a + nl, nr);
+            n = nl;
+        }
+    }
+    for (size_t i = 1; i < n; ++i) {
+        const kd_event x = a[i];
+        size_t j = i;
+        while (j > 0 && a[j - 1] > x) { a[j] = a[j - 1]; --j; }
+        a[j] = x;
+    }
+}
+
+/* Events of box `bx` on axis k: a planar event for a flat extent, else a
+ * start and an end.  Returns how many were written. */
+static size_t box_events(kd_event *out, sidx_aabb bx, uint32_t k, uint32_t prim)
+{
+    const float lo = axis_of(bx.min, k), hi = axis_of(bx.max, k);
+    if (lo == hi) {
+        out[0] = make_event(lo, EV_PLANAR, prim);
+        return 1;
+    }
+    out[0] = make_event(lo, EV_START, prim);
+    out[1] = make_event(hi, EV_END, prim);
+    return 2;
+}
+
+enum { CLS_BOTH = 0, CLS_LEFT = 1, CLS_RIGHT = 2 };
+
+typedef struct sah_best {
+    float cost;
+    float pos;
+    uint32_t axis;
+    int planar_left;
+    uint32_t nl, nr;
+} sah_best;
+
+/* The sweep over one axis's sorted events (WH06 Alg. 4): N_L, N_P, N_R are
+ * updated plane by plane; planar triangles lying in the plane are tried on
+ * either side and put on the cheaper one.  Only planes strictly inside the
+ * cell are candidates: a plane on the cell's face separates nothing. */
+static void sweep_axis(kd_builder *b, uint32_t idx, sidx_aabb cell, float inv_area, uint32_t k, const kd_event *E,
+                       size_t m, uint32_t n, sah_best *best)
+{
+    const float lo = axis_of(cell.min, k), hi = axis_of(cell.max, k);
+    uint32_t nl = 0, nr = n;
+    size_t i = 0;
+    while (i < m) {
+        const uint32_t key = ev_key(E[i]);
+        const float p = key_float(key);
+        uint32_t pe = 0, pp = 0, ps = 0;
+        while (i < m && ev_key(E[i]) == key && ev_type(E[i]) == EV_END) { ++pe; ++i; }
+        while (i < m && ev_key(E[i]) == key && ev_type(E[i]) == EV_PLANAR) { ++pp; ++i; }
+        while (i < m && ev_key(E[i]) == key && ev_type(E[i]) == EV_START) { ++ps; ++i; }
+        nr -= pe + pp;
+        if (p > lo && p < hi) {
+            const float cl = sah_cost(b, cell, inv_area, k, p, nl + pp, nr);
+            const float cr = pp ? sah_cost(b, cell, inv_area, k, p, nl, nr + pp) : cl;
+            const int left = cl <= cr;
+            const float c = left ? cl : cr;
+            const uint32_t cnl = left ? nl + pp : nl, cnr = left ? nr : nr + pp;
+            SIDX_EMIT(1, b->hook, SIDX_EV_BUILD_CANDIDATE, e_.structure = b->name; e_.node = idx;
+                      e_.axis = (int32_t)k; e_.pos = p; e_.cost = c; e_.count = cnl; e_.aux = cnr);
+            if (c < best->cost) {
+                best->cost = c;
+                best->pos = p;
+                best->axis = k;
+                best->planar_left = left;
+                best->nl = cnl;
+                best->nr = cnr;
+            }
+        }
+        nl += ps + pp;
+    }
+}
+
+/* One node.  `ev` holds the node's three sorted event lists back to back
+ * (lengths cnt[0..2]) and is owned (freed) here. */
+static sidx_status sah_node(kd_builder *b, uint32_t idx, uint32_t parent, uint32_t depth, sidx_aabb cell,
+                            kd_event *ev, const size_t cnt[3], uint32_t n, uint32_t bad)
+{
+    sidx_status s = SIDX_OK;
+    const kd_event *E[3] = {ev, ev + cnt[0], ev + cnt[0] + cnt[1]};
+    emit_node(b, idx, parent, depth, cell, n);
+
+    int reason = SIDX_LEAF_NONE;
+    sah_best best = {INFINITY, 0.0f, 0, 1, 0, 0};
+    const float leaf_cost = b->c_tri * (float)n;
+    if (n == 0) reason = SIDX_LEAF_EMPTY;
+    else if (n <= b->leaf_size) reason = SIDX_LEAF_FEW_PRIMS;
+    else if (depth >= b->max_depth) reason = SIDX_LEAF_MAX_DEPTH;
+    else {
+        const float area = sidx_aabb_area(cell);
+        if (area > 0.0f) {
+            const float inv_area = 1.0f / area;
+            for (uint32_t k = 0; k < 3; ++k) sweep_axis(b, idx, cell, inv_area, k, E[k], cnt[k], n, &best);
+        }
+        if (best.cost == INFINITY) reason = SIDX_LEAF_NO_SPLIT;
+        else if (best.cost >= leaf_cost) {
+            /* Not better than a leaf here; maybe one or two levels down
+             * (the look-ahead).  pbrt's extra rule: a much worse split on
+             * few triangles is not worth exploring at all. */
+            ++bad;
+            if (bad >= KD_LOOKAHEAD || (best.cost > 4.0f * leaf_cost && n < 16)) reason = SIDX_LEAF_NO_GAIN;
+        }
+    }
+
+    if (reason != SIDX_LEAF_NONE) {
+        uint32_t off = 0;
+        s = leaf_reserve(b, n, &off);
+        if (s == SIDX_OK) {
+            /* every primitive has exactly one start or planar event per axis */
+            uint32_t w = 0;
+            for (size_t i = 0; i < cnt[0]; ++i)
+                if (ev_type(E[0][i]) != EV_END) b->prims[off + w++] = ev_prim(E[0][i]);
+            leaf_finish(b, idx, depth, cell, n, off, reason);
+        }
+        sidx__free(b->a, ev);
+        return s;
+    }
+
+    /* ---- classify (WH06 Alg. 5) ---- */
+    const uint32_t k = best.axis;
+    const float p = best.pos;
+    const kd_event *Ek = E[k];
+    for (size_t i = 0; i < cnt[k]; ++i) b->cls[ev_prim(Ek[i])] = CLS_BOTH;
+    for (size_t i = 0; i < cnt[k]; ++i) {
+        const uint32_t t = ev_type(Ek[i]);
+        const float q = key_float(ev_key(Ek[i]));
+        const uint32_t pr = ev_prim(Ek[i]);
+        if (t == EV_END && q <= p) b->cls[pr] = CLS_LEFT;
+        else if (t == EV_START && q >= p) b->cls[pr] = CLS_RIGHT;
+        else if (t == EV_PLANAR) {
+            if (q < p || (q == p && best.planar_left)) b->cls[pr] = CLS_LEFT;
+            else b->cls[pr] = CLS_RIGHT;
+        }
+    }
+    uint32_t nboth = 0, nl = 0, nr = 0;
+    for (size_t i = 0; i < cnt[k]; ++i) {
+        if (ev_type(Ek[i]) == EV_END) continue;
+        const uint8_t c = b->cls[ev_prim(Ek[i])];
+        nboth += c == CLS_BOTH;
+        nl += c != CLS_RIGHT;
+        nr += c != CLS_LEFT;
+    }
+
+    /* ---- straddlers: clip to both children, new events ---- */
+    sidx_aabb lcell, rcell;
+    split_cell(cell, k, p, &lcell, &rcell);
+    uint32_t *both = NULL;
+    sidx_aabb *bl = NULL, *br = NULL;
+    kd_event *scratch = NULL, *evl = NULL, *evr = NULL;
+    if (nboth) {
+        both = sidx__alloc(b->a, nboth, sizeof *both);
+        bl = sidx__alloc(b->a, (size_t)nboth * 2u, sizeof *bl);
+        scratch = sidx__alloc(b->a, (size_t)nboth * 2u, sizeof *scratch);
+        if (!both || !bl || !scratch) { s = SIDX_ERR_NOMEM; goto fail; }
+        br = bl + nboth;
+        uint32_t w = 0;
+        for (size_t i = 0; i < cnt[k]; ++i)
+            if (ev_type(Ek[i]) != EV_END && b->cls[ev_prim(Ek[i])] == CLS_BOTH) both[w++] = ev_prim(Ek[i]);
+        for (uint32_t i = 0; i < nboth; ++i) {
+            bl[i] = clip_bounds(&b->tris[both[i]], lcell);
+            br[i] = clip_bounds(&b->tris[both[i]], rcell);
+        }
+    }
+
+    /* ---- split the sorted lists in one pass each, merge the new events ---- */
+    size_t lc[3] = {0, 0, 0}, rc[3] = {0, 0, 0};
+    for (uint32_t a = 0; a < 3; ++a) {
+        for (size_t i = 0; i < cnt[a]; ++i) {
+            const uint8_t c = b->cls[ev_prim(E[a][i])];
+            lc[a] += c == CLS_LEFT;
+            rc[a] += c == CLS_RIGHT;
+        }
+        for (uint32_t i = 0; i < nboth; ++i) {
+            lc[a] += axis_of(bl[i].min, a) == axis_of(bl[i].max, a) ? 1u : 2u;
+            rc[a] += axis_of(br[i].min, a) == axis_of(br[i].max, a) ? 1u : 2u;
+        }
+    }
+    evl = sidx__alloc(b->a, lc[0] + lc[1] + lc[2], sizeof *evl);
+    evr = sidx__alloc(b->a, rc[0] + rc[1] + rc[2], sizeof *evr);
+    if (!evl || !evr) { s = SIDX_ERR_NOMEM; goto fail; }
+    {
+        kd_event *dl = evl, *dr = evr;
+        for (uint32_t a = 0; a < 3; ++a) {
+            size_t ol = 0, or_ = 0;
+            for (size_t i = 0; i < cnt[a]; ++i) {
+                const uint8_t c = b->cls[ev_prim(E[a][i])];
+                if (c == CLS_LEFT) dl[ol++] = E[a][i];
+                else if (c == CLS_RIGHT) dr[or_++] = E[a][i];
+            }
+            for (int side = 0; side < 2; ++side) {
+                kd_event *d = side ? dr : dl;
+                size_t old = side ? or_ : ol;
+                const sidx_aabb *bx = side ? br : bl;
+                size_t nn = 0;
+                for (uint32_t i = 0; i < nboth; ++i) nn += box_events(scratch + nn, bx[i], a, both[i]);
+                sort_events(scratch, nn);
+                /* merge from the back, in place */
+                size_t o = old + nn;
+                ptrdiff_t ii = (ptrdiff_t)old - 1, jj = (ptrdiff_t)nn - 1;
+                while (jj >= 0) {
+                    if (ii >= 0 && d[ii] > scratch[jj]) d[--o] = d[ii--];
+                    else d[--o] = scratch[jj--];
+                }
+            }
+            dl += lc[a];
+            dr += rc[a];
+        }
+    }
+    sidx__free(b->a, both);
+    sidx__free(b->a, bl);
+    sidx__free(b->a, scratch);
+    both = NULL;
+    bl = NULL;
+    scratch = NULL;
+
+    uint32_t child;
+    s = alloc_pair(b, &child);
+    if (s != SIDX_OK) goto fail;
+    inner_finish(b, idx, depth, cell, k, p, child, best.cost, nl, nr);
+    sidx__free(b->a, ev);
+    ev = NULL;
+    s = sah_node(b, child, idx, depth + 1, lcell, evl, lc, nl, bad);
+    evl = NULL;
+    if (s != SIDX_OK) goto fail;
+    s = sah_node(b, child + 1, idx, depth + 1, rcell, evr, rc, nr, bad);
+    return s;
+
+fail:
+    sidx__free(b->a, both);
+    sidx__free(b->a, bl);
+    sidx__free(b->a, scratch);
+    sidx__free(b->a, evl);
+    sidx__free(b->a, evr);
+    sidx__free(b->a, ev);
+    return s;
+}
+
+static sidx_status build_sah(kd_builder *b, sidx_aabb root)
+{
+    const uint32_t n = b->a->mesh->num_triangles;
+    size_t cnt[3] = {0, 0, 0};
+    sidx_aabb *boxes = NULL;
+    sidx_status s = sidx__prim_boxes(b->a, &boxes, NULL);
+    if (s != SIDX_OK) return s;
+    for (uint32_t k = 0; k < 3; ++k)
+        for (uint32_t i = 0; i < n; ++i) cnt[k] += axis_of(boxes[i].min, k) == axis_of(boxes[i].max, k) ? 1u : 2u;
+    kd_event *ev = sidx__alloc(b->a, cnt[0] + cnt[1] + cnt[2], sizeof *ev);
+    b->cls = sidx__alloc(b->a, n, 1);
+    if (!ev || !b->cls) {
+        sidx__free(b->a, boxes);
+        sidx__free(b->a, ev);
+        return SIDX_ERR_NOMEM;
+    }
+    kd_event *d = ev;
+    for (uint32_t k = 0; k < 3; ++k) {
+        size_t w = 0;
+        for (uint32_t i = 0; i < n; ++i) w += box_events(d + w, boxes[i], k, i);
+        sort_events(d, w); /* the one and only full sort */
+        d += w;
+    }
+    sidx__free(b->a, boxes);
+    return sah_node(b, 0, UINT32_MAX, 0, root, ev, cnt, n, 0);
+}
+
+/* ==== reference-list builders: binned SAH, median, middle ================= */
+
+typedef struct kd_ref {
+    sidx_aabb box; /* the triangle's box clipped to the current cell */
+    uint32_t prim;
+} kd_ref;
+
+/* k-th smallest of v[0..n) (Hoare's selection), partially reorders v. */
+static float select_kth(float *v, ptrdiff_t n, ptrdiff_t kth)
+{
+    ptrdiff_t lo = 0, hi = n - 1;
+    while (lo < hi) {
+        const float p = v[lo + (hi - lo) / 2];
+        ptrdiff_t i = lo, j = hi;
+        while (i <= j) {
+            while (v[i] < p) ++i;
+            while (v[j] > p) --j;
+            if (i <= j) {
+                const float t = v[i];
+                v[i++] = v[j];
+                v[j--] = t;
+            }
+        }
+        /* now v[lo..j] <= p <= v[i..hi] and everything between equals p */
+        if (kth <= j) hi = j;
+        else if (kth >= i) lo = i;
+        else break;
+    }
+    return v[kth];
+}
+
+/* Binned SAH: B equal bins per axis; a primitive counts on the left of
+ * plane i if its box starts in a bin left of it, on the right if it ends
+ * in a bin at or right of it. */
+static sidx_status binned_choice(kd_builder *b, uint32_t idx, sidx_aabb cell, const kd_ref *refs, uint32_t n,
+                                 sah_best *best)
+{
+    const uint32_t B = b->bins;
+    uint32_t *cnt = sidx__calloc(b->a, (size_t)B * 2u, sizeof *cnt);
+    if (!cnt) return SIDX_ERR_NOMEM;
+    const float area = sidx_aabb_area(cell);
+    if (!(area > 0.0f)) { sidx__free(b->a, cnt); return SIDX_OK; }
+    const float inv_area = 1.0f / area;
+    for (uint32_t k = 0; k < 3; ++k) {
+        const float lo = axis_of(cell.min, k), hi = axis_of(cell.max, k);
+        if (!(hi > lo)) continue;
+        uint32_t *start = cnt, *end = cnt + B;
+        memset(cnt, 0, (size_t)B * 2u * sizeof *cnt);
+        const float scale = (float)B / (hi - lo);
+        for (uint32_t i = 0; i < n; ++i) {
+            int s0 = (int)((axis_of(refs[i].box.min, k) - lo) * scale);
+            int s1 = (int)((axis_of(refs[i].box.max, k) - lo) * scale);
+            s0 = s0 < 0 ? 0 : s0 >= (int)B ? (int)B - 1 : s0;
+            s1 = s1 < 0 ? 0 : s1 >= (int)B ? (int)B - 1 : s1;
+            start[s0]++;
+            end[s1]++;
+        }
+        uint32_t nl = 0, nr = n;
+        for (uint32_t i = 1; i < B; ++i) {
+            nl += start[i - 1];
+            nr -= end[i - 1];
+            const float p = lo + (hi - lo) * (float)i / (float)B;
+            if (!(p > lo && p < hi)) continue;
+            const float c = sah_cost(b, cell, inv_area, k, p, nl, nr);
+            SIDX_EMIT(1, b->hook, SIDX_EV_BUILD_CANDIDATE, e_.structure = b->name; e_.node = idx;
+                      e_.axis = (int32_t)k; e_.pos = p; e_.cost = c; e_.count = nl; e_.aux = nr);
+            if (c < best->cost) {
+                best->cost = c;
+                best->pos = p;
+                best->axis = k;
+                best->nl = nl;
+                best->nr = nr;
+            }
+        }
+    }
+    sidx__free(b->a, cnt);
+    return SIDX_OK;
+}
+
+static sidx_status refs_node(kd_builder *b, uint32_t idx, uint32_t parent, uint32_t depth, sidx_aabb cell,
+                             kd_ref *refs, uint32_t n, uint32_t bad)
+{
+    sidx_status s = SIDX_OK;
+    emit_node(b, idx, parent, depth, cell, n);
+    int reason = SIDX_LEAF_NONE;
+    sah_best best = {INFINITY, 0.0f, 0, 1, 0, 0};
+    const float leaf_cost = b->c_tri * (float)n;
+    kd_ref *lr = NULL, *rr = NULL;
+    uint32_t nl = 0, nr = 0;
+
+    if (n == 0) reason = SIDX_LEAF_EMPTY;
+    else if (n <= b->leaf_size) reason = SIDX_LEAF_FEW_PRIMS;
+    else if (depth >= b->max_depth) reason = SIDX_LEAF_MAX_DEPTH;
+    else if (b->variant == KD_VARIANT_BINNED) {
+        s = binned_choice(b, idx, cell, refs, n, &best);
+        if (s != SIDX_OK) goto done;
+        if (best.cost == INFINITY) reason = SIDX_LEAF_NO_SPLIT;
+        else if (best.cost >= leaf_cost) {
+            ++bad;
+            if (bad >= KD_LOOKAHEAD || (best.cost > 4.0f * leaf_cost && n < 16)) reason = SIDX_LEAF_NO_GAIN;
+        }
+    } else {
+        /* the deck's "intuitive" choices: largest extent, then the middle
+         * of the extent or the median of the geometry */
+        const uint32_t k = (uint32_t)sidx_aabb_max_axis(cell);
+        const float lo = axis_of(cell.min, k), hi = axis_of(cell.max, k);
+        float p = lo + 0.5f * (hi - lo);
+        if (b->variant == KD_VARIANT_MEDIAN) {
+            float *c = sidx__alloc(b->a, n, sizeof *c);
+            if (!c) { s = SIDX_ERR_NOMEM; goto done; }
+            for (uint32_t i = 0; i < n; ++i)
+                c[i] = 0.5f * (axis_of(refs[i].box.min, k) + axis_of(refs[i].box.max, k));
+            const float med = select_kth(c, (ptrdiff_t)n, (ptrdiff_t)(n / 2));
+            sidx__free(b->a, c);
+            if (med > lo && med < hi) p = med;
+        }
+        if (!(p > lo && p < hi)) reason = SIDX_LEAF_NO_SPLIT;
+        else {
+            best.axis = k;
+            best.pos = p;
+        }
+    }
+
+    if (reason == SIDX_LEAF_NONE) {
+        const uint32_t k = best.axis;
+        const float p = best.pos;
+        for (uint32_t i = 0; i < n; ++i) {
+            const float lo = axis_of(refs[i].box.min, k), hi = axis_of(refs[i].box.max, k);
+            nl += lo < p || hi <= p; /* a flat box in the plane goes left */
+            nr += hi > p;
+        }
+        if (b->variant >= KD_VARIANT_MEDIAN) {
+            const float area = sidx_aabb_area(cell);
+            best.cost = area > 0.0f ? sah_cost(b, cell, 1.0f / area, k, p, nl, nr) : 0.0f;
+            SIDX_EMIT(1, b->hook, SIDX_EV_BUILD_CANDIDATE, e_.structure = b->name; e_.node = idx;
+                      e_.axis = (int32_t)k; e_.pos = p; e_.cost = best.cost; e_.count = nl; e_.aux = nr);
+            /* a plane that separates nothing only duplicates: stop */
+            if (nl == n && nr == n) reason = SIDX_LEAF_NO_SPLIT;
+        }
+    }
+
+    if (reason != SIDX_LEAF_NONE) {
+        uint32_t off = 0;
+        s = leaf_reserve(b, n, &off);
+        if (s != SIDX_OK) goto done;
+        for (uint32_t i = 0; i < n; ++i) b->prims[off + i] = refs[i].prim;
+        leaf_finish(b, idx, depth, cell, n, off, reason);
+        goto done;
+    }
+
+    {
+        const uint32_t k = best.axis;
+        const float p = best.pos;
+        sidx_aabb lcell, rcell;
+        split_cell(cell, k, p, &lcell, &rcell);
+        lr = sidx__alloc(b->a, nl, sizeof *lr);
+        rr = sidx__alloc(b->a, nr, sizeof *rr);
+        if (!lr || !rr) { s = SIDX_ERR_NOMEM; goto done; }
+        uint32_t wl = 0, wr = 0;
+        for (uint32_t i = 0; i < n; ++i) {
+            const float lo = axis_of(refs[i].box.min, k), hi = axis_of(refs[i].box.max, k);
+            const int L = lo < p || hi <= p, R = hi > p;
+            if (L && R) {
+                lr[wl].prim = rr[wr].prim = refs[i].prim;
+                lr[wl++].box = clip_bounds(&b->tris[refs[i].prim], lcell);
+                rr[wr++].box = clip_bounds(&b->tris[refs[i].prim], rcell);
+            } else if (L) lr[wl++] = refs[i];
+            else rr[wr++] = refs[i];
+        }
+        uint32_t child;
+        s = alloc_pair(b, &child);
+        if (s != SIDX_OK) goto done;
+        inner_finish(b, idx, depth, cell, k, p, child, best.cost, nl, nr);
+        sidx__free(b->a, refs);
+        refs = NULL;
+        s = refs_node(b, child, idx, depth + 1, lcell, lr, nl, bad);
+        lr = NULL;
+        if (s == SIDX_OK) {
+            s = refs_node(b, child + 1, idx, depth + 1, rcell, rr, nr, bad);
+            rr = NULL;
+        }
+    }
+done:
+    sidx__free(b->a, lr);
+    sidx__free(b->a, rr);
+    sidx__free(b->a, refs);
+    return s;
+}
+
+static sidx_status build_refs(kd_builder *b, sidx_aabb root)
+{
+    const uint32_t n = b->a->mesh->num_triangles;
+    kd_ref *refs = sidx__alloc(b->a, n, sizeof *refs);
+    if (!refs) return SIDX_ERR_NOMEM;
+    for (uint32_t i = 0; i < n; ++i) {
+        const kd_tri *t = &b->tris[i];
+        refs[i].prim = i;
+        refs[i].box = sidx_aabb_grow(sidx_aabb_grow(sidx_aabb_grow(sidx_aabb_empty(), t->v0), t->v1), t->v2);
+    }
+    return refs_node(b, 0, UINT32_MAX, 0, root, refs, n, 0);
+}
+
+/* ==== entry point ========================================================== */
+
+/* Copy an over-allocated array into one of exact size (keeps the old one
+ * if that allocation fails: smaller is nicer, not required). */
+static void *shrink(const sidx_accel *a, void *p, size_t count, size_t size, size_t cap)
+{
+    if (!p || count == cap) return p;
+    void *q = sidx__alloc(a, count, size);
+    if (!q) return p;
+    if (count) memcpy(q, p, count * size);
+    sidx__free(a, p);
+    return q;
+}
+
+static void kd_free(const sidx_accel *a, kd_tree *kd)
+{
+    if (!kd) return;
+    sidx__free(a, kd->nodes);
+    sidx__free(a, kd->prims);
+    sidx__free(a, kd->tris);
+    sidx__free(a, kd);
+}
+
+sidx_status sidx__kd_build(sidx_accel *a, sidx_error *err)
+{
+    const sidx_mesh *m = a->mesh;
+    const uint32_t n = m->num_triangles;
+    a->impl = NULL;
+    if (n >= KD_INDEX_LIMIT)
+        return sidx__fail(err, SIDX_ERR_LIMIT, "%s: %u triangles exceed the 8-byte node encoding (< 2^30)", a->name,
+                          n);
+    const sidx_aabb root = sidx_mesh_bounds(m);
+    SIDX_EMIT(1, a->opt.hook, SIDX_EV_BUILD_BEGIN, e_.structure = a->name; e_.count = n; e_.bounds = root);
+
+    kd_tree *kd = sidx__calloc(a, 1, sizeof *kd);
+    if (!kd) return sidx__fail(err, SIDX_ERR_NOMEM, "%s: out of memory", a->name);
+    kd->tris = sidx__alloc(a, n, sizeof *kd->tris);
+    if (!kd->tris) { kd_free(a, kd); return sidx__fail(err, SIDX_ERR_NOMEM, "%s: out of memory", a->name); }
+    for (uint32_t i = 0; i < n; ++i) {
+        kd->tris[i].v0 = sidx_mesh_vertex(m, i, 0);
+        kd->tris[i].v1 = sidx_mesh_vertex(m, i, 1);
+        kd->tris[i].v2 = sidx_mesh_vertex(m, i, 2);
+    }
+    kd->bounds = root;
+
+    kd_builder b;
+    memset(&b, 0, sizeof b);
+    b.a = a;
+    b.hook = a->opt.hook;
+    b.name = a->name;
+    b.tris = kd->tris;
+    b.variant = a->variant;
+    b.c_trav = a->opt.c_trav > 0.0f ? a->opt.c_trav : KD_DEFAULT_C_TRAV;
+    b.c_tri = a->opt.c_tri > 0.0f ? a->opt.c_tri : KD_DEFAULT_C_TRI;
+    const float bonus = a->opt.empty_bonus > 0.0f ? a->opt.empty_bonus : KD_DEFAULT_EMPTY_BONUS;
+    b.lambda = 1.0f - bonus;
+    b.leaf_size = a->opt.leaf_size ? a->opt.leaf_size
+                  : a->variant >= KD_VARIANT_MEDIAN ? KD_DEFAULT_LEAF_INTUITIVE : KD_DEFAULT_LEAF_SAH;
+    /* pbrt's depth limit 8 + 1.3·log2(n): deep enough for "typical depth
+     * of 50-100" only on huge scenes, shallow enough to bound duplication. */
+    uint32_t md = a->opt.max_depth;
+    if (md == 0) md = (uint32_t)lrint(8.0 + 1.3 * log2((double)(n ? n : 1)));
+    b.max_depth = md < KD_MAX_DEPTH ? md : KD_MAX_DEPTH;
+    b.bins = a->opt.bins ? a->opt.bins : 32u;
+    if (b.bins < 2u) b.bins = 2u;
+    const float ra = sidx_aabb_area(root);
+    b.inv_root_area = ra > 0.0f ? 1.0f / ra : 0.0f;
+
+    sidx_status s = SIDX_OK;
+    uint32_t child;
+    s = alloc_pair(&b, &child); /* slot 0 = root; slot 1 is reused as the first child */
+    if (s == SIDX_OK) {
+        b.num_nodes = 1;
+        if (n == 0) {
+            uint32_t off = 0;
+            s = leaf_reserve(&b, 0, &off);
+            if (s == SIDX_OK) leaf_finish(&b, 0, 0, root, 0, 0, SIDX_LEAF_EMPTY);
+        } else if (a->variant == KD_VARIANT_SAH) {
+            s = build_sah(&b, root);
+        } else {
+            s = build_refs(&b, root);
+        }
+    }
+    sidx__free(a, b.cls);
+    kd->nodes = b.nodes;
+    kd->prims = b.prims;
+    if (s != SIDX_OK) {
+        kd_free(a, kd);
+        if (s == SIDX_ERR_LIMIT)
+            return sidx__fail(err, s, "%s: the tree outgrows the 8-byte node encoding (2^30 nodes/references)",
+                              a->name);
+        return sidx__fail(err, s, "%s: out of memory", a->name);
+    }
+    kd->num_nodes = b.num_nodes;
+    kd->num_refs = b.num_refs;
+    kd->nodes = shrink(a, kd->nodes, kd->num_nodes, sizeof *kd->nodes, b.nodes_cap);
+    kd->prims = shrink(a, kd->prims, kd->num_refs, sizeof *kd->prims, b.prims_cap);
+    /* swap the per-triangle vertex array used by the build for the
+     * per-reference one traversal reads */
+    kd_tri *rt = sidx__alloc(a, kd->num_refs, sizeof *rt);
+    if (!rt) {
+        kd_free(a, kd);
+        return sidx__fail(err, SIDX_ERR_NOMEM, "%s: out of memory", a->name);
+    }
+    for (uint32_t i = 0; i < kd->num_refs; ++i) {
+        rt[i] = kd->tris[kd->prims[i]];
+        rt[i].prim = kd->prims[i];
+    }
+    sidx__free(a, kd->tris);
+    kd->tris = rt;
+    kd->leaves = b.leaves;
+    kd->empty_leaves = b.empty_leaves;
+    kd->max_depth = b.depth;
+    kd->sah_cost = b.sah;
+    kd->c_trav = b.c_trav;
+    kd->c_tri = b.c_tri;
+    kd->empty_bonus = bonus;
+    a->impl = kd;
+    SIDX_EMIT(1, a->opt.hook, SIDX_EV_BUILD_END, e_.structure = a->name; e_.node = kd->num_nodes;
+              e_.count = kd->num_refs; e_.depth = kd->max_depth);
+    return SIDX_OK;
+}
+
+void sidx__kd_destroy(sidx_accel *a)
+{
+    kd_free(a, a->impl);
+    a->impl = NULL;
+}
+
+void sidx__kd_stats(const sidx_accel *a, sidx_accel_stats *s)
+{
+    const kd_tree *kd = a->impl;
+    if (!kd) return;
+    s->nodes = kd->num_nodes;
+    s->leaves = kd->leaves;
+    s->empty_leaves = kd->empty_leaves;
+    s->max_depth = kd->max_depth;
+    s->prim_refs = kd->num_refs;
+    const uint32_t full = kd->leaves - kd->empty_leaves;
+    s->mean_leaf_prims = full ? (double)kd->num_refs / (double)full : 0.0;
+    s->bytes = sizeof *kd + (size_t)kd->num_nodes * sizeof(kd_node) + (size_t)kd->num_refs * sizeof(uint32_t) +
+               (size_t)kd->num_refs * sizeof(kd_tri);
+    s->sah_cost = kd->sah_cost;
+}
