@@ -122,7 +122,10 @@ int main(int argc, char **argv)
         lp.inner = sidx_printer_hook(&lp.printer);
         sidx_counters build_counts;
         sidx_counters_init(&build_counts);
-        sidx_tee tee = {{{limited_fn, &lp, SIDX_EVMASK_BUILD | SIDX_EVMASK(SIDX_EV_NOTE)}, sidx_counters_hook(&build_counts)}, 2};
+        /* Candidates are counted, not printed: the lessons plot them. */
+        sidx_tee tee = {{{limited_fn, &lp, (SIDX_EVMASK_BUILD & ~SIDX_EVMASK(SIDX_EV_BUILD_CANDIDATE)) | SIDX_EVMASK(SIDX_EV_NOTE)},
+                         sidx_counters_hook(&build_counts)},
+                        2};
         sidx_hook build_hook = sidx_tee_hook(&tee);
         sidx_build_options opt = {0};
         opt.hook = &build_hook;
@@ -133,7 +136,11 @@ int main(int argc, char **argv)
             ++failures;
             continue;
         }
-        if (lp.skipped) printf("   ... %ld more build events\n", lp.skipped);
+        if (lp.skipped) printf("   ... %ld more build decisions\n", lp.skipped);
+        printf("-- %llu split candidates evaluated, %llu splits, %llu leaves\n",
+               (unsigned long long)build_counts.n[SIDX_EV_BUILD_CANDIDATE],
+               (unsigned long long)build_counts.n[SIDX_EV_BUILD_SPLIT],
+               (unsigned long long)build_counts.n[SIDX_EV_BUILD_LEAF]);
         sidx_accel_stats st;
         sidx_accel_stats_get(a, &st);
         printf("-- built: %u nodes, %u leaves, depth %u, %llu primitive references, %zu bytes, SAH cost %.2f\n",
