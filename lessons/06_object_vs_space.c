@@ -1,0 +1,278 @@
+/* 06_object_vs_space.c — object partitioning (BVH) vs space partitioning (kd-tree).
+ *
+ * Slides (deck 000, "Spatial Index Structures"): "Object vs. Space
+ * Partitioning" ("BVHs hierarchical partition objects into groups ...
+ * Subgroups may be overlapping!" — "Space partitioning ... Subspaces are
+ * non-overlapping and completely fill parent space"), "Bounding Volume
+ * Hierarchies (BVHs)" ("BV can also overlap — Cannot terminate on first
+ * intersection found"), "kD-Tree Traversal" ("Traversal can be terminated
+ * as soon as surface intersection is found in the current node").  Deck
+ * 001: "Primitive vs. Spatial" ("[-] Volumes can overlap, [-] Unable to
+ * terminate on first hit" / "[+] No volume overlap, [+] Can terminate on
+ * first hit, [-] May intersect primitive multiple times") and "K-D Trees"
+ * ("Requirement: intersection point must lie within zone").
+ *
+ * What it shows: the same scene (default: a soup of 600 random triangles)
+ * in a BVH and in a kd-tree.
+ *   1. the top of both trees, boxes printed: the BVH's children overlap,
+ *      the kd-tree's cells tile their parent; over the whole tree, how
+ *      many sibling pairs overlap and by how much, and how many primitive
+ *      references each stores (the kd-tree duplicates straddling ones);
+ *   2. one ray traced in both, through the printer: the kd-tree stops in
+ *      the cell where it found its hit ("terminate: hit_in_cell"), the BVH
+ *      goes on until every remaining box lies behind the hit;
+ *   3. over many rays: nodes visited after the closest hit was already
+ *      found, and how often a kd-tree hit lay outside the current cell
+ *      (the "must lie within zone" requirement, when it cannot stop).
+ *
+ * Run:   build/lessons/06_object_vs_space [SCENE]
+ *        SCENE = a built-in scene name or .obj/.ply (default soup:600)
+ */
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include "sidx/sidx.h"
+
+static void usage(FILE *f)
+{
+    fprintf(f, "usage: 06_object_vs_space [--help] [SCENE]\n"
+               "\n"
+               "The same scene in a BVH (object partitioning) and a kd-tree (space partitioning):\n"
+               "overlapping boxes vs disjoint cells, and which can stop at the first hit.\n"
+               "\n"
+               "  SCENE   built-in scene name or .obj/.ply (default: soup:600)\n");
+}
+
+static double volume(sidx_aabb b)
+{
+    if (sidx_aabb_is_empty(b)) return 0.0;
+    const sidx_vec3 e = sidx_aabb_extent(b);
+    return (double)e.x * e.y * e.z;
+}
+
+static sidx_aabb intersect_box(sidx_aabb a, sidx_aabb b)
+{
+    sidx_aabb r = {sidx_v3_max(a.min, b.min), sidx_v3_min(a.max, b.max)};
+    return r;
+}
+
+typedef struct {
+    uint32_t pairs, overlapping;
+    double overlap_frac;    /* mean volume of the sibling overlap / volume of the parent */
+    double cover_err;       /* max |vol(L) + vol(R) - vol(P)| / vol(P), space partitioning */
+} tree_stats;
+
+/* Sibling pairs from BUILD_NODE events (parent links). */
+static tree_stats sibling_stats(const sidx_recorder *rec)
+{
+    tree_stats s = {0, 0, 0.0, 0.0};
+    const sidx_event *ev = rec->events;
+    for (size_t i = 0; i < rec->count; ++i) {
+        if (ev[i].type != SIDX_EV_BUILD_NODE) continue;
+        const sidx_event *kids[2];
+        int n = 0;
+        for (size_t j = i + 1; j < rec->count && n < 2; ++j)
+            if (ev[j].type == SIDX_EV_BUILD_NODE && ev[j].parent == ev[i].node) kids[n++] = &ev[j];
+        if (n != 2) continue;
+        const double vp = volume(ev[i].bounds);
+        if (!(vp > 0.0)) continue;
+        s.pairs++;
+        const double ov = volume(intersect_box(kids[0]->bounds, kids[1]->bounds));
+        if (ov > 1e-9 * vp) s.overlapping++;
+        s.overlap_frac += ov / vp;
+        const double cover = fabs(volume(kids[0]->bounds) + volume(kids[1]->bounds) - vp) / vp;
+        if (cover > s.cover_err) s.cover_err = cover;
+    }
+    if (s.pairs) s.overlap_frac /= s.pairs;
+    return s;
+}
+
+/* Prints the root and its children with their boxes. */
+static void print_top(const sidx_recorder *rec)
+{
+    sidx_printer pr;
+    sidx_printer_init(&pr, stdout);
+    pr.show_bounds = 1;
+    const sidx_hook ph = sidx_printer_hook(&pr);
+    for (size_t i = 0; i < rec->count; ++i) {
+        const sidx_event *e = &rec->events[i];
+        if (e->type == SIDX_EV_BUILD_BEGIN || (e->type == SIDX_EV_BUILD_NODE && e->depth <= 1) ||
+            (e->type == SIDX_EV_BUILD_SPLIT && e->depth == 0))
+            sidx_hook_emit(&ph, e);
+    }
+}
+
+typedef struct {
+    double visits, after_hit;
+    long out_of_cell, stopped_in_cell, rays;
+} walk_stats;
+
+/* Per ray: traversal steps (node visits, pops, box and triangle tests)
+ * after the final closest-hit update; for a
+ * kd-tree, also whether some hit was found beyond its cell's t_far. */
+static void analyse_ray(const sidx_recorder *rec, walk_stats *w)
+{
+    size_t last_update = rec->count;
+    float cell_far = INFINITY;
+    int out = 0, visits = 0;
+    for (size_t i = 0; i < rec->count; ++i) {
+        const sidx_event *e = &rec->events[i];
+        if (e->type == SIDX_EV_HIT_UPDATE) last_update = i;
+        if (e->type == SIDX_EV_NODE_ENTER) { cell_far = e->t_far; ++visits; }
+        if (e->type == SIDX_EV_PRIM_TEST && e->result == 1 && e->t > cell_far * 1.000001f) out = 1;
+        if (e->type == SIDX_EV_TERMINATE && e->reason == SIDX_TERM_HIT_IN_CELL) w->stopped_in_cell++;
+    }
+    int after = 0;
+    for (size_t i = last_update; i < rec->count; ++i) {
+        const sidx_event_type t = rec->events[i].type;
+        after += t == SIDX_EV_NODE_ENTER || t == SIDX_EV_STACK_POP || t == SIDX_EV_BOX_TEST ||
+                 t == SIDX_EV_PRIM_TEST || t == SIDX_EV_MAILBOX_HIT;
+    }
+    w->visits += visits;
+    w->after_hit += after;
+    w->out_of_cell += out;
+    w->rays++;
+}
+
+int main(int argc, char **argv)
+{
+    const char *scene = NULL;
+    for (int i = 1; i < argc; ++i) {
+        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) { usage(stdout); return 0; }
+        if (argv[i][0] == '-' || scene) {
+            fprintf(stderr, "06_object_vs_space: unexpected argument '%s'\n", argv[i]);
+            usage(stderr);
+            return 2;
+        }
+        scene = argv[i];
+    }
+    static const char *const names[2] = {"bvh", "kdtree"};
+    for (int s = 0; s < 2; ++s)
+        if (!sidx_accel_is_registered(names[s])) {
+            fprintf(stderr, "06_object_vs_space: structure '%s' is not registered in this build\n", names[s]);
+            return 1;
+        }
+    const char *spec = scene ? scene : "soup:600";
+    sidx_mesh mesh;
+    sidx_error err = {0};
+    if (sidx_scene_open(spec, &mesh, &err) != SIDX_OK) {
+        fprintf(stderr, "06_object_vs_space: %s\n", err.message);
+        return 1;
+    }
+    if (mesh.num_triangles == 0) {
+        fprintf(stderr, "06_object_vs_space: scene '%s' is empty\n", spec);
+        sidx_mesh_free(&mesh);
+        return 1;
+    }
+
+    sidx_accel *acc[2] = {NULL, NULL};
+    sidx_accel_stats st[2];
+    tree_stats ts[2];
+    sidx_recorder rec;
+    sidx_recorder_init(&rec);
+    const sidx_hook rh = sidx_recorder_hook(&rec);
+    printf("== '%s': %u triangles\n", spec, mesh.num_triangles);
+    for (int s = 0; s < 2; ++s) {
+        sidx_recorder_clear(&rec);
+        sidx_build_options opt = {0};
+        opt.hook = &rh;
+        if (sidx_accel_build(names[s], &mesh, &opt, &acc[s], &err) != SIDX_OK) {
+            fprintf(stderr, "06_object_vs_space: %s\n", err.message);
+            sidx_accel_destroy(acc[0]);
+            sidx_recorder_free(&rec);
+            sidx_mesh_free(&mesh);
+            return 1;
+        }
+        sidx_accel_stats_get(acc[s], &st[s]);
+        printf("\n== 1%c. The top of the %s (%s partitioning): root and its two children\n", 'a' + s, names[s],
+               s == 0 ? "object" : "space");
+        print_top(&rec);
+        ts[s] = sibling_stats(&rec);
+    }
+    printf("\n  over the whole tree                          %12s %12s\n", "bvh", "kdtree");
+    printf("  sibling pairs                                %12u %12u\n", ts[0].pairs, ts[1].pairs);
+    printf("  pairs whose boxes overlap                    %12u %12u\n", ts[0].overlapping, ts[1].overlapping);
+    printf("  mean overlap volume / parent volume          %11.1f%% %11.1f%%\n", 100 * ts[0].overlap_frac,
+           100 * ts[1].overlap_frac);
+    printf("  worst |vol(L) + vol(R) - vol(parent)|        %11.1f%% %11.1f%%\n", 100 * ts[0].cover_err,
+           100 * ts[1].cover_err);
+    printf("  primitive references (%u triangles)        %12llu %12llu\n", mesh.num_triangles,
+           (unsigned long long)st[0].prim_refs, (unsigned long long)st[1].prim_refs);
+    printf("  The BVH's children overlap and need not fill their parent; the kd-tree's cells never\n"
+           "  overlap and fill it exactly, at the price of referencing a triangle from every cell it\n"
+           "  touches.\n");
+
+    /* ---- one ray ---- */
+    const sidx_aabb box = sidx_mesh_bounds(&mesh);
+    const sidx_vec3 ext = sidx_aabb_extent(box), ctr = sidx_aabb_centroid(box);
+    /* aimed at the triangle nearest the centre of the scene, from above */
+    uint32_t aim = 0;
+    float best_d = INFINITY;
+    for (uint32_t i = 0; i < mesh.num_triangles; ++i) {
+        const float d = sidx_v3_length(sidx_v3_sub(sidx_aabb_centroid(sidx_mesh_triangle_bounds(&mesh, i)), ctr));
+        if (d < best_d) { best_d = d; aim = i; }
+    }
+    const sidx_vec3 target = sidx_aabb_centroid(sidx_mesh_triangle_bounds(&mesh, aim));
+    const sidx_vec3 org = sidx_v3(ctr.x + 0.13f * ext.x, ctr.y - 0.11f * ext.y, box.max.z + 2.0f * ext.z);
+    sidx_ray ray;
+    sidx_ray_init(&ray, org, sidx_v3_sub(target, org), 0.0f, INFINITY);
+    printf("\n  The ray: from (%g, %g, %g) towards the centroid of triangle %u\n", org.x, org.y, org.z, aim);
+    sidx_printer pr;
+    sidx_printer_init(&pr, stdout);
+    const sidx_hook ph = sidx_printer_hook(&pr);
+    sidx_hit h[2];
+    for (int s = 0; s < 2; ++s) {
+        printf("\n== 2%c. One ray through the %s, every event\n", 'a' + s, names[s]);
+        sidx_query q = {0, SIDX_TRAVERSE_DEFAULT, &ph, 0};
+        sidx_accel_intersect(acc[s], &ray, &q, &h[s]);
+    }
+
+    /* ---- many rays ---- */
+    walk_stats ws[2];
+    memset(ws, 0, sizeof ws);
+    int same = h[0].t == h[1].t;
+    const float R = sidx_v3_length(ext);
+    uint32_t seed = 99u;
+    const int nrays = 5000;
+    for (int i = 0; i < nrays; ++i) {
+        float f[5];
+        for (int j = 0; j < 5; ++j) { seed = seed * 1664525u + 1013904223u; f[j] = (float)(seed >> 8) / 16777216.0f; }
+        const float z = 2 * f[0] - 1, ang = 6.2831853f * f[1], sn = sqrtf(1 - z * z);
+        const sidx_vec3 o = sidx_v3_add(ctr, sidx_v3(R * sn * cosf(ang), R * sn * sinf(ang), R * z));
+        const sidx_vec3 t = sidx_v3(box.min.x + f[2] * ext.x, box.min.y + f[3] * ext.y, box.min.z + f[4] * ext.z);
+        sidx_ray r;
+        if (sidx_ray_init(&r, o, sidx_v3_sub(t, o), 0.0f, INFINITY) != SIDX_OK) continue;
+        float tt[2];
+        for (int s = 0; s < 2; ++s) {
+            sidx_recorder_clear(&rec);
+            sidx_query q = {0, SIDX_TRAVERSE_DEFAULT, &rh, (uint32_t)i};
+            sidx_hit hh;
+            sidx_accel_intersect(acc[s], &r, &q, &hh);
+            tt[s] = hh.t;
+            if (hh.prim != SIDX_NO_HIT) analyse_ray(&rec, &ws[s]);
+        }
+        if (!(tt[0] == tt[1])) same = 0;
+    }
+    sidx_recorder_free(&rec);
+    sidx_accel_destroy(acc[0]);
+    sidx_accel_destroy(acc[1]);
+    sidx_mesh_free(&mesh);
+
+    printf("\n== 3. %d random rays; averages over the %ld that hit something\n", nrays, ws[0].rays);
+    printf("  %-8s %14s %28s %18s\n", "", "nodes visited", "steps after closest hit", "stopped in cell");
+    for (int s = 0; s < 2; ++s)
+        printf("  %-8s %14.2f %28.2f %17.1f%%\n", names[s], ws[s].visits / (double)ws[s].rays,
+               ws[s].after_hit / (double)ws[s].rays, 100.0 * ws[s].stopped_in_cell / (double)ws[s].rays);
+    printf("  (steps = node visits, stack pops, box and triangle tests after the final closest-hit update)\n");
+    printf("  kd-tree rays that found a hit beyond the current cell and so could NOT stop there: %ld\n",
+           ws[1].out_of_cell);
+    printf("  Same closest hits in both: %s\n", same ? "yes" : "NO");
+    const double after_bvh = ws[0].after_hit / (double)ws[0].rays, after_kd = ws[1].after_hit / (double)ws[1].rays;
+    printf("CHECK same_hits=%d\n", same);
+    printf("CHECK bvh_boxes_overlap=%d\n", ts[0].overlapping > 0);
+    printf("CHECK kd_cells_disjoint=%d\n", ts[1].pairs > 0 && ts[1].overlapping == 0 && ts[1].cover_err < 1e-4);
+    printf("CHECK kd_stops_at_first_hit=%d\n", after_kd < after_bvh && ws[1].stopped_in_cell > 0);
+    return 0;
+}

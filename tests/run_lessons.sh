@@ -1,0 +1,117 @@
+#!/bin/sh
+# run_lessons.sh — run every built lesson and check its key figures.
+#
+#   BUILD=build sh tests/run_lessons.sh        (make test does this; BUILD=build/san under SAN=1)
+#
+# For each program in $BUILD/lessons/: `--help` must exit 0, an unknown
+# option must exit 2, and a run with no arguments must exit 0 and print,
+# among its output, every "CHECK name=value" line listed for it below.
+# The lessons compute those values from what they measure (leak counts,
+# cost comparisons, ...), so a check fails when the property stops
+# holding, not when the wording changes.  A lesson whose structures are
+# not registered in lib/accel_registry.def is reported as skipped.
+# Run from the repository root.  Exit status 1 if anything failed.
+
+BUILD=${BUILD:-build}
+DIR=$BUILD/lessons
+DEF=lib/accel_registry.def
+
+# The structures a lesson needs (all must be registered).
+needs() {
+    case $1 in
+    03_*|04_*|05_*) echo "bvh bvh-sweep bvh-everyb bvh-median bvh-middle" ;;
+    06_*) echo "bvh kdtree" ;;
+    07_*) echo "grid grid-nomailbox" ;;
+    08_*) echo "grid grid2 kdtree" ;;
+    09_*) echo "kdtree kdtree-median kdtree-middle" ;;
+    10_*|11_*) echo "kdtree" ;;
+    12_*) echo "octree quadtree bsp" ;;
+    13_*) echo "bvh kdtree grid" ;;
+    14_*) echo "bvh" ;;
+    15_*) echo "bvh rayclass" ;;
+    16_*) echo "bvh" ;;
+    *) echo "" ;;
+    esac
+}
+
+# The CHECK lines a lesson must print.
+expect() {
+    case $1 in
+    01_ray_triangle) echo "worked_example_agrees=1 d_zero_all_miss=1 negative_t_rejected=1 edge_vertex_hit=1
+                           watertight_leaks=0 moller_leaks_more=1 mesh_watertight_leaks_le_moller=1" ;;
+    02_bounding_volumes) echo "conservative=1 area_predicts_hit_rate=1 kdop_within_aabb=1 obb_tighter_on_rod=1
+                               sphere_fits_round_object=1" ;;
+    03_bvh_partitioning) echo "candidate_costs_reproduced=1 sah_cost_lower=1 sah_tree_cost_lower=1
+                               sah_fewer_tests_per_ray=1" ;;
+    04_bvh_build_review) echo "same_hits=1 reindexed_contiguous=1 sweep_cost_lowest=1 binned_faster_than_sweep=1" ;;
+    05_bvh_traversal) echo "same_hit=1 ordered_visits_fewer=1 ordered_fewer_on_average=1" ;;
+    06_object_vs_space) echo "same_hits=1 bvh_boxes_overlap=1 kd_cells_disjoint=1 kd_stops_at_first_hit=1" ;;
+    07_uniform_grid) echo "resolution_formula=1 dda_cells_in_order=1 mailbox_saves_tests=1 middle_lambda_best=1" ;;
+    08_teapot_in_stadium) echo "same_hits=1 uniform_grid_worst=1 adaptive_beats_uniform=1" ;;
+    09_kdtree_build) echo "same_hits=1 sah_cost_lower=1 sah_thin_leaves=1 cost_curve_min_is_split=1" ;;
+    10_kdtree_traversal) echo "same_hit=1 stack_trace_consistent=1 cannot_terminate_seen=1" ;;
+    11_kd_node_layout) echo "decoded_matches=1 children_side_by_side=1" ;;
+    12_octree_bsp) echo "same_hits=1 painter_order_back_to_front=1" ;;
+    13_worst_case) echo "worst_cases_linear=1" ;;
+    # threads_faster is printed but not required: wall-clock speed-ups
+    # cannot be promised on a shared or single-core CI machine.
+    14_going_faster) echo "same_hits=1" ;;
+    15_shadows) echo "same_answers=1 any_hit_cheaper=1 light_buffer_saves=1" ;;
+    16_time_vs_error) echo "watertight_leaks=0 moller_leaks_more=1 robust_box_misses=0 plain_box_misses_more=1" ;;
+    *) echo "" ;;
+    esac
+}
+
+registered() { grep -q "^SIDX_ACCEL(\"$1\"" "$DEF" 2>/dev/null; }
+
+if [ ! -d "$DIR" ]; then
+    echo "run_lessons: no lessons built in $DIR"
+    exit 1
+fi
+
+passed=0 failed=0 skipped=0
+out=${TMPDIR:-/tmp}/sidx_lesson.$$
+trap 'rm -f "$out"' EXIT INT TERM
+
+for prog in "$DIR"/*; do
+    [ -f "$prog" ] && [ -x "$prog" ] || continue
+    name=$(basename "$prog")
+    missing=""
+    for s in $(needs "$name"); do
+        registered "$s" || missing="$missing $s"
+    done
+    if [ -n "$missing" ]; then
+        echo "SKIP $name (not registered:$missing)"
+        skipped=$((skipped + 1))
+        continue
+    fi
+    why=""
+    "$prog" --help >/dev/null 2>&1 || why="$why --help did not exit 0;"
+    "$prog" --no-such-option >/dev/null 2>&1
+    [ $? -eq 2 ] || why="$why a bad option did not exit 2;"
+    start=$(date +%s)
+    "$prog" >"$out" 2>&1
+    rc=$?
+    secs=$(( $(date +%s) - start ))
+    [ $rc -eq 0 ] || why="$why exit code $rc;"
+    for want in $(expect "$name"); do
+        grep -qx "CHECK $want" "$out" || {
+            got=$(grep "^CHECK ${want%%=*}=" "$out" | head -1)
+            why="$why expected CHECK $want, got '${got:-nothing}';"
+        }
+    done
+    if [ -z "$(expect "$name")" ] && ! grep -q "^CHECK " "$out"; then
+        why="$why no CHECK line and none expected (add it to tests/run_lessons.sh);"
+    fi
+    if [ -z "$why" ]; then
+        echo "PASS $name (${secs}s)"
+        passed=$((passed + 1))
+    else
+        echo "FAIL $name (${secs}s):$why"
+        tail -5 "$out" | sed 's/^/     | /'
+        failed=$((failed + 1))
+    fi
+done
+
+echo "lessons: $passed passed, $failed failed, $skipped skipped"
+[ $failed -eq 0 ]
