@@ -145,6 +145,8 @@ static void out_plane(sink_out *o, const sidx_event *ev)
 {
     if (ev->axis >= 0 && ev->axis <= 2)
         out_printf(o, "axis %s at %g", axis_name(ev->axis), (double)ev->pos);
+    else if (!isfinite(ev->bounds.min.x) || !isfinite(ev->pos))
+        out_printf(o, "no plane (equal centroids: index range halved)"); /* BVH edge case */
     else
         out_printf(o, "plane n=(%g, %g, %g) d=%g", (double)ev->bounds.min.x, (double)ev->bounds.min.y,
                    (double)ev->bounds.min.z, (double)ev->pos);
