@@ -1,0 +1,68 @@
+#!/bin/sh
+# make_docs_pictures.sh — regenerate docs/img/: the Graphviz tree of every
+# registered tree structure over the teapot (cut at depth 5, with one ray),
+# and sidx-view screenshots of every structure on the 2D lecture scene
+# (traversal half-way, and the build with the SAH curve), plus 3D and heat
+# views of the teapot.
+#
+#   sh viz/make_docs_pictures.sh [BUILD_DIR] [OUT_DIR]     (defaults: build, docs/img)
+#
+# Run from the repository root after `make`.  Needs no display: sidx-view
+# renders headless.  Structures that do not emit a tree (brute, the uniform
+# grid) get no tree picture; the script says so and goes on.
+set -u
+
+BUILD=${1:-build}
+OUT=${2:-docs/img}
+BIN=$BUILD/bin
+for p in sidx-dot sidx-view; do
+  if [ ! -x "$BIN/$p" ]; then
+    echo "make_docs_pictures: $BIN/$p not found; run make first" >&2
+    exit 1
+  fi
+done
+mkdir -p "$OUT" || exit 1
+
+# A ray from in front of the teapot, slightly downwards, through the body.
+TEAPOT_RAY=0,0.6,4,0,-0.05,-1
+failed=0
+
+names=$("$BIN/sidx-dot" --list | awk '{print $1}')
+for a in $names; do
+  if "$BIN/sidx-dot" --accel "$a" teapot --depth 5 --ray "$TEAPOT_RAY" -o "$OUT/tree-$a-teapot.svg" >/dev/null 2>"$OUT/.err"; then
+    echo "  $OUT/tree-$a-teapot.svg"
+  else
+    echo "  (no tree picture for $a: $(cat "$OUT/.err"))"
+  fi
+  "$BIN/sidx-dot" --accel "$a" flat2d --depth 4 -o "$OUT/tree-$a-flat2d.svg" >/dev/null 2>&1 &&
+    echo "  $OUT/tree-$a-flat2d.svg"
+
+  # 2D traversal: the screenshot at the middle of the recorded events
+  total=$("$BIN/sidx-view" --accel "$a" --screenshot "$OUT/view2d-$a.png" --size 1100x700 |
+          sed -n 's|.*step [0-9]*/\([0-9]*\)).*|\1|p')
+  if [ -n "$total" ]; then
+    half=$((total / 2))
+    "$BIN/sidx-view" --accel "$a" --step "$half" --screenshot "$OUT/view2d-$a.png" --size 1100x700 >/dev/null &&
+      echo "  $OUT/view2d-$a.png (step $half of $total)"
+  else
+    echo "  sidx-view failed for $a" >&2
+    failed=1
+  fi
+  # build, a third of the way through
+  btotal=$("$BIN/sidx-view" --accel "$a" --mode build --screenshot "$OUT/build2d-$a.png" |
+           sed -n 's|.*step [0-9]*/\([0-9]*\)).*|\1|p')
+  if [ -n "$btotal" ] && [ "$btotal" -gt 0 ]; then
+    "$BIN/sidx-view" --accel "$a" --mode build --step $((btotal / 3)) --screenshot "$OUT/build2d-$a.png" >/dev/null &&
+      echo "  $OUT/build2d-$a.png"
+  fi
+done
+
+for a in bvh kdtree; do
+  echo "$names" | grep -qx "$a" || continue
+  "$BIN/sidx-view" --accel "$a" --scene teapot --mode 3d --level 3 --screenshot "$OUT/view3d-$a-teapot.png" >/dev/null &&
+    echo "  $OUT/view3d-$a-teapot.png"
+  "$BIN/sidx-view" --accel "$a" --scene teapot --mode heat --screenshot "$OUT/heat-$a-teapot.png" >/dev/null &&
+    echo "  $OUT/heat-$a-teapot.png"
+done
+rm -f "$OUT/.err"
+exit $failed

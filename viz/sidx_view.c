@@ -1,0 +1,239 @@
+/* sidx-view — watch a structure being built and a ray walking through it.
+ *
+ *   sidx-view [--accel NAME] [--scene S] [--mode 2d|build|3d|heat] [--ray R]
+ *   sidx-view --screenshot out.png [--step N] [--mode ...] [--size WxH] ...
+ *
+ * With --screenshot it renders one frame into an offscreen surface and
+ * writes a PNG: no window, no display, no video driver.  F1 / h in the
+ * window lists the keys.  Exit status: 0 ok, 1 failure, 2 usage. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <SDL.h>
+#include <SDL_image.h>
+#include "view.h"
+
+static void usage(FILE *f)
+{
+    fprintf(f,
+            "usage: sidx-view [options]\n"
+            "\n"
+            "An SDL2 window over the hook events: the 2D lecture scene with the structure's\n"
+            "boxes and a ray you drag, stepping through its traversal (Right/Left, Home/End,\n"
+            "Space); the build step by step with the SAH candidate curve; a 3D view shaded\n"
+            "by normal with the boxes of one tree level, and a heat map of traversal steps.\n"
+            "Press F1 or h in the window for the keys.\n"
+            "\n"
+            "  --accel NAME        structure (default: bvh if registered, else brute; --list)\n"
+            "  --scene S           scene file or built-in name (default flat2d)\n"
+            "  --mode M            2d, build, 3d or heat (default 2d)\n"
+            "  --ray R             ray ox,oy,oz,dx,dy,dz (default: across the scene, in z = 0)\n"
+            "  --step N            show the first N events (default: all)\n"
+            "  --level K           3D: draw the boxes of tree level K\n"
+            "  --yaw A --pitch A   3D camera angles in radians; --zoom Z\n"
+            "  --size WxH          window / screenshot size (default 1100x700)\n"
+            "  --screenshot F.png  render one frame headless to F.png and exit\n"
+            "  --list              list the registered structures\n"
+            "  -h, --help          this help\n");
+}
+
+static int parse_size(const char *s, int *w, int *h)
+{
+    char *end;
+    long a = strtol(s, &end, 10);
+    if (*end != 'x' || a < 64 || a > 8192) return -1;
+    long b = strtol(end + 1, &end, 10);
+    if (*end || b < 64 || b > 8192) return -1;
+    *w = (int)a;
+    *h = (int)b;
+    return 0;
+}
+
+static int parse_float(const char *s, float *out)
+{
+    char *end;
+    float f = strtof(s, &end);
+    if (end == s || *end || !isfinite(f)) return -1;
+    *out = f;
+    return 0;
+}
+
+static const char *default_accel(void)
+{
+    return sidx_accel_is_registered("bvh") ? "bvh" : sidx_accel_registered_name(0);
+}
+
+/* ---- interactive ------------------------------------------------------------------------- */
+
+static int run_window(view_state *v, int w, int h)
+{
+    if (SDL_Init(SDL_INIT_VIDEO) != 0) {
+        fprintf(stderr, "sidx-view: cannot open a window: %s (try --screenshot)\n", SDL_GetError());
+        return 1;
+    }
+    SDL_Window *win = SDL_CreateWindow("sidx-view", SDL_WINDOWPOS_CENTERED, SDL_WINDOWPOS_CENTERED, w, h, 0);
+    if (!win) {
+        fprintf(stderr, "sidx-view: cannot open a window: %s\n", SDL_GetError());
+        SDL_Quit();
+        return 1;
+    }
+    SDL_Surface *frame = SDL_CreateRGBSurfaceWithFormat(0, w, h, 32, SDL_PIXELFORMAT_ARGB8888);
+    if (!frame) {
+        fprintf(stderr, "sidx-view: %s\n", SDL_GetError());
+        SDL_DestroyWindow(win);
+        SDL_Quit();
+        return 1;
+    }
+    view_input in;
+    view_input_init(&in, w, h);
+    int running = 1, dirty = 1;
+    Uint32 last_play = SDL_GetTicks();
+    while (running) {
+        SDL_Event e;
+        int got = dirty ? SDL_PollEvent(&e) : SDL_WaitEventTimeout(&e, v->playing ? 30 : 250);
+        while (got) {
+            int r = view_handle_event(v, &in, &e);
+            if (r & VIEW_INPUT_QUIT) running = 0;
+            if (r & VIEW_INPUT_REDRAW) dirty = 1;
+            got = SDL_PollEvent(&e);
+        }
+        if (v->playing && SDL_GetTicks() - last_play > 120) {
+            last_play = SDL_GetTicks();
+            view_tick(v);
+            dirty = 1;
+        }
+        if (!dirty) continue;
+        dirty = 0;
+        if (SDL_MUSTLOCK(frame)) SDL_LockSurface(frame);
+        viz_canvas cv;
+        viz_canvas_from_surface(&cv, frame);
+        view_render(v, &cv);
+        if (SDL_MUSTLOCK(frame)) SDL_UnlockSurface(frame);
+        SDL_Surface *ws = SDL_GetWindowSurface(win);
+        if (ws) {
+            SDL_BlitSurface(frame, NULL, ws, NULL);
+            SDL_UpdateWindowSurface(win);
+        }
+        if (!in.dragging && v->pixel_step != 1) { /* refine after orbiting */
+            v->pixel_step = 1;
+            v->image_valid = 0;
+            dirty = 1;
+        }
+    }
+    SDL_FreeSurface(frame);
+    SDL_DestroyWindow(win);
+    SDL_Quit();
+    return 0;
+}
+
+int main(int argc, char **argv)
+{
+    const char *accel = NULL, *scene = "flat2d", *shot = NULL;
+    int w = 1100, h = 700, has_ray = 0, has_step = 0, level = -1;
+    long step = 0;
+    float yaw = NAN, pitch = NAN, zoom = NAN;
+    view_mode mode = VIEW_2D;
+    sidx_vec3 org = {0, 0, 0}, dir = {0, 0, 0};
+    for (int i = 1; i < argc; ++i) {
+        const char *a = argv[i];
+        const int has_val = i + 1 < argc;
+        if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
+            usage(stdout);
+            return 0;
+        } else if (!strcmp(a, "--list")) {
+            for (size_t k = 0; k < sidx_accel_registered_count(); ++k)
+                printf("%-14s %s\n", sidx_accel_registered_name(k), sidx_accel_registered_description(k));
+            return 0;
+        } else if (!strcmp(a, "--accel") && has_val) {
+            accel = argv[++i];
+        } else if (!strcmp(a, "--scene") && has_val) {
+            scene = argv[++i];
+        } else if (!strcmp(a, "--screenshot") && has_val) {
+            shot = argv[++i];
+        } else if (!strcmp(a, "--mode") && has_val) {
+            if (view_mode_parse(argv[++i], &mode) != 0) {
+                fprintf(stderr, "sidx-view: --mode wants 2d, build, 3d or heat, not '%s'\n", argv[i]);
+                return 2;
+            }
+        } else if (!strcmp(a, "--size") && has_val) {
+            if (parse_size(argv[++i], &w, &h) != 0) {
+                fprintf(stderr, "sidx-view: --size wants WxH between 64 and 8192, not '%s'\n", argv[i]);
+                return 2;
+            }
+        } else if (!strcmp(a, "--step") && has_val) {
+            char *end;
+            step = strtol(argv[++i], &end, 10);
+            if (*end || step < 0) {
+                fprintf(stderr, "sidx-view: --step wants a number >= 0, not '%s'\n", argv[i]);
+                return 2;
+            }
+            has_step = 1;
+        } else if (!strcmp(a, "--level") && has_val) {
+            char *end;
+            long k = strtol(argv[++i], &end, 10);
+            if (*end || k < -1 || k > 1000) {
+                fprintf(stderr, "sidx-view: --level wants a number >= 0, not '%s'\n", argv[i]);
+                return 2;
+            }
+            level = (int)k;
+        } else if ((!strcmp(a, "--yaw") || !strcmp(a, "--pitch") || !strcmp(a, "--zoom")) && has_val) {
+            float f;
+            if (parse_float(argv[++i], &f) != 0 || (!strcmp(a, "--zoom") && !(f > 0.0f))) {
+                fprintf(stderr, "sidx-view: %s wants a number, not '%s'\n", a, argv[i]);
+                return 2;
+            }
+            if (!strcmp(a, "--yaw")) yaw = f;
+            else if (!strcmp(a, "--pitch")) pitch = f;
+            else zoom = f;
+        } else if (!strcmp(a, "--ray") && has_val) {
+            if (sidx_viz_parse_ray(argv[++i], &org, &dir) != 0) {
+                fprintf(stderr, "sidx-view: --ray wants ox,oy,oz,dx,dy,dz (finite, non-zero direction), not '%s'\n",
+                        argv[i]);
+                return 2;
+            }
+            has_ray = 1;
+        } else {
+            fprintf(stderr, "sidx-view: unknown option or missing value: %s\n", a);
+            usage(stderr);
+            return 2;
+        }
+    }
+    if (!accel) accel = default_accel();
+    if (!sidx_accel_is_registered(accel)) {
+        fprintf(stderr, "sidx-view: no structure named '%s' (try --list)\n", accel);
+        return 2;
+    }
+
+    view_state v;
+    sidx_error err;
+    if (view_open(&v, scene, accel, &err) != SIDX_OK) {
+        fprintf(stderr, "sidx-view: %s\n", err.message);
+        view_close(&v);
+        return 1;
+    }
+    v.mode = mode;
+    v.level = level;
+    if (isfinite(yaw)) v.yaw = yaw;
+    if (isfinite(pitch)) v.pitch = pitch;
+    if (isfinite(zoom)) v.zoom = zoom;
+    if (!has_ray) view_default_ray(&v, &org, &dir);
+    /* in 3D without an explicit ray, show none (click a pixel for one) */
+    if (has_ray || mode == VIEW_2D || mode == VIEW_BUILD)
+        view_set_ray(&v, org, dir, has_step && mode != VIEW_BUILD ? (size_t)step : SIZE_MAX);
+    if (mode == VIEW_BUILD) v.build_step = has_step && (size_t)step < v.build.count ? (size_t)step : v.build.count;
+
+    int rc;
+    if (shot) {
+        char msg[300];
+        rc = view_screenshot(&v, shot, w, h, msg, sizeof msg) == 0 ? 0 : 1;
+        if (rc)
+            fprintf(stderr, "sidx-view: %s\n", msg);
+        else
+            printf("wrote %s (%dx%d, %s mode, %s, step %zu/%zu)\n", shot, w, h, view_mode_name(v.mode), v.accel_name,
+                   v.mode == VIEW_BUILD ? v.build_step : v.step, v.mode == VIEW_BUILD ? v.build.count : v.trav.count);
+    } else {
+        rc = run_window(&v, w, h);
+    }
+    view_close(&v);
+    return rc;
+}
