@@ -455,6 +455,11 @@ static sidx_status bvh_build(sidx_accel *a, sidx_error *err)
     if (n > BVH_COUNT_MASK)
         return sidx__fail(err, SIDX_ERR_LIMIT, "%s: %u triangles exceed the BVH's limit of %u", a->name, n,
                           BVH_COUNT_MASK);
+    if (a->opt.threads > 1 && B->kind == BVH_BINNED && !(B->hook && B->hook->fn) && n > 0) {
+        /* Same tree, built on several threads (parallel.c). */
+        const bvh_par_params pp = {B->leaf_size, B->max_leaf, B->max_depth, B->bins, B->c_trav, B->c_tri};
+        return sidx__bvh_build_parallel(a, &pp, err);
+    }
     SIDX_EMIT(1, B->hook, SIDX_EV_BUILD_BEGIN, e_.count = n; e_.bounds = sidx_mesh_bounds(m));
 
     sidx_status s = SIDX_ERR_NOMEM;

@@ -94,6 +94,16 @@ typedef struct bvh {
 void sidx__bvh_intersect(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit);
 int sidx__bvh_occluded(const sidx_accel *a, const sidx_ray *r, const sidx_query *q);
 
+/* parallel.c: the binned-SAH build on opt.threads threads, producing the
+ * same tree as the one-thread build (bvh_build.c calls it for "bvh" when
+ * threads > 1 and no build hook is attached).  The parameters are the
+ * builder's resolved options. */
+typedef struct bvh_par_params {
+    uint32_t leaf_size, max_leaf, max_depth, bins;
+    float c_trav, c_tri;
+} bvh_par_params;
+sidx_status sidx__bvh_build_parallel(sidx_accel *a, const bvh_par_params *p, sidx_error *err);
+
 /* bvh_obb.c: fit one oriented box per node (after nodes/tris are final). */
 sidx_status sidx__bvh_fit_obbs(const sidx_accel *a, bvh *b);
 

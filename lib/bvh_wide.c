@@ -1,0 +1,472 @@
+/* bvh_wide.c — "bvh4" and "bvh8": the binned-SAH BVH collapsed into 4- and
+ * 8-wide nodes, traversed with SSE4.1 / AVX2 (bvh_wide_walk.h).
+ *
+ * Build = the ordinary binary build (bvh_build.c, binned SAH, Wald 2007),
+ * then a top-down collapse (Dammertz et al. 2008; the same greedy rule as
+ * Embree's BVH4/8 builders): a wide node starts with its binary node's two
+ * children and repeatedly replaces the child of LARGEST SURFACE AREA by
+ * its own two children until it has W of them or none is left to open.
+ * The largest box is the one rays are most likely to enter (the SAH's
+ * probability), so pulling its children up saves the most node visits.
+ * A binary subtree of at most WIDE_LEAF_MERGE triangles is not opened at
+ * all but becomes one leaf: its triangles are contiguous in the binary
+ * tree's order and one SIMD pass tests all 4.
+ *
+ * The collapse keeps the binary tree's boxes, so the wide tree bounds
+ * exactly what the binary one does; only the grouping changes.
+ *
+ * Kernels are chosen once, when the structure is built: AVX2 for bvh8 and
+ * SSE4.1 for bvh4 when the CPU has them (__builtin_cpu_supports), else
+ * the scalar copy of the same walk; SIDX_SIMD=scalar in the environment
+ * forces the scalar copy (the tests compare both).  A NOTE event on the
+ * build hook says which was picked. */
+#include <stdlib.h>
+#include <string.h>
+#include "bvh_wide_internal.h"
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#endif
+
+#define SIDX_STRUCTURE_NAME (a->name)
+
+/* ---- the traversal, instantiated per width and instruction set -------------- */
+
+#define WALK_TARGET
+#define WALK_ISA 0
+#define WALK_W 4
+#include "bvh_wide_walk.h"
+#undef WALK_W
+#define WALK_W 8
+#include "bvh_wide_walk.h"
+#undef WALK_W
+#undef WALK_ISA
+#undef WALK_TARGET
+
+#ifdef SIDX_WIDE_X86
+#define WALK_TARGET __attribute__((target("sse4.1")))
+#define WALK_ISA 1
+#define WALK_W 4
+#include "bvh_wide_walk.h"
+#undef WALK_W
+#undef WALK_ISA
+#undef WALK_TARGET
+
+#define WALK_TARGET __attribute__((target("avx2,fma")))
+#define WALK_ISA 2
+#define WALK_W 8
+#include "bvh_wide_walk.h"
+#undef WALK_W
+#undef WALK_ISA
+#undef WALK_TARGET
+#endif
+
+wide_isa sidx__wide_pick_isa(uint32_t width)
+{
+    const char *env = getenv("SIDX_SIMD");
+    int allow = 2;
+    if (env && (!strcmp(env, "scalar") || !strcmp(env, "0"))) allow = 0;
+    else if (env && !strcmp(env, "sse4.1")) allow = 1;
+#ifdef SIDX_WIDE_X86
+    __builtin_cpu_init();
+    if (width == 8 && allow >= 2 && __builtin_cpu_supports("avx2")) return WIDE_ISA_AVX2;
+    if (width == 4 && allow >= 1 && __builtin_cpu_supports("sse4.1")) return WIDE_ISA_SSE41;
+#else
+    (void)width;
+    (void)allow;
+#endif
+    return WIDE_ISA_SCALAR;
+}
+
+static void set_kernels(wide_bvh *w)
+{
+    w->isect = w->width == 8 ? sidx__wide_isect_8_0 : sidx__wide_isect_4_0;
+    w->occl = w->width == 8 ? sidx__wide_occl_8_0 : sidx__wide_occl_4_0;
+#ifdef SIDX_WIDE_X86
+    if (w->isa == WIDE_ISA_AVX2) {
+        w->isect = sidx__wide_isect_8_2;
+        w->occl = sidx__wide_occl_8_2;
+    } else if (w->isa == WIDE_ISA_SSE41) {
+        w->isect = sidx__wide_isect_4_1;
+        w->occl = sidx__wide_occl_4_1;
+    }
+#endif
+}
+
+/* ---- collapse ------------------------------------------------------------------ */
+
+typedef struct collapse {
+    const bvh *b;
+    uint32_t W;
+    const uint32_t *sub_count, *sub_first; /* per binary node: triangles below it and the first one */
+    float *nodes;
+    uint32_t num_inner;
+    wide_tri4 *blocks;
+    uint32_t num_blocks, num_leaves, max_depth;
+    uint32_t merge;
+} collapse;
+
+static int openable(const collapse *C, uint32_t n2)
+{
+    return !bvh_is_leaf(&C->b->nodes[n2]) && C->sub_count[n2] > C->merge;
+}
+
+/* Triangles [first, first + count) of the binary tree's order as a run of
+ * blocks; returns the first block. */
+static uint32_t make_leaf(collapse *C, uint32_t first, uint32_t count)
+{
+    const uint32_t b0 = C->num_blocks, nb = (count + 3u) / 4u;
+    for (uint32_t k = 0; k < nb; ++k) {
+        wide_tri4 *B = &C->blocks[b0 + k];
+        for (uint32_t l = 0; l < 4; ++l) {
+            const uint32_t i = 4u * k + l;
+            for (int v = 0; v < 3; ++v) {
+                const sidx_vec3 p = i < count ? C->b->tris[first + i].v[v] : sidx_v3(NAN, NAN, NAN);
+                B->v[v][0][l] = p.x;
+                B->v[v][1][l] = p.y;
+                B->v[v][2][l] = p.z;
+            }
+            B->prim[l] = i < count ? C->b->prim_id[first + i] : WIDE_PAD_PRIM;
+        }
+    }
+    C->blocks[b0 + nb - 1].prim[0] |= WIDE_LAST_BLOCK;
+    C->num_blocks += nb;
+    return b0;
+}
+
+static void set_slot(float *n, uint32_t W, uint32_t s, sidx_aabb bb)
+{
+    n[0 * W + s] = bb.min.x; n[1 * W + s] = bb.min.y; n[2 * W + s] = bb.min.z;
+    n[3 * W + s] = bb.max.x; n[4 * W + s] = bb.max.y; n[5 * W + s] = bb.max.z;
+}
+
+/* Wide node for binary node n2 (openable, or the root whatever it is);
+ * nodes are numbered in pre-order, so a child's index is above its
+ * parent's and refit can run backwards. */
+static uint32_t make_node(collapse *C, uint32_t n2, uint32_t depth)
+{
+    const uint32_t W = C->W;
+    const bvh_node *bn = C->b->nodes;
+    const uint32_t idx = C->num_inner++;
+    if (depth > C->max_depth) C->max_depth = depth;
+    uint32_t kids[8], k = 0;
+    if (openable(C, n2)) {
+        kids[k++] = n2 + 1;
+        kids[k++] = bn[n2].left_or_first;
+        while (k < W) {
+            int pick = -1;
+            float pick_area = -1.0f;
+            for (uint32_t i = 0; i < k; ++i) {
+                if (!openable(C, kids[i])) continue;
+                const float ar = sidx_aabb_area(bvh_node_box(&bn[kids[i]]));
+                if (ar > pick_area) {
+                    pick_area = ar;
+                    pick = (int)i;
+                }
+            }
+            if (pick < 0) break;
+            /* Replace it by its children in place (keeps spatial order). */
+            const uint32_t c = kids[pick];
+            for (uint32_t j = k; j > (uint32_t)pick + 1; --j) kids[j] = kids[j - 1];
+            kids[pick] = c + 1;
+            kids[pick + 1] = bn[c].left_or_first;
+            ++k;
+        }
+    } else {
+        kids[k++] = n2;
+    }
+    float *n = C->nodes + (size_t)idx * 8u * W;
+    uint32_t *ch = (uint32_t *)(void *)(n + 6u * W), *id = (uint32_t *)(void *)(n + 7u * W);
+    for (uint32_t s = 0; s < W; ++s) {
+        set_slot(n, W, s, sidx_aabb_empty());
+        ch[s] = WIDE_EMPTY;
+        id[s] = UINT32_MAX;
+    }
+    for (uint32_t s = 0; s < k; ++s) {
+        set_slot(n, W, s, bvh_node_box(&bn[kids[s]]));
+        if (openable(C, kids[s])) {
+            const uint32_t c = make_node(C, kids[s], depth + 1);
+            ch[s] = c;
+            id[s] = c;
+        } else {
+            ch[s] = WIDE_LEAF_BIT | make_leaf(C, C->sub_first[kids[s]], C->sub_count[kids[s]]);
+            id[s] = C->num_leaves++; /* + num_inner once that is known */
+            if (depth + 1 > C->max_depth) C->max_depth = depth + 1;
+        }
+    }
+    return idx;
+}
+
+/* ---- build events (after the fact, with the final ids) -------------------------- */
+
+static uint32_t leaf_prims(const wide_bvh *w, uint32_t first_block)
+{
+    uint32_t c = 0;
+    for (const wide_tri4 *B = w->blocks + first_block;; ++B) {
+        for (int l = 0; l < 4; ++l) c += (B->prim[l] & WIDE_PRIM_MASK) != WIDE_PAD_PRIM;
+        if (B->prim[0] & WIDE_LAST_BLOCK) return c;
+    }
+}
+
+static sidx_aabb leaf_box(const wide_bvh *w, uint32_t first_block)
+{
+    sidx_aabb bb = sidx_aabb_empty();
+    for (const wide_tri4 *B = w->blocks + first_block;; ++B) {
+        for (int l = 0; l < 4; ++l) {
+            if ((B->prim[l] & WIDE_PRIM_MASK) == WIDE_PAD_PRIM) continue;
+            for (int v = 0; v < 3; ++v) bb = sidx_aabb_grow(bb, sidx_v3(B->v[v][0][l], B->v[v][1][l], B->v[v][2][l]));
+        }
+        if (B->prim[0] & WIDE_LAST_BLOCK) return bb;
+    }
+}
+
+static sidx_aabb node_box(const wide_bvh *w, uint32_t i)
+{
+    const float *n = wide_node(w, i);
+    sidx_aabb bb = sidx_aabb_empty();
+    for (uint32_t s = 0; s < w->width; ++s)
+        if (wide_child(n, w->width)[s] != WIDE_EMPTY) bb = sidx_aabb_union(bb, wide_slot_box(n, w->width, s));
+    return bb;
+}
+
+static void emit_build(const sidx_accel *a, const wide_bvh *w, const uint32_t *count, uint32_t i, uint32_t parent,
+                       uint32_t depth)
+{
+    const sidx_hook *h = a->opt.hook;
+    const uint32_t W = w->width;
+    const float *n = wide_node(w, i);
+    SIDX_EMIT(1, h, SIDX_EV_BUILD_NODE, e_.node = i; e_.parent = parent; e_.depth = depth;
+              e_.bounds = node_box(w, i); e_.count = count[i]);
+    for (uint32_t s = 0; s < W; ++s) {
+        const uint32_t c = wide_child(n, W)[s], id = wide_id(n, W)[s];
+        if (c == WIDE_EMPTY) continue;
+        if (!(c & WIDE_LEAF_BIT)) {
+            emit_build(a, w, count, c, i, depth + 1);
+            continue;
+        }
+        const uint32_t np = leaf_prims(w, c & ~WIDE_LEAF_BIT);
+        const float cost = (float)np * (a->opt.c_tri > 0.0f ? a->opt.c_tri : 1.0f);
+        SIDX_EMIT(1, h, SIDX_EV_BUILD_NODE, e_.node = id; e_.parent = i; e_.depth = depth + 1;
+                  e_.bounds = wide_slot_box(n, W, s); e_.count = np);
+        SIDX_EMIT(1, h, SIDX_EV_BUILD_LEAF, e_.node = id; e_.depth = depth + 1; e_.count = np; e_.cost = cost;
+                  e_.reason = SIDX_LEAF_FEW_PRIMS; e_.bounds = wide_slot_box(n, W, s));
+    }
+}
+
+/* Triangles below each inner node (children have higher indices). */
+static void inner_counts(const wide_bvh *w, uint32_t *count)
+{
+    for (uint32_t i = w->num_inner; i-- > 0;) {
+        const float *n = wide_node(w, i);
+        uint32_t c = 0;
+        for (uint32_t s = 0; s < w->width; ++s) {
+            const uint32_t ch = wide_child(n, w->width)[s];
+            if (ch == WIDE_EMPTY) continue;
+            c += (ch & WIDE_LEAF_BIT) ? leaf_prims(w, ch & ~WIDE_LEAF_BIT) : count[ch];
+        }
+        count[i] = c;
+    }
+}
+
+/* ---- SAH cost and refit ---------------------------------------------------------- */
+
+static double wide_sah(const wide_bvh *w, float c_trav, float c_tri)
+{
+    const double root = sidx_aabb_area(w->bounds);
+    if (!(root > 0.0)) return (double)w->num_prims * c_tri;
+    double s = 0.0;
+    for (uint32_t i = 0; i < w->num_inner; ++i) {
+        const float *n = wide_node(w, i);
+        s += c_trav * sidx_aabb_area(node_box(w, i)) / root;
+        for (uint32_t k = 0; k < w->width; ++k) {
+            const uint32_t ch = wide_child(n, w->width)[k];
+            if (ch == WIDE_EMPTY || !(ch & WIDE_LEAF_BIT)) continue;
+            s += c_tri * (double)leaf_prims(w, ch & ~WIDE_LEAF_BIT) * sidx_aabb_area(wide_slot_box(n, w->width, k)) /
+                 root;
+        }
+    }
+    return s;
+}
+
+static float opt_or(float v, float def) { return v > 0.0f ? v : def; }
+
+static sidx_status wide_refit(sidx_accel *a, sidx_error *err)
+{
+    (void)err;
+    wide_bvh *w = a->impl;
+    if (!w || w->num_inner == 0) return SIDX_OK;
+    const sidx_mesh *m = a->mesh;
+    for (uint32_t k = 0; k < w->num_blocks; ++k) {
+        wide_tri4 *B = &w->blocks[k];
+        for (int l = 0; l < 4; ++l) {
+            const uint32_t id = B->prim[l] & WIDE_PRIM_MASK;
+            if (id == WIDE_PAD_PRIM) continue;
+            for (int v = 0; v < 3; ++v) {
+                const sidx_vec3 p = sidx_mesh_vertex(m, id, v);
+                B->v[v][0][l] = p.x;
+                B->v[v][1][l] = p.y;
+                B->v[v][2][l] = p.z;
+            }
+        }
+    }
+    for (uint32_t i = w->num_inner; i-- > 0;) {
+        float *n = w->nodes + (size_t)i * 8u * w->width;
+        for (uint32_t s = 0; s < w->width; ++s) {
+            const uint32_t ch = wide_child(n, w->width)[s];
+            if (ch == WIDE_EMPTY) continue;
+            set_slot(n, w->width, s, (ch & WIDE_LEAF_BIT) ? leaf_box(w, ch & ~WIDE_LEAF_BIT) : node_box(w, ch));
+        }
+    }
+    w->bounds = node_box(w, 0);
+    w->sah_cost = wide_sah(w, opt_or(a->opt.c_trav, 1.0f), opt_or(a->opt.c_tri, 1.0f));
+    return SIDX_OK;
+}
+
+/* ---- build ------------------------------------------------------------------------ */
+
+static void wide_free(const sidx_accel *a, wide_bvh *w)
+{
+    if (!w) return;
+    sidx__free(a, w->nodes_mem);
+    sidx__free(a, w->blocks_mem);
+    sidx__free(a, w);
+}
+
+static void *aligned_in(void *mem, uintptr_t align)
+{
+    return (void *)(((uintptr_t)mem + align - 1u) & ~(align - 1u));
+}
+
+static sidx_status wide_build(sidx_accel *a, sidx_error *err)
+{
+    const sidx_mesh *m = a->mesh;
+    const uint32_t W = a->variant == 8 ? 8u : 4u;
+    const sidx_hook *hook = a->opt.hook;
+    SIDX_EMIT(1, hook, SIDX_EV_BUILD_BEGIN, e_.count = m->num_triangles; e_.bounds = sidx_mesh_bounds(m));
+
+    /* The binary tree, silently (its node ids are not ours). */
+    sidx_accel bin = *a;
+    bin.variant = BVH_BINNED;
+    bin.opt.hook = NULL;
+    bin.impl = NULL;
+    sidx_status s = sidx__bvh_vtable.build(&bin, err);
+    if (s != SIDX_OK) return s;
+    const bvh *b = bin.impl;
+
+    s = SIDX_ERR_NOMEM;
+    uint32_t *sub = NULL, *counts = NULL;
+    float *tmp_nodes = NULL;
+    wide_tri4 *tmp_blocks = NULL;
+    wide_bvh *w = sidx__calloc(a, 1, sizeof *w);
+    if (!w) goto fail;
+    w->width = W;
+    w->num_prims = b->num_prims;
+    w->isa = sidx__wide_pick_isa(W);
+    set_kernels(w);
+    w->bounds = sidx_aabb_empty();
+    if (b->num_nodes > 0) {
+        const uint32_t nn = b->num_nodes;
+        sub = sidx__alloc(a, 2u * (size_t)nn, sizeof *sub);
+        tmp_nodes = sidx__alloc(a, (size_t)nn * 8u * W, sizeof(float));
+        tmp_blocks = sidx__alloc(a, b->num_prims + 1u, sizeof *tmp_blocks);
+        if (!sub || !tmp_nodes || !tmp_blocks) goto fail;
+        uint32_t *sub_count = sub, *sub_first = sub + nn;
+        for (uint32_t i = nn; i-- > 0;) {
+            const bvh_node *n = &b->nodes[i];
+            if (bvh_is_leaf(n)) {
+                sub_count[i] = bvh_count(n);
+                sub_first[i] = n->left_or_first;
+            } else {
+                sub_count[i] = sub_count[i + 1] + sub_count[n->left_or_first];
+                sub_first[i] = sub_first[i + 1];
+            }
+        }
+        collapse C = {b, W, sub_count, sub_first, tmp_nodes, 0, tmp_blocks, 0, 0, 0, WIDE_LEAF_MERGE};
+        make_node(&C, 0, 0);
+        /* Exact-size, aligned copies: a node is whole cache lines. */
+        w->nodes_mem = sidx__alloc(a, (size_t)C.num_inner * 8u * W * sizeof(float) + 64u, 1);
+        w->blocks_mem = sidx__alloc(a, (size_t)C.num_blocks * sizeof(wide_tri4) + 64u, 1);
+        if (!w->nodes_mem || !w->blocks_mem) goto fail;
+        w->nodes = aligned_in(w->nodes_mem, 64);
+        w->blocks = aligned_in(w->blocks_mem, 64);
+        memcpy(w->nodes, tmp_nodes, (size_t)C.num_inner * 8u * W * sizeof(float));
+        memcpy(w->blocks, tmp_blocks, (size_t)C.num_blocks * sizeof(wide_tri4));
+        w->num_inner = C.num_inner;
+        w->num_blocks = C.num_blocks;
+        w->num_leaves = C.num_leaves;
+        w->max_depth = C.max_depth;
+        /* Leaf event ids come after the inner nodes. */
+        for (uint32_t i = 0; i < w->num_inner; ++i) {
+            float *n = w->nodes + (size_t)i * 8u * W;
+            uint32_t *ch = (uint32_t *)(void *)(n + 6u * W), *id = (uint32_t *)(void *)(n + 7u * W);
+            for (uint32_t k = 0; k < W; ++k)
+                if (ch[k] != WIDE_EMPTY && (ch[k] & WIDE_LEAF_BIT)) id[k] += w->num_inner;
+        }
+        w->bounds = node_box(w, 0);
+    }
+    w->sah_cost = wide_sah(w, opt_or(a->opt.c_trav, 1.0f), opt_or(a->opt.c_tri, 1.0f));
+    if (hook && hook->fn && w->num_inner) {
+        counts = sidx__alloc(a, w->num_inner, sizeof *counts);
+        if (!counts) goto fail;
+        inner_counts(w, counts);
+        emit_build(a, w, counts, 0, UINT32_MAX, 0);
+    }
+    SIDX_EMIT(1, hook, SIDX_EV_NOTE,
+              e_.text = w->isa == WIDE_ISA_AVX2    ? "wide BVH: AVX2 kernels (8 boxes per pass, 4 triangles per pass)"
+                        : w->isa == WIDE_ISA_SSE41 ? "wide BVH: SSE4.1 kernels (4 boxes per pass, 4 triangles per pass)"
+                                                   : "wide BVH: portable scalar kernels");
+    SIDX_EMIT(1, hook, SIDX_EV_BUILD_END, e_.node = w->num_inner + w->num_leaves; e_.count = w->num_prims;
+              e_.depth = w->max_depth);
+    sidx__free(a, sub);
+    sidx__free(a, counts);
+    sidx__free(a, tmp_nodes);
+    sidx__free(a, tmp_blocks);
+    sidx__bvh_vtable.destroy(&bin);
+    a->impl = w;
+    return SIDX_OK;
+
+fail:
+    sidx__free(a, sub);
+    sidx__free(a, counts);
+    sidx__free(a, tmp_nodes);
+    sidx__free(a, tmp_blocks);
+    wide_free(a, w);
+    sidx__bvh_vtable.destroy(&bin);
+    a->impl = NULL;
+    return sidx__fail(err, s, "%s: out of memory", a->name);
+}
+
+static void wide_destroy(sidx_accel *a)
+{
+    wide_free(a, a->impl);
+    a->impl = NULL;
+}
+
+static void wide_stats(const sidx_accel *a, sidx_accel_stats *s)
+{
+    const wide_bvh *w = a->impl;
+    if (!w) return;
+    s->nodes = w->num_inner + w->num_leaves;
+    s->leaves = w->num_leaves;
+    s->max_depth = w->max_depth;
+    s->prim_refs = w->num_prims;
+    s->bytes = sizeof *w + (size_t)w->num_inner * 8u * w->width * sizeof(float) +
+               (size_t)w->num_blocks * sizeof(wide_tri4);
+    s->sah_cost = w->sah_cost;
+    s->mean_leaf_prims = w->num_leaves ? (double)w->num_prims / w->num_leaves : 0.0;
+    s->empty_leaves = 0;
+}
+
+static void wide_intersect(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
+{
+    ((const wide_bvh *)a->impl)->isect(a, r, q, hit);
+}
+
+static int wide_occluded(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
+{
+    return ((const wide_bvh *)a->impl)->occl(a, r, q);
+}
+
+const sidx_accel_vtable sidx__wide_vtable = {wide_build, wide_intersect, wide_occluded,
+                                             wide_stats, wide_destroy, wide_refit};
+
+int sidx__is_wide(const sidx_accel *a) { return a && a->vt == &sidx__wide_vtable; }

@@ -1,0 +1,120 @@
+/* bvh_wide_internal.h — the 4- and 8-wide BVH ("bvh4", "bvh8"): data
+ * layout shared by bvh_wide.c (collapse, dispatch), bvh_wide_walk.h (the
+ * traversal, compiled once per instruction set) and packet.c.
+ *
+ * Why wide nodes: a binary BVH tests one box per node visit with scalar
+ * code, so three quarters of an SSE register and seven eighths of an AVX
+ * register sit idle.  Collapsing the binary tree so each node holds the
+ * boxes of its 4 or 8 "grandchildren" (Dammertz, Hanika, Keller 2008,
+ * "Shallow bounding volume hierarchies for fast SIMD ray tracing of
+ * incoherent rays"; Ernst & Greiner 2008, "Multi bounding volume
+ * hierarchies"; Wald, Benthin, Boulos 2008, "Getting rid of packets") lets
+ * one ray test all of them in one pass of SIMD instructions — the deck's
+ * "traverse one ray, but intersect with many BVs (needs wide BVH!)".
+ *
+ * Node (W = 4 or 8 lanes, 8·W 32-bit words = 128 or 256 bytes, so a node
+ * is whole cache lines when the array is 64-byte aligned):
+ *
+ *   float    b[6][W]   child boxes, structure of arrays: lo_x, lo_y, lo_z,
+ *                      hi_x, hi_y, hi_z — one SIMD load per plane;
+ *   uint32_t child[W]  inner child: its node index;  leaf: WIDE_LEAF_BIT |
+ *                      first triangle block;  unused slot: WIDE_EMPTY;
+ *   uint32_t id[W]     the child's node id in events (inner: its index;
+ *                      leaf: num_inner + leaf number), only read when traced.
+ *
+ * An unused slot has lo = +inf, hi = -inf: every ray's slab interval for
+ * it comes out as [+inf, -inf] (for either sign of the direction, and for
+ * a ±0 direction too), so it is a miss without a per-slot valid mask.
+ *
+ * Leaves hold their triangles in blocks of 4 (structure of arrays, the
+ * layout Embree's Triangle4 uses) so one SSE pass runs the watertight test
+ * on 4 triangles; a leaf is a run of consecutive blocks, the last marked by
+ * WIDE_LAST_BLOCK in prim[0].  Unused lanes have NaN vertices (every
+ * comparison on them is false, so they never hit and never trigger the
+ * double-precision fallback) and prim = WIDE_PAD_PRIM. */
+#ifndef SIDX_BVH_WIDE_INTERNAL_H
+#define SIDX_BVH_WIDE_INTERNAL_H
+
+#include "bvh_internal.h"
+
+#define WIDE_LEAF_BIT 0x80000000u
+#define WIDE_EMPTY 0xFFFFFFFFu
+#define WIDE_LAST_BLOCK 0x80000000u
+#define WIDE_PRIM_MASK 0x7FFFFFFFu
+#define WIDE_PAD_PRIM 0x7FFFFFFFu
+
+/* A BVH2 subtree of at most this many triangles becomes one wide leaf of
+ * one block: testing 4 triangles in one SIMD pass costs about what one
+ * box test does, so splitting them further only adds box tests. */
+#define WIDE_LEAF_MERGE 4u
+
+/* Closest-hit traversal pushes at most W − 1 deferred children per level
+ * and the tree is at most BVH_DEPTH_LIMIT deep: 64 · 7 + 1 < 512. */
+#define WIDE_STACK 512
+
+/* Instruction sets of the kernels (chosen when the structure is built). */
+typedef enum wide_isa { WIDE_ISA_SCALAR = 0, WIDE_ISA_SSE41 = 1, WIDE_ISA_AVX2 = 2 } wide_isa;
+
+typedef struct wide_tri4 {
+    float v[3][3][4];  /* [vertex][axis][lane] */
+    uint32_t prim[4];  /* original triangle index (WIDE_PRIM_MASK bits); prim[0] also carries WIDE_LAST_BLOCK */
+} wide_tri4;
+_Static_assert(sizeof(wide_tri4) == 160, "wide_tri4 is 9 float4 + 4 ids");
+
+struct wide_bvh;
+typedef void (*wide_isect_fn)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit);
+typedef int (*wide_occl_fn)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q);
+
+typedef struct wide_bvh {
+    uint32_t width;        /* W: 4 or 8 */
+    wide_isa isa;          /* kernels in use */
+    float *nodes;          /* num_inner nodes of 8·W words, 64-byte aligned inside nodes_mem */
+    void *nodes_mem;
+    uint32_t num_inner, num_leaves, max_depth, num_prims;
+    wide_tri4 *blocks;     /* 64-byte aligned inside blocks_mem */
+    void *blocks_mem;
+    uint32_t num_blocks;
+    double sah_cost;
+    sidx_aabb bounds;      /* scene box (union of the root's slots) */
+    wide_isect_fn isect;
+    wide_occl_fn occl;
+} wide_bvh;
+
+static SIDX_INLINE const float *wide_node(const wide_bvh *w, uint32_t i) { return w->nodes + (size_t)i * 8u * w->width; }
+static SIDX_INLINE const uint32_t *wide_child(const float *n, uint32_t W)
+{
+    return (const uint32_t *)(const void *)(n + 6u * W);
+}
+static SIDX_INLINE const uint32_t *wide_id(const float *n, uint32_t W)
+{
+    return (const uint32_t *)(const void *)(n + 7u * W);
+}
+static inline sidx_aabb wide_slot_box(const float *n, uint32_t W, uint32_t s)
+{
+    sidx_aabb b = {{n[0 * W + s], n[1 * W + s], n[2 * W + s]}, {n[3 * W + s], n[4 * W + s], n[5 * W + s]}};
+    return b;
+}
+
+/* Traversal entry points, one set per width and instruction set
+ * (bvh_wide.c instantiates bvh_wide_walk.h for each). */
+void sidx__wide_isect_4_0(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit);
+int sidx__wide_occl_4_0(const sidx_accel *a, const sidx_ray *r, const sidx_query *q);
+void sidx__wide_isect_8_0(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit);
+int sidx__wide_occl_8_0(const sidx_accel *a, const sidx_ray *r, const sidx_query *q);
+#if defined(__x86_64__) || defined(__i386__)
+#define SIDX_WIDE_X86 1
+void sidx__wide_isect_4_1(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit);
+int sidx__wide_occl_4_1(const sidx_accel *a, const sidx_ray *r, const sidx_query *q);
+void sidx__wide_isect_8_2(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit);
+int sidx__wide_occl_8_2(const sidx_accel *a, const sidx_ray *r, const sidx_query *q);
+#endif
+
+/* The instruction set bvh4/bvh8 pick on this machine: the best the CPU
+ * has, unless the environment variable SIDX_SIMD=scalar (or sse4.1) asks
+ * for less — that is how the tests run the portable fallback. */
+wide_isa sidx__wide_pick_isa(uint32_t width);
+
+/* Is `a` a bvh4 / bvh8 (for packet.c)? */
+int sidx__is_wide(const sidx_accel *a);
+
+#endif

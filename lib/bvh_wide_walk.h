@@ -1,0 +1,466 @@
+/* bvh_wide_walk.h — one ray through a wide BVH: the traversal template.
+ *
+ * Not a normal header: bvh_wide.c includes it once per (width, instruction
+ * set) with WALK_W (4 or 8), WALK_ISA (0 scalar, 1 SSE4.1, 2 AVX2) and
+ * WALK_TARGET (the matching __attribute__((target(...))) or nothing)
+ * defined.  Every function here carries WALK_TARGET, so the SIMD copies are
+ * compiled for their instruction set while the library as a whole is built
+ * for baseline x86-64, and picked at run time (bvh_wide.c).  The scalar copy
+ * is the portable reference: the same operations in the same order, so it
+ * returns bit-identical hits (see "identical results" below).
+ *
+ * The walk (closest hit) per node:
+ *   1. slab-test all W child boxes at once against [tmin, best]
+ *      (Kay & Kajiya 1986), t_far widened by 1 + 2γ₃ (Ize 2013) exactly as
+ *      sidx__box_test does, and min/max written in the order that lets a
+ *      NaN slab value (0·∞: origin on the plane of an axis the ray is
+ *      parallel to) never narrow the interval: MAXPS/MINPS return their
+ *      SECOND operand when either is NaN, so the slab value goes first and
+ *      the running interval second — the SIMD twin of `x > y ? x : y`;
+ *   2. one hit child: descend, no stack traffic (the common case deep in
+ *      the tree); several: sort them by entry distance (insertion sort on
+ *      at most 8 (ref, t) pairs — in practice 2 or 3) and descend into the
+ *      nearest, deferring the others nearest-on-top, as Wald et al. 2008
+ *      and Embree do;
+ *   3. a leaf: its triangle blocks, 4 triangles per SSE pass with the
+ *      watertight test (Woop, Benthin, Wald 2013) written lane-parallel;
+ *   4. pop the next deferred child whose entry is still before the best hit.
+ *
+ * Identical results, SIMD or scalar: the slab and triangle arithmetic is
+ * the same sequence of IEEE single-precision operations in every copy
+ * (no FMA contraction: ISO C mode compiles with -ffp-contract=off, and the
+ * intrinsics spell out mul then sub), min/max resolve NaNs the same way,
+ * and a block's hits are reduced to the smallest t, ties to the lowest
+ * lane — exactly what testing the 4 triangles one after another with a
+ * shrinking bound accepts.  A lane whose edge function is exactly 0 sends
+ * the whole block to the scalar test, which redoes it in double as the
+ * paper prescribes.
+ *
+ * Events: the traced copy (traced = 1) emits NODE_ENTER, BOX_TEST per used
+ * slot, STACK_PUSH / STACK_POP, PRIM_TEST and HIT_UPDATE per triangle (it
+ * tests leaves one triangle at a time so the events say what was tested)
+ * and TERMINATE; in the untraced copies every SIDX_EMIT is dead code. */
+
+#if !defined(WALK_W) || !defined(WALK_ISA)
+#error "bvh_wide_walk.h is included by bvh_wide.c with WALK_W and WALK_ISA defined"
+#endif
+#if (WALK_ISA == 2 && WALK_W != 8) || (WALK_ISA == 1 && WALK_W != 4)
+#error "AVX2 kernels are 8 wide, SSE4.1 kernels 4 wide"
+#endif
+
+#define WJOIN_(a, b, c) a##b##_##c
+#define WJOIN(a, b, c) WJOIN_(a, b, c)
+#define WFN(name) WJOIN(name, WALK_W, WALK_ISA)
+#ifndef WIDE_PREFETCH
+#define WIDE_PREFETCH 1
+#endif
+#define WINL static inline __attribute__((always_inline)) WALK_TARGET
+
+/* ---- per-ray constants ------------------------------------------------------ */
+
+typedef struct WFN(wray_) {
+#if WALK_ISA == 2
+    __m256 ox, oy, oz, ix, iy, iz, fx, fy, fz, tmin;
+#elif WALK_ISA == 1
+    __m128 ox, oy, oz, ix, iy, iz, fx, fy, fz, tmin;
+#else
+    float o[3], inv[3], finv[3], tmin;
+#endif
+#if WALK_ISA >= 1
+    /* watertight triangle test, lane-broadcast */
+    __m128 okx, oky, okz, sx, sy, sz, ttmin;
+    uint32_t kx4, ky4, kz4; /* float offsets of the permuted axes inside a block's vertex */
+#endif
+    uint32_t no[3], fo[3];  /* float offsets of the near / far planes of each axis inside a node */
+} WFN(wray_);
+
+WINL void WFN(wray_init_)(WFN(wray_) * R, const sidx_ray *r, float scale)
+{
+    const float *o = &r->org.x, *inv = &r->inv_dir.x;
+    for (int k = 0; k < 3; ++k) {
+        /* b[0..2] = lo, b[3..5] = hi: a negative direction enters through hi. */
+        R->no[k] = (uint32_t)((r->sign[k] ? 3 + k : k) * WALK_W);
+        R->fo[k] = (uint32_t)((r->sign[k] ? k : 3 + k) * WALK_W);
+    }
+#if WALK_ISA == 2
+    R->ox = _mm256_set1_ps(o[0]); R->oy = _mm256_set1_ps(o[1]); R->oz = _mm256_set1_ps(o[2]);
+    R->ix = _mm256_set1_ps(inv[0]); R->iy = _mm256_set1_ps(inv[1]); R->iz = _mm256_set1_ps(inv[2]);
+    R->fx = _mm256_set1_ps(inv[0] * scale); R->fy = _mm256_set1_ps(inv[1] * scale);
+    R->fz = _mm256_set1_ps(inv[2] * scale);
+    R->tmin = _mm256_set1_ps(r->tmin);
+#elif WALK_ISA == 1
+    R->ox = _mm_set1_ps(o[0]); R->oy = _mm_set1_ps(o[1]); R->oz = _mm_set1_ps(o[2]);
+    R->ix = _mm_set1_ps(inv[0]); R->iy = _mm_set1_ps(inv[1]); R->iz = _mm_set1_ps(inv[2]);
+    R->fx = _mm_set1_ps(inv[0] * scale); R->fy = _mm_set1_ps(inv[1] * scale); R->fz = _mm_set1_ps(inv[2] * scale);
+    R->tmin = _mm_set1_ps(r->tmin);
+#else
+    for (int k = 0; k < 3; ++k) { R->o[k] = o[k]; R->inv[k] = inv[k]; R->finv[k] = inv[k] * scale; }
+    R->tmin = r->tmin;
+#endif
+#if WALK_ISA >= 1
+    R->okx = _mm_set1_ps(o[r->kx]); R->oky = _mm_set1_ps(o[r->ky]); R->okz = _mm_set1_ps(o[r->kz]);
+    R->sx = _mm_set1_ps(r->sx); R->sy = _mm_set1_ps(r->sy); R->sz = _mm_set1_ps(r->sz);
+    R->ttmin = _mm_set1_ps(r->tmin);
+    R->kx4 = 4u * r->kx; R->ky4 = 4u * r->ky; R->kz4 = 4u * r->kz;
+#endif
+}
+
+/* ---- W boxes at once ---------------------------------------------------------
+ * The far planes use 1/d pre-multiplied by the Ize factor (as Embree's
+ * robust mode does with its rdir_far): fl(fl(b − o)·fl(fl(1/d)·S)) carries
+ * four roundings, like fl(fl(fl(b − o)·fl(1/d))·S) in sidx__box_test, so
+ * the same 1 + 2γ₃ bound keeps it conservative, and a node costs three
+ * multiplies fewer.  With the plain test S = 1 and the product is exact.
+ * Returns the mask of children whose clipped interval is non-empty; tn[]
+ * (and tf[] when want_tf) receive the intervals of all W slots. */
+WINL unsigned WFN(boxes_)(const float *n, const WFN(wray_) * R, float best, float *tn, float *tf, const int want_tf)
+{
+#if WALK_ISA == 2
+    const __m256 nx = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(n + R->no[0]), R->ox), R->ix);
+    const __m256 ny = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(n + R->no[1]), R->oy), R->iy);
+    const __m256 nz = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(n + R->no[2]), R->oz), R->iz);
+    const __m256 fx = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(n + R->fo[0]), R->ox), R->fx);
+    const __m256 fy = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(n + R->fo[1]), R->oy), R->fy);
+    const __m256 fz = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(n + R->fo[2]), R->oz), R->fz);
+    __m256 t0 = _mm256_max_ps(nx, R->tmin);
+    t0 = _mm256_max_ps(ny, t0);
+    t0 = _mm256_max_ps(nz, t0);
+    __m256 t1 = _mm256_min_ps(fx, _mm256_set1_ps(best));
+    t1 = _mm256_min_ps(fy, t1);
+    t1 = _mm256_min_ps(fz, t1);
+    _mm256_store_ps(tn, t0);
+    if (want_tf) _mm256_store_ps(tf, t1);
+    return (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(t0, t1, _CMP_LE_OQ));
+#elif WALK_ISA == 1
+    const __m128 nx = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(n + R->no[0]), R->ox), R->ix);
+    const __m128 ny = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(n + R->no[1]), R->oy), R->iy);
+    const __m128 nz = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(n + R->no[2]), R->oz), R->iz);
+    const __m128 fx = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(n + R->fo[0]), R->ox), R->fx);
+    const __m128 fy = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(n + R->fo[1]), R->oy), R->fy);
+    const __m128 fz = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(n + R->fo[2]), R->oz), R->fz);
+    __m128 t0 = _mm_max_ps(nx, R->tmin);
+    t0 = _mm_max_ps(ny, t0);
+    t0 = _mm_max_ps(nz, t0);
+    __m128 t1 = _mm_min_ps(fx, _mm_set1_ps(best));
+    t1 = _mm_min_ps(fy, t1);
+    t1 = _mm_min_ps(fz, t1);
+    _mm_store_ps(tn, t0);
+    if (want_tf) _mm_store_ps(tf, t1);
+    return (unsigned)_mm_movemask_ps(_mm_cmple_ps(t0, t1));
+#else
+    unsigned m = 0;
+    for (uint32_t s = 0; s < WALK_W; ++s) {
+        float t0 = R->tmin, t1 = best;
+        for (int k = 0; k < 3; ++k) {
+            const float a = (n[R->no[k] + s] - R->o[k]) * R->inv[k];
+            const float b = (n[R->fo[k] + s] - R->o[k]) * R->finv[k];
+            t0 = a > t0 ? a : t0;
+            t1 = b < t1 ? b : t1;
+        }
+        tn[s] = t0;
+        if (want_tf) tf[s] = t1;
+        m |= (unsigned)(t0 <= t1) << s;
+    }
+    return m;
+#endif
+}
+
+/* ---- 4 triangles at once (watertight) -----------------------------------------
+ * Returns 1 with the smallest t in [tmin, best) (lowest lane on ties),
+ * 0 for no hit, -1 when some lane's edge function is exactly 0 and the
+ * block must take the scalar path (which redoes those in double). */
+#if WALK_ISA >= 1
+WINL int WFN(tri4_)(const wide_tri4 *B, const WFN(wray_) * R, float best, float *t_out, unsigned *lane_out)
+{
+    const float *v = &B->v[0][0][0]; /* vertex k, axis x, lane l at v[12k + 4x + l] */
+    const __m128 ax = _mm_sub_ps(_mm_load_ps(v + R->kx4), R->okx);
+    const __m128 ay = _mm_sub_ps(_mm_load_ps(v + R->ky4), R->oky);
+    const __m128 az = _mm_sub_ps(_mm_load_ps(v + R->kz4), R->okz);
+    const __m128 bx = _mm_sub_ps(_mm_load_ps(v + 12 + R->kx4), R->okx);
+    const __m128 by = _mm_sub_ps(_mm_load_ps(v + 12 + R->ky4), R->oky);
+    const __m128 bz = _mm_sub_ps(_mm_load_ps(v + 12 + R->kz4), R->okz);
+    const __m128 cx = _mm_sub_ps(_mm_load_ps(v + 24 + R->kx4), R->okx);
+    const __m128 cy = _mm_sub_ps(_mm_load_ps(v + 24 + R->ky4), R->oky);
+    const __m128 cz = _mm_sub_ps(_mm_load_ps(v + 24 + R->kz4), R->okz);
+    const __m128 Ax = _mm_sub_ps(ax, _mm_mul_ps(R->sx, az)), Ay = _mm_sub_ps(ay, _mm_mul_ps(R->sy, az));
+    const __m128 Bx = _mm_sub_ps(bx, _mm_mul_ps(R->sx, bz)), By = _mm_sub_ps(by, _mm_mul_ps(R->sy, bz));
+    const __m128 Cx = _mm_sub_ps(cx, _mm_mul_ps(R->sx, cz)), Cy = _mm_sub_ps(cy, _mm_mul_ps(R->sy, cz));
+    const __m128 U = _mm_sub_ps(_mm_mul_ps(Cx, By), _mm_mul_ps(Cy, Bx));
+    const __m128 V = _mm_sub_ps(_mm_mul_ps(Ax, Cy), _mm_mul_ps(Ay, Cx));
+    const __m128 W = _mm_sub_ps(_mm_mul_ps(Bx, Ay), _mm_mul_ps(By, Ax));
+    const __m128 zero = _mm_setzero_ps();
+    const __m128 anyzero = _mm_or_ps(_mm_or_ps(_mm_cmpeq_ps(U, zero), _mm_cmpeq_ps(V, zero)), _mm_cmpeq_ps(W, zero));
+    if (SIDX_UNLIKELY(_mm_movemask_ps(anyzero))) return -1;
+    const __m128 neg = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(U, zero), _mm_cmplt_ps(V, zero)), _mm_cmplt_ps(W, zero));
+    const __m128 pos = _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(U, zero), _mm_cmpgt_ps(V, zero)), _mm_cmpgt_ps(W, zero));
+    const __m128 det = _mm_add_ps(_mm_add_ps(U, V), W);
+    const __m128 T = _mm_add_ps(_mm_add_ps(_mm_mul_ps(U, _mm_mul_ps(R->sz, az)), _mm_mul_ps(V, _mm_mul_ps(R->sz, bz))),
+                                _mm_mul_ps(W, _mm_mul_ps(R->sz, cz)));
+    const __m128 t = _mm_div_ps(T, det);
+    const __m128 ok = _mm_andnot_ps(_mm_and_ps(neg, pos),
+                                    _mm_and_ps(_mm_cmpneq_ps(det, zero),
+                                               _mm_and_ps(_mm_cmpge_ps(t, R->ttmin), _mm_cmplt_ps(t, _mm_set1_ps(best)))));
+    const unsigned m = (unsigned)_mm_movemask_ps(ok);
+    if (!m) return 0;
+    const __m128 tt = _mm_blendv_ps(_mm_set1_ps(INFINITY), t, ok);
+    __m128 mn = _mm_min_ps(tt, _mm_shuffle_ps(tt, tt, _MM_SHUFFLE(1, 0, 3, 2)));
+    mn = _mm_min_ps(mn, _mm_shuffle_ps(mn, mn, _MM_SHUFFLE(2, 3, 0, 1)));
+    const unsigned lane = (unsigned)__builtin_ctz((unsigned)_mm_movemask_ps(_mm_cmpeq_ps(tt, mn)) & m);
+    *t_out = _mm_cvtss_f32(mn);
+    *lane_out = lane;
+    return 1;
+}
+#endif
+
+/* One leaf: its blocks in order.  Returns 1 when an any-hit query may stop. */
+WINL int WFN(leaf_)(const sidx_accel *a, const wide_bvh *w, uint32_t first_block, const sidx_ray *r,
+                    const WFN(wray_) * R, const sidx_query *q, uint32_t node_id, float *best, uint32_t *prim,
+                    const int anyhit, const int traced, const int simd_tri)
+{
+    (void)R;
+    (void)node_id;
+    const wide_tri4 *B = w->blocks + first_block;
+    for (;; ++B) {
+        int scalar = 1;
+#if WALK_ISA >= 1
+        if (!traced && simd_tri) {
+            float t;
+            unsigned lane;
+            const int h = WFN(tri4_)(B, R, *best, &t, &lane);
+            if (h >= 0) {
+                scalar = 0;
+                if (h) {
+                    *prim = B->prim[lane] & WIDE_PRIM_MASK;
+                    if (anyhit) return 1;
+                    *best = t;
+                }
+            }
+        }
+#else
+        (void)simd_tri;
+#endif
+        if (scalar) {
+            for (int l = 0; l < 4; ++l) {
+                const uint32_t id = B->prim[l] & WIDE_PRIM_MASK;
+                if (id == WIDE_PAD_PRIM) continue;
+                const sidx_vec3 p0 = {B->v[0][0][l], B->v[0][1][l], B->v[0][2][l]};
+                const sidx_vec3 p1 = {B->v[1][0][l], B->v[1][1][l], B->v[1][2][l]};
+                const sidx_vec3 p2 = {B->v[2][0][l], B->v[2][1][l], B->v[2][2][l]};
+                float t;
+                const int h = sidx__tri_test(a->opt.tri, r, p0, p1, p2, *best, &t, NULL, NULL);
+                SIDX_EMIT(traced, q->hook, SIDX_EV_PRIM_TEST, e_.ray_id = q->ray_id; e_.node = node_id;
+                          e_.prim = id; e_.result = h; e_.t = h ? t : INFINITY);
+                if (h) {
+                    *prim = id;
+                    if (anyhit) return 1;
+                    *best = t;
+                    SIDX_EMIT(traced, q->hook, SIDX_EV_HIT_UPDATE, e_.ray_id = q->ray_id; e_.prim = id; e_.t = t);
+                }
+            }
+        }
+        if (B->prim[0] & WIDE_LAST_BLOCK) return 0;
+    }
+}
+
+/* ---- the walk ----------------------------------------------------------------- */
+
+WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit, const int anyhit,
+                    const int traced, const int simd_tri)
+{
+    const wide_bvh *w = a->impl;
+    const float *nodes = w->nodes;
+    float best = anyhit ? r->tmax : hit->t;
+    uint32_t prim = SIDX_NO_HIT, visited = 0;
+    if (w->num_inner == 0) {
+        SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = SIDX_TERM_MISS_ROOT;
+                  e_.count = 0);
+        return 0;
+    }
+    WFN(wray_) R;
+    WFN(wray_init_)(&R, r, a->opt.box == SIDX_BOX_ROBUST ? SIDX_ROBUST_TFAR_SCALE : 1.0f);
+
+    /* Deferred children and their entry distances; exit distance, depth
+     * and event id only for the events (dead in the untraced copies). */
+    uint32_t stk[WIDE_STACK];
+    float stk_tn[WIDE_STACK];
+    float stk_tf[WIDE_STACK];
+    uint32_t stk_depth[WIDE_STACK], stk_id[WIDE_STACK];
+    _Alignas(32) float tn[8];
+    _Alignas(32) float tf[8];
+    uint32_t sp = 0, cur = 0, cur_id = 0, depth = 0;
+    float cur_tn = r->tmin, cur_tf = best;
+    int root_hit = 0;
+    (void)cur_tn;
+    (void)cur_tf;
+    (void)cur_id;
+    for (;;) {
+        ++visited;
+        SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id; e_.node = cur_id; e_.depth = depth;
+                  e_.t_near = cur_tn; e_.t_far = cur_tf);
+        if (!(cur & WIDE_LEAF_BIT)) {
+            const float *n = nodes + (size_t)cur * (8u * WALK_W);
+            const uint32_t *ch = wide_child(n, WALK_W);
+            unsigned m = WFN(boxes_)(n, &R, best, tn, tf, traced);
+            if (traced) {
+                const uint32_t *ids = wide_id(n, WALK_W);
+                for (uint32_t s = 0; s < WALK_W; ++s) {
+                    if (ch[s] == WIDE_EMPTY) continue;
+                    const int res = (int)((m >> s) & 1u);
+                    SIDX_EMIT(traced, q->hook, SIDX_EV_BOX_TEST, e_.ray_id = q->ray_id; e_.node = ids[s];
+                              e_.depth = depth + 1; e_.bounds = wide_slot_box(n, WALK_W, s); e_.result = res;
+                              e_.t_near = res ? tn[s] : NAN; e_.t_far = res ? tf[s] : NAN);
+                }
+            }
+            if (visited == 1) root_hit = m != 0;
+            if (!traced && WIDE_PREFETCH) {
+                /* Start fetching every child that was hit: the nearest is
+                 * needed in a few cycles, the others when popped; a node
+                 * is 4 cache lines, a leaf block 3, and the walk is bound
+                 * by their latency, not by arithmetic (perf: most samples
+                 * sit on the first load of a node or block). */
+                unsigned pm = m;
+                while (pm) {
+                    const uint32_t c = ch[__builtin_ctz(pm)];
+                    pm &= pm - 1;
+                    const char *p = (c & WIDE_LEAF_BIT) ? (const char *)(w->blocks + (c & ~WIDE_LEAF_BIT))
+                                                        : (const char *)(nodes + (size_t)c * (8u * WALK_W));
+                    __builtin_prefetch(p);
+                    __builtin_prefetch(p + 64);
+                    __builtin_prefetch(p + 128);
+                    if (!(c & WIDE_LEAF_BIT) && WALK_W == 8) __builtin_prefetch(p + 192);
+                }
+            }
+            if (m) {
+                const unsigned s0 = (unsigned)__builtin_ctz(m);
+                m &= m - 1;
+                if (!m) { /* one child: descend, no stack */
+                    cur = ch[s0];
+                    if (traced) {
+                        cur_tn = tn[s0];
+                        cur_tf = tf[s0];
+                        cur_id = wide_id(n, WALK_W)[s0];
+                    }
+                    ++depth;
+                    continue;
+                }
+                if (!traced && !(m & (m - 1))) {
+                    /* Two (the most common case of several): one compare,
+                     * the farther waits; ties go to the lower slot. */
+                    const unsigned s1 = (unsigned)__builtin_ctz(m);
+                    const float d0 = tn[s0], d1 = tn[s1];
+                    const int first0 = anyhit || d0 <= d1;
+                    stk[sp] = first0 ? ch[s1] : ch[s0];
+                    stk_tn[sp] = first0 ? d1 : d0;
+                    ++sp;
+                    cur = first0 ? ch[s0] : ch[s1];
+                    ++depth;
+                    continue;
+                }
+                /* Several: append them, then order nearest-on-top. */
+                const uint32_t base = sp;
+                unsigned s = s0;
+                for (;;) {
+                    stk[sp] = ch[s];
+                    stk_tn[sp] = tn[s];
+                    if (traced) {
+                        stk_tf[sp] = tf[s];
+                        stk_depth[sp] = depth + 1;
+                        stk_id[sp] = wide_id(n, WALK_W)[s];
+                    }
+                    ++sp;
+                    if (!m) break;
+                    s = (unsigned)__builtin_ctz(m);
+                    m &= m - 1;
+                }
+                if (!anyhit) {
+                    /* Insertion sort, farthest at the bottom; stable, so
+                     * equal entries keep slot order and the lower slot
+                     * is visited first. */
+                    for (uint32_t i = base + 1; i < sp; ++i) {
+                        const uint32_t c = stk[i];
+                        const float d = stk_tn[i];
+                        float df = 0.0f;
+                        uint32_t dd = 0, di = 0;
+                        if (traced) { df = stk_tf[i]; dd = stk_depth[i]; di = stk_id[i]; }
+                        uint32_t j = i;
+                        while (j > base && stk_tn[j - 1] <= d) {
+                            stk[j] = stk[j - 1];
+                            stk_tn[j] = stk_tn[j - 1];
+                            if (traced) {
+                                stk_tf[j] = stk_tf[j - 1];
+                                stk_depth[j] = stk_depth[j - 1];
+                                stk_id[j] = stk_id[j - 1];
+                            }
+                            --j;
+                        }
+                        stk[j] = c;
+                        stk_tn[j] = d;
+                        if (traced) { stk_tf[j] = df; stk_depth[j] = dd; stk_id[j] = di; }
+                    }
+                }
+                --sp; /* the nearest is visited now, the rest wait */
+                for (uint32_t i = base; traced && i < sp; ++i)
+                    SIDX_EMIT(traced, q->hook, SIDX_EV_STACK_PUSH, e_.ray_id = q->ray_id; e_.node = stk_id[i];
+                              e_.depth = i + 1; e_.t_near = stk_tn[i]; e_.t_far = stk_tf[i]);
+                cur = stk[sp];
+                if (traced) {
+                    cur_tn = stk_tn[sp];
+                    cur_tf = stk_tf[sp];
+                    cur_id = stk_id[sp];
+                }
+                ++depth;
+                continue;
+            }
+        } else if (WFN(leaf_)(a, w, cur & ~WIDE_LEAF_BIT, r, &R, q, cur_id, &best, &prim, anyhit, traced,
+                              simd_tri)) {
+            SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = SIDX_TERM_ANY_HIT;
+                      e_.count = visited);
+            return 1;
+        }
+        /* Pop the next deferred child that can still hold a closer hit. */
+        for (;;) {
+            if (sp == 0) {
+                SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id;
+                          e_.reason = root_hit ? SIDX_TERM_STACK_EMPTY : SIDX_TERM_MISS_ROOT; e_.t = best;
+                          e_.count = visited);
+                if (!anyhit && prim != SIDX_NO_HIT) {
+                    hit->t = best;
+                    hit->prim = prim;
+                }
+                return 0;
+            }
+            --sp;
+            SIDX_EMIT(traced, q->hook, SIDX_EV_STACK_POP, e_.ray_id = q->ray_id; e_.node = stk_id[sp];
+                      e_.depth = sp + 1; e_.t_near = stk_tn[sp]; e_.t_far = stk_tf[sp]);
+            if (stk_tn[sp] < best) {
+                cur = stk[sp];
+                if (traced) {
+                    cur_tn = stk_tn[sp];
+                    cur_tf = stk_tf[sp];
+                    cur_id = stk_id[sp];
+                    depth = stk_depth[sp];
+                }
+                break;
+            }
+        }
+    }
+}
+
+WALK_TARGET void WFN(sidx__wide_isect_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
+{
+    if (SIDX_QUERY_TRACED(q)) WFN(walk_)(a, r, q, hit, 0, 1, 0);
+    else if (a->opt.tri == SIDX_TRI_WATERTIGHT) WFN(walk_)(a, r, q, hit, 0, 0, 1);
+    else WFN(walk_)(a, r, q, hit, 0, 0, 0);
+}
+
+WALK_TARGET int WFN(sidx__wide_occl_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
+{
+    if (SIDX_QUERY_TRACED(q)) return WFN(walk_)(a, r, q, NULL, 1, 1, 0);
+    if (a->opt.tri == SIDX_TRI_WATERTIGHT) return WFN(walk_)(a, r, q, NULL, 1, 0, 1);
+    return WFN(walk_)(a, r, q, NULL, 1, 0, 0);
+}
+
+#undef WJOIN_
+#undef WJOIN
+#undef WFN
+#undef WINL

@@ -1,0 +1,691 @@
+/* parallel.c — multi-core tracing and the parallel binned-SAH BVH build.
+ *
+ * Tracing (sidx_trace_parallel): the calling thread and threads − 1
+ * pthreads pull batches of SIDX_PARALLEL_BATCH rays from one atomic
+ * counter until none are left.  Nothing else is shared: the structure is
+ * read-only and each ray writes its own hit, so there is no lock and no
+ * false sharing except at batch borders (a batch of 256 hits is 12 KB).
+ *
+ * Build (sidx__bvh_build_parallel, called by bvh_build.c): the same
+ * decisions as the one-thread binned builder (Wald 2007), organised the
+ * way Wald ("On fast construction of SAH-based bounding volume
+ * hierarchies", 2007) and Embree's parallel builders do it:
+ *
+ *   1. top phase, on the calling thread: nodes above TASK_MIN_FRACTION of
+ *      the triangles are split one after another, but their two O(n)
+ *      passes — the node's bounds and the binning of all three axes — run
+ *      on every thread over disjoint chunks, each thread filling private
+ *      bins that are merged afterwards (box unions and counts are exact,
+ *      so the merged bins equal sequential ones bit for bit);
+ *   2. task phase: every smaller subtree the top phase reached becomes an
+ *      independent task; the threads take tasks largest first from an
+ *      atomic counter (longest-processing-time order balances them) and
+ *      build each into a private node array;
+ *   3. stitching: the top nodes and the task arrays are laid out in
+ *      depth-first pre-order, the right-child indices of each task shifted
+ *      by where its array lands.
+ *
+ * Every split sees the same triangles in the same index order as in the
+ * sequential build (partitioning stays sequential and in place, the same
+ * two-pointer loop), so the tree is identical — node for node — to the
+ * one-thread tree; tests/test_parallel.c checks that. */
+#include <pthread.h>
+#include <stdatomic.h>
+#include <unistd.h>
+#include "bvh_internal.h"
+#include "sidx/parallel.h"
+
+unsigned sidx_hardware_threads(void)
+{
+    const long n = sysconf(_SC_NPROCESSORS_ONLN);
+    return n > 0 ? (unsigned)n : 1u;
+}
+
+/* Run fn(ctx, t) for t in [0, nt): t = 0 on the caller, the others on new
+ * threads.  A thread that cannot be created has its share run here. */
+typedef void (*par_fn)(void *ctx, unsigned t);
+typedef struct par_arg { par_fn fn; void *ctx; unsigned t; } par_arg;
+static void *par_main(void *p)
+{
+    par_arg *a = p;
+    a->fn(a->ctx, a->t);
+    return NULL;
+}
+#define MAX_THREADS 64u
+static void par_run(unsigned nt, par_fn fn, void *ctx)
+{
+    pthread_t th[MAX_THREADS];
+    par_arg args[MAX_THREADS];
+    int started[MAX_THREADS];
+    if (nt > MAX_THREADS) nt = MAX_THREADS;
+    for (unsigned t = 1; t < nt; ++t) {
+        args[t] = (par_arg){fn, ctx, t};
+        started[t] = pthread_create(&th[t], NULL, par_main, &args[t]) == 0;
+    }
+    fn(ctx, 0);
+    for (unsigned t = 1; t < nt; ++t) {
+        if (started[t]) pthread_join(th[t], NULL);
+        else fn(ctx, t);
+    }
+}
+
+/* ---- tracing ------------------------------------------------------------------ */
+
+typedef struct trace_job {
+    const sidx_accel *a;
+    const sidx_ray *rays;
+    size_t n;
+    sidx_query q;
+    sidx_hit *hits;
+    uint8_t *occ;
+    atomic_size_t next;
+} trace_job;
+
+static void trace_worker(void *ctx, unsigned t)
+{
+    (void)t;
+    trace_job *j = ctx;
+    sidx_query q = j->q;
+    const uint32_t base = q.ray_id;
+    for (;;) {
+        const size_t b = atomic_fetch_add_explicit(&j->next, SIDX_PARALLEL_BATCH, memory_order_relaxed);
+        if (b >= j->n) return;
+        const size_t e = b + SIDX_PARALLEL_BATCH < j->n ? b + SIDX_PARALLEL_BATCH : j->n;
+        for (size_t i = b; i < e; ++i) {
+            q.ray_id = base + (uint32_t)i;
+            if (j->hits) {
+                sidx_accel_intersect(j->a, &j->rays[i], &q, &j->hits[i]);
+            } else {
+                int o = 0;
+                sidx_accel_occluded(j->a, &j->rays[i], &q, &o);
+                j->occ[i] = (uint8_t)o;
+            }
+        }
+    }
+}
+
+static sidx_status trace_common(const sidx_accel *a, const sidx_ray *rays, size_t n, const sidx_query *q,
+                                sidx_hit *hits, uint8_t *occ, unsigned threads)
+{
+    if (!a || (n && (!rays || (!hits && !occ)))) return SIDX_ERR_INVALID_ARG;
+    trace_job j;
+    j.a = a;
+    j.rays = rays;
+    j.n = n;
+    if (q) j.q = *q;
+    else memset(&j.q, 0, sizeof j.q);
+    j.hits = hits;
+    j.occ = occ;
+    atomic_init(&j.next, 0);
+    if (threads == 0) threads = sidx_hardware_threads();
+    /* A traced query stays on this thread: ordered events, no concurrent hook calls. */
+    if (j.q.hook && j.q.hook->fn) threads = 1;
+    const size_t batches = (n + SIDX_PARALLEL_BATCH - 1) / SIDX_PARALLEL_BATCH;
+    if (threads > batches) threads = batches ? (unsigned)batches : 1u;
+    par_run(threads, trace_worker, &j);
+    return SIDX_OK;
+}
+
+sidx_status sidx_trace_parallel(const sidx_accel *a, const sidx_ray *rays, size_t n, const sidx_query *q,
+                                sidx_hit *hits, unsigned threads)
+{
+    if (n && !hits) return SIDX_ERR_INVALID_ARG;
+    return trace_common(a, rays, n, q, hits, NULL, threads);
+}
+
+sidx_status sidx_occluded_parallel(const sidx_accel *a, const sidx_ray *rays, size_t n, const sidx_query *q,
+                                   uint8_t *occluded, unsigned threads)
+{
+    if (n && !occluded) return SIDX_ERR_INVALID_ARG;
+    return trace_common(a, rays, n, q, NULL, occluded, threads);
+}
+
+/* ---- parallel build ------------------------------------------------------------- */
+
+/* Nodes with at least this many triangles run their O(n) passes on all
+ * threads: below it, starting threads costs more than the pass. */
+#define PAR_PASS_MIN 16384u
+/* The top phase stops at subtrees of at most n / (threads · TASK_SPLIT)
+ * triangles, giving several tasks per thread to balance. */
+#define TASK_SPLIT 8u
+#define TASK_MIN 256u
+/* Marks a top-phase node that is the root of a task (left_or_first = task). */
+#define TASK_MARK 0xFFFFFFFFu
+
+/* A primitive reference: its box and its id, 32 bytes.  The builder
+ * partitions this array itself, not an index array into boxes and
+ * centroids as bvh_build.c does: every pass over a node then streams
+ * through contiguous memory instead of gathering from two tables at
+ * random (Wald 2007 and Embree's PrimRef do the same).  The centroid is
+ * recomputed as (lo + hi)·0.5, the expression sidx_aabb_centroid uses. */
+typedef struct pref {
+    float lo[3];
+    uint32_t id;
+    float hi[3];
+    uint32_t pad;
+} pref;
+
+typedef struct pb {
+    const sidx_accel *a;
+    bvh_par_params P;
+    pref *pr;
+    unsigned threads;
+} pb;
+
+static inline float pref_c(const pref *r, int k) { return (r->lo[k] + r->hi[k]) * 0.5f; }
+static inline sidx_aabb pref_box(const pref *r)
+{
+    sidx_aabb b = {{r->lo[0], r->lo[1], r->lo[2]}, {r->hi[0], r->hi[1], r->hi[2]}};
+    return b;
+}
+
+/* One node array under construction, in pre-order. */
+typedef struct nodebuf {
+    bvh_node *nodes;
+    uint32_t num, leaves, max_depth;
+    uint32_t base; /* added to stored child indices: where nodes[0] sits in the final array */
+} nodebuf;
+
+typedef struct task {
+    uint32_t first, count, depth, top_node;
+    uint32_t off; /* reserved region in the final array: 2·count − 1 nodes from here */
+    nodebuf out;
+} task;
+
+typedef struct bins3 {
+    sidx_aabb box[3][1024];
+    uint32_t count[3][1024];
+} bins3;
+
+/* Same expression as bvh_build.c's bin_of: binning and partitioning agree. */
+static inline uint32_t bin_of(float c, float cmin, float scale, uint32_t nb)
+{
+    const float f = (c - cmin) * scale;
+    const uint32_t k = f > 0.0f ? (uint32_t)f : 0u;
+    return k < nb ? k : nb - 1;
+}
+
+typedef struct binspec {
+    float cmin[3], scale[3];
+    int use[3];
+    uint32_t nb;
+} binspec;
+
+static binspec make_binspec(const pb *B, sidx_aabb cb)
+{
+    binspec s;
+    s.nb = B->P.bins;
+    for (int k = 0; k < 3; ++k) {
+        s.cmin[k] = sidx_v3_get(cb.min, k);
+        const float ext = sidx_v3_get(cb.max, k) - s.cmin[k];
+        s.use[k] = ext > 0.0f; /* a flat axis has no plane between centroids */
+        s.scale[k] = s.use[k] ? (float)s.nb / ext : 0.0f;
+    }
+    return s;
+}
+
+static void bins_clear(bins3 *b, uint32_t nb)
+{
+    for (int k = 0; k < 3; ++k)
+        for (uint32_t i = 0; i < nb; ++i) {
+            b->box[k][i] = sidx_aabb_empty();
+            b->count[k][i] = 0;
+        }
+}
+
+/* All three axes in one pass over the triangles: one read of each box and
+ * centroid instead of three (the sequential builder's axis loop). */
+static void bin_range(const pb *B, const binspec *s, uint32_t first, uint32_t count, bins3 *out)
+{
+    const pref *pr = B->pr + first;
+    for (uint32_t i = 0; i < count; ++i) {
+        const sidx_aabb pb_ = pref_box(&pr[i]);
+        for (int k = 0; k < 3; ++k) {
+            if (!s->use[k]) continue;
+            const uint32_t j = bin_of(pref_c(&pr[i], k), s->cmin[k], s->scale[k], s->nb);
+            out->count[k][j]++;
+            out->box[k][j] = sidx_aabb_union(out->box[k][j], pb_);
+        }
+    }
+}
+
+static void bounds_range(const pb *B, uint32_t first, uint32_t count, sidx_aabb *bb, sidx_aabb *cb)
+{
+    sidx_aabb b = sidx_aabb_empty(), c = sidx_aabb_empty();
+    const pref *pr = B->pr + first;
+    for (uint32_t i = 0; i < count; ++i) {
+        b = sidx_aabb_union(b, pref_box(&pr[i]));
+        c = sidx_aabb_grow(c, sidx_v3(pref_c(&pr[i], 0), pref_c(&pr[i], 1), pref_c(&pr[i], 2)));
+    }
+    *bb = b;
+    *cb = c;
+}
+
+/* The parallel versions: each thread a contiguous chunk. */
+typedef struct pass_ctx {
+    const pb *B;
+    const binspec *s;
+    uint32_t first, count;
+    unsigned nt;
+    bins3 *bins;         /* per thread */
+    sidx_aabb *bb, *cb;  /* per thread */
+} pass_ctx;
+
+static void chunk(const pass_ctx *c, unsigned t, uint32_t *f, uint32_t *n)
+{
+    const uint64_t lo = (uint64_t)c->count * t / c->nt, hi = (uint64_t)c->count * (t + 1) / c->nt;
+    *f = c->first + (uint32_t)lo;
+    *n = (uint32_t)(hi - lo);
+}
+static void bounds_worker(void *ctx, unsigned t)
+{
+    pass_ctx *c = ctx;
+    uint32_t f, n;
+    chunk(c, t, &f, &n);
+    bounds_range(c->B, f, n, &c->bb[t], &c->cb[t]);
+}
+static void bin_worker(void *ctx, unsigned t)
+{
+    pass_ctx *c = ctx;
+    uint32_t f, n;
+    chunk(c, t, &f, &n);
+    bins_clear(&c->bins[t], c->s->nb);
+    bin_range(c->B, c->s, f, n, &c->bins[t]);
+}
+
+typedef struct scratch {
+    bins3 *bins;  /* [threads] for the top phase, [1] in tasks */
+    float right_area[1024];
+    uint32_t used[3][1024], nused[3]; /* non-empty bins of the last node, per axis */
+} scratch;
+
+typedef struct split {
+    int axis;
+    uint32_t nl, plane;
+    float cost;
+} split;
+
+/* The sequential builder's find_binned: the same costs from the same float
+ * expressions, the same tie rule (first minimum over axis, then plane) —
+ * but only at planes right after a NON-EMPTY bin.  Behind an empty bin
+ * the left box, the left count and the right box are all unchanged, so
+ * the cost is bit-identical to the previous plane's and, ties going to
+ * the first, can never win.  A node of 8 triangles has at most 8 of the
+ * 32 bins filled: 7 planes per axis instead of 31, which is most of the
+ * build time in the many small nodes near the leaves. */
+static int best_split(const pb *B, const bins3 *bn, uint32_t count, float inv_area, scratch *S, split *best)
+{
+    const uint32_t nb = B->P.bins;
+    int found = 0;
+    best->cost = INFINITY;
+    for (int axis = 0; axis < 3; ++axis) {
+        const sidx_aabb *box = bn->box[axis];
+        const uint32_t *cnt = bn->count[axis];
+        uint32_t *used = S->used[axis];
+        uint32_t k = 0;
+        for (uint32_t p = 0; p < nb; ++p)
+            if (cnt[p]) used[k++] = p;
+        S->nused[axis] = k;
+        if (k < 2) continue; /* flat axis (not binned) or one bin: no plane */
+        sidx_aabb acc = sidx_aabb_empty();
+        for (uint32_t j = k; j-- > 1;) { /* right_area[j] = area of bins used[j..k) */
+            acc = sidx_aabb_union(acc, box[used[j]]);
+            S->right_area[j] = sidx_aabb_area(acc);
+        }
+        acc = sidx_aabb_empty();
+        uint32_t nl = 0;
+        for (uint32_t j = 0; j + 1 < k; ++j) {
+            acc = sidx_aabb_union(acc, box[used[j]]);
+            nl += cnt[used[j]];
+            const float cost =
+                B->P.c_trav + B->P.c_tri * (sidx_aabb_area(acc) * (float)nl + S->right_area[j + 1] * (float)(count - nl)) *
+                                  inv_area;
+            if (cost < best->cost) {
+                best->cost = cost;
+                best->axis = axis;
+                best->nl = nl;
+                best->plane = used[j] + 1;
+                found = 1;
+            }
+        }
+    }
+    return found;
+}
+
+static uint32_t partition(const pb *B, const binspec *s, uint32_t first, uint32_t count, int axis, uint32_t plane)
+{
+    /* bvh_build.c's two-pointer loop, element for element. */
+    pref *pr = B->pr;
+    uint32_t i = first, j = first + count;
+    while (i < j) {
+        if (bin_of(pref_c(&pr[i], axis), s->cmin[axis], s->scale[axis], s->nb) < plane) {
+            ++i;
+        } else {
+            const pref t = pr[i];
+            pr[i] = pr[--j];
+            pr[j] = t;
+        }
+    }
+    return i - first;
+}
+
+/* One node and its subtree into out.  top: the top phase (parallel passes,
+ * small subtrees become tasks) or 0 inside a task. */
+typedef struct topctx {
+    task *tasks;
+    uint32_t num_tasks, cap_tasks, task_max;
+} topctx;
+
+static uint32_t build_rec(const pb *B, scratch *S, nodebuf *out, topctx *top, uint32_t first, uint32_t count,
+                          uint32_t depth)
+{
+    const uint32_t ni = out->num++;
+    bvh_node *n = &out->nodes[ni];
+    if (top && count <= top->task_max && count > B->P.leaf_size && depth < B->P.max_depth &&
+        top->num_tasks < top->cap_tasks) {
+        task *t = &top->tasks[top->num_tasks];
+        t->first = first;
+        t->count = count;
+        t->depth = depth;
+        t->top_node = ni;
+        n->left_or_first = top->num_tasks++;
+        n->count_axis = TASK_MARK;
+        return ni;
+    }
+    const int par = top && count >= PAR_PASS_MIN && B->threads > 1;
+    sidx_aabb bb, cb;
+    if (par) {
+        sidx_aabb pbb[MAX_THREADS], pcb[MAX_THREADS];
+        pass_ctx c = {B, NULL, first, count, B->threads, NULL, pbb, pcb};
+        par_run(B->threads, bounds_worker, &c);
+        bb = pbb[0];
+        cb = pcb[0];
+        for (unsigned t = 1; t < B->threads; ++t) {
+            bb = sidx_aabb_union(bb, pbb[t]);
+            cb = sidx_aabb_union(cb, pcb[t]);
+        }
+    } else {
+        bounds_range(B, first, count, &bb, &cb);
+    }
+    n->bmin[0] = bb.min.x; n->bmin[1] = bb.min.y; n->bmin[2] = bb.min.z;
+    n->bmax[0] = bb.max.x; n->bmax[1] = bb.max.y; n->bmax[2] = bb.max.z;
+    if (depth > out->max_depth) out->max_depth = depth;
+
+    const float area = sidx_aabb_area(bb);
+    const float inv_area = area > 0.0f ? 1.0f / area : 0.0f;
+    const float leaf_cost = (float)count * B->P.c_tri;
+    int leaf = 0, axis = -1;
+    uint32_t nl = 0;
+    if (count <= B->P.leaf_size || depth >= B->P.max_depth) {
+        leaf = 1;
+    } else if (!(cb.max.x > cb.min.x) && !(cb.max.y > cb.min.y) && !(cb.max.z > cb.min.z)) {
+        if (count > B->P.max_leaf) nl = count / 2; /* equal centroids: halve in index order */
+        else leaf = 1;
+    } else {
+        const binspec s = make_binspec(B, cb);
+        const bins3 *bn;
+        if (par) {
+            pass_ctx c = {B, &s, first, count, B->threads, S->bins, NULL, NULL};
+            par_run(B->threads, bin_worker, &c);
+            for (unsigned t = 1; t < B->threads; ++t)
+                for (int k = 0; k < 3; ++k)
+                    for (uint32_t j = 0; j < s.nb; ++j) {
+                        S->bins[0].count[k][j] += S->bins[t].count[k][j];
+                        S->bins[0].box[k][j] = sidx_aabb_union(S->bins[0].box[k][j], S->bins[t].box[k][j]);
+                    }
+        } else {
+            bin_range(B, &s, first, count, &S->bins[0]); /* bins[0] is clean on entry */
+        }
+        bn = &S->bins[0];
+        split sp = {0, 0, 0, INFINITY};
+        const int found = best_split(B, bn, count, inv_area, S, &sp);
+        /* Clean bins[0] for the next node by resetting only what was filled
+         * (clearing all 3 x 32 boxes per node cost more than the binning
+         * of a small node). */
+        for (int k = 0; k < 3; ++k)
+            for (uint32_t u = 0; u < S->nused[k]; ++u) {
+                S->bins[0].box[k][S->used[k][u]] = sidx_aabb_empty();
+                S->bins[0].count[k][S->used[k][u]] = 0;
+            }
+        if (!found) {
+            nl = count / 2; /* cannot happen with a non-flat centroid box */
+        } else {
+            /* Partitioned even when the SAH then keeps the node as a leaf,
+             * as the sequential builder does: the leaf's triangle order
+             * (and so its tie-breaking) stays the same. */
+            axis = sp.axis;
+            nl = partition(B, &s, first, count, sp.axis, sp.plane);
+            if (!(sp.cost < leaf_cost) && count <= B->P.max_leaf) leaf = 1;
+        }
+    }
+    if (leaf) {
+        n->left_or_first = first;
+        n->count_axis = count;
+        out->leaves++;
+        return ni;
+    }
+    build_rec(B, S, out, top, first, nl, depth + 1);
+    const uint32_t right = build_rec(B, S, out, top, first + nl, count - nl, depth + 1);
+    n = &out->nodes[ni];
+    n->left_or_first = right + out->base;
+    n->count_axis = (uint32_t)(axis < 0 ? 0 : axis) << BVH_AXIS_SHIFT;
+    return ni;
+}
+
+typedef struct task_job {
+    const pb *B;
+    task *tasks;
+    uint32_t num;
+    scratch *S; /* one per thread; allocated by the caller (a user allocator need not be thread-safe) */
+    atomic_uint next;
+} task_job;
+
+static void task_worker(void *ctx, unsigned t)
+{
+    task_job *j = ctx;
+    for (;;) {
+        const uint32_t k = atomic_fetch_add(&j->next, 1u);
+        if (k >= j->num) return;
+        task *tk = &j->tasks[k];
+        build_rec(j->B, &j->S[t], &tk->out, NULL, tk->first, tk->count, tk->depth);
+    }
+}
+
+/* Final layout without a second array: before the tasks run, every top
+ * node gets one slot and every task a region of 2·count − 1 (the most
+ * nodes a binary tree over count primitives can have) in pre-order; the
+ * tasks build straight into their regions; then the regions are slid
+ * down over the unused tails, in order (a region never moves up, so a
+ * forward copy is safe).  Fresh memory costs page faults — in a virtual
+ * machine as much as the building itself — so the nodes are written
+ * once and moved once within the same pages. */
+static void reserve(const nodebuf *top, task *tasks, uint32_t ti, uint32_t *off)
+{
+    const bvh_node *n = &top->nodes[ti];
+    if (n->count_axis == TASK_MARK) {
+        task *t = &tasks[n->left_or_first];
+        t->off = *off;
+        *off += 2u * t->count - 1u;
+        return;
+    }
+    *off += 1u;
+    if (bvh_is_leaf(n)) return;
+    reserve(top, tasks, ti + 1, off);
+    reserve(top, tasks, n->left_or_first, off);
+}
+
+static uint32_t place(const nodebuf *top, const task *tasks, uint32_t ti, bvh_node *F, uint32_t *pos)
+{
+    const bvh_node *n = &top->nodes[ti];
+    if (n->count_axis == TASK_MARK) {
+        const task *t = &tasks[n->left_or_first];
+        const uint32_t base = *pos, delta = t->off - base;
+        for (uint32_t i = 0; i < t->out.num; ++i) {
+            bvh_node c = F[t->off + i];
+            if (!bvh_is_leaf(&c)) c.left_or_first -= delta;
+            F[base + i] = c;
+        }
+        *pos += t->out.num;
+        return base;
+    }
+    const uint32_t me = (*pos)++;
+    F[me] = *n;
+    if (bvh_is_leaf(n)) return me;
+    place(top, tasks, ti + 1, F, pos);
+    F[me].left_or_first = place(top, tasks, n->left_or_first, F, pos);
+    return me;
+}
+
+/* The vertex copies in leaf order: a gather from the mesh, split in chunks. */
+typedef struct fill_ctx {
+    const sidx_mesh *m;
+    bvh *b;
+    uint32_t n;
+    unsigned nt;
+} fill_ctx;
+static void fill_worker(void *ctx, unsigned t)
+{
+    fill_ctx *c = ctx;
+    const uint32_t lo = (uint32_t)((uint64_t)c->n * t / c->nt), hi = (uint32_t)((uint64_t)c->n * (t + 1) / c->nt);
+    for (uint32_t i = lo; i < hi; ++i)
+        for (int k = 0; k < 3; ++k) c->b->tris[i].v[k] = sidx_mesh_vertex(c->m, c->b->prim_id[i], k);
+}
+
+static int cmp_task_desc(const void *x, const void *y)
+{
+    const task *a = x, *b = y;
+    return (a->count < b->count) - (a->count > b->count);
+}
+
+sidx_status sidx__bvh_build_parallel(sidx_accel *a, const bvh_par_params *p, sidx_error *err)
+{
+    const sidx_mesh *m = a->mesh;
+    const uint32_t n = m->num_triangles;
+    pb B;
+    B.pr = NULL;
+    B.a = a;
+    B.P = *p;
+    B.threads = a->opt.threads > MAX_THREADS ? MAX_THREADS : a->opt.threads;
+    sidx_status s = SIDX_ERR_NOMEM;
+    nodebuf top = {NULL, 0, 0, 0, 0};
+    topctx tc = {NULL, 0, 0, 0};
+    scratch *S = NULL, *wS = NULL;
+    bins3 *bins = NULL, *wbins = NULL;
+    task *sorted = NULL;
+    bvh *b = sidx__calloc(a, 1, sizeof *b);
+    if (!b) goto fail;
+    b->num_prims = n;
+    B.pr = sidx__alloc(a, n, sizeof *B.pr);
+    b->prim_id = sidx__alloc(a, n, sizeof *b->prim_id);
+    if (!B.pr || !b->prim_id) goto fail;
+    for (uint32_t i = 0; i < n; ++i) {
+        sidx_aabb bb = sidx_aabb_empty(); /* as sidx__prim_boxes */
+        for (int k = 0; k < 3; ++k) bb = sidx_aabb_grow(bb, sidx_mesh_vertex(m, i, k));
+        pref *r = &B.pr[i];
+        r->lo[0] = bb.min.x; r->lo[1] = bb.min.y; r->lo[2] = bb.min.z;
+        r->hi[0] = bb.max.x; r->hi[1] = bb.max.y; r->hi[2] = bb.max.z;
+        r->id = i;
+        r->pad = 0;
+    }
+
+    /* Top phase. */
+    tc.task_max = n / (B.threads * TASK_SPLIT);
+    if (tc.task_max < TASK_MIN) tc.task_max = TASK_MIN;
+    tc.cap_tasks = 2u * (n / tc.task_max + 1u) + 8u;
+    tc.tasks = sidx__calloc(a, tc.cap_tasks, sizeof *tc.tasks);
+    top.nodes = sidx__alloc(a, 2u * (size_t)n - 1u, sizeof *top.nodes);
+    S = sidx__alloc(a, 1, sizeof *S);
+    bins = sidx__alloc(a, B.threads, sizeof *bins);
+    if (!tc.tasks || !top.nodes || !S || !bins) goto fail;
+    S->bins = bins;
+    bins_clear(&bins[0], B.P.bins);
+    build_rec(&B, S, &top, &tc, 0, n, 0);
+
+    /* Task phase: largest first, every buffer allocated here. */
+    const unsigned workers = B.threads < tc.num_tasks ? B.threads : (tc.num_tasks ? tc.num_tasks : 1u);
+    uint32_t reserved = 0;
+    reserve(&top, tc.tasks, 0, &reserved);
+    b->nodes_mem = sidx__alloc(a, (size_t)reserved + 2u, sizeof *b->nodes);
+    if (!b->nodes_mem) goto fail;
+    b->nodes = (bvh_node *)(void *)(((uintptr_t)b->nodes_mem + 63u) & ~(uintptr_t)63u);
+    for (uint32_t i = 0; i < tc.num_tasks; ++i) {
+        tc.tasks[i].out.nodes = b->nodes + tc.tasks[i].off;
+        tc.tasks[i].out.base = tc.tasks[i].off;
+    }
+    wS = sidx__calloc(a, workers, sizeof *wS);
+    wbins = sidx__alloc(a, workers, sizeof *wbins);
+    sorted = sidx__alloc(a, tc.num_tasks ? tc.num_tasks : 1u, sizeof *sorted);
+    if (!wS || !wbins || !sorted) goto fail;
+    for (unsigned t = 0; t < workers; ++t) {
+        wS[t].bins = &wbins[t];
+        bins_clear(&wbins[t], B.P.bins);
+    }
+    memcpy(sorted, tc.tasks, (size_t)tc.num_tasks * sizeof *sorted);
+    qsort(sorted, tc.num_tasks, sizeof *sorted, cmp_task_desc);
+    task_job j;
+    j.B = &B;
+    j.tasks = sorted;
+    j.num = tc.num_tasks;
+    j.S = wS;
+    atomic_init(&j.next, 0u);
+    par_run(workers, task_worker, &j);
+    /* Back in top order (stitch looks tasks up by index). */
+    for (uint32_t i = 0; i < tc.num_tasks; ++i) tc.tasks[top.nodes[sorted[i].top_node].left_or_first] = sorted[i];
+
+    uint32_t total = top.num, leaves = top.leaves, maxd = top.max_depth;
+    for (uint32_t i = 0; i < tc.num_tasks; ++i) {
+        total += tc.tasks[i].out.num - 1u;
+        leaves += tc.tasks[i].out.leaves;
+        if (tc.tasks[i].out.max_depth > maxd) maxd = tc.tasks[i].out.max_depth;
+    }
+    b->tris = sidx__alloc(a, n, sizeof *b->tris);
+    if (!b->tris) goto fail;
+    uint32_t pos = 0;
+    place(&top, tc.tasks, 0, b->nodes, &pos);
+    b->num_nodes = total;
+    for (uint32_t i = 0; i < n; ++i) b->prim_id[i] = B.pr[i].id;
+    b->num_leaves = leaves;
+    b->max_depth = maxd;
+    {
+        fill_ctx fc = {m, b, n, n >= PAR_PASS_MIN ? B.threads : 1u};
+        par_run(fc.nt, fill_worker, &fc);
+    }
+    /* The SAH cost exactly as bvh_build.c's tree_sah sums it. */
+    {
+        const double root = sidx_aabb_area(bvh_node_box(&b->nodes[0]));
+        double sum = 0.0;
+        if (!(root > 0.0)) {
+            sum = (double)n * B.P.c_tri;
+        } else {
+            for (uint32_t i = 0; i < total; ++i) {
+                const bvh_node *nd = &b->nodes[i];
+                const double ar = sidx_aabb_area(bvh_node_box(nd)) / root;
+                sum += bvh_is_leaf(nd) ? ar * B.P.c_tri * bvh_count(nd) : ar * B.P.c_trav;
+            }
+        }
+        b->sah_cost = sum;
+    }
+    s = SIDX_OK;
+    a->impl = b;
+    b = NULL;
+fail:
+    sidx__free(a, tc.tasks);
+    sidx__free(a, top.nodes);
+    sidx__free(a, S);
+    sidx__free(a, bins);
+    sidx__free(a, wS);
+    sidx__free(a, wbins);
+    sidx__free(a, sorted);
+    sidx__free(a, B.pr);
+    if (b) {
+        sidx__free(a, b->nodes_mem);
+        sidx__free(a, b->prim_id);
+        sidx__free(a, b->tris);
+        sidx__free(a, b);
+    }
+    if (s != SIDX_OK) {
+        a->impl = NULL;
+        return sidx__fail(err, s, "%s: out of memory", a->name);
+    }
+    return SIDX_OK;
+}

@@ -1,0 +1,461 @@
+/* test_wide.c — bvh4 and bvh8, the wide BVHs with SIMD kernels.
+ *
+ * What the registry-wide suite does not check:
+ *  - the SIMD kernels (SSE4.1 / AVX2, when this CPU has them) and the
+ *    portable scalar copy (SIDX_SIMD=scalar) return BIT-IDENTICAL hits
+ *    (prim, t, and u, v) and any-hit answers on random, grazing and
+ *    axis-parallel (±0 direction) rays, for every triangle / box test;
+ *  - closest hits agree with brute force (same prim, or same t within
+ *    1e-5 relative) on the built-in scenes, traced and untraced alike;
+ *  - zero leaks from inside the icosphere at every vertex and edge midpoint;
+ *  - the collapsed tree is well formed: every triangle in exactly one
+ *    leaf lane, child boxes inside their slot, pre-order numbering, padding
+ *    lanes and empty slots as documented;
+ *  - traversal events use the ids the build announced; refit equals a
+ *    rebuild; allocation failures at every step leak nothing. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "sidx/sidx.h"
+#include "bvh_wide_internal.h"
+#include "common/testkit.h"
+
+static const char *const wides[] = {"bvh4", "bvh8"};
+#define NWIDES 2
+static const char *const scenes[] = {"icosphere", "teapot", "soup", "menger", "stadium", "cornell"};
+#define NSCENES (sizeof scenes / sizeof scenes[0])
+
+static sidx_mesh scene(const char *name)
+{
+    sidx_mesh m;
+    sidx_error err;
+    if (sidx_scene_make(name, 0, &m, &err) != SIDX_OK) fail_msg("scene %s: %s", name, err.message);
+    return m;
+}
+
+/* Builds with the SIMD kernels (simd = 1) or with the scalar copy forced. */
+static sidx_accel *build(const char *name, const sidx_mesh *m, const sidx_build_options *opt, int simd)
+{
+    if (!simd) setenv("SIDX_SIMD", "scalar", 1);
+    sidx_accel *a = NULL;
+    sidx_error err;
+    const sidx_status s = sidx_accel_build(name, m, opt, &a, &err);
+    unsetenv("SIDX_SIMD");
+    if (s != SIDX_OK) fail_msg("build %s: %s", name, err.message);
+    if (!simd) assert_int_equal(((const wide_bvh *)a->impl)->isa, WIDE_ISA_SCALAR);
+    return a;
+}
+
+static size_t make_rays(const sidx_mesh *m, size_t per_kind, uint64_t seed, sidx_ray **out)
+{
+    const tk_ray_kind kinds[] = {TK_RAYS_DIFFUSE, TK_RAYS_GRAZING, TK_RAYS_AXIS, TK_RAYS_PRIMARY, TK_RAYS_SHADOW};
+    const size_t nk = sizeof kinds / sizeof kinds[0];
+    tk_rayrec *rec = malloc(per_kind * sizeof *rec);
+    sidx_ray *rays = malloc(nk * per_kind * sizeof *rays);
+    assert_non_null(rec);
+    assert_non_null(rays);
+    size_t n = 0;
+    for (size_t k = 0; k < nk; ++k) {
+        tk_make_rays(m, kinds[k], per_kind, seed + k, rec);
+        for (size_t i = 0; i < per_kind; ++i)
+            if (tk_ray_from(&rec[i], &rays[n]) == SIDX_OK) ++n;
+    }
+    free(rec);
+    *out = rays;
+    return n;
+}
+
+static size_t per_kind(size_t normal) { return tk_fast_tests() ? (normal + 3) / 4 : normal; }
+
+static void count_fn(const sidx_event *ev, void *user)
+{
+    (void)ev;
+    ++*(uint64_t *)user;
+}
+
+/* ---- SIMD == scalar, bit for bit ------------------------------------------------ */
+
+static void test_simd_equals_scalar(void **state)
+{
+    (void)state;
+    for (size_t si = 0; si < NSCENES; ++si) {
+        sidx_mesh m = scene(scenes[si]);
+        sidx_ray *rays;
+        const size_t n = make_rays(&m, per_kind(300), 11, &rays);
+        for (int w = 0; w < NWIDES; ++w)
+            for (int tri = 0; tri < SIDX_TRI_METHOD_COUNT; ++tri)
+                for (int box = 0; box < SIDX_BOX_METHOD_COUNT; ++box) {
+                    sidx_build_options o;
+                    memset(&o, 0, sizeof o);
+                    o.tri = (sidx_tri_method)tri;
+                    o.box = (sidx_box_method)box;
+                    sidx_accel *fast = build(wides[w], &m, &o, 1), *ref = build(wides[w], &m, &o, 0);
+                    const sidx_query q = {SIDX_QUERY_UV, SIDX_TRAVERSE_DEFAULT, NULL, 0};
+                    for (size_t i = 0; i < n; ++i) {
+                        sidx_hit a, b;
+                        int oa, ob;
+                        sidx_accel_intersect(fast, &rays[i], &q, &a);
+                        sidx_accel_intersect(ref, &rays[i], &q, &b);
+                        sidx_accel_occluded(fast, &rays[i], &q, &oa);
+                        sidx_accel_occluded(ref, &rays[i], &q, &ob);
+                        if (a.prim != b.prim || memcmp(&a.t, &b.t, sizeof a.t) || memcmp(&a.u, &b.u, sizeof a.u) ||
+                            memcmp(&a.v, &b.v, sizeof a.v) || oa != ob)
+                            fail_msg("%s %s tri %d box %d ray %zu: simd prim %u t %.9g occ %d, scalar prim %u t %.9g occ %d",
+                                     scenes[si], wides[w], tri, box, i, a.prim, (double)a.t, oa, b.prim, (double)b.t,
+                                     ob);
+                    }
+                    sidx_accel_destroy(fast);
+                    sidx_accel_destroy(ref);
+                }
+        free(rays);
+        sidx_mesh_free(&m);
+    }
+}
+
+/* ---- against brute force, traced and untraced ----------------------------------- */
+
+static void test_match_brute(void **state)
+{
+    (void)state;
+    for (size_t si = 0; si < NSCENES; ++si) {
+        sidx_mesh m = scene(scenes[si]);
+        sidx_ray *rays;
+        const size_t n = make_rays(&m, per_kind(200), 5, &rays);
+        sidx_accel *brute = NULL;
+        assert_int_equal(sidx_accel_build("brute", &m, NULL, &brute, NULL), SIDX_OK);
+        for (int w = 0; w < NWIDES; ++w)
+            for (int simd = 0; simd < 2; ++simd) {
+                sidx_accel *a = build(wides[w], &m, NULL, simd);
+                uint64_t events = 0;
+                const sidx_hook hook = {count_fn, &events, 0};
+                const sidx_query traced = {0, SIDX_TRAVERSE_DEFAULT, &hook, 0};
+                for (size_t i = 0; i < n; ++i) {
+                    sidx_hit ref, h, ht;
+                    int oref, o, ot;
+                    sidx_accel_intersect(brute, &rays[i], NULL, &ref);
+                    sidx_accel_occluded(brute, &rays[i], NULL, &oref);
+                    sidx_accel_intersect(a, &rays[i], NULL, &h);
+                    sidx_accel_intersect(a, &rays[i], &traced, &ht);
+                    sidx_accel_occluded(a, &rays[i], NULL, &o);
+                    sidx_accel_occluded(a, &rays[i], &traced, &ot);
+                    if (!tk_hits_agree(&ref, &h))
+                        fail_msg("%s/%s simd %d ray %zu: prim %u t %.9g, brute prim %u t %.9g", scenes[si], wides[w],
+                                 simd, i, h.prim, (double)h.t, ref.prim, (double)ref.t);
+                    assert_int_equal(h.prim, ht.prim);
+                    assert_true(h.t == ht.t || (isinf(h.t) && isinf(ht.t)));
+                    assert_int_equal(o, oref);
+                    assert_int_equal(ot, oref);
+                }
+                assert_true(events > 0);
+                sidx_accel_destroy(a);
+            }
+        sidx_accel_destroy(brute);
+        free(rays);
+        sidx_mesh_free(&m);
+    }
+}
+
+/* ---- zero leaks ----------------------------------------------------------------- */
+
+static void test_no_leaks_icosphere(void **state)
+{
+    (void)state;
+    for (uint32_t detail = 1; detail <= 4; ++detail) {
+        sidx_mesh m;
+        assert_int_equal(sidx_scene_make("icosphere", detail, &m, NULL), SIDX_OK);
+        const sidx_aabb bb = sidx_mesh_bounds(&m);
+        const sidx_vec3 e = sidx_aabb_extent(bb);
+        const sidx_vec3 in = sidx_v3_add(sidx_aabb_centroid(bb), sidx_v3(0.0123f * e.x, -0.0071f * e.y, 0.0031f * e.z));
+        const size_t max = 6u * m.num_triangles;
+        tk_rayrec *rec = malloc(max * sizeof *rec);
+        assert_non_null(rec);
+        const size_t n = tk_make_leak_rays(&m, in, max, rec);
+        for (int w = 0; w < NWIDES; ++w)
+            for (int simd = 0; simd < 2; ++simd) {
+                sidx_accel *a = build(wides[w], &m, NULL, simd);
+                for (size_t i = 0; i < n; ++i) {
+                    sidx_ray r;
+                    assert_int_equal(tk_ray_from(&rec[i], &r), SIDX_OK);
+                    sidx_hit h;
+                    int occ;
+                    sidx_accel_intersect(a, &r, NULL, &h);
+                    sidx_accel_occluded(a, &r, NULL, &occ);
+                    if (h.prim == SIDX_NO_HIT || !occ)
+                        fail_msg("leak: icosphere:%u %s simd %d ray %zu", detail, wides[w], simd, i);
+                }
+                sidx_accel_destroy(a);
+            }
+        free(rec);
+        sidx_mesh_free(&m);
+    }
+}
+
+/* ---- structure -------------------------------------------------------------------- */
+
+static int box_inside(sidx_aabb outer, sidx_aabb inner) { return sidx_aabb_contains(outer, inner); }
+
+static void check_node(const wide_bvh *w, uint32_t i, uint32_t depth, uint8_t *seen, uint32_t *leaves)
+{
+    const uint32_t W = w->width;
+    const float *n = wide_node(w, i);
+    int used = 0, gap = 0;
+    assert_true(depth <= w->max_depth);
+    for (uint32_t s = 0; s < W; ++s) {
+        const uint32_t c = wide_child(n, W)[s];
+        const sidx_aabb sb = wide_slot_box(n, W, s);
+        if (c == WIDE_EMPTY) {
+            gap = 1; /* empty slots come last */
+            assert_true(sb.min.x == INFINITY && sb.max.x == -INFINITY);
+            continue;
+        }
+        assert_false(gap);
+        ++used;
+        if (c & WIDE_LEAF_BIT) {
+            ++*leaves;
+            assert_true(wide_id(n, W)[s] >= w->num_inner);
+            const wide_tri4 *B = w->blocks + (c & ~WIDE_LEAF_BIT);
+            for (;; ++B) {
+                assert_true(B < w->blocks + w->num_blocks);
+                for (int l = 0; l < 4; ++l) {
+                    const uint32_t id = B->prim[l] & WIDE_PRIM_MASK;
+                    if (id == WIDE_PAD_PRIM) {
+                        assert_true(isnan(B->v[0][0][l]));
+                        continue;
+                    }
+                    assert_true(id < w->num_prims);
+                    assert_int_equal(seen[id], 0);
+                    seen[id] = 1;
+                    for (int v = 0; v < 3; ++v) {
+                        const sidx_vec3 p = {B->v[v][0][l], B->v[v][1][l], B->v[v][2][l]};
+                        assert_true(box_inside(sb, (sidx_aabb){p, p}));
+                    }
+                }
+                if (B->prim[0] & WIDE_LAST_BLOCK) break;
+            }
+        } else {
+            assert_true(c > i && c < w->num_inner); /* pre-order */
+            assert_int_equal(wide_id(n, W)[s], c);
+            const float *cn = wide_node(w, c);
+            for (uint32_t k = 0; k < W; ++k)
+                if (wide_child(cn, W)[k] != WIDE_EMPTY) assert_true(box_inside(sb, wide_slot_box(cn, W, k)));
+            check_node(w, c, depth + 1, seen, leaves);
+        }
+    }
+    assert_true(used >= 1);
+}
+
+static void test_structure(void **state)
+{
+    (void)state;
+    for (size_t si = 0; si < NSCENES; ++si) {
+        sidx_mesh m = scene(scenes[si]);
+        for (int w = 0; w < NWIDES; ++w) {
+            sidx_accel *a = build(wides[w], &m, NULL, 1);
+            const wide_bvh *wb = a->impl;
+            assert_int_equal(wb->width, w ? 8u : 4u);
+            uint8_t *seen = calloc(m.num_triangles, 1);
+            assert_non_null(seen);
+            uint32_t leaves = 0;
+            check_node(wb, 0, 0, seen, &leaves);
+            for (uint32_t t = 0; t < m.num_triangles; ++t) assert_int_equal(seen[t], 1);
+            assert_int_equal(leaves, wb->num_leaves);
+            sidx_accel_stats st;
+            sidx_accel_stats_get(a, &st);
+            assert_int_equal(st.nodes, wb->num_inner + wb->num_leaves);
+            assert_true(st.sah_cost > 0.0);
+            free(seen);
+            sidx_accel_destroy(a);
+        }
+        sidx_mesh_free(&m);
+    }
+}
+
+/* ---- events ------------------------------------------------------------------------ */
+
+typedef struct idrec {
+    uint8_t *built;
+    uint32_t cap;
+    uint64_t enters, boxes, prims, terminates, bad;
+} idrec;
+
+static void id_fn(const sidx_event *ev, void *user)
+{
+    idrec *r = user;
+    switch (ev->type) {
+    case SIDX_EV_BUILD_NODE:
+        if (ev->node < r->cap) r->built[ev->node] = 1;
+        else r->bad++;
+        break;
+    case SIDX_EV_NODE_ENTER:
+        r->enters++;
+        if (ev->node >= r->cap || !r->built[ev->node]) r->bad++;
+        break;
+    case SIDX_EV_BOX_TEST:
+        r->boxes++;
+        if (ev->node >= r->cap || !r->built[ev->node]) r->bad++;
+        break;
+    case SIDX_EV_PRIM_TEST: r->prims++; break;
+    case SIDX_EV_TERMINATE: r->terminates++; break;
+    default: break;
+    }
+}
+
+static void test_event_ids(void **state)
+{
+    (void)state;
+    sidx_mesh m = scene("teapot");
+    for (int w = 0; w < NWIDES; ++w) {
+        idrec r;
+        memset(&r, 0, sizeof r);
+        r.cap = 4u * m.num_triangles + 16u;
+        r.built = calloc(r.cap, 1);
+        assert_non_null(r.built);
+        const sidx_hook hook = {id_fn, &r, 0};
+        sidx_build_options o;
+        memset(&o, 0, sizeof o);
+        o.hook = &hook;
+        sidx_accel *a = build(wides[w], &m, &o, 1);
+        sidx_ray *rays;
+        const size_t n = make_rays(&m, 20, 3, &rays);
+        const sidx_query q = {0, SIDX_TRAVERSE_DEFAULT, &hook, 0};
+        for (size_t i = 0; i < n; ++i) {
+            sidx_hit h;
+            sidx_accel_intersect(a, &rays[i], &q, &h);
+        }
+        assert_int_equal(r.bad, 0);
+        assert_int_equal(r.terminates, n);
+        assert_true(r.enters >= n && r.boxes > r.enters && r.prims > 0);
+        free(rays);
+        free(r.built);
+        sidx_accel_destroy(a);
+    }
+    sidx_mesh_free(&m);
+}
+
+/* ---- refit ------------------------------------------------------------------------- */
+
+static void test_refit_matches_rebuild(void **state)
+{
+    (void)state;
+    sidx_mesh m = scene("teapot");
+    sidx_ray *rays;
+    const size_t n = make_rays(&m, per_kind(100), 9, &rays);
+    for (int w = 0; w < NWIDES; ++w) {
+        sidx_accel *a = build(wides[w], &m, NULL, 1);
+        /* squash y and shift: same topology, new boxes */
+        for (uint32_t i = 0; i < m.num_vertices; ++i) {
+            m.positions[i].y = 0.5f * m.positions[i].y + 0.25f;
+            m.positions[i].x += 0.1f;
+        }
+        assert_int_equal(sidx_accel_refit(a, NULL), SIDX_OK);
+        sidx_accel *brute = NULL;
+        assert_int_equal(sidx_accel_build("brute", &m, NULL, &brute, NULL), SIDX_OK);
+        for (size_t i = 0; i < n; ++i) {
+            sidx_hit h, ref;
+            sidx_accel_intersect(a, &rays[i], NULL, &h);
+            sidx_accel_intersect(brute, &rays[i], NULL, &ref);
+            if (!tk_hits_agree(&ref, &h)) fail_msg("refit %s ray %zu", wides[w], i);
+        }
+        sidx_accel_destroy(brute);
+        sidx_accel_destroy(a);
+    }
+    free(rays);
+    sidx_mesh_free(&m);
+}
+
+/* ---- allocation failures ------------------------------------------------------------ */
+
+typedef struct failing { int countdown, live; } failing;
+static void *f_alloc(size_t size, void *user)
+{
+    failing *f = user;
+    if (f->countdown-- == 0) return NULL;
+    f->live++;
+    return malloc(size);
+}
+static void f_free(void *p, void *user)
+{
+    failing *f = user;
+    if (p) f->live--;
+    free(p);
+}
+
+static void test_alloc_failures(void **state)
+{
+    (void)state;
+    sidx_mesh m = scene("icosphere");
+    for (int w = 0; w < NWIDES; ++w)
+        for (int k = 0;; ++k) {
+            failing f = {k, 0};
+            const sidx_allocator al = {f_alloc, f_free, &f};
+            sidx_build_options o;
+            memset(&o, 0, sizeof o);
+            o.alloc = &al;
+            sidx_accel *a = NULL;
+            const sidx_status s = sidx_accel_build(wides[w], &m, &o, &a, NULL);
+            if (s == SIDX_OK) {
+                sidx_accel_destroy(a);
+                assert_int_equal(f.live, 0);
+                break;
+            }
+            assert_int_equal(s, SIDX_ERR_NOMEM);
+            assert_null(a);
+            assert_int_equal(f.live, 0);
+            assert_true(k < 100);
+        }
+    sidx_mesh_free(&m);
+}
+
+/* ---- tiny and degenerate inputs ---------------------------------------------------- */
+
+static void test_tiny_and_empty(void **state)
+{
+    (void)state;
+    const float xyz[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 5, 5, 5};
+    const uint32_t one[] = {0, 1, 2}, degen[] = {3, 3, 3};
+    sidx_mesh m1, m0, md;
+    assert_int_equal(sidx_mesh_from_arrays(&m1, xyz, 4, one, 1, NULL), SIDX_OK);
+    assert_int_equal(sidx_mesh_from_arrays(&m0, xyz, 4, one, 0, NULL), SIDX_OK);
+    assert_int_equal(sidx_mesh_from_arrays(&md, xyz, 4, degen, 1, NULL), SIDX_OK);
+    sidx_ray r;
+    assert_int_equal(sidx_ray_init(&r, sidx_v3(0.25f, 0.25f, -1), sidx_v3(0, 0, 1), 0.0f, INFINITY), SIDX_OK);
+    for (int w = 0; w < NWIDES; ++w)
+        for (int simd = 0; simd < 2; ++simd) {
+            sidx_accel *a = build(wides[w], &m1, NULL, simd);
+            sidx_hit h;
+            sidx_accel_intersect(a, &r, NULL, &h);
+            assert_int_equal(h.prim, 0);
+            assert_true(fabsf(h.t - 1.0f) < 1e-6f);
+            sidx_accel_destroy(a);
+            a = build(wides[w], &m0, NULL, simd);
+            sidx_accel_intersect(a, &r, NULL, &h);
+            assert_int_equal(h.prim, SIDX_NO_HIT);
+            sidx_accel_destroy(a);
+            a = build(wides[w], &md, NULL, simd);
+            sidx_accel_intersect(a, &r, NULL, &h);
+            assert_int_equal(h.prim, SIDX_NO_HIT);
+            sidx_accel_destroy(a);
+        }
+    sidx_mesh_free(&m1);
+    sidx_mesh_free(&m0);
+    sidx_mesh_free(&md);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_simd_equals_scalar), cmocka_unit_test(test_match_brute),
+        cmocka_unit_test(test_no_leaks_icosphere), cmocka_unit_test(test_structure),
+        cmocka_unit_test(test_event_ids),          cmocka_unit_test(test_refit_matches_rebuild),
+        cmocka_unit_test(test_alloc_failures),     cmocka_unit_test(test_tiny_and_empty),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
