@@ -54,7 +54,10 @@ LIBA := $(BUILD)/lib/libsidx.a
 LIBSO := $(BUILD)/lib/libsidx.so
 VIZA := $(BUILD)/lib/libsidxviz.a
 PROGS := $(VIZ_PROGS) $(if $(wildcard lessons/tour.c),$(BUILD)/bin/sidx-tour) \
-         $(if $(BENCH_SRC),$(BUILD)/bin/sidx-bench)
+         $(if $(BENCH_SRC),$(BUILD)/bin/sidx-bench $(BUILD)/bin/sidx-bench-nohooks)
+# The library again with every hook compiled out (-DSIDX_NO_HOOKS), linked
+# into sidx-bench-nohooks: `sidx-bench run` compares it with sidx-bench.
+NOHOOKS_OBJ := $(LIB_SRC:%.c=$(BUILD)/nohooks/obj/%.o)
 ALL_LIBS = $(VIZA) $(LIBA) $(PKG_LIBS) $(LDLIBS)
 
 .PHONY: all deps build demo test test-run valgrind bench install clean docs fuzz
@@ -104,6 +107,14 @@ $(BUILD)/bin/sidx-tour: $(BUILD)/obj/lessons/tour.o $(VIZA) $(LIBA)
 $(BUILD)/bin/sidx-bench: $(BENCH_OBJ) $(VIZA) $(LIBA)
 	@mkdir -p $(dir $@)
 	$(CC) $(LDFLAGS) -o $@ $(BENCH_OBJ) $(ALL_LIBS) -lembree3
+
+$(BUILD)/nohooks/obj/%.o: %.c
+	@mkdir -p $(dir $@)
+	$(CC) $(CFLAGS) -DSIDX_NO_HOOKS -MMD -MP -c $< -o $@
+
+$(BUILD)/bin/sidx-bench-nohooks: $(BENCH_OBJ) $(NOHOOKS_OBJ)
+	@mkdir -p $(dir $@)
+	$(CC) $(LDFLAGS) -o $@ $(BENCH_OBJ) $(NOHOOKS_OBJ) $(LDLIBS) -lembree3
 
 $(BUILD)/lessons/%: $(BUILD)/obj/lessons/%.o $(VIZA) $(LIBA)
 	@mkdir -p $(dir $@)
@@ -170,6 +181,11 @@ fuzz: $(FUZZ_BINS)
 	    build/fuzz/corpus/$$name 2>&1 | grep -E "^(#[0-9]+.*DONE|stat::number_of_executed_units|stat::peak_rss|==[0-9]+==ERROR|SUMMARY)|cov:" | tail -4 \
 	    || exit 1; \
 	done
+
+# Pictures for docs/: Graphviz trees and viewer screenshots (headless).
+docs: deps
+	@$(MAKE) --no-print-directory build
+	sh viz/make_docs_pictures.sh $(BUILD) docs/img
 
 install: all
 	install -d $(DESTDIR)$(PREFIX)/include/sidx $(DESTDIR)$(PREFIX)/lib/pkgconfig $(DESTDIR)$(PREFIX)/bin

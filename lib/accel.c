@@ -92,10 +92,14 @@ sidx_status sidx_accel_build(const char *name, const sidx_mesh *mesh, const sidx
     return build_entry(e, mesh, opt, out, err);
 }
 
-/* Below this many triangles a structure's set-up and traversal overhead is
- * more than testing every triangle (measured in sidx-bench run: brute force
- * wins on the Cornell box's 36 triangles). */
-#define AUTO_BRUTE_MAX_TRIS 64u
+/* At or below this many triangles a structure's set-up and traversal
+ * overhead is more than testing every triangle.  Measured with `sidx-bench
+ * run --builtin flat2d:1,flat2d:2,flat2d:4,cornell --accel brute,bvh,...`:
+ * brute force only ties the BVH at 8 triangles on diffuse and shadow rays
+ * (and is 3x slower on primary rays, most of which miss the root box); at
+ * 16 and more the BVH is 2-20x faster (Cornell box, 36: 7-20x). */
+#define AUTO_BRUTE_MAX_TRIS 4u
+#define AUTO_FLAT_KDTREE_MAX_TRIS 65536u
 
 sidx_status sidx_accel_auto(const sidx_mesh *mesh, const sidx_build_options *opt, sidx_accel **out, sidx_error *err)
 {
@@ -104,13 +108,37 @@ sidx_status sidx_accel_auto(const sidx_mesh *mesh, const sidx_build_options *opt
     *out = NULL;
     if (!mesh) return sidx__fail(err, SIDX_ERR_INVALID_ARG, "mesh is NULL");
     const char *choice, *why;
-    if (mesh->num_triangles <= AUTO_BRUTE_MAX_TRIS || !find_entry("bvh")) {
+    /* A BVH adapts to any density; a uniform grid collapses on uneven
+     * scenes (teapot in a stadium), so it is never the automatic pick.
+     * The wide BVHs, when registered, beat the binary one on every scene
+     * `sidx-bench run` measures (bvh8 1.3-2x faster than bvh in the
+     * head-to-head "auto:" lines), so the widest one registered wins. */
+    static const char *const bvh_pref[] = {"bvh8", "bvh4", "bvh"};
+    const char *bvh = NULL;
+    for (size_t i = 0; i < sizeof bvh_pref / sizeof bvh_pref[0] && !bvh; ++i)
+        if (find_entry(bvh_pref[i])) bvh = bvh_pref[i];
+    /* A flat scene (every triangle in one plane: the box has no thickness)
+     * of moderate size: the kd-tree's cells tile the plane without overlap
+     * and beat the BVHs by 12-33% (grid:16 .. grid:128); from ~100k
+     * triangles on the 8-wide BVH is faster again (grid:256). */
+    const sidx_aabb box = sidx_mesh_bounds(mesh);
+    const sidx_vec3 ext = sidx_aabb_extent(box);
+    const float lo = fminf(ext.x, fminf(ext.y, ext.z)), hi = fmaxf(ext.x, fmaxf(ext.y, ext.z));
+    const int flat = !sidx_aabb_is_empty(box) && lo <= 1e-6f * hi && hi > 0.0f;
+    if (mesh->num_triangles <= AUTO_BRUTE_MAX_TRIS || !bvh) {
         choice = "brute";
-        why = "auto: tiny scene (<= 64 triangles): testing every triangle beats building a structure";
+        why = "auto: tiny scene (<= 4 triangles): testing every triangle beats building a structure";
+    } else if (flat && mesh->num_triangles < AUTO_FLAT_KDTREE_MAX_TRIS && find_entry("kdtree-binned")) {
+        choice = "kdtree-binned";
+        why = "auto: flat scene (all triangles in one plane), < 65536 triangles: binned kd-tree, measured fastest";
+    } else if (bvh[3] == '8') {
+        choice = bvh;
+        why = "auto: 8-wide binned-SAH BVH: adapts to uneven density and has the best measured Mrays/s";
+    } else if (bvh[3] == '4') {
+        choice = bvh;
+        why = "auto: 4-wide binned-SAH BVH: adapts to uneven density and has the best measured Mrays/s";
     } else {
-        /* A BVH adapts to any density; a uniform grid collapses on uneven
-         * scenes (teapot in a stadium), so it is never the automatic pick. */
-        choice = "bvh";
+        choice = bvh;
         why = "auto: binned-SAH BVH: adapts to uneven density and has the best measured Mrays/s";
     }
     if (opt && opt->hook) {

@@ -1,0 +1,91 @@
+/* bench.h — the pieces of sidx-bench (trace, rays, run, scale). */
+#ifndef SIDX_BENCH_H
+#define SIDX_BENCH_H
+
+#include <stdint.h>
+#include <stdio.h>
+#include "sidx/sidx.h"
+#include "../common/testkit.h"
+
+/* Exit codes of every sub-command. */
+#define BENCH_OK 0
+#define BENCH_FAIL 1
+#define BENCH_USAGE 2
+
+extern const char *bench_argv0; /* path of this executable (for the no-hooks twin) */
+/* 1: single-threaded traces and builds are timed in CPU time of the thread
+ * (process for builds), not wall-clock, so other load on the machine does
+ * not count (run and scale set it; trace keeps wall-clock). */
+extern int bench_cpu_time;
+double bench_clock_ms(void);       /* trace clock: thread CPU time or wall-clock */
+double bench_build_clock_ms(void); /* build clock: process CPU time or wall-clock */
+
+/* Rays prepared once for tracing (sidx_ray_init outside the timed loop).
+ * A record sidx_ray_init rejects (zero direction, NaN, tmin > tmax) stays
+ * invalid and always misses. */
+typedef struct bench_rays {
+    sidx_ray *r;
+    uint8_t *valid;
+    size_t n;
+} bench_rays;
+int bench_rays_prepare(const tk_rayrec *rec, size_t n, bench_rays *out); /* 0 on out of memory */
+void bench_rays_free(bench_rays *br);
+
+/* Traces rays[begin, end) into hits with `threads` pthreads (0/1 = the
+ * calling thread).  any_hit: hits[i].prim = 0 for occluded, SIDX_NO_HIT
+ * otherwise.  Stops early (single thread only) once budget_ms is spent,
+ * when budget_ms > 0; returns the number of rays traced and the elapsed
+ * milliseconds in *ms. */
+size_t bench_trace(const sidx_accel *a, const bench_rays *br, size_t begin, size_t end, const sidx_query *q,
+                   int any_hit, unsigned threads, double budget_ms, sidx_hit *hits, double *ms);
+
+/* Embree 3 as the peer. */
+typedef struct bench_embree bench_embree;
+typedef struct bench_embree_cfg {
+    int robust;  /* RTC_SCENE_FLAG_ROBUST */
+    int quality; /* RTC_BUILD_QUALITY_LOW/MEDIUM/HIGH = 0/1/2 */
+} bench_embree_cfg;
+/* Parses "embree", "embree-robust", "embree-hq", "embree-robust-hq"; 1 if it is one. */
+int bench_embree_parse(const char *name, bench_embree_cfg *cfg);
+int bench_embree_build(const sidx_mesh *m, bench_embree_cfg cfg, bench_embree **out, double *build_ms, char *msg,
+                       size_t msg_size);
+size_t bench_embree_bytes(const bench_embree *e);
+/* rtcIntersect1 / rtcOccluded1, one thread; packet = 1, 4, 8 or 16
+ * (rtcIntersectN).  Returns elapsed ms.  u, v are filled. */
+double bench_embree_trace(bench_embree *e, const tk_rayrec *rays, size_t n, int any_hit, int packet, sidx_hit *hits);
+void bench_embree_free(bench_embree *e);
+const char *bench_embree_version(void);
+
+/* A tiny SVG scatter plot. */
+typedef struct bench_point {
+    double x, y;
+    const char *label; /* tooltip; also drawn next to the marker when show_label */
+    int series;        /* colour index */
+    int shape;         /* scatter: 0 circle, 1 square, 2 triangle */
+    int hollow;        /* scatter: outline only */
+    int show_label;
+} bench_point;
+int bench_svg_scatter(const char *path, const char *title, const char *xlabel, const char *ylabel, int xlog,
+                      int ylog, const bench_point *pts, size_t n, const char *const *series_names, int nseries,
+                      const char *const *shape_names, int nshapes);
+/* Line plot: one polyline per series (points sorted by x within series). */
+int bench_svg_lines(const char *path, const char *title, const char *xlabel, const char *ylabel,
+                    const bench_point *pts, size_t n, const char *const *series_names, int nseries);
+
+/* Sub-commands. */
+int bench_cmd_trace(int argc, char **argv);
+int bench_cmd_rays(int argc, char **argv);
+int bench_cmd_run(int argc, char **argv);
+int bench_cmd_scale(int argc, char **argv);
+
+/* Comma-separated list helpers. */
+int bench_list_has(const char *list, const char *name); /* NULL list = everything */
+int bench_progress_enabled(void);                        /* stderr is a terminal */
+void bench_progress(const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 1, 2)))
+#endif
+    ;
+void bench_progress_done(void);
+
+#endif

@@ -1,0 +1,1132 @@
+/* run.c — `sidx-bench run`: the benchmark table.
+ *
+ * For each scene x ray kind x structure: build ms, Mrays/s (one thread),
+ * memory, nodes, mean traversal steps (NODE_ENTER events) and primitive
+ * tests (PRIM_TEST events) per ray from a sidx_counters hook on a ray
+ * subset, and the error against the double-precision watertight
+ * brute-force reference (tk_ref_intersect) on a subset: false misses,
+ * false hits, wrong primitive (different prim with t beyond tolerance),
+ * max relative t error.  Embree 3 rows trace the same rays.  Then: a
+ * per-(structure, triangle test, box test) summary and its SVG plot
+ * (Mrays/s against error rate), auto's pick against the best structure
+ * per scene, and the hook-overhead rows (this binary with no hook attached
+ * against sidx-bench-nohooks, the library built with -DSIDX_NO_HOOKS). */
+#include <dirent.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <poll.h>
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "bench.h"
+
+typedef struct run_opts {
+    const char *scenes_dir, *accel_list, *kinds_list, *builtin_list, *csv, *plot, *method_scenes;
+    size_t rays;
+    uint64_t seed;
+    double ref_budget;   /* ray x triangle tests for the reference, per scene x kind */
+    double time_budget;  /* ms per timed trace */
+    double build_budget; /* skip a structure whose predicted build exceeds this (ms) */
+    uint32_t brute_max;  /* brute force only on scenes up to this many triangles */
+    int embree, methods, hooks, packets;
+    double timeout_ms;   /* per structure and scene, in a child process; 0 = in process */
+    unsigned long mem_limit_mb;
+    unsigned ref_threads;
+} run_opts;
+
+typedef struct row {
+    char scene[64], kind[16], accel[40];
+    sidx_tri_method tri;
+    sidx_box_method box;
+    int embree;      /* 1 for Embree rows */
+    int packet;      /* Embree packet width (4, 8, 16) for rtcIntersectN rows, else 0 */
+    int builtin;     /* scene is a built-in */
+    uint32_t tris;
+    double build_ms, trace_ms;
+    size_t rays_timed, rays_req;
+    size_t bytes;
+    uint32_t nodes;
+    double steps, prims; /* per ray; < 0 when not measured */
+    tk_errstats err;
+} row;
+
+typedef struct rows {
+    row *v;
+    size_t n, cap;
+} rows;
+
+/* Truncating string copy (snprintf("%s") trips -Wformat-truncation). */
+static void copy_str(char *dst, size_t size, const char *src)
+{
+    size_t n = strlen(src);
+    if (n >= size) n = size - 1;
+    memcpy(dst, src, n);
+    dst[n] = '\0';
+}
+
+static row *rows_add(rows *r)
+{
+    if (r->n == r->cap) {
+        size_t cap = r->cap ? 2 * r->cap : 256;
+        row *nv = realloc(r->v, cap * sizeof *nv);
+        if (!nv) return NULL;
+        r->v = nv;
+        r->cap = cap;
+    }
+    row *x = &r->v[r->n++];
+    memset(x, 0, sizeof *x);
+    x->steps = x->prims = -1;
+    return x;
+}
+
+static double row_mrays(const row *r) { return r->trace_ms > 0 ? (double)r->rays_timed / (r->trace_ms * 1e3) : 0; }
+
+/* One ray set of one scene, prepared once for every structure. */
+typedef struct kind_data {
+    tk_ray_kind kind;
+    tk_rayrec *rec;
+    bench_rays br;
+    size_t nsub;        /* reference subset: rays sub[0..nsub) */
+    tk_rayrec *sub;
+    bench_rays sub_br;
+    sidx_hit *ref;
+    sidx_hit *hits;     /* scratch, rays */
+} kind_data;
+
+static void kind_data_free(kind_data *k)
+{
+    free(k->rec);
+    free(k->sub);
+    free(k->ref);
+    free(k->hits);
+    bench_rays_free(&k->br);
+    bench_rays_free(&k->sub_br);
+    memset(k, 0, sizeof *k);
+}
+
+static int kind_data_make(const sidx_mesh *m, tk_ray_kind kind, const run_opts *o, kind_data *k)
+{
+    memset(k, 0, sizeof *k);
+    k->kind = kind;
+    const size_t n = o->rays;
+    size_t nsub = m->num_triangles ? (size_t)(o->ref_budget / m->num_triangles) : n;
+    if (nsub < 500) nsub = 500;
+    if (nsub > 20000) nsub = 20000;
+    if (nsub > n) nsub = n;
+    k->nsub = nsub;
+    k->rec = malloc((n ? n : 1) * sizeof *k->rec);
+    k->sub = malloc((nsub ? nsub : 1) * sizeof *k->sub);
+    k->ref = malloc((nsub ? nsub : 1) * sizeof *k->ref);
+    k->hits = malloc((n ? n : 1) * sizeof *k->hits);
+    if (!k->rec || !k->sub || !k->ref || !k->hits) return 0;
+    tk_make_rays(m, kind, n, o->seed, k->rec);
+    /* strided subset, so it covers the whole image for primary rays */
+    for (size_t i = 0; i < nsub; ++i) k->sub[i] = k->rec[i * n / nsub];
+    if (!bench_rays_prepare(k->rec, n, &k->br) || !bench_rays_prepare(k->sub, nsub, &k->sub_br)) return 0;
+    tk_ref_intersect_all(m, k->sub, nsub, k->ref, o->ref_threads);
+    return 1;
+}
+
+typedef struct scene_spec {
+    char name[64];   /* shown in the table */
+    char spec[512];  /* for sidx_scene_open */
+    int builtin;
+} scene_spec;
+
+static int cmp_str(const void *a, const void *b) { return strcmp(*(char *const *)a, *(char *const *)b); }
+
+/* Built-ins first, then the .obj/.ply files of dir, sorted. */
+static size_t collect_scenes(const run_opts *o, scene_spec *out, size_t max)
+{
+    size_t n = 0;
+    static const char *const defaults[] = {"teapot", "stadium", "icosphere", "soup", "menger", "cornell", "flat2d",
+                                           "grid"};
+    if (o->builtin_list) {
+        const char *p = o->builtin_list;
+        while (*p && n < max) {
+            const char *e = strchr(p, ',');
+            size_t len = e ? (size_t)(e - p) : strlen(p);
+            if (len && len < sizeof out[n].spec) {
+                memcpy(out[n].spec, p, len);
+                out[n].spec[len] = '\0';
+                copy_str(out[n].name, sizeof out[n].name, out[n].spec);
+                out[n].builtin = 1;
+                ++n;
+            }
+            if (!e) break;
+            p = e + 1;
+        }
+    } else {
+        for (size_t i = 0; i < sizeof defaults / sizeof defaults[0] && n < max; ++i) {
+            copy_str(out[n].spec, sizeof out[n].spec, defaults[i]);
+            copy_str(out[n].name, sizeof out[n].name, defaults[i]);
+            out[n].builtin = 1;
+            ++n;
+        }
+    }
+    if (o->scenes_dir) {
+        DIR *d = opendir(o->scenes_dir);
+        if (!d) {
+            fprintf(stderr, "sidx-bench run: --scenes %s: %s\n", o->scenes_dir, strerror(errno));
+            return (size_t)-1;
+        }
+        char *names[256];
+        size_t nn = 0;
+        struct dirent *de;
+        while ((de = readdir(d)) && nn < 256) {
+            const size_t len = strlen(de->d_name);
+            if (len > 4 && (!strcmp(de->d_name + len - 4, ".obj") || !strcmp(de->d_name + len - 4, ".ply")))
+                names[nn++] = strdup(de->d_name);
+        }
+        closedir(d);
+        qsort(names, nn, sizeof names[0], cmp_str);
+        for (size_t i = 0; i < nn; ++i) {
+            if (names[i] && n < max) {
+                snprintf(out[n].spec, sizeof out[n].spec, "%s/%s", o->scenes_dir, names[i]);
+                copy_str(out[n].name, sizeof out[n].name, names[i]);
+                out[n].builtin = 0;
+                ++n;
+            }
+            free(names[i]);
+        }
+    }
+    return n;
+}
+
+/* Counters hook on up to max rays spread over the subset: steps =
+ * NODE_ENTER, prims = PRIM_TEST events per ray. */
+static void measure_counts(const sidx_accel *a, const kind_data *k, size_t max, row *r)
+{
+    sidx_counters c;
+    sidx_counters_init(&c);
+    sidx_hook h = sidx_counters_hook(&c);
+    h.mask = SIDX_EVMASK(SIDX_EV_NODE_ENTER) | SIDX_EVMASK(SIDX_EV_PRIM_TEST);
+    const size_t n = k->nsub < max ? k->nsub : max;
+    size_t used = 0;
+    for (size_t j = 0; j < n; ++j) {
+        const size_t i = j * k->nsub / n;
+        if (!k->sub_br.valid[i]) continue;
+        sidx_query q = {0, SIDX_TRAVERSE_DEFAULT, &h, (uint32_t)i};
+        sidx_hit hit;
+        sidx_accel_intersect(a, &k->sub_br.r[i], &q, &hit);
+        ++used;
+    }
+    if (used == 0) return;
+    r->steps = (double)c.n[SIDX_EV_NODE_ENTER] / (double)used;
+    r->prims = (double)c.n[SIDX_EV_PRIM_TEST] / (double)used;
+}
+
+/* Errors on up to max rays spread over the subset.  full_hits: the hits of
+ * every ray when all were traced (no tracing needed), else NULL. */
+static void measure_errors(const sidx_accel *a, const kind_data *k, const sidx_hit *full_hits, size_t max, row *r)
+{
+    memset(&r->err, 0, sizeof r->err);
+    const size_t n = full_hits || k->nsub < max ? k->nsub : max;
+    for (size_t j = 0; j < n; ++j) {
+        const size_t i = j * k->nsub / n;
+        sidx_hit h;
+        if (full_hits) h = full_hits[i * k->br.n / k->nsub];
+        else if (!k->sub_br.valid[i]) h = sidx_hit_none();
+        else sidx_accel_intersect(a, &k->sub_br.r[i], NULL, &h);
+        tk_errstats_add(&r->err, &k->ref[i], &h);
+    }
+}
+
+/* Milliseconds per ray, estimated on 64 rays spread over the set (the
+ * faster of two passes: the first one also pays for cold caches). */
+static double probe_cost(const sidx_accel *a, const kind_data *k, size_t n)
+{
+    const size_t m = n < 64 ? n : 64;
+    if (m == 0) return 0;
+    double best = INFINITY;
+    for (int pass = 0; pass < 2; ++pass) {
+        const double t0 = bench_clock_ms();
+        for (size_t j = 0; j < m; ++j) {
+            const size_t i = j * n / m;
+            sidx_hit h;
+            if (k->br.valid[i]) sidx_accel_intersect(a, &k->br.r[i], NULL, &h);
+        }
+        const double t = (bench_clock_ms() - t0) / (double)m;
+        if (t < best) best = t;
+    }
+    return best;
+}
+
+/* Timed trace of up to n rays within about budget ms: all of them (best of
+ * up to 3 runs while short: a preempted run on a busy machine would decide
+ * the number), or, for a slow structure, 8 contiguous blocks spread evenly
+ * over the set (coherent primary rays stay coherent, the whole image is
+ * covered).  Returns the rays timed; *all = 1 when k->hits holds every ray. */
+static size_t timed_trace(const sidx_accel *a, const kind_data *k, size_t n, double budget, double ms_per_ray,
+                          double *ms, int *all)
+{
+    const size_t total = k->br.n;
+    size_t want = ms_per_ray > 0 ? (size_t)(budget / ms_per_ray) : n;
+    if (want < 256) want = 256;
+    if (want > n) want = n;
+    *all = 0;
+    if (want >= total) {
+        bench_trace(a, &k->br, 0, n, NULL, 0, 1, 0.0, k->hits, ms);
+        for (int rep = 0; rep < 2 && *ms < 30.0; ++rep) {
+            double again;
+            bench_trace(a, &k->br, 0, n, NULL, 0, 1, 0.0, k->hits, &again);
+            if (again < *ms) *ms = again;
+        }
+        *all = n == k->br.n;
+        return n;
+    }
+    /* fewer rays than the set (slow structure, or a ray limit) */
+    const size_t blocks = 8, per = want / blocks;
+    double sum = 0;
+    for (size_t b = 0; b < blocks; ++b) {
+        const size_t begin = b * total / blocks;
+        double t;
+        bench_trace(a, &k->br, begin, begin + per, NULL, 0, 1, 0.0, k->hits, &t);
+        sum += t;
+    }
+    *ms = sum;
+    return per * blocks;
+}
+
+/* One structure (with one tri/box method) on one scene, every kind.
+ * Returns the build time in ms, < 0 when the build failed. */
+static double bench_structure(const char *name, const sidx_mesh *m, const scene_spec *sc, kind_data *kinds, int nk,
+                              sidx_tri_method tri, sidx_box_method box, size_t ray_limit, double budget,
+                              rows *out)
+{
+    sidx_build_options bo;
+    memset(&bo, 0, sizeof bo);
+    bo.tri = tri;
+    bo.box = box;
+    sidx_accel *a = NULL;
+    sidx_error err = {SIDX_OK, ""};
+    const double t0 = bench_build_clock_ms();
+    sidx_status s = sidx_accel_build(name, m, &bo, &a, &err);
+    const double build_ms = bench_build_clock_ms() - t0;
+    if (s != SIDX_OK) {
+        fprintf(stderr, "sidx-bench run: %s on %s: %s\n", name, sc->name, err.message);
+        return -1;
+    }
+    sidx_accel_stats st;
+    sidx_accel_stats_get(a, &st);
+    for (int ki = 0; ki < nk; ++ki) {
+        kind_data *k = &kinds[ki];
+        row *r = rows_add(out);
+        if (!r) break;
+        copy_str(r->scene, sizeof r->scene, sc->name);
+        copy_str(r->kind, sizeof r->kind, tk_ray_kind_name(k->kind));
+        copy_str(r->accel, sizeof r->accel, name);
+        r->tri = tri;
+        r->box = box;
+        r->builtin = sc->builtin;
+        r->tris = m->num_triangles;
+        r->build_ms = build_ms;
+        r->bytes = st.bytes;
+        r->nodes = st.nodes;
+        const size_t n = k->br.n < ray_limit ? k->br.n : ray_limit;
+        const double cost = probe_cost(a, k, n);
+        int all = 0;
+        r->rays_req = n;
+        r->rays_timed = timed_trace(a, k, n, budget, cost, &r->trace_ms, &all);
+        size_t max = cost > 0 ? (size_t)(budget / cost) : k->nsub;
+        if (max < 200) max = 200;
+        measure_errors(a, k, all ? k->hits : NULL, max, r);
+        measure_counts(a, k, max / 4 < 1000 ? (max / 4 < 50 ? 50 : max / 4) : 1000, r);
+    }
+    sidx_accel_destroy(a);
+    return build_ms;
+}
+
+/* ---- isolation: each structure runs in a child process ---------------------- */
+
+/* Structures are written concurrently with this harness, so one may hang,
+ * explode in memory or crash on some scene.  Each structure's rows are
+ * produced in a forked child (address space capped, wall-clock timeout)
+ * and sent back through a pipe; a failure costs that row, not the run. */
+typedef struct job {
+    const char *name;
+    const sidx_mesh *m;
+    const scene_spec *sc;
+    kind_data *kd;
+    int nk;
+    int sweep; /* 0: watertight/robust on every ray; 1: the other tri/box tests on 1/4 of the rays */
+    const run_opts *o;
+} job;
+
+static double job_run(const job *j, rows *out)
+{
+    if (!j->sweep)
+        return bench_structure(j->name, j->m, j->sc, j->kd, j->nk, SIDX_TRI_WATERTIGHT, SIDX_BOX_ROBUST, (size_t)-1,
+                               j->o->time_budget, out);
+    for (int t = 0; t < SIDX_TRI_METHOD_COUNT; ++t)
+        for (int b = 0; b < SIDX_BOX_METHOD_COUNT; ++b) {
+            if (t == SIDX_TRI_WATERTIGHT && b == SIDX_BOX_ROBUST) continue;
+            if (!strcmp(j->name, "brute") && b != SIDX_BOX_ROBUST) continue; /* brute has no boxes */
+            bench_structure(j->name, j->m, j->sc, j->kd, j->nk, (sidx_tri_method)t, (sidx_box_method)b,
+                            j->o->rays / 4 + 1, j->o->time_budget / 2, out);
+        }
+    return 0;
+}
+
+static int write_all(int fd, const void *p, size_t n)
+{
+    const char *c = p;
+    while (n) {
+        ssize_t w = write(fd, c, n);
+        if (w < 0 && errno == EINTR) continue;
+        if (w <= 0) return 0;
+        c += w;
+        n -= (size_t)w;
+    }
+    return 1;
+}
+
+/* Returns the build ms (job_run's result), or < 0 with *why set. */
+static double job_isolated(const job *j, rows *out, char *why, size_t why_size)
+{
+    why[0] = '\0';
+    if (j->o->timeout_ms <= 0) return job_run(j, out);
+    int fd[2];
+    if (pipe(fd) != 0) return job_run(j, out);
+    fflush(stdout);
+    fflush(stderr);
+    pid_t pid = fork();
+    if (pid < 0) {
+        close(fd[0]);
+        close(fd[1]);
+        return job_run(j, out);
+    }
+    if (pid == 0) {
+        close(fd[0]);
+        struct rlimit rl = {(rlim_t)j->o->mem_limit_mb << 20, (rlim_t)j->o->mem_limit_mb << 20};
+        setrlimit(RLIMIT_AS, &rl);
+        rows mine = {NULL, 0, 0};
+        double build_ms = job_run(j, &mine);
+        int ok = write_all(fd[1], &build_ms, sizeof build_ms) && write_all(fd[1], &mine.n, sizeof mine.n) &&
+                 (mine.n == 0 || write_all(fd[1], mine.v, mine.n * sizeof *mine.v));
+        _exit(ok ? 0 : 3);
+    }
+    close(fd[1]);
+    size_t cap = 1 << 16, len = 0;
+    char *buf = malloc(cap);
+    const double t0 = tk_now_ms();
+    int timed_out = 0;
+    for (;;) {
+        const double left = j->o->timeout_ms - (tk_now_ms() - t0);
+        if (left <= 0) {
+            timed_out = 1;
+            break;
+        }
+        struct pollfd pfd = {fd[0], POLLIN, 0};
+        int pr = poll(&pfd, 1, left > 1000 ? 1000 : (int)left + 1);
+        if (pr < 0 && errno == EINTR) continue;
+        if (pr <= 0) continue;
+        if (buf && len == cap) {
+            char *nb = realloc(buf, cap * 2);
+            if (!nb) break;
+            buf = nb;
+            cap *= 2;
+        }
+        ssize_t r = read(fd[0], buf ? buf + len : (char[1]){0}, buf ? cap - len : 1);
+        if (r < 0 && errno == EINTR) continue;
+        if (r <= 0) break;
+        len += (size_t)r;
+    }
+    close(fd[0]);
+    if (timed_out) kill(pid, SIGKILL);
+    int status = 0;
+    waitpid(pid, &status, 0);
+    double result = -1;
+    if (timed_out) snprintf(why, why_size, "timed out after %.0f s (--timeout)", j->o->timeout_ms / 1e3);
+    else if (WIFSIGNALED(status))
+        snprintf(why, why_size, "crashed (signal %d%s)", WTERMSIG(status),
+                 WTERMSIG(status) == SIGABRT || WTERMSIG(status) == SIGSEGV ? "; out of memory or a bug" : "");
+    else if (!WIFEXITED(status) || WEXITSTATUS(status) != 0 || !buf || len < sizeof(double) + sizeof(size_t))
+        snprintf(why, why_size, "child failed (exit %d)", WIFEXITED(status) ? WEXITSTATUS(status) : -1);
+    else {
+        size_t n;
+        memcpy(&result, buf, sizeof result);
+        memcpy(&n, buf + sizeof result, sizeof n);
+        if (len != sizeof result + sizeof n + n * sizeof(row)) {
+            snprintf(why, why_size, "child sent a truncated result");
+            result = -1;
+        } else {
+            const row *rv = (const row *)(void *)(buf + sizeof result + sizeof n);
+            for (size_t i = 0; i < n; ++i) {
+                row *r = rows_add(out);
+                if (r) memcpy(r, &rv[i], sizeof *r);
+            }
+        }
+    }
+    free(buf);
+    return result;
+}
+
+static void bench_embree_rows(const char *name, bench_embree_cfg cfg, const sidx_mesh *m, const scene_spec *sc,
+                              kind_data *kinds, int nk, const run_opts *o, rows *out)
+{
+    bench_embree *e = NULL;
+    double build_ms = 0;
+    char msg[256];
+    if (!bench_embree_build(m, cfg, &e, &build_ms, msg, sizeof msg)) {
+        fprintf(stderr, "sidx-bench run: %s on %s: %s\n", name, sc->name, msg);
+        return;
+    }
+    const int packets[4] = {1, 4, 8, 16};
+    for (int ki = 0; ki < nk; ++ki) {
+        kind_data *k = &kinds[ki];
+        for (int p = 0; p < (o->packets && k->kind == TK_RAYS_PRIMARY ? 4 : 1); ++p) {
+            row *r = rows_add(out);
+            if (!r) break;
+            copy_str(r->scene, sizeof r->scene, sc->name);
+            copy_str(r->kind, sizeof r->kind, tk_ray_kind_name(k->kind));
+            if (packets[p] == 1) copy_str(r->accel, sizeof r->accel, name);
+            else snprintf(r->accel, sizeof r->accel, "%.30s-p%d", name, packets[p]);
+            r->embree = 1;
+            r->packet = packets[p] > 1 ? packets[p] : 0;
+            r->builtin = sc->builtin;
+            r->tris = m->num_triangles;
+            r->build_ms = build_ms;
+            r->bytes = bench_embree_bytes(e);
+            r->rays_timed = r->rays_req = k->br.n;
+            r->trace_ms = bench_embree_trace(e, k->rec, k->br.n, 0, packets[p], k->hits);
+            for (int rep = 0; rep < 2 && r->trace_ms < 30.0; ++rep) {
+                const double again = bench_embree_trace(e, k->rec, k->br.n, 0, packets[p], k->hits);
+                if (again < r->trace_ms) r->trace_ms = again;
+            }
+            measure_errors(NULL, k, k->hits, k->nsub, r);
+        }
+    }
+    bench_embree_free(e);
+}
+
+/* ---- output ------------------------------------------------------------------ */
+
+static void print_header(FILE *f)
+{
+    fprintf(f, "%-10s %-8s %-18s %9s %9s %8s %8s %7s %8s %7s %6s %6s %6s %9s\n", "scene", "kind", "accel",
+            "build_ms", "Mrays/s", "MB", "nodes", "steps", "prims", "checked", "fmiss", "fhit", "wrong",
+            "max_rel_t");
+}
+
+static void print_row(FILE *f, const row *r)
+{
+    char steps[16], prims[16];
+    if (r->steps >= 0) snprintf(steps, sizeof steps, "%.1f", r->steps); else snprintf(steps, sizeof steps, "-");
+    if (r->prims >= 0) snprintf(prims, sizeof prims, "%.1f", r->prims); else snprintf(prims, sizeof prims, "-");
+    char name[64];
+    if (r->tri != SIDX_TRI_WATERTIGHT || r->box != SIDX_BOX_ROBUST)
+        snprintf(name, sizeof name, "%.39s/%.12s/%.8s", r->accel, sidx_tri_method_name(r->tri), sidx_box_method_name(r->box));
+    else copy_str(name, sizeof name, r->accel);
+    fprintf(f, "%-10.10s %-8s %-18s %9.2f %9.3f %8.2f %8u %7s %8s %7llu %6llu %6llu %6llu %9.2e%s\n", r->scene,
+            r->kind, name, r->build_ms, row_mrays(r), (double)r->bytes / 1048576.0, r->nodes, steps, prims,
+            (unsigned long long)r->err.rays, (unsigned long long)r->err.false_miss,
+            (unsigned long long)r->err.false_hit, (unsigned long long)r->err.wrong_prim, r->err.max_rel_t,
+            r->rays_timed < r->rays_req ? "  (time budget: partial)" : "");
+}
+
+static int write_csv(const char *path, const rows *rs)
+{
+    FILE *f = fopen(path, "w");
+    if (!f) return 0;
+    fprintf(f, "scene,tris,kind,accel,tri,box,embree,build_ms,trace_ms,rays_timed,mrays_per_s,bytes,nodes,"
+               "steps_per_ray,prims_per_ray,checked,false_miss,false_hit,wrong_prim,max_rel_t,error_rate\n");
+    for (size_t i = 0; i < rs->n; ++i) {
+        const row *r = &rs->v[i];
+        fprintf(f, "%s,%u,%s,%s,%s,%s,%d,%.3f,%.3f,%zu,%.4f,%zu,%u,%.3f,%.3f,%llu,%llu,%llu,%llu,%.3e,%.3e\n",
+                r->scene, r->tris, r->kind, r->accel, r->embree ? "embree" : sidx_tri_method_name(r->tri),
+                r->embree ? "embree" : sidx_box_method_name(r->box), r->embree, r->build_ms, r->trace_ms,
+                r->rays_timed, row_mrays(r), r->bytes, r->nodes, r->steps, r->prims,
+                (unsigned long long)r->err.rays, (unsigned long long)r->err.false_miss,
+                (unsigned long long)r->err.false_hit, (unsigned long long)r->err.wrong_prim, r->err.max_rel_t,
+                tk_errstats_rate(&r->err));
+    }
+    return fclose(f) == 0;
+}
+
+/* Per (accel, tri, box): geometric mean of Mrays/s over scene x kind, and
+ * the error rate over every checked ray. */
+typedef struct summary {
+    char accel[40];
+    sidx_tri_method tri;
+    sidx_box_method box;
+    int embree;
+    double log_sum;
+    int count;
+    tk_errstats err;
+} summary;
+
+static size_t summarize(const rows *rs, const char *scenes, summary *out, size_t max)
+{
+    size_t n = 0;
+    for (size_t i = 0; i < rs->n; ++i) {
+        const row *r = &rs->v[i];
+        if (r->trace_ms <= 0 || r->rays_timed == 0 || r->packet) continue;
+        if (scenes && !bench_list_has(scenes, r->scene)) continue;
+        size_t j = 0;
+        while (j < n && !(strcmp(out[j].accel, r->accel) == 0 && out[j].tri == r->tri && out[j].box == r->box)) ++j;
+        if (j == n) {
+            if (n == max) continue;
+            memset(&out[n], 0, sizeof out[n]);
+            copy_str(out[n].accel, sizeof out[n].accel, r->accel);
+            out[n].tri = r->tri;
+            out[n].box = r->box;
+            out[n].embree = r->embree;
+            ++n;
+        }
+        summary *s = &out[j];
+        s->log_sum += log(row_mrays(r));
+        s->count++;
+        s->err.rays += r->err.rays;
+        s->err.false_miss += r->err.false_miss;
+        s->err.false_hit += r->err.false_hit;
+        s->err.wrong_prim += r->err.wrong_prim;
+        if (r->err.max_rel_t > s->err.max_rel_t) s->err.max_rel_t = r->err.max_rel_t;
+    }
+    return n;
+}
+
+static const char *method_label(const summary *s, char *buf, size_t size)
+{
+    if (s->embree) snprintf(buf, size, "%s", s->accel);
+    else snprintf(buf, size, "%.39s %.12s/%.8s", s->accel, sidx_tri_method_name(s->tri), sidx_box_method_name(s->box));
+    return buf;
+}
+
+static void print_summary(FILE *f, const char *scenes, const summary *s, size_t n)
+{
+    fprintf(f, "\n== run time against error on scenes %s x every kind (geometric mean Mrays/s over scene x kind;\n"
+               "   errors over all checked rays; max_rel_t = max |t - t_ref| / max(1, |t_ref|) on the same prim)\n",
+            scenes ? scenes : "(all)");
+    fprintf(f, "%-36s %9s %6s %9s %7s %7s %7s %10s %9s\n", "accel tri/box", "Mrays/s", "rows", "checked", "fmiss",
+            "fhit", "wrong", "err_rate", "max_rel_t");
+    for (size_t i = 0; i < n; ++i) {
+        char lab[96];
+        fprintf(f, "%-36s %9.3f %6d %9llu %7llu %7llu %7llu %10.3e %9.2e\n", method_label(&s[i], lab, sizeof lab),
+                exp(s[i].log_sum / s[i].count), s[i].count, (unsigned long long)s[i].err.rays,
+                (unsigned long long)s[i].err.false_miss, (unsigned long long)s[i].err.false_hit,
+                (unsigned long long)s[i].err.wrong_prim, tk_errstats_rate(&s[i].err), s[i].err.max_rel_t);
+    }
+}
+
+static int write_plot(const char *path, const summary *s, size_t n)
+{
+    bench_point *pts = calloc(n + 1, sizeof *pts);
+    char (*labels)[96] = calloc(n + 1, sizeof *labels);
+    const char *series[16];
+    char series_buf[16][40];
+    int nseries = 0;
+    if (!pts || !labels) {
+        free(pts);
+        free(labels);
+        return 0;
+    }
+    for (size_t i = 0; i < n; ++i) {
+        /* colour by structure family: the name up to the first '-' */
+        char fam[40];
+        copy_str(fam, sizeof fam, s[i].accel);
+        char *dash = strchr(fam, '-');
+        if (dash && !s[i].embree) *dash = '\0';
+        if (s[i].embree) snprintf(fam, sizeof fam, "embree");
+        int k = 0;
+        while (k < nseries && strcmp(series_buf[k], fam)) ++k;
+        if (k == nseries && nseries < 16) {
+            copy_str(series_buf[nseries], sizeof series_buf[0], fam);
+            series[nseries] = series_buf[nseries];
+            ++nseries;
+        }
+        pts[i].x = tk_errstats_rate(&s[i].err);
+        pts[i].y = exp(s[i].log_sum / s[i].count);
+        pts[i].label = method_label(&s[i], labels[i], sizeof labels[i]);
+        pts[i].series = k < 16 ? k : 15;
+        pts[i].shape = s[i].embree ? 0 : (int)s[i].tri;
+        pts[i].hollow = !s[i].embree && s[i].box == SIDX_BOX_PLAIN;
+        /* label the default (watertight/robust) points and Embree; the rest by marker */
+        pts[i].show_label = s[i].embree || (s[i].tri == SIDX_TRI_WATERTIGHT && s[i].box == SIDX_BOX_ROBUST);
+    }
+    static const char *const shapes[6] = {"watertight / robust box", "watertight / plain box",
+                                          "moller / robust box",     "moller / plain box",
+                                          "twostep / robust box",    "twostep / plain box"};
+    int ok = bench_svg_scatter(path, "sidx: run time against error (every structure x triangle test / box test)",
+                               "error rate vs double-precision reference (false misses + false hits + wrong prim)",
+                               "Mrays/s (geometric mean, one thread)", 1, 1, pts, n, series, nseries, shapes, 6);
+    free(pts);
+    free(labels);
+    return ok;
+}
+
+/* ---- hook overhead: this binary vs sidx-bench-nohooks ------------------------ */
+
+static int self_path(char *buf, size_t size);
+
+static int nohooks_path(char *buf, size_t size)
+{
+    char self[4096];
+    if (!self_path(self, sizeof self)) return 0;
+    char *slash = strrchr(self, '/');
+    if (slash) *slash = '\0';
+    else snprintf(self, sizeof self, ".");
+    if ((size_t)snprintf(buf, size, "%s/sidx-bench-nohooks", self) >= size) return 0;
+    return access(buf, X_OK) == 0;
+}
+
+/* This executable (rebuilt while running: /proc/self/exe ends in " (deleted)"). */
+static int self_path(char *buf, size_t size)
+{
+    ssize_t len = readlink("/proc/self/exe", buf, size - 1);
+    if (len <= 0) return snprintf(buf, size, "%s", bench_argv0) < (int)size;
+    buf[len] = '\0';
+    static const char deleted[] = " (deleted)";
+    const size_t dl = sizeof deleted - 1;
+    if ((size_t)len > dl && !strcmp(buf + len - dl, deleted)) buf[len - dl] = '\0';
+    return 1;
+}
+
+/* Runs prog trace ..., returns trace_ms from its JSON line, < 0 on failure. */
+static double run_trace(const char *prog, const char *accel, const char *scene, const char *rays, const char *hits)
+{
+    int fd[2];
+    if (pipe(fd) != 0) return -1;
+    pid_t pid = fork();
+    if (pid < 0) {
+        close(fd[0]);
+        close(fd[1]);
+        return -1;
+    }
+    if (pid == 0) {
+        dup2(fd[1], 1);
+        close(fd[0]);
+        close(fd[1]);
+        int devnull = open("/dev/null", O_WRONLY);
+        if (devnull >= 0) dup2(devnull, 2);
+        execl(prog, prog, "trace", "--accel", accel, scene, rays, hits, "--uv", "0", "--cpu-time", (char *)NULL);
+        _exit(127);
+    }
+    close(fd[1]);
+    char out[2048];
+    size_t n = 0;
+    ssize_t got;
+    while (n < sizeof out - 1 && (got = read(fd[0], out + n, sizeof out - 1 - n)) > 0) n += (size_t)got;
+    out[n] = '\0';
+    close(fd[0]);
+    int status = 0;
+    waitpid(pid, &status, 0);
+    if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) return -1;
+    const char *p = strstr(out, "\"trace_ms\":");
+    return p ? strtod(p + 11, NULL) : -1;
+}
+
+static void hook_rows(FILE *f, const run_opts *o, const scene_spec *sc)
+{
+    char twin[4096], self[4096];
+    fprintf(f, "\n== hook overhead: no hook attached (hooks compiled in) vs hooks compiled out (-DSIDX_NO_HOOKS)\n");
+    if (!nohooks_path(twin, sizeof twin) || !self_path(self, sizeof self)) {
+        fprintf(f, "(skipped: %s not found; `make build` builds it)\n", "sidx-bench-nohooks");
+        return;
+    }
+    sidx_mesh m = {0};
+    sidx_error err = {SIDX_OK, ""};
+    if (sidx_scene_open(sc->spec, &m, &err) != SIDX_OK) {
+        fprintf(f, "(skipped: %s)\n", err.message);
+        return;
+    }
+    char dir[] = "/tmp/sidx-bench-XXXXXX";
+    if (!mkdtemp(dir)) {
+        fprintf(f, "(skipped: mkdtemp: %s)\n", strerror(errno));
+        sidx_mesh_free(&m);
+        return;
+    }
+    char rays[64], hits[64];
+    snprintf(rays, sizeof rays, "%s/rays.bin", dir);
+    snprintf(hits, sizeof hits, "%s/hits.bin", dir);
+    const size_t n = 100000;
+    tk_rayrec *rec = malloc(n * sizeof *rec);
+    if (rec) {
+        tk_make_rays(&m, TK_RAYS_DIFFUSE, n, o->seed, rec);
+        tk_write_rays(rays, rec, n, NULL);
+        free(rec);
+    }
+    fprintf(f, "scene %s, %zu diffuse rays, best of 3 runs each\n", sc->name, n);
+    fprintf(f, "%-18s %12s %12s %9s\n", "accel", "hooks Mrays", "no-hooks", "overhead");
+    for (size_t i = 0; i < sidx_accel_registered_count(); ++i) {
+        const char *name = sidx_accel_registered_name(i);
+        if (!bench_list_has(o->accel_list, name)) continue;
+        if (!strcmp(name, "brute") && m.num_triangles > 1000) continue;
+        bench_progress("hooks: %s", name);
+        double best[2] = {INFINITY, INFINITY};
+        for (int rep = 0; rep < 3; ++rep)
+            for (int w = 0; w < 2; ++w) {
+                double ms = run_trace(w ? twin : self, name, sc->spec, rays, hits);
+                if (ms > 0 && ms < best[w]) best[w] = ms;
+            }
+        if (!isfinite(best[0]) || !isfinite(best[1])) {
+            fprintf(f, "%-18s %12s %12s %9s\n", name, "failed", "failed", "-");
+            continue;
+        }
+        fprintf(f, "%-18s %12.3f %12.3f %8.1f%%\n", name, (double)n / (best[0] * 1e3), (double)n / (best[1] * 1e3),
+                100.0 * (best[0] - best[1]) / best[1]);
+    }
+    bench_progress_done();
+    unlink(rays);
+    unlink(hits);
+    rmdir(dir);
+    sidx_mesh_free(&m);
+}
+
+/* ---- auto -------------------------------------------------------------------- */
+
+/* Time per ray summed over the kinds (the structure's cost on this scene). */
+static double scene_cost(const rows *rs, size_t from, const char *scene, const char *accel)
+{
+    double cost = 0;
+    int found = 0;
+    for (size_t i = from; i < rs->n; ++i) {
+        const row *r = &rs->v[i];
+        if (r->embree || strcmp(r->scene, scene) || strcmp(r->accel, accel) || r->tri != SIDX_TRI_WATERTIGHT ||
+            r->box != SIDX_BOX_ROBUST)
+            continue;
+        if (r->rays_timed == 0) return INFINITY;
+        cost += r->trace_ms / (double)r->rays_timed;
+        found = 1;
+    }
+    return found ? cost : -1;
+}
+
+/* Head to head: auto's pick against the 3 fastest structures of the
+ * table on this scene, every kind, interleaved over 5 rounds with the
+ * fastest round kept, so a busy machine does not decide the ratio. */
+static void auto_line(FILE *f, const rows *rs, size_t from, const scene_spec *sc, const sidx_mesh *m,
+                      kind_data *kd, int nk)
+{
+    sidx_accel *picked_a = NULL;
+    if (sidx_accel_auto(m, NULL, &picked_a, NULL) != SIDX_OK) {
+        fprintf(f, "auto: %s: build failed\n", sc->name);
+        return;
+    }
+    const char *picked = sidx_accel_name(picked_a);
+    sidx_accel_destroy(picked_a);
+    enum { MAXC = 4 };
+    const char *cand[MAXC];
+    double table_cost[MAXC];
+    int nc = 0;
+    cand[nc] = picked;
+    table_cost[nc++] = scene_cost(rs, from, sc->name, picked);
+    for (size_t i = 0; i < sidx_accel_registered_count(); ++i) {
+        const char *name = sidx_accel_registered_name(i);
+        if (!strcmp(name, picked)) continue;
+        const double c = scene_cost(rs, from, sc->name, name);
+        if (!(c > 0) || !isfinite(c)) continue;
+        /* keep the 3 cheapest besides the pick */
+        if (nc < MAXC) {
+            cand[nc] = name;
+            table_cost[nc++] = c;
+        } else {
+            int worst = 1;
+            for (int j = 2; j < nc; ++j)
+                if (table_cost[j] > table_cost[worst]) worst = j;
+            if (c < table_cost[worst]) {
+                cand[worst] = name;
+                table_cost[worst] = c;
+            }
+        }
+    }
+    if (!(table_cost[0] > 0)) {
+        fprintf(f, "auto: %-10s picked %-12s (not measured in this run)\n", sc->name, picked);
+        return;
+    }
+    sidx_accel *acc[MAXC] = {NULL};
+    for (int j = 0; j < nc; ++j)
+        if (sidx_accel_build(cand[j], m, NULL, &acc[j], NULL) != SIDX_OK) acc[j] = NULL;
+    double best_ms[MAXC][TK_RAYS_KIND_COUNT];
+    for (int j = 0; j < nc; ++j)
+        for (int k = 0; k < nk; ++k) best_ms[j][k] = INFINITY;
+    for (int round = 0; round < 5; ++round)
+        for (int k = 0; k < nk; ++k)
+            for (int j = 0; j < nc; ++j) {
+                if (!acc[j]) continue;
+                double ms;
+                bench_trace(acc[j], &kd[k].br, 0, kd[k].br.n, NULL, 0, 1, 0.0, kd[k].hits, &ms);
+                if (ms < best_ms[j][k]) best_ms[j][k] = ms;
+            }
+    double cost[MAXC];
+    int best = -1;
+    for (int j = 0; j < nc; ++j) {
+        cost[j] = 0;
+        for (int k = 0; k < nk; ++k) cost[j] += best_ms[j][k];
+        if (acc[j] && (best < 0 || cost[j] < cost[best])) best = j;
+        sidx_accel_destroy(acc[j]);
+    }
+    if (!acc[0] || best < 0) {
+        fprintf(f, "auto: %-10s picked %-12s (could not rebuild it)\n", sc->name, picked);
+        return;
+    }
+    if (getenv("SIDX_BENCH_DEBUG")) for (int j = 0; j < nc; ++j) fprintf(stderr, "h2h %s %s %.3f ms\n", sc->name, cand[j], cost[j]);
+    const double ratio = cost[best] / cost[0];
+    fprintf(f, "auto: %-10s picked %-12s best %-12s ratio %.2f (head to head, 5 rounds, every ray)%s\n",
+            sc->name, picked, cand[best], ratio, ratio >= 0.9 ? "" : "  ** auto more than 10% slower **");
+}
+
+/* ---- the command ------------------------------------------------------------- */
+
+static void run_usage(FILE *out)
+{
+    fprintf(out,
+            "usage: sidx-bench run [options]\n"
+            "\n"
+            "The benchmark table: every registered structure (brute force only on scenes of at\n"
+            "most --brute-max triangles) on every scene and ray kind, with Embree 3 rows on the\n"
+            "same rays, the error against a double-precision watertight brute-force reference, a\n"
+            "run-time-against-error summary over triangle/box tests, auto's pick per scene, and\n"
+            "the hook-overhead rows.\n"
+            "options:\n"
+            "  --scenes DIR       also every .obj/.ply file in DIR\n"
+            "  --builtin LIST     built-in scenes (default teapot,stadium,icosphere,soup,menger,\n"
+            "                     cornell,flat2d,grid); name:detail allowed; \"none\" for none\n"
+            "  --accel LIST       structures (default: every registered one) and/or embree,\n"
+            "                     embree-robust, embree-hq, embree-robust-hq\n"
+            "  --kinds LIST       ray kinds (default primary,diffuse,shadow,grazing,axis)\n"
+            "  --rays N           rays per scene and kind (default 20000)\n"
+            "  --seed S           ray seed (default 1)\n"
+            "  --ref-budget N     ray x triangle tests for the reference per scene and kind\n"
+            "                     (default 1.5e8; the subset has at least 500 rays)\n"
+            "  --time-budget MS   time about MS ms of tracing per row (default 100): a slow structure\n"
+            "                     traces 8 blocks of contiguous rays spread over the set; fast\n"
+            "                     ones trace every ray 3 times and the fastest run counts\n"
+            "  --build-budget MS  skip a structure whose predicted build exceeds MS (default 8000)\n"
+            "  --method-scenes L  built-in scenes for the triangle/box test sweep (default cornell,icosphere)\n"
+            "  --timeout S        each structure runs per scene in a child process, killed after S\n"
+            "                     seconds (default 60; 0 = in this process, no protection)\n"
+            "  --mem-limit MB     address-space limit of that child (default 4096)\n"
+            "  --brute-max N      brute force only up to N triangles (default 5000)\n"
+            "  --no-embree --no-methods --no-hooks --no-packets   skip those parts (methods: the\n"
+            "                     5 other triangle/box test pairs, on 1/4 of the rays)\n"
+            "  --csv FILE         every row as CSV\n"
+            "  --plot FILE.svg    Mrays/s against error rate, one point per (structure, tri/box test)\n"
+            "Columns: build_ms, Mrays/s (one thread), MB (structure memory), nodes, steps (NODE_ENTER\n"
+            "events per ray) and prims (PRIM_TEST events per ray) on up to 1000 rays, then on the\n"
+            "reference subset: checked rays, false misses, false hits, wrong primitive (different\n"
+            "prim and |t - t_ref| > 1e-5 max(1,|t_ref|)), max relative t error.\n"
+            "Embree rows: rtcIntersect1 on one thread (device \"threads=1\"), scene flags none or\n"
+            "ROBUST, build quality MEDIUM (HIGH for -hq); -p4/-p8/-p16 rows use rtcIntersect4/8/16\n"
+            "on primary rays.\n");
+}
+
+int bench_cmd_run(int argc, char **argv)
+{
+    run_opts o = {NULL, NULL, NULL, NULL, NULL, NULL, "cornell,icosphere", 20000, 1, 1.5e8, 100.0, 8000.0, 5000,
+                  1, 1, 1, 1, 60000.0, 4096, 2};
+    for (int i = 1; i < argc; ++i) {
+        const char *a = argv[i];
+        const char *val = (i + 1 < argc) ? argv[i + 1] : NULL;
+        if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
+            run_usage(stdout);
+            return BENCH_OK;
+        }
+        if (!strcmp(a, "--no-embree")) { o.embree = 0; continue; }
+        if (!strcmp(a, "--no-methods")) { o.methods = 0; continue; }
+        if (!strcmp(a, "--no-hooks")) { o.hooks = 0; continue; }
+        if (!strcmp(a, "--no-packets")) { o.packets = 0; continue; }
+        if (a[0] != '-' || !val) {
+            fprintf(stderr, "sidx-bench run: unexpected '%s'%s\n", a, a[0] == '-' ? " (needs a value)" : "");
+            run_usage(stderr);
+            return BENCH_USAGE;
+        }
+        ++i;
+        char *end = NULL;
+        if (!strcmp(a, "--scenes")) o.scenes_dir = val;
+        else if (!strcmp(a, "--accel")) o.accel_list = val;
+        else if (!strcmp(a, "--kinds")) o.kinds_list = val;
+        else if (!strcmp(a, "--builtin")) o.builtin_list = val;
+        else if (!strcmp(a, "--csv")) o.csv = val;
+        else if (!strcmp(a, "--plot")) o.plot = val;
+        else if (!strcmp(a, "--method-scenes")) o.method_scenes = val;
+        else if (!strcmp(a, "--timeout")) {
+            o.timeout_ms = strtod(val, &end) * 1e3;
+            if (*end || !(o.timeout_ms >= 0)) goto bad_value;
+        } else if (!strcmp(a, "--mem-limit")) {
+            o.mem_limit_mb = strtoul(val, &end, 10);
+            if (*end || o.mem_limit_mb < 64) goto bad_value;
+        }
+        else if (!strcmp(a, "--build-budget")) {
+            o.build_budget = strtod(val, &end);
+            if (*end || !(o.build_budget > 0)) goto bad_value;
+        }
+        else if (!strcmp(a, "--rays")) {
+            o.rays = (size_t)strtoull(val, &end, 10);
+            if (*end || o.rays == 0 || o.rays > 100000000) goto bad_value;
+        } else if (!strcmp(a, "--seed")) {
+            o.seed = strtoull(val, &end, 0);
+            if (*end) goto bad_value;
+        } else if (!strcmp(a, "--ref-budget")) {
+            o.ref_budget = strtod(val, &end);
+            if (*end || !(o.ref_budget > 0)) goto bad_value;
+        } else if (!strcmp(a, "--time-budget")) {
+            o.time_budget = strtod(val, &end);
+            if (*end || !(o.time_budget > 0)) goto bad_value;
+        } else if (!strcmp(a, "--brute-max")) {
+            o.brute_max = (uint32_t)strtoul(val, &end, 10);
+            if (*end) goto bad_value;
+        } else {
+            fprintf(stderr, "sidx-bench run: unknown option '%s'\n", a);
+            run_usage(stderr);
+            return BENCH_USAGE;
+        }
+        continue;
+    bad_value:
+        fprintf(stderr, "sidx-bench run: bad value '%s' for %s\n", val, a);
+        return BENCH_USAGE;
+    }
+    if (o.builtin_list && !strcmp(o.builtin_list, "none")) o.builtin_list = "";
+    bench_cpu_time = 1;
+    /* validate lists */
+    tk_ray_kind kinds[TK_RAYS_KIND_COUNT];
+    int nk = 0;
+    for (int k = 0; k < TK_RAYS_KIND_COUNT; ++k)
+        if (bench_list_has(o.kinds_list, tk_ray_kind_name((tk_ray_kind)k))) kinds[nk++] = (tk_ray_kind)k;
+    if (nk == 0) {
+        fprintf(stderr, "sidx-bench run: --kinds selects no ray kind (primary diffuse shadow grazing axis)\n");
+        return BENCH_USAGE;
+    }
+    if (o.accel_list) {
+        const char *p = o.accel_list;
+        while (*p) {
+            const char *e = strchr(p, ',');
+            char nm[64];
+            size_t len = e ? (size_t)(e - p) : strlen(p);
+            snprintf(nm, sizeof nm, "%.*s", (int)(len < 63 ? len : 63), p);
+            if (!sidx_accel_is_registered(nm) && !bench_embree_parse(nm, NULL)) {
+                fprintf(stderr, "sidx-bench run: unknown structure '%s' in --accel\n", nm);
+                return BENCH_USAGE;
+            }
+            if (!e) break;
+            p = e + 1;
+        }
+    }
+    scene_spec scenes[64];
+    size_t ns = collect_scenes(&o, scenes, 64);
+    if (ns == (size_t)-1) return BENCH_USAGE;
+
+    rows rs = {NULL, 0, 0};
+    FILE *f = stdout;
+    fprintf(f, "sidx-bench run: %zu rays per scene x kind (seed %llu), one thread; Embree %s; "
+               "reference: double-precision watertight brute force;\n"
+               "times are CPU time of the tracing thread (builds: of the process), not wall-clock\n",
+            o.rays, (unsigned long long)o.seed, bench_embree_version());
+    const double t_start = tk_now_ms();
+    int failures = 0;
+    double ms_per_tri[128] = {0};
+    for (size_t si = 0; si < ns; ++si) {
+        const scene_spec *sc = &scenes[si];
+        sidx_mesh m = {0};
+        sidx_error err = {SIDX_OK, ""};
+        const double scene_t0 = tk_now_ms();
+        bench_progress("%s: loading", sc->name);
+        if (sidx_scene_open(sc->spec, &m, &err) != SIDX_OK) {
+            bench_progress_done();
+            fprintf(stderr, "sidx-bench run: %s: %s\n", sc->spec, err.message);
+            ++failures;
+            continue;
+        }
+        kind_data kd[TK_RAYS_KIND_COUNT];
+        int ok = 1;
+        for (int k = 0; k < nk; ++k) {
+            bench_progress("%s: rays and reference (%s)", sc->name, tk_ray_kind_name(kinds[k]));
+            if (!kind_data_make(&m, kinds[k], &o, &kd[k])) ok = 0;
+        }
+        if (!ok) {
+            fprintf(stderr, "sidx-bench run: out of memory preparing rays for %s\n", sc->name);
+            for (int k = 0; k < nk; ++k) kind_data_free(&kd[k]);
+            sidx_mesh_free(&m);
+            ++failures;
+            continue;
+        }
+        const size_t first = rs.n;
+        for (size_t i = 0; i < sidx_accel_registered_count() && i < 128; ++i) {
+            const char *name = sidx_accel_registered_name(i);
+            if (!bench_list_has(o.accel_list, name)) continue;
+            if (!strcmp(name, "brute") && m.num_triangles > o.brute_max) continue;
+            /* a build cannot be interrupted: skip what would blow the budget,
+             * predicted from the slowest ms per triangle seen so far */
+            const double predicted = ms_per_tri[i] * m.num_triangles * 1.5;
+            if (predicted > o.build_budget) {
+                fprintf(f, "(%s: %s skipped: predicted build %.0f ms > --build-budget %.0f)\n", sc->name, name,
+                        predicted, o.build_budget);
+                continue;
+            }
+            bench_progress("%s: %s", sc->name, name);
+            char why[160];
+            job jb = {name, &m, sc, kd, nk, 0, &o};
+            const double bms = job_isolated(&jb, &rs, why, sizeof why);
+            if (bms < 0) {
+                fprintf(f, "(%s: %s failed: %s)\n", sc->name, name, why[0] ? why : "build error");
+                fprintf(stderr, "sidx-bench run: %s on %s: %s\n", name, sc->name, why[0] ? why : "build error");
+                ++failures;
+                ms_per_tri[i] = INFINITY; /* do not try it on bigger scenes */
+                continue;
+            }
+            if (m.num_triangles >= 1000 && bms / m.num_triangles > ms_per_tri[i])
+                ms_per_tri[i] = bms / m.num_triangles;
+            if (!o.methods || !sc->builtin || !bench_list_has(o.method_scenes, sc->spec)) continue;
+            /* the other triangle / box tests, on a quarter of the rays (for the plot) */
+            bench_progress("%s: %s, other triangle/box tests", sc->name, name);
+            jb.sweep = 1;
+            if (job_isolated(&jb, &rs, why, sizeof why) < 0)
+                fprintf(f, "(%s: %s, other triangle/box tests failed: %s)\n", sc->name, name, why);
+        }
+        if (o.embree) {
+            static const char *const en[] = {"embree", "embree-robust", "embree-robust-hq"};
+            for (size_t e = 0; e < sizeof en / sizeof en[0]; ++e) {
+                bench_embree_cfg cfg;
+                if (o.accel_list && !bench_list_has(o.accel_list, en[e])) continue;
+                bench_embree_parse(en[e], &cfg);
+                bench_progress("%s: %s", sc->name, en[e]);
+                bench_embree_rows(en[e], cfg, &m, sc, kd, nk, &o, &rs);
+            }
+        }
+        bench_progress_done();
+        fprintf(f, "\n== %s: %u triangles (%.1f s)\n", sc->name, m.num_triangles, (tk_now_ms() - scene_t0) / 1e3);
+        print_header(f);
+        for (int k = 0; k < nk; ++k)
+            for (size_t i = first; i < rs.n; ++i)
+                if (!strcmp(rs.v[i].kind, tk_ray_kind_name(kinds[k])) && rs.v[i].tri == SIDX_TRI_WATERTIGHT &&
+                    rs.v[i].box == SIDX_BOX_ROBUST)
+                    print_row(f, &rs.v[i]);
+        auto_line(f, &rs, first, sc, &m, kd, nk);
+        fflush(f);
+        for (int k = 0; k < nk; ++k) kind_data_free(&kd[k]);
+        sidx_mesh_free(&m);
+    }
+    summary sums[512];
+    const char *sum_scenes = o.methods ? o.method_scenes : NULL;
+    const size_t nsum = summarize(&rs, sum_scenes, sums, 512);
+    print_summary(f, sum_scenes, sums, nsum);
+    /* Embree packets, primary rays only */
+    for (size_t i = 0; i < rs.n; ++i)
+        if (rs.v[i].packet && (!sum_scenes || bench_list_has(sum_scenes, rs.v[i].scene)))
+            fprintf(f, "packet %-26s %-12s primary %9.3f Mrays/s\n", rs.v[i].accel, rs.v[i].scene, row_mrays(&rs.v[i]));
+    if (o.hooks && ns > 0) {
+        size_t pick = 0;
+        for (size_t i = 0; i < ns; ++i)
+            if (!strcmp(scenes[i].spec, "teapot")) pick = i;
+        hook_rows(f, &o, &scenes[pick]);
+    }
+    fprintf(f, "\ntotal %.1f s wall-clock, %.1f s CPU in this process (children not counted)\n",
+            (tk_now_ms() - t_start) / 1e3, tk_process_cpu_ms() / 1e3);
+    int rc = failures ? BENCH_FAIL : BENCH_OK;
+    if (o.csv && !write_csv(o.csv, &rs)) {
+        fprintf(stderr, "sidx-bench run: cannot write %s: %s\n", o.csv, strerror(errno));
+        rc = BENCH_FAIL;
+    }
+    if (o.plot && !write_plot(o.plot, sums, nsum)) {
+        fprintf(stderr, "sidx-bench run: cannot write %s: %s\n", o.plot, strerror(errno));
+        rc = BENCH_FAIL;
+    }
+    free(rs.v);
+    return rc;
+}
