@@ -373,7 +373,8 @@ static uint32_t build_node(builder *B, uint32_t first, uint32_t count, uint32_t 
         case BVH_MIDDLE: split_middle(B, ni, first, count, cb, inv_area, &sp); break;
         default: ok = find_binned(B, ni, first, count, cb, inv_area, &sp); break;
         }
-        /* Cannot happen with a non-flat centroid box, but never loop on it. */
+        /* Binning can find no plane when rounding puts every centroid in
+         * one bin (tiny extents far from the origin): split at the median. */
         if (!ok) split_median(B, ni, first, count, cb, inv_area, &sp);
         const int sah_builder = B->kind != BVH_MEDIAN && B->kind != BVH_MIDDLE;
         if (sah_builder && !(sp.cost < leaf_cost) && count <= B->max_leaf) reason = SIDX_LEAF_NO_GAIN;
@@ -483,6 +484,11 @@ static sidx_status bvh_build(sidx_accel *a, sidx_error *err)
         B->right_area = sidx__alloc(a, n, sizeof(float));
         if (!B->keys[0] || !B->keys[1] || !B->right_area) goto fail;
     } else {
+        /* The binned builder falls back to the median split when binning
+         * finds no plane (all centroids in one bin after rounding, found by
+         * fuzzing), and the median needs its key array. */
+        B->keys[0] = sidx__alloc(a, n, sizeof(sweep_key));
+        if (!B->keys[0]) goto fail;
         B->bin_box = sidx__alloc(a, B->bins, sizeof *B->bin_box);
         B->bin_count = sidx__alloc(a, B->bins, sizeof *B->bin_count);
         B->right_area = sidx__alloc(a, B->bins, sizeof(float));
