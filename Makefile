@@ -6,6 +6,7 @@
 #   make test SAN=1 the same under AddressSanitizer + UndefinedBehaviorSanitizer (build/san)
 #   make valgrind   the suites under valgrind memcheck
 #   make bench      the benchmark table (build/bench/)
+#   make apidocs    the API reference from the headers (Doxygen, build/apidocs/html)
 #   make install PREFIX=/usr/local
 #
 # Everything is found by wildcard: a new lib/*.c joins the library, a new
@@ -60,7 +61,7 @@ PROGS := $(VIZ_PROGS) $(if $(wildcard lessons/tour.c),$(BUILD)/bin/sidx-tour) \
 NOHOOKS_OBJ := $(LIB_SRC:%.c=$(BUILD)/nohooks/obj/%.o)
 ALL_LIBS = $(VIZA) $(LIBA) $(PKG_LIBS) $(LDLIBS)
 
-.PHONY: all deps build demo test test-run valgrind bench install clean docs fuzz
+.PHONY: all deps build demo test test-run valgrind bench install clean docs apidocs fuzz
 
 all: deps
 	@$(MAKE) --no-print-directory build
@@ -182,10 +183,28 @@ fuzz: $(FUZZ_BINS)
 	    || exit 1; \
 	done
 
-# Pictures for docs/: Graphviz trees and viewer screenshots (headless).
+# Pictures for docs/: Graphviz trees and viewer screenshots (headless),
+# then the API reference.
 docs: deps
 	@$(MAKE) --no-print-directory build
 	sh viz/make_docs_pictures.sh $(BUILD) docs/img
+	@$(MAKE) --no-print-directory apidocs
+
+# API reference from lib/include/sidx/*.h and docs/*.md (Doxygen), into
+# build/apidocs/html.  Installs doxygen the way deps does (not part of DEBS:
+# make test does not need it).
+apidocs:
+	@if ! command -v doxygen >/dev/null 2>&1; then \
+	  if [ "$$(id -u)" = 0 ]; then \
+	    echo "apidocs: installing doxygen"; \
+	    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq doxygen >/dev/null || exit 1; \
+	  else \
+	    echo "apidocs: missing Debian package: doxygen"; \
+	    echo "apidocs: run: sudo apt-get install -y doxygen"; exit 1; \
+	  fi; \
+	fi
+	doxygen docs/Doxyfile
+	@echo "apidocs: build/apidocs/html/index.html"
 
 install: all
 	install -d $(DESTDIR)$(PREFIX)/include/sidx $(DESTDIR)$(PREFIX)/lib/pkgconfig $(DESTDIR)$(PREFIX)/bin
