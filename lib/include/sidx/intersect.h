@@ -27,6 +27,11 @@
  * segment can therefore register a hit — at the correct t, on the segment
  * (tests/test_accel_suite.c checks exactly that).  Everywhere else: miss.
  *
+ * Watertightness needs the edge functions computed the same way for every
+ * triangle: compile sidx with -ffp-contract=off (the Makefile does), or a
+ * compiler may fuse some of them into FMAs and let rays slip through edges
+ * (found by fuzzing clang's AVX2 kernels; tests/fuzz/regress/build/).
+ *
  * A negative t ("What if t is negative?" on the slides) is an intersection
  * behind the origin: every test reports it as a miss when t < tmin.
  *
