@@ -94,14 +94,7 @@ static float range_cost(const builder *B, uint32_t first, uint32_t nl, uint32_t 
 
 /* ---- binned SAH (Wald 2007) ------------------------------------------ */
 
-/* Bin of centroid coordinate c: the same expression when binning and when
- * partitioning, so both agree on every primitive. */
-static inline uint32_t bin_of(float c, float cmin, float scale, uint32_t nb)
-{
-    const float f = (c - cmin) * scale;
-    const uint32_t k = f > 0.0f ? (uint32_t)f : 0u;
-    return k < nb ? k : nb - 1;
-}
+/* bin_of (bvh_internal.h) maps a centroid to its bin. */
 
 static SIDX_NOINLINE int find_binned(builder *B, uint32_t node, uint32_t first, uint32_t count, sidx_aabb cb,
                                      float inv_area, bvh_split *best)

@@ -207,4 +207,17 @@ static SIDX_INLINE int bvh_obb_test(const sidx_ray *r, const bvh_obb *b, float t
     return t0 <= t1;
 }
 
+/* Bin of centroid coordinate c: the same expression when binning and when
+ * partitioning, so both agree on every primitive. */
+static inline uint32_t bin_of(float c, float cmin, float scale, uint32_t nb)
+{
+    const float f = (c - cmin) * scale;
+    /* Clamp in float before converting: with a tiny centroid extent the
+     * scale overflows to inf, and converting inf to an integer is
+     * undefined (found by fuzz_build). NaN goes to bin 0. */
+    if (!(f > 0.0f)) return 0u;
+    if (f >= (float)nb) return nb - 1;
+    return (uint32_t)f;
+}
+
 #endif

@@ -197,13 +197,6 @@ typedef struct bins3 {
     uint32_t count[3][1024];
 } bins3;
 
-/* Same expression as bvh_build.c's bin_of: binning and partitioning agree. */
-static inline uint32_t bin_of(float c, float cmin, float scale, uint32_t nb)
-{
-    const float f = (c - cmin) * scale;
-    const uint32_t k = f > 0.0f ? (uint32_t)f : 0u;
-    return k < nb ? k : nb - 1;
-}
 
 typedef struct binspec {
     float cmin[3], scale[3];
