@@ -8,6 +8,7 @@
  *
  *   sidx-tour [--scene NAME|FILE] [--accel a,b,...] [--full] [--out DIR]
  */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -169,14 +170,21 @@ int main(int argc, char **argv)
         /* a drawing of the tree, when the structure builds one */
         char path[512];
         snprintf(path, sizeof path, "%s/%s.svg", outdir, name);
+        /* About 100 nodes stay readable: 6 levels of a binary tree, fewer
+         * for wide ones (branching estimated from the node counts). */
+        double branching = st.nodes > st.leaves ? (double)(st.nodes - 1) / (double)(st.nodes - st.leaves) : 2.0;
+        if (branching < 2.0) branching = 2.0;
+        uint32_t depth = (uint32_t)(log(100.0) / log(branching));
+        if (depth < 1) depth = 1;
+        if (depth > 6) depth = 6;
         sidx_dot_options dopt = {0};
-        dopt.max_depth = 6;
+        dopt.max_depth = depth;
         dopt.has_ray = 1;
         dopt.ray_org = ray.org;
         dopt.ray_dir = ray.dir;
         sidx_error derr = {0};
         sidx_status ds = sidx_dot_write(&mesh, name, &dopt, path, &derr);
-        if (ds == SIDX_OK) printf("-- tree drawn (6 levels, ray path coloured): %s\n", path);
+        if (ds == SIDX_OK) printf("-- tree drawn (%u levels, ray path coloured): %s\n", depth, path);
         else if (ds != SIDX_ERR_UNSUPPORTED) printf("-- drawing failed: %s\n", derr.message);
         sidx_accel_destroy(a);
     }
