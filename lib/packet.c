@@ -485,6 +485,7 @@ static sidx_status run_packet(const sidx_accel *a, const sidx_ray *rays, uint32_
     memset(&o, 0, sizeof o);
     if (opt) o = *opt;
     sidx_packet_stats dummy;
+    memset(&dummy, 0, sizeof dummy);
     if (!stats) stats = &dummy;
     stats->packets++;
     const int anyhit = hits == NULL;
