@@ -13,7 +13,7 @@
 # tests/test_*.c becomes a suite, a new lessons/*.c a lesson, a new
 # viz/sidx_*.c a program.
 
-DEBS := pkg-config libcmocka-dev libgraphviz-dev libsdl2-dev libsdl2-image-dev libembree-dev gnuplot-nox
+DEBS := pkg-config libcmocka-dev libgraphviz-dev libsdl2-dev libsdl2-image-dev libembree-dev gnuplot-nox valgrind
 
 PREFIX ?= /usr/local
 OPT ?= -O2
@@ -156,7 +156,8 @@ valgrind: deps
 	  echo "== valgrind $$t"; \
 	  SIDX_FAST_TESTS=1 valgrind -q --error-exitcode=99 --leak-check=full --show-leak-kinds=definite,indirect,possible \
 	    --errors-for-leak-kinds=definite,indirect,possible $$t >/dev/null || { echo "!! FAILED: $$t"; failed=1; }; \
-	done; exit $$failed
+	done; \
+	if [ $$failed -eq 0 ]; then echo "valgrind: every suite ran with zero errors and zero leaks"; fi; exit $$failed
 
 bench: deps
 	@$(MAKE) --no-print-directory build
