@@ -355,20 +355,6 @@ static void paint_arguments(void **state)
 
 /* ---- allocation failure ------------------------------------------------------ */
 
-typedef struct failing { long left; long live; } failing;
-static void *fail_alloc(size_t size, void *user)
-{
-    failing *f = user;
-    if (f->left-- <= 0) return NULL;
-    f->live++;
-    return malloc(size);
-}
-static void fail_free(void *p, void *user)
-{
-    failing *f = user;
-    if (p) f->live--;
-    free(p);
-}
 
 static void nomem_leaks_nothing(void **state)
 {
@@ -377,8 +363,8 @@ static void nomem_leaks_nothing(void **state)
     make_scene("soup", 100, &m);
     int ok = 0;
     for (long k = 0; k < 400 && !ok; k += (k < 40 ? 1 : 7)) {
-        failing f = {k, 0};
-        sidx_allocator al = {fail_alloc, fail_free, &f};
+        tk_failing f = {k, 0};
+        sidx_allocator al = tk_failing_allocator(&f);
         sidx_build_options opt;
         memset(&opt, 0, sizeof opt);
         opt.alloc = &al;

@@ -257,20 +257,6 @@ static void events_and_arguments(void **state)
     sidx_mesh_free(&m);
 }
 
-typedef struct failing { long left; long live; } failing;
-static void *fail_alloc(size_t size, void *user)
-{
-    failing *f = user;
-    if (f->left-- <= 0) return NULL;
-    f->live++;
-    return malloc(size);
-}
-static void fail_free(void *p, void *user)
-{
-    failing *f = user;
-    if (p) f->live--;
-    free(p);
-}
 
 static void nomem(void **state)
 {
@@ -279,8 +265,8 @@ static void nomem(void **state)
     make_scene("cornell", 0, &m);
     for (int eager = 0; eager < 2; ++eager)
         for (long k = 0; k < 12; ++k) {
-            failing f = {k, 0};
-            sidx_allocator al = {fail_alloc, fail_free, &f};
+            tk_failing f = {k, 0};
+            sidx_allocator al = tk_failing_allocator(&f);
             sidx_build_options opt;
             memset(&opt, 0, sizeof opt);
             opt.alloc = &al;

@@ -125,20 +125,6 @@ static void events(void **state)
     sidx_mesh_free(&m);
 }
 
-typedef struct failing { long left; long live; } failing;
-static void *fail_alloc(size_t size, void *user)
-{
-    failing *f = user;
-    if (f->left-- <= 0) return NULL;
-    f->live++;
-    return malloc(size);
-}
-static void fail_free(void *p, void *user)
-{
-    failing *f = user;
-    if (p) f->live--;
-    free(p);
-}
 
 static void nomem(void **state)
 {
@@ -147,8 +133,8 @@ static void nomem(void **state)
     make_scene("cornell", 0, &m);
     int ok = 0;
     for (long k = 0; k < 2000 && !ok; k += (k < 50 ? 1 : 37)) {
-        failing f = {k, 0};
-        sidx_allocator al = {fail_alloc, fail_free, &f};
+        tk_failing f = {k, 0};
+        sidx_allocator al = tk_failing_allocator(&f);
         sidx_build_options opt;
         memset(&opt, 0, sizeof opt);
         opt.alloc = &al;

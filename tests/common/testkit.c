@@ -694,3 +694,26 @@ double tk_now_ms(void)
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec * 1e-6;
 }
+
+/* ---- failing allocator ------------------------------------------------- */
+
+static void *tk_fail_alloc(size_t size, void *user)
+{
+    tk_failing *f = user;
+    if (f->left-- <= 0) return NULL;
+    f->live++;
+    return malloc(size);
+}
+
+static void tk_fail_free(void *p, void *user)
+{
+    tk_failing *f = user;
+    if (p) f->live--;
+    free(p);
+}
+
+sidx_allocator tk_failing_allocator(tk_failing *f)
+{
+    sidx_allocator al = {tk_fail_alloc, tk_fail_free, f};
+    return al;
+}

@@ -125,4 +125,11 @@ double tk_now_ms(void);
 double tk_thread_cpu_ms(void);
 double tk_process_cpu_ms(void);
 
+/* An allocator that succeeds `left` times, then fails every call, and
+ * counts the blocks still live: for out-of-memory tests.
+ *   tk_failing f = {k, 0};
+ *   sidx_allocator al = tk_failing_allocator(&f); */
+typedef struct tk_failing { long left; long live; } tk_failing;
+sidx_allocator tk_failing_allocator(tk_failing *f);
+
 #endif
