@@ -19,11 +19,13 @@ PREFIX ?= /usr/local
 OPT ?= -O2
 SAN ?= 0
 
+# BUILDDIR=build/NAME gives a separate tree (parallel work in one checkout).
+BUILDDIR ?= build
 ifeq ($(SAN),1)
-BUILD := build/san
+BUILD := $(BUILDDIR)/san
 SANFLAGS := -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
 else
-BUILD := build
+BUILD := $(BUILDDIR)
 SANFLAGS :=
 endif
 
