@@ -24,6 +24,7 @@ sidx_event sidx_event_blank(sidx_event_type type)
     e.t = INFINITY;
     e.bounds = sidx_aabb_empty();
     e.text = NULL;
+    e.prims = NULL;
     return e;
 }
 

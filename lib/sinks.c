@@ -115,6 +115,18 @@ static void out_box(sink_out *o, const sidx_aabb *b)
 
 static int has_cell(const sidx_event *ev) { return ev->cell[0] >= 0; }
 
+#define PRINT_LEAF_IDS 4 /* a leaf line names this many of its primitives, then "... +k more" */
+
+/* ": 3 17 52 60 ... +9 more" after a leaf's count, when the event lists them. */
+static void out_leaf_prims(sink_out *o, const sidx_event *ev)
+{
+    if (!ev->prims || ev->count == 0 || ev->count == UINT32_MAX) return;
+    const uint32_t shown = ev->count < PRINT_LEAF_IDS ? ev->count : PRINT_LEAF_IDS;
+    out_puts(o, ":");
+    for (uint32_t i = 0; i < shown; ++i) out_printf(o, " %" PRIu32, ev->prims[i]);
+    if (ev->count > shown) out_printf(o, " ... +%" PRIu32 " more", ev->count - shown);
+}
+
 static void out_cell(sink_out *o, const sidx_event *ev)
 {
     out_printf(o, "cell (%" PRId32 ",%" PRId32 ",%" PRId32 ")", ev->cell[0], ev->cell[1], ev->cell[2]);
@@ -236,6 +248,7 @@ static void format_event(sink_out *o, const sidx_event *ev, int show_bounds)
         out_puts(o, "leaf node ");
         out_id(o, ev->node);
         out_printf(o, "  prims %" PRIu32, ev->count);
+        out_leaf_prims(o, ev);
         if (!isnan(ev->cost)) out_printf(o, "  cost %g", (double)ev->cost);
         out_printf(o, "  (%s)", sidx_leaf_reason_name(ev->reason));
         if (has_cell(ev)) { out_puts(o, "  "); out_cell(o, ev); }
@@ -548,6 +561,12 @@ static void json_event(sink_out *o, const sidx_event *ev, int unused)
         json_u32(o, "count", ev->count);
         json_float(o, "cost", ev->cost);
         json_reason(o, sidx_leaf_reason_name(ev->reason));
+        if (ev->prims && ev->count != UINT32_MAX) { /* all of them: tools want the exact list */
+            json_key(o, "prims");
+            out_puts(o, "[");
+            for (uint32_t i = 0; i < ev->count; ++i) out_printf(o, i ? ",%" PRIu32 : "%" PRIu32, ev->prims[i]);
+            out_puts(o, "]");
+        }
         break;
     case SIDX_EV_BUILD_END:
         json_u32(o, "node", ev->node); /* a node count here, not an id */
@@ -652,6 +671,48 @@ sidx_hook sidx_jsonl_hook(sidx_jsonl *j)
 /* ---- recorder ------------------------------------------------------------- */
 
 #define RECORDER_FIRST_CAPACITY 256
+#define PRIM_CHUNK_MIN 4096 /* ids per chunk of the prims store, at least */
+
+/* The prims lists are copied into a list of chunks that are never moved
+ * or resized, so the pointers handed out stay valid while more leaves are
+ * recorded (a realloc'd pool would leave the earlier events dangling). */
+typedef struct prim_chunk {
+    struct prim_chunk *next;
+    size_t used, cap;
+    uint32_t ids[];
+} prim_chunk;
+
+static void prim_store_free(sidx_recorder *r)
+{
+    prim_chunk *c = r->prim_store;
+    while (c) {
+        prim_chunk *next = c->next;
+        free(c);
+        c = next;
+    }
+    r->prim_store = NULL;
+}
+
+/* A copy of ids[0..n) owned by the recorder, or NULL when out of memory. */
+static const uint32_t *prim_store_copy(sidx_recorder *r, const uint32_t *ids, uint32_t n)
+{
+    prim_chunk *c = r->prim_store; /* the newest chunk is first */
+    if (!c || c->cap - c->used < n) {
+        size_t cap = n > PRIM_CHUNK_MIN ? n : PRIM_CHUNK_MIN;
+        if (c && c->cap <= (SIZE_MAX / 2) && 2 * c->cap > cap) cap = 2 * c->cap; /* fewer chunks on big builds */
+        if (cap > (SIZE_MAX - sizeof(prim_chunk)) / sizeof(uint32_t)) return NULL;
+        prim_chunk *fresh = malloc(sizeof(prim_chunk) + cap * sizeof(uint32_t));
+        if (!fresh) return NULL;
+        fresh->next = c;
+        fresh->used = 0;
+        fresh->cap = cap;
+        r->prim_store = c = fresh;
+    }
+    uint32_t *dst = c->ids + c->used;
+    memcpy(dst, ids, (size_t)n * sizeof *ids);
+    c->used += n;
+    return dst;
+}
 
 static void recorder_fn(const sidx_event *ev, void *user)
 {
@@ -680,7 +741,19 @@ static void recorder_fn(const sidx_event *ev, void *user)
         r->events = grown;
         r->capacity = cap;
     }
-    r->events[r->count++] = *ev;
+    sidx_event copy = *ev;
+    if (ev->prims) {
+        /* The emitter's list lives only during this call: keep our own. */
+        copy.prims = NULL;
+        if (ev->count && ev->count != UINT32_MAX) {
+            copy.prims = prim_store_copy(r, ev->prims, ev->count);
+            if (!copy.prims) {
+                r->overflow = 1;
+                return;
+            }
+        }
+    }
+    r->events[r->count++] = copy;
 }
 
 void sidx_recorder_init(sidx_recorder *r)
@@ -691,6 +764,7 @@ void sidx_recorder_init(sidx_recorder *r)
     r->capacity = 0;
     r->limit = 0;
     r->overflow = 0;
+    r->prim_store = NULL;
 }
 
 void sidx_recorder_clear(sidx_recorder *r)
@@ -698,12 +772,14 @@ void sidx_recorder_clear(sidx_recorder *r)
     if (!r) return;
     r->count = 0;
     r->overflow = 0;
+    prim_store_free(r);
 }
 
 void sidx_recorder_free(sidx_recorder *r)
 {
     if (!r) return;
     free(r->events);
+    prim_store_free(r);
     r->events = NULL;
     r->count = 0;
     r->capacity = 0;

@@ -377,6 +377,16 @@ static void test_format_build(void **state)
     e.cost = 3.0f;
     e.reason = SIDX_LEAF_NO_GAIN;
     expect_format(&e, "      leaf node 9  prims 3  cost 3  (no_gain)");
+    /* with its primitive list: the first few ids, then how many more */
+    const uint32_t ids[7] = {4, 17, 52, 60, 61, 90, 3};
+    e.prims = ids;
+    expect_format(&e, "      leaf node 9  prims 3: 4 17 52  cost 3  (no_gain)");
+    e.count = 4;
+    expect_format(&e, "      leaf node 9  prims 4: 4 17 52 60  cost 3  (no_gain)");
+    e.count = 7;
+    expect_format(&e, "      leaf node 9  prims 7: 4 17 52 60 ... +3 more  cost 3  (no_gain)");
+    e.count = 0; /* an empty leaf lists nothing, whatever the pointer */
+    expect_format(&e, "      leaf node 9  prims 0  cost 3  (no_gain)");
 
     e = sidx_event_blank(SIDX_EV_BUILD_END);
     e.structure = "bvh";
@@ -554,6 +564,11 @@ static void test_json_fields_per_type(void **state)
     expect_json_keys(&e, (const char *const[]){"type", "structure", "ray", "node", "depth", "count", "cost", "reason",
                                                NULL});
 
+    const uint32_t one = 7;
+    e.prims = &one; /* the list comes along when the structure gives it */
+    expect_json_keys(&e, (const char *const[]){"type", "structure", "ray", "node", "depth", "count", "cost", "reason",
+                                               "prims", NULL});
+
     e = sidx_event_blank(SIDX_EV_BUILD_END);
     expect_json_keys(&e, (const char *const[]){"type", "structure", "ray", "node", "count", "depth", NULL});
 
@@ -691,7 +706,139 @@ static void test_jsonl_sink(void **state)
     fclose(f);
 }
 
+/* Reads back "count" and the "prims" array of a build_leaf JSON line.
+ * Returns the number of ids read into ids (at most cap), -1 without a list. */
+static long json_leaf_prims(const char *line, uint32_t *count, uint32_t *ids, size_t cap)
+{
+    const char *c = strstr(line, "\"count\":");
+    assert_non_null(c);
+    *count = (uint32_t)strtoul(c + 8, NULL, 10);
+    const char *p = strstr(line, "\"prims\":[");
+    if (!p) return -1;
+    p += 9;
+    long n = 0;
+    while (*p != ']') {
+        char *end;
+        unsigned long v = strtoul(p, &end, 10);
+        assert_true(end != p);
+        if ((size_t)n < cap) ids[n] = (uint32_t)v;
+        ++n;
+        p = end;
+        if (*p == ',') ++p;
+    }
+    return n;
+}
+
+/* A leaf's list survives the trip through the JSONL sink: every id, in
+ * order, as many as count says, even when the line outgrows the sink's
+ * stack buffer. */
+static void test_jsonl_leaf_prims_round_trip(void **state)
+{
+    (void)state;
+    FILE *f = tmpfile();
+    assert_non_null(f);
+    sidx_jsonl j;
+    sidx_jsonl_init(&j, f);
+    sidx_hook h = sidx_jsonl_hook(&j);
+
+    enum { BIG = 300 }; /* ~2 KB of ids: longer than one stack-formatted line */
+    static uint32_t big[BIG];
+    for (uint32_t i = 0; i < BIG; ++i) big[i] = 4000000000u - 7u * i; /* large and unordered enough */
+    const uint32_t small[3] = {5, 0, 11};
+    sidx_event e = sidx_event_blank(SIDX_EV_BUILD_LEAF);
+    e.structure = "bvh";
+    e.node = 3;
+    e.count = 3;
+    e.prims = small;
+    sidx_hook_emit(&h, &e);
+    e.count = BIG;
+    e.prims = big;
+    sidx_hook_emit(&h, &e);
+    e.count = 2;
+    e.prims = NULL; /* a structure that does not list them: no key at all */
+    sidx_hook_emit(&h, &e);
+
+    char *all = slurp(f);
+    char *l1 = all, *l2 = strchr(l1, '\n');
+    assert_non_null(l2);
+    *l2++ = '\0';
+    char *l3 = strchr(l2, '\n');
+    assert_non_null(l3);
+    *l3++ = '\0';
+    assert_non_null(strchr(l3, '\n'));
+    *strchr(l3, '\n') = '\0';
+    json_parse_line(l1);
+    json_parse_line(l2);
+    json_parse_line(l3);
+
+    uint32_t count, got[BIG];
+    assert_int_equal(json_leaf_prims(l1, &count, got, BIG), 3);
+    assert_int_equal(count, 3);
+    assert_memory_equal(got, small, sizeof small);
+    assert_int_equal(json_leaf_prims(l2, &count, got, BIG), BIG);
+    assert_int_equal(count, BIG);
+    assert_memory_equal(got, big, sizeof big);
+    assert_int_equal(json_leaf_prims(l3, &count, got, BIG), -1);
+    assert_int_equal(count, 2);
+    free(all);
+    fclose(f);
+}
+
 /* ---- recorder ------------------------------------------------------------ */
+
+/* The recorder keeps its own copy of each leaf's list: the emitter's array
+ * may be reused as soon as the callback returns, and the copies must stay
+ * put while thousands more leaves arrive. */
+static void test_recorder_copies_leaf_prims(void **state)
+{
+    (void)state;
+    sidx_recorder r;
+    sidx_recorder_init(&r);
+    sidx_hook h = sidx_recorder_hook(&r);
+    enum { LEAVES = 3000 }; /* 3000 leaves of up to 9 ids: several chunks of the store */
+    uint32_t scratch[9];
+    const uint32_t *first_copy = NULL;
+    for (uint32_t l = 0; l < LEAVES; ++l) {
+        sidx_event e = sidx_event_blank(SIDX_EV_BUILD_LEAF);
+        e.node = l;
+        e.count = l % 10; /* 0..9, so some leaves are empty */
+        for (uint32_t k = 0; k < e.count; ++k) scratch[k] = l * 10u + k;
+        e.prims = scratch;
+        sidx_hook_emit(&h, &e);
+        if (l == 1) first_copy = r.events[r.count - 1].prims;
+        memset(scratch, 0xff, sizeof scratch); /* the emitter reuses its array */
+        /* and an event without a list stays without one */
+        sidx_event n = sidx_event_blank(SIDX_EV_BUILD_NODE);
+        sidx_hook_emit(&h, &n);
+    }
+    assert_int_equal(r.count, 2 * LEAVES);
+    assert_int_equal(r.overflow, 0);
+    assert_ptr_equal(r.events[2].prims, first_copy); /* never moved */
+    for (uint32_t l = 0; l < LEAVES; ++l) {
+        const sidx_event *e = &r.events[2 * l];
+        assert_int_equal(e->count, l % 10);
+        if (e->count == 0) {
+            assert_null(e->prims);
+        } else {
+            assert_non_null(e->prims);
+            assert_true(e->prims != scratch);
+            for (uint32_t k = 0; k < e->count; ++k) assert_int_equal(e->prims[k], l * 10u + k);
+        }
+        assert_null(r.events[2 * l + 1].prims);
+    }
+    /* clear drops the copies with the events; recording starts afresh */
+    sidx_recorder_clear(&r);
+    assert_null(r.prim_store);
+    const uint32_t two[2] = {8, 9};
+    sidx_event e = sidx_event_blank(SIDX_EV_BUILD_LEAF);
+    e.count = 2;
+    e.prims = two;
+    sidx_hook_emit(&h, &e);
+    assert_int_equal(r.count, 1);
+    assert_int_equal(r.events[0].prims[1], 9);
+    sidx_recorder_free(&r);
+    assert_null(r.prim_store);
+}
 
 static void test_recorder(void **state)
 {
@@ -1003,6 +1150,8 @@ int main(void)
         cmocka_unit_test(test_json_values),
         cmocka_unit_test(test_jsonl_sink),
         cmocka_unit_test(test_recorder),
+        cmocka_unit_test(test_recorder_copies_leaf_prims),
+        cmocka_unit_test(test_jsonl_leaf_prims_round_trip),
         cmocka_unit_test(test_recorder_cannot_grow),
         cmocka_unit_test(test_counters),
         cmocka_unit_test(test_tee),

@@ -8,6 +8,7 @@
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
+#include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -75,12 +76,16 @@ static void split(evbuf *b, uint32_t id, int axis, float pos, float cost)
     e->aux = 2;
 }
 
+/* The leaves' primitive lists (node 1: prim 0; node 3: prims 5, 6; node 4: prim 2). */
+static const uint32_t fake_prims[5][2] = {{0, 0}, {0, 0}, {0, 0}, {5, 6}, {2, 0}};
+
 static void leaf(evbuf *b, uint32_t id, uint32_t count)
 {
     sidx_event *e = add(b, SIDX_EV_BUILD_LEAF);
     e->node = id;
     e->count = count;
     e->reason = SIDX_LEAF_FEW_PRIMS;
+    e->prims = fake_prims[id];
 }
 
 static void fake_build(evbuf *b)
@@ -170,6 +175,15 @@ static void tree_from_synthetic_events(void **state)
     sidx_viz_tree_subtree(&t, t.root, &nn, &pp);
     assert_int_equal(nn, 5);
     assert_int_equal(pp, 4);
+    /* the leaves keep their lists, copied: the events may go away */
+    const sidx_viz_node *l3 = &t.nodes[sidx_viz_tree_find(&t, 3)];
+    assert_int_equal(l3->leaf_count, 2);
+    assert_non_null(l3->prims);
+    assert_true(l3->prims != fake_prims[3]);
+    assert_int_equal(l3->prims[0], 5);
+    assert_int_equal(l3->prims[1], 6);
+    assert_int_equal(t.num_prim_ids, 4);
+    assert_null(t.nodes[t.root].prims);
 
     evbuf r;
     fake_ray(&r);
@@ -285,7 +299,30 @@ static void dot_synthetic_parses_back(void **state)
     assert_non_null(strstr(node_attr(g, "n0", "label"), "split x = 1"));
     assert_non_null(strstr(node_attr(g, "n0", "label"), "SAH 3.5"));
     assert_non_null(strstr(node_attr(g, "n3", "label"), "2 prims"));
+    assert_non_null(strstr(node_attr(g, "n3", "label"), "prims: 5 6"));
+    assert_non_null(strstr(node_attr(g, "n1", "label"), "prims: 0"));
+    assert_null(strstr(node_attr(g, "n0", "label"), "prims:")); /* inner nodes list none */
     agclose(g);
+
+    /* a big leaf is cut after a few ids, with the rest counted */
+    {
+        static uint32_t many[20];
+        for (uint32_t i = 0; i < 20; ++i) many[i] = 100 + i;
+        evbuf big;
+        big.n = 0;
+        node(&big, 0, UINT32_MAX, 0, 20, box(0, 0, 1, 1));
+        sidx_event *e = add(&big, SIDX_EV_BUILD_LEAF);
+        e->node = 0;
+        e->count = 20;
+        e->prims = many;
+        assert_int_equal(sidx_dot_write_events(big.ev, big.n, NULL, 0, &opt, path, &err), SIDX_OK);
+        g = read_graph(path);
+        const char *lb = node_attr(g, "n0", "label");
+        assert_non_null(strstr(lb, "prims: 100 101 102 103"));
+        assert_non_null(strstr(lb, "107 +12 more"));
+        assert_null(strstr(lb, "108"));
+        agclose(g);
+    }
 
     /* cut below depth 1: root, its two children and one summary under 2 */
     opt.max_depth = 1;
@@ -404,6 +441,181 @@ static void dot_real_structure(void **state)
     fclose(f);
     assert_non_null(strstr(buf, "<svg"));
     unlink(svg);
+    unlink(path);
+    sidx_mesh_free(&m);
+}
+
+/* ---- leaf primitive lists from real builds --------------------------------------------------- */
+
+/* Object partitioning puts every triangle in exactly one leaf; space
+ * partitioning in at least one (straddlers are referenced from every cell
+ * they overlap). */
+static int is_object_partitioning(const char *name) { return strncmp(name, "bvh", 3) == 0; }
+
+/* Every leaf of every tree structure lists its primitives, and the lists are
+ * the ones traversal uses: each primitive tested right after entering a
+ * leaf is in that leaf's list. */
+static void leaf_prims_from_real_builds(void **state)
+{
+    (void)state;
+    static const char *const names[] = {"bvh",      "bvh-sweep", "bvh-median", "bvh-middle", "bvh-obb", "bvh4",
+                                        "bvh8",     "kdtree",    "kdtree-binned", "octree",  "quadtree", "bsp",
+                                        "grid2",    "rayclass"};
+    static const char *const scenes[] = {"flat2d", "icosphere"};
+    int structures = 0, subset_checks = 0;
+    for (size_t si = 0; si < sizeof scenes / sizeof scenes[0]; ++si) {
+        sidx_mesh m;
+        sidx_error err;
+        assert_int_equal(sidx_scene_open(scenes[si], &m, &err), SIDX_OK);
+        const uint32_t nt = m.num_triangles;
+        uint32_t *seen = calloc(nt, sizeof *seen);
+        assert_non_null(seen);
+        for (size_t k = 0; k < sizeof names / sizeof names[0]; ++k) {
+            if (!sidx_accel_is_registered(names[k])) continue;
+            sidx_recorder rec, trav;
+            sidx_recorder_init(&rec);
+            sidx_recorder_init(&trav);
+            sidx_hook h = sidx_recorder_hook(&rec);
+            h.mask = SIDX_EVMASK_BUILD;
+            sidx_build_options bo;
+            memset(&bo, 0, sizeof bo);
+            bo.hook = &h;
+            sidx_accel *a = NULL;
+            if (sidx_accel_build(names[k], &m, &bo, &a, &err) != SIDX_OK) fail_msg("%s: %s", names[k], err.message);
+            assert_int_equal(rec.overflow, 0);
+            memset(seen, 0, nt * sizeof *seen);
+            size_t leaves = 0;
+            for (size_t i = 0; i < rec.count; ++i) {
+                const sidx_event *e = &rec.events[i];
+                if (e->type != SIDX_EV_BUILD_LEAF || e->count == 0) continue;
+                ++leaves;
+                if (!e->prims) fail_msg("%s on %s: leaf %u lists no primitives", names[k], scenes[si], e->node);
+                for (uint32_t j = 0; j < e->count; ++j) {
+                    assert_true(e->prims[j] < nt);
+                    for (uint32_t q = 0; q < j; ++q) /* no triangle twice in one leaf */
+                        if (e->prims[q] == e->prims[j])
+                            fail_msg("%s: prim %u twice in leaf %u", names[k], e->prims[j], e->node);
+                    seen[e->prims[j]]++;
+                }
+            }
+            assert_true(leaves > 0);
+            for (uint32_t i = 0; i < nt; ++i) {
+                if (is_object_partitioning(names[k]) && seen[i] != 1)
+                    fail_msg("%s on %s: triangle %u is in %u leaves, not 1", names[k], scenes[si], i, seen[i]);
+                if (!is_object_partitioning(names[k]) && seen[i] == 0)
+                    fail_msg("%s on %s: triangle %u is in no leaf", names[k], scenes[si], i);
+            }
+
+            /* rays through the scene: prim tests inside a leaf use its list */
+            const int checks_before = subset_checks;
+            sidx_aabb b = sidx_mesh_bounds(&m);
+            sidx_vec3 c = sidx_aabb_centroid(b), e3 = sidx_aabb_extent(b);
+            for (int r = 0; r < 16; ++r) {
+                const float a0 = 0.4f * (float)r;
+                sidx_vec3 dir = sidx_v3(cosf(a0), sinf(a0), scenes[si][0] == 'f' ? 0.0f : 0.3f * cosf(1.7f * a0));
+                float reach = e3.x + e3.y + e3.z + 1.0f;
+                sidx_vec3 org = sidx_v3(c.x - reach * dir.x + 0.05f * e3.x * sinf(3.0f * a0),
+                                        c.y - reach * dir.y + 0.05f * e3.y * cosf(2.0f * a0), c.z - reach * dir.z);
+                sidx_ray ray;
+                assert_int_equal(sidx_ray_init(&ray, org, dir, 0.0f, INFINITY), SIDX_OK);
+                sidx_recorder_clear(&trav);
+                sidx_hook th = sidx_recorder_hook(&trav);
+                th.mask = SIDX_EVMASK_TRAVERSAL;
+                sidx_query q;
+                memset(&q, 0, sizeof q);
+                q.hook = &th;
+                sidx_hit hit;
+                sidx_accel_intersect(a, &ray, &q, &hit);
+                const sidx_event *leaf = NULL;
+                for (size_t i = 0; i < trav.count; ++i) {
+                    const sidx_event *e = &trav.events[i];
+                    if (e->type == SIDX_EV_NODE_ENTER) {
+                        leaf = NULL;
+                        for (size_t j = 0; j < rec.count; ++j)
+                            if (rec.events[j].type == SIDX_EV_BUILD_LEAF && rec.events[j].node == e->node) {
+                                leaf = &rec.events[j];
+                                break;
+                            }
+                    } else if (e->type == SIDX_EV_PRIM_TEST && leaf) {
+                        int found = 0;
+                        for (uint32_t j = 0; j < leaf->count && !found; ++j) found = leaf->prims[j] == e->prim;
+                        if (!found)
+                            fail_msg("%s: prim %u tested in leaf %u, which does not list it", names[k], e->prim,
+                                     leaf->node);
+                        ++subset_checks;
+                    }
+                }
+            }
+            if (subset_checks == checks_before)
+                fail_msg("%s on %s: no ray tested a primitive inside a listed leaf", names[k], scenes[si]);
+            ++structures;
+            sidx_accel_destroy(a);
+            sidx_recorder_free(&rec);
+            sidx_recorder_free(&trav);
+        }
+        free(seen);
+        sidx_mesh_free(&m);
+    }
+    if (structures == 0) {
+        print_message("no tree structure registered: nothing to check\n");
+        return;
+    }
+    assert_true(subset_checks > 0);
+}
+
+/* The Graphviz labels of a real BVH name each leaf's primitives, and
+ * together they name every triangle exactly once. */
+static void dot_real_leaf_labels(void **state)
+{
+    (void)state;
+    if (!sidx_accel_is_registered("bvh")) {
+        print_message("bvh not registered: skipped\n");
+        return;
+    }
+    sidx_mesh m;
+    assert_int_equal(load_tiny(&m), 0);
+    char path[128];
+    tmp_path(path, sizeof path, "leaves.dot");
+    sidx_build_options bo;
+    memset(&bo, 0, sizeof bo);
+    bo.leaf_size = 2; /* small leaves: every label lists all its ids */
+    sidx_dot_options opt;
+    memset(&opt, 0, sizeof opt);
+    opt.build = &bo;
+    opt.max_depth = SIDX_DOT_ALL_DEPTHS;
+    sidx_error err;
+    assert_int_equal(sidx_dot_write(&m, "bvh", &opt, path, &err), SIDX_OK);
+    Agraph_t *g = read_graph(path);
+    uint32_t *seen = calloc(m.num_triangles, sizeof *seen);
+    assert_non_null(seen);
+    int leaves = 0;
+    for (Agnode_t *n = agfstnode(g); n; n = agnxtnode(g, n)) {
+        const char *lb = agget(n, (char *)"label");
+        const char *p = strstr(lb, "prims:");
+        if (strncmp(lb, "leaf", 4) != 0) {
+            assert_null(p);
+            continue;
+        }
+        assert_non_null(p);
+        ++leaves;
+        unsigned listed = 0, count = 0;
+        assert_int_equal(sscanf(strstr(lb, "\\n") + 2, "%u prims", &count), 1);
+        for (p += 6; *p == ' ' || (*p >= '0' && *p <= '9') || (p[0] == '\\' && p[1] == 'n');) {
+            if (*p == '\\') { p += 2; continue; }
+            if (*p == ' ') { ++p; continue; }
+            char *end;
+            unsigned long id = strtoul(p, &end, 10);
+            assert_true(id < m.num_triangles);
+            seen[id]++;
+            ++listed;
+            p = end;
+        }
+        assert_int_equal(listed, count);
+    }
+    assert_true(leaves > 1);
+    for (uint32_t i = 0; i < m.num_triangles; ++i) assert_int_equal(seen[i], 1);
+    free(seen);
+    agclose(g);
     unlink(path);
     sidx_mesh_free(&m);
 }
@@ -574,6 +786,195 @@ static void view_keys_and_mouse(void **state)
     view_close(&v);
 }
 
+/* ---- the viewer over a real recording ----------------------------------------------------------- */
+
+/* What the first `step` recorded traversal events say, worked out here
+ * independently of view_replay_run: the last node entered and the stack
+ * after the pushes and pops so far (a pop takes the top entry). */
+typedef struct replay_expect {
+    uint32_t current_id;
+    size_t enters;
+    uint32_t node[256];
+    float t_near[256], t_far[256];
+    int n;
+} replay_expect;
+
+static void expect_after(const sidx_recorder *trav, size_t step, replay_expect *x)
+{
+    memset(x, 0, sizeof *x);
+    x->current_id = SIDX_VIZ_NONE;
+    for (size_t i = 0; i < step; ++i) {
+        const sidx_event *e = &trav->events[i];
+        if (e->type == SIDX_EV_NODE_ENTER) {
+            x->current_id = e->node;
+            x->enters++;
+        } else if (e->type == SIDX_EV_STACK_PUSH) {
+            assert_true(x->n < 256);
+            x->node[x->n] = e->node;
+            x->t_near[x->n] = e->t_near;
+            x->t_far[x->n] = e->t_far;
+            x->n++;
+        } else if (e->type == SIDX_EV_STACK_POP) {
+            assert_true(x->n > 0);
+            if (x->node[x->n - 1] != e->node)
+                fail_msg("event %zu pops node %u but %u is on top", i, e->node, x->node[x->n - 1]);
+            x->n--;
+        }
+    }
+}
+
+static void check_step(const view_state *v, const char *accel)
+{
+    replay_expect x;
+    expect_after(&v->trav, v->step, &x);
+    view_replay r;
+    view_replay_run(v, v->step, &r);
+    if (r.current_id != x.current_id)
+        fail_msg("%s step %zu: highlighted node %u, the recording says %u", accel, v->step, r.current_id,
+                 x.current_id);
+    assert_int_equal(r.nodes_entered, x.enters);
+    /* the highlighted node is the tree's node of that id, marked as entered */
+    if (x.current_id != SIDX_VIZ_NONE && v->has_tree) {
+        uint32_t ti = sidx_viz_tree_find(&v->tree, x.current_id);
+        assert_int_equal(r.current, ti);
+        if (ti != SIDX_VIZ_NONE) assert_int_equal(v->node_mark[ti], 1);
+    }
+    assert_int_equal(r.stack_more, 0);
+    if (r.stack_n != x.n) fail_msg("%s step %zu: stack of %d shown, %d recorded", accel, v->step, r.stack_n, x.n);
+    for (int k = 0; k < x.n; ++k) {
+        assert_int_equal(r.stack[k].node, x.node[k]);
+        assert_true(r.stack[k].t_near == x.t_near[k] || (isnan(r.stack[k].t_near) && isnan(x.t_near[k])));
+        assert_true(r.stack[k].t_far == x.t_far[k] || (isnan(r.stack[k].t_far) && isnan(x.t_far[k])));
+    }
+}
+
+/* One key press through SDL's own event queue (dummy video driver) when it
+ * is available, else handed straight to the viewer. */
+static int press(view_state *v, view_input *in, SDL_Keycode k, int sdl_ok)
+{
+    SDL_Event e;
+    memset(&e, 0, sizeof e);
+    e.type = SDL_KEYDOWN;
+    e.key.keysym.sym = k;
+    if (!sdl_ok) return view_handle_event(v, in, &e);
+    assert_int_equal(SDL_PushEvent(&e), 1);
+    int flags = 0, got = 0;
+    SDL_Event out;
+    while (SDL_PollEvent(&out))
+        if (out.type == SDL_KEYDOWN) {
+            flags |= view_handle_event(v, in, &out);
+            ++got;
+        }
+    assert_int_equal(got, 1);
+    return flags;
+}
+
+static int png_pixels_differ(const char *a_path, const char *b_path, size_t *diff)
+{
+    SDL_Surface *a = load_png(a_path), *b = load_png(b_path);
+    assert_int_equal(a->w, b->w);
+    assert_int_equal(a->h, b->h);
+    *diff = differing_pixels(a, b);
+    SDL_FreeSurface(a);
+    SDL_FreeSurface(b);
+    return *diff > 0;
+}
+
+/* The viewer fed a real build and a real traced ray (not synthetic events):
+ * stepping forward and back moves the highlight through the recorded
+ * NODE_ENTER sequence, the stack list follows the pushes and pops, and
+ * sidx-view --screenshot draws two different pictures for two steps. */
+static void view_steps_real_recording(void **state)
+{
+    (void)state;
+    const int sdl_ok = setenv("SDL_VIDEODRIVER", "dummy", 1) == 0 && SDL_Init(SDL_INIT_VIDEO) == 0;
+    if (!sdl_ok) print_message("SDL dummy video unavailable (%s): keys go straight to the viewer\n", SDL_GetError());
+    static const char *const names[] = {"bvh", "kdtree"};
+    int checked = 0;
+    for (size_t k = 0; k < sizeof names / sizeof names[0]; ++k) {
+        if (!sidx_accel_is_registered(names[k])) continue;
+        view_state v;
+        sidx_error err;
+        assert_int_equal(view_open(&v, "flat2d", names[k], &err), SIDX_OK);
+        assert_int_equal(v.has_tree, 1);
+        sidx_vec3 o, d;
+        view_default_ray(&v, &o, &d);
+        assert_int_equal(view_set_ray(&v, o, d, 0), SIDX_OK);
+        /* the recorded sequence of entered nodes, and that the ray does use the stack */
+        uint32_t enters[512];
+        size_t ne = 0, pushes = 0, pops = 0;
+        for (size_t i = 0; i < v.trav.count; ++i) {
+            if (v.trav.events[i].type == SIDX_EV_NODE_ENTER && ne < 512) enters[ne++] = v.trav.events[i].node;
+            pushes += v.trav.events[i].type == SIDX_EV_STACK_PUSH;
+            pops += v.trav.events[i].type == SIDX_EV_STACK_POP;
+        }
+        if (ne < 3 || pushes == 0 || pops == 0)
+            fail_msg("%s: the default flat2d ray enters %zu nodes, pushes %zu, pops %zu: too little to step through",
+                     names[k], ne, pushes, pops);
+
+        view_input in;
+        view_input_init(&in, 800, 500);
+        /* forward, one event per key: the highlight walks the NODE_ENTER list in order */
+        size_t next_enter = 0;
+        int max_stack = 0;
+        check_step(&v, names[k]);
+        while (v.step < v.trav.count) {
+            const size_t before = v.step;
+            assert_int_equal(press(&v, &in, SDLK_RIGHT, sdl_ok), VIEW_INPUT_REDRAW);
+            assert_int_equal(v.step, before + 1);
+            check_step(&v, names[k]);
+            const sidx_event *e = &v.trav.events[v.step - 1];
+            if (e->type == SIDX_EV_NODE_ENTER) {
+                view_replay r;
+                view_replay_run(&v, v.step, &r);
+                assert_true(next_enter < ne);
+                assert_int_equal(r.current_id, enters[next_enter]);
+                ++next_enter;
+                if (r.stack_n > max_stack) max_stack = r.stack_n;
+            }
+        }
+        assert_int_equal(next_enter, ne);
+        assert_true(max_stack > 0);
+        /* back to the start, one key at a time: the same states in reverse */
+        while (v.step > 0) {
+            const size_t before = v.step;
+            press(&v, &in, SDLK_LEFT, sdl_ok);
+            assert_int_equal(v.step, before - 1);
+            check_step(&v, names[k]);
+        }
+        press(&v, &in, SDLK_END, sdl_ok);
+        assert_int_equal(v.step, v.trav.count);
+        check_step(&v, names[k]);
+
+        /* sidx-view --screenshot at the second and the last node entered */
+        size_t step_a = 0, step_b = 0, seen = 0;
+        for (size_t i = 0; i < v.trav.count; ++i)
+            if (v.trav.events[i].type == SIDX_EV_NODE_ENTER) {
+                if (++seen == 2) step_a = i + 1;
+                step_b = i + 1;
+            }
+        assert_true(step_a > 0 && step_b > step_a);
+        char pa[128], pb[128], cmd[2048];
+        snprintf(pa, sizeof pa, "/tmp/sidx_test_view_real_%ld_a.png", (long)getpid());
+        snprintf(pb, sizeof pb, "/tmp/sidx_test_view_real_%ld_b.png", (long)getpid());
+        snprintf(cmd, sizeof cmd,
+                 "%s/sidx-view --accel %s --scene flat2d --size 480x300 --step %zu --screenshot %s >/dev/null && "
+                 "%s/sidx-view --accel %s --scene flat2d --size 480x300 --step %zu --screenshot %s >/dev/null",
+                 bin_dir, names[k], step_a, pa, bin_dir, names[k], step_b, pb);
+        int rc = system(cmd);
+        if (!(WIFEXITED(rc) && WEXITSTATUS(rc) == 0)) fail_msg("failed: %s", cmd);
+        size_t diff;
+        assert_true(png_pixels_differ(pa, pb, &diff));
+        assert_true(diff > 100);
+        unlink(pa);
+        unlink(pb);
+        view_close(&v);
+        ++checked;
+    }
+    if (sdl_ok) SDL_Quit();
+    if (!checked) print_message("neither bvh nor kdtree registered: skipped\n");
+}
+
 /* ---- sidx-step -------------------------------------------------------------------------------- */
 
 static char *run_capture(const char *cmd)
@@ -692,6 +1093,9 @@ int main(int argc, char **argv)
         cmocka_unit_test(dot_real_structure),
         cmocka_unit_test(view_screenshots_differ_between_steps),
         cmocka_unit_test(view_keys_and_mouse),
+        cmocka_unit_test(view_steps_real_recording),
+        cmocka_unit_test(leaf_prims_from_real_builds),
+        cmocka_unit_test(dot_real_leaf_labels),
         cmocka_unit_test(step_matches_expected),
     };
     return cmocka_run_group_tests_name("viz", tests, NULL, NULL);

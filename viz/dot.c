@@ -2,8 +2,9 @@
  * laid out and rendered with gvc.
  *
  * Inner nodes say what decided them (axis, split position, SAH cost,
- * primitive count); leaves their primitive count, leaf reason and, with a
- * ray, the primitives the ray tested there.  With a ray, visited nodes are
+ * primitive count); leaves their primitive count, leaf reason, the ids of
+ * their primitives (from BUILD_LEAF; the first DOT_LEAF_IDS of a big leaf)
+ * and, with a ray, the primitives the ray tested there.  With a ray, visited nodes are
  * filled along a yellow-to-red gradient in visit order and numbered, nodes
  * whose box test failed are greyed, the hit leaf gets a double red border.
  * Below max_depth each cut subtree becomes one summary node. */
@@ -67,6 +68,9 @@ static void gradient(uint32_t order, uint32_t total, char out[16])
     snprintf(out, 16, "#%02x%02x%02x", r, g, b);
 }
 
+#define DOT_LEAF_IDS 8  /* ids listed in a leaf's label; a bigger leaf ends with "+k" */
+#define DOT_IDS_PER_LINE 4
+
 static void node_label(const sidx_viz_tree *t, const sidx_viz_node *nd, int with_ray, strbuf *b)
 {
     if (nd->id == SIDX_VIZ_VIRTUAL_ROOT && t->virtual_root) {
@@ -93,6 +97,13 @@ static void node_label(const sidx_viz_tree *t, const sidx_viz_node *nd, int with
         sb_add(b, "%u prims", nd->leaf_count);
         if (nd->leaf_reason != SIDX_LEAF_NONE) sb_add(b, " (%s)", sidx_leaf_reason_name(nd->leaf_reason));
         if (!isnan(nd->cost)) sb_add(b, "\\ncost %.4g", (double)nd->cost);
+        if (nd->prims && nd->leaf_count) {
+            const uint32_t k = nd->leaf_count < DOT_LEAF_IDS ? nd->leaf_count : DOT_LEAF_IDS;
+            sb_add(b, "\\nprims:");
+            for (uint32_t i = 0; i < k; ++i)
+                sb_add(b, "%s%u", i && i % DOT_IDS_PER_LINE == 0 ? "\\n" : " ", nd->prims[i]);
+            if (nd->leaf_count > k) sb_add(b, " +%u more", nd->leaf_count - k);
+        }
         if (with_ray && nd->prims_tested) {
             sb_add(b, "\\ntested:");
             uint32_t k = nd->prims_tested < 4 ? nd->prims_tested : 4;

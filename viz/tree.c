@@ -2,7 +2,9 @@
  *
  * The events are the only input: BUILD_NODE gives id, parent id, depth,
  * bounds and primitive count; BUILD_SPLIT and BUILD_LEAF say what was
- * decided at a node; BUILD_CANDIDATE is counted.  Node ids are looked up
+ * decided at a node (a leaf's primitive ids are copied from its BUILD_LEAF,
+ * since the events' lists may not outlive them); BUILD_CANDIDATE is
+ * counted.  Node ids are looked up
  * through a sorted (id, index) table, so ids need not be dense. */
 #include <stdarg.h>
 #include <stdio.h>
@@ -52,6 +54,7 @@ void sidx_viz_tree_free(sidx_viz_tree *t)
     if (!t) return;
     free(t->nodes);
     free(t->children);
+    free(t->prim_ids);
     free(t->lookup);
     memset(t, 0, sizeof *t);
 }
@@ -223,7 +226,25 @@ sidx_status sidx_viz_tree_from_events(const sidx_event *ev, size_t n, sidx_viz_t
     for (size_t i = 0; i < count; ++i)
         if (t.nodes[i].depth > t.max_depth) t.max_depth = t.nodes[i].depth;
 
-    /* decisions */
+    /* decisions; first the room for the leaves' primitive lists */
+    {
+        size_t total = 0;
+        for (size_t i = 0; i < n; ++i)
+            if (ev[i].type == SIDX_EV_BUILD_LEAF && ev[i].prims && ev[i].count != UINT32_MAX) {
+                if (total > SIZE_MAX / sizeof(uint32_t) - ev[i].count) {
+                    st = fail(err, SIDX_ERR_LIMIT, "%s: too many leaf primitives", name);
+                    goto done;
+                }
+                total += ev[i].count;
+            }
+        if (total) {
+            t.prim_ids = malloc(total * sizeof *t.prim_ids);
+            if (!t.prim_ids) {
+                st = fail(err, SIDX_ERR_NOMEM, "%s: out of memory copying the leaves' primitives", name);
+                goto done;
+            }
+        }
+    }
     for (size_t i = 0; i < n; ++i) {
         const sidx_event *e = &ev[i];
         if (e->type != SIDX_EV_BUILD_SPLIT && e->type != SIDX_EV_BUILD_LEAF && e->type != SIDX_EV_BUILD_CANDIDATE)
@@ -246,6 +267,13 @@ sidx_status sidx_viz_tree_from_events(const sidx_event *ev, size_t n, sidx_viz_t
             nd->leaf_reason = e->reason;
             nd->leaf_count = e->count == UINT32_MAX ? nd->count : e->count;
             if (!isnan(e->cost)) nd->cost = e->cost;
+            nd->prims = NULL;
+            if (e->prims && e->count != UINT32_MAX && e->count) {
+                uint32_t *dst = t.prim_ids + t.num_prim_ids;
+                memcpy(dst, e->prims, (size_t)e->count * sizeof *dst);
+                t.num_prim_ids += e->count;
+                nd->prims = dst;
+            }
         }
     }
     for (size_t i = 0; i < count; ++i) {

@@ -385,6 +385,12 @@ static void render_2d(view_state *v, viz_canvas *cv, int build_mode)
             else
                 viz_thick_line(cv, mx(&m, b.min.x), my(&m, cur_ev->pos), mx(&m, b.max.x), my(&m, cur_ev->pos), 3, col);
         }
+        /* a leaf just made: its primitives, as the event lists them */
+        if (cur_ev->type == SIDX_EV_BUILD_LEAF && cur_ev->prims && v->prim_mark) {
+            for (uint32_t i = 0; i < cur_ev->count; ++i)
+                if (cur_ev->prims[i] < v->mesh.num_triangles) v->prim_mark[cur_ev->prims[i]] = 2;
+            draw_triangles(v, cv, &m, 1);
+        }
     }
 
     if (!build_mode && v->has_ray) {

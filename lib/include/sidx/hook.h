@@ -8,8 +8,10 @@
  * unused.  docs/events.md describes each field per event type.
  *
  * Strings in events (structure, text) point to static storage and stay valid
- * for the life of the program; everything else is copied by value, so a sink
- * may keep the event by copying the struct. */
+ * for the life of the program.  The one other pointer, `prims` (a leaf's
+ * primitive ids on BUILD_LEAF), points into the structure's build arrays and
+ * is valid only during the callback: a sink that keeps events must copy the
+ * list (the recorder does).  Everything else is copied by value. */
 #ifndef SIDX_HOOK_H
 #define SIDX_HOOK_H
 
@@ -26,7 +28,8 @@ typedef enum sidx_event_type {
     SIDX_EV_BUILD_NODE,      /* node created: node, parent, depth, bounds, count */
     SIDX_EV_BUILD_CANDIDATE, /* split candidate: node, axis, pos, cost, count = N_left, aux = N_right */
     SIDX_EV_BUILD_SPLIT,     /* chosen split: node, axis, pos, cost, count = N_left, aux = N_right */
-    SIDX_EV_BUILD_LEAF,      /* leaf made: node, depth, count, cost, reason (sidx_leaf_reason) */
+    SIDX_EV_BUILD_LEAF,      /* leaf made: node, depth, count, cost, reason (sidx_leaf_reason),
+                                prims = its count primitive ids */
     SIDX_EV_BUILD_END,       /* node = node count, count = primitive references, depth = max depth */
     /* traversal */
     SIDX_EV_RAY_BEGIN,       /* ray_id, t_near/t_far = [tmin, tmax] */
@@ -94,6 +97,10 @@ typedef struct sidx_event {
     float t;               /* hit distance */
     sidx_aabb bounds;      /* node / cell bounds */
     const char *text;      /* NOTE events: static text; NULL otherwise */
+    const uint32_t *prims; /* BUILD_LEAF: the leaf's `count` primitive ids (original triangle indices;
+                              an aggregate's instance indices), in the leaf's order.  Valid only
+                              during the callback: copy it to keep it.  NULL on other events, and
+                              when count is 0 or the structure does not list them */
 } sidx_event;
 
 typedef void (*sidx_hook_fn)(const sidx_event *ev, void *user);

@@ -37,15 +37,18 @@ sidx_hook sidx_jsonl_hook(sidx_jsonl *j);
 int sidx_event_to_json(const sidx_event *ev, char *buf, size_t size);
 
 /* Keeps every event in memory, for stepping forward and back.  If an
- * allocation fails the recorder stops recording and sets overflow. */
+ * allocation fails the recorder stops recording and sets overflow.  A
+ * BUILD_LEAF's prims list is copied into memory the recorder owns, so the
+ * recorded events' prims stay valid until clear or free. */
 typedef struct sidx_recorder {
     sidx_event *events;
     size_t count, capacity;
     size_t limit;       /* stop after this many events; 0 = no limit */
     int overflow;       /* 1 if events were dropped (limit or out of memory) */
+    void *prim_store;   /* internal: the copied prims lists (chunks that never move) */
 } sidx_recorder;
 void sidx_recorder_init(sidx_recorder *r);
-void sidx_recorder_clear(sidx_recorder *r);   /* forget events, keep memory */
+void sidx_recorder_clear(sidx_recorder *r);   /* forget events (and their prims lists), keep the event array */
 void sidx_recorder_free(sidx_recorder *r);
 sidx_hook sidx_recorder_hook(sidx_recorder *r);
 

@@ -49,6 +49,8 @@ typedef struct sidx_viz_node {
     uint32_t n_left, n_right;
     int32_t leaf_reason;    /* sidx_leaf_reason */
     uint32_t leaf_count;    /* BUILD_LEAF count */
+    const uint32_t *prims;  /* leaf: its leaf_count primitive ids from BUILD_LEAF's prims (the tree's own
+                               copy, in sidx_viz_tree.prim_ids); NULL when the events did not list them */
     uint32_t candidates;    /* BUILD_CANDIDATE events for this node */
     size_t build_event;     /* index of its BUILD_NODE in the build event array */
     /* filled by sidx_viz_tree_apply_ray */
@@ -68,6 +70,8 @@ typedef struct sidx_viz_tree {
     uint32_t max_depth;
     uint32_t leaves;
     int virtual_root;       /* 1: nodes[root] was added above the structure's several roots */
+    uint32_t *prim_ids;     /* every leaf's prims list, leaf after leaf (nodes[i].prims point here) */
+    size_t num_prim_ids;
     uint64_t *lookup;       /* internal: (id << 32 | index), sorted, for sidx_viz_tree_find */
     uint32_t visited;       /* nodes entered by the applied ray */
     uint32_t hit_prim;      /* final hit of the applied ray, SIDX_NO_HIT if none */
