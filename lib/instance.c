@@ -32,6 +32,7 @@ typedef struct agg_impl {
     uint32_t n;
     uint32_t leaves;        /* leaf instances in total */
     sidx__boxtree tree;
+    size_t node_slots;      /* nodes allocated for tree (>= tree.num_nodes) */
     sidx_aabb box;
 } agg_impl;
 
@@ -193,6 +194,21 @@ sidx_status sidx_aggregate_build(const sidx_instance *instances, uint32_t n, con
         al.free(a, al.user);
         return sidx__fail(err, s, "aggregate: out of memory");
     }
+    /* boxtree.c allocates room for 2n nodes; a tree with leaves of up to 2
+     * instances uses about n.  Give the rest back, so that what an
+     * aggregate holds is what its stats report (the bytes per instance are
+     * the point of instancing).  If the smaller block cannot be had, keep
+     * the big one: nothing is lost but memory. */
+    g->node_slots = 2u * (size_t)(n ? n : 1);
+    if (g->tree.num_nodes < g->node_slots) {
+        sidx__btnode *fit = al.alloc((size_t)g->tree.num_nodes * sizeof *fit, al.user);
+        if (fit) {
+            memcpy(fit, g->tree.nodes, (size_t)g->tree.num_nodes * sizeof *fit);
+            al.free(g->tree.nodes, al.user);
+            g->tree.nodes = fit;
+            g->node_slots = g->tree.num_nodes;
+        }
+    }
     SIDX_EMIT(1, hook, SIDX_EV_BUILD_NODE, e_.node = 0; e_.parent = UINT32_MAX; e_.depth = 0; e_.count = n;
               e_.bounds = g->tree.nodes[0].box);
     for (uint32_t i = 0; i < g->tree.num_nodes; ++i) {
@@ -202,7 +218,8 @@ sidx_status sidx_aggregate_build(const sidx_instance *instances, uint32_t n, con
             SIDX_EMIT(1, hook, SIDX_EV_BUILD_NODE, e_.node = nd->first + 1; e_.parent = i;
                       e_.bounds = g->tree.nodes[nd->first + 1].box);
         } else {
-            SIDX_EMIT(1, hook, SIDX_EV_BUILD_LEAF, e_.node = i; e_.count = nd->count; e_.reason = SIDX_LEAF_FEW_PRIMS);
+            SIDX_EMIT(1, hook, SIDX_EV_BUILD_LEAF, e_.node = i; e_.count = nd->count; e_.reason = SIDX_LEAF_FEW_PRIMS;
+                      e_.prims = nd->count ? g->tree.items + nd->first : NULL);
         }
     }
     SIDX_EMIT(1, hook, SIDX_EV_BUILD_END, e_.node = g->tree.num_nodes; e_.count = n; e_.depth = g->tree.depth);
@@ -364,7 +381,9 @@ static int agg_occluded(const sidx_accel *a, const sidx_ray *r, const sidx_query
 static size_t own_bytes(const sidx_accel *a)
 {
     const agg_impl *g = a->impl;
-    return sizeof *a + sizeof *g + (size_t)g->n * sizeof *g->inst + sidx__boxtree_bytes(&g->tree);
+    /* the tree's node slots as allocated (sidx__boxtree_bytes counts the used ones) */
+    return sizeof *a + sizeof *g + (size_t)g->n * sizeof *g->inst + sidx__boxtree_bytes(&g->tree) +
+           (g->node_slots - g->tree.num_nodes) * sizeof *g->tree.nodes;
 }
 
 static void agg_stats(const sidx_accel *a, sidx_accel_stats *s)

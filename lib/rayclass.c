@@ -161,7 +161,8 @@ static void build_cell(rc_build *b, uint32_t id, const rc_cell *c, int k, double
         if (n > t->info.max_candidates) t->info.max_candidates = n;
         SIDX_EMIT(1, b->a->opt.hook, SIDX_EV_BUILD_LEAF, e_.node = id; e_.depth = depth; e_.count = n;
                   e_.cost = (float)n; e_.reason = n <= b->leaf_size ? (n ? SIDX_LEAF_FEW_PRIMS : SIDX_LEAF_EMPTY)
-                                                                      : SIDX_LEAF_MAX_DEPTH);
+                                                                      : SIDX_LEAF_MAX_DEPTH;
+                  e_.prims = n ? t->cand + nd->first : NULL);
         return;
     }
     const int dim = rc_order[depth % 5];

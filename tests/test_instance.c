@@ -1,8 +1,10 @@
 /* test_instance.c — aggregates and instancing: 10,000 instances of one
  * icosphere BVH trace like the flattened scene (every instance's triangles
  * transformed and copied into one mesh) for random rays, with one copy of
- * the sphere's structure in memory; nested aggregates; u, v and world
- * normals; events; argument errors. */
+ * the sphere's structure in memory; the issue's own case, 10,000 instances
+ * of the Stanford bunny's BVH (when $SIDX_SCENES names the directory of
+ * bunny.obj; skipped otherwise) against a per-instance reference; nested
+ * aggregates; u, v and world normals; events; argument errors. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -194,6 +196,264 @@ static void ten_thousand_instances(void **state)
     sidx_mesh_free(&sphere);
 }
 
+/* ---- 10,000 bunnies ------------------------------------------------------------------
+ *
+ * Flattening is no reference here (694 million triangles), so the reference
+ * is the definition of instancing, computed independently of instance.c:
+ * for every ray and every one of the 10,000 placements, invert the
+ * transform in double precision here, carry the ray into the bunny's space
+ * and ask the one bunny BVH, keeping the nearest t (the direction is not
+ * renormalized, so t is comparable across instances).  That reference is
+ * itself spot-checked against the double-precision brute-force tracer of
+ * testkit on the bunny's triangles. */
+
+/* counts what the aggregate build allocates: it must be O(instances), not a copy of the bunny */
+typedef struct counting { size_t live, peak, total; } counting;
+typedef struct counted_hdr { size_t size; max_align_t pad; } counted_hdr;
+static void *counting_alloc(size_t size, void *user)
+{
+    counting *c = user;
+    counted_hdr *h = malloc(sizeof *h + size);
+    if (!h) return NULL;
+    h->size = size;
+    c->live += size;
+    c->total += size;
+    if (c->live > c->peak) c->peak = c->live;
+    return h + 1;
+}
+static void counting_free(void *p, void *user)
+{
+    if (!p) return;
+    counting *c = user;
+    counted_hdr *h = (counted_hdr *)p - 1;
+    c->live -= h->size;
+    free(h);
+}
+
+/* world -> object for m (object -> world), in double */
+static void invert_affine(const float m[12], double inv[12])
+{
+    double a[9];
+    for (int r = 0; r < 3; ++r) for (int c = 0; c < 3; ++c) a[3 * r + c] = m[4 * r + c];
+    double b[9];
+    b[0] = a[4] * a[8] - a[5] * a[7]; b[1] = a[2] * a[7] - a[1] * a[8]; b[2] = a[1] * a[5] - a[2] * a[4];
+    b[3] = a[5] * a[6] - a[3] * a[8]; b[4] = a[0] * a[8] - a[2] * a[6]; b[5] = a[2] * a[3] - a[0] * a[5];
+    b[6] = a[3] * a[7] - a[4] * a[6]; b[7] = a[1] * a[6] - a[0] * a[7]; b[8] = a[0] * a[4] - a[1] * a[3];
+    const double det = a[0] * b[0] + a[1] * b[3] + a[2] * b[6];
+    assert_true(fabs(det) > 1e-12);
+    for (int r = 0; r < 3; ++r) {
+        double t = 0.0;
+        for (int c = 0; c < 3; ++c) {
+            inv[4 * r + c] = b[3 * r + c] / det;
+            t -= inv[4 * r + c] * m[4 * c + 3];
+        }
+        inv[4 * r + 3] = t;
+    }
+}
+
+static tk_rayrec local_ray(const double inv[12], const sidx_ray *r, float tmax)
+{
+    const double o[3] = {r->org.x, r->org.y, r->org.z}, d[3] = {r->dir.x, r->dir.y, r->dir.z};
+    float lo[3], ld[3];
+    for (int k = 0; k < 3; ++k) {
+        lo[k] = (float)(inv[4 * k] * o[0] + inv[4 * k + 1] * o[1] + inv[4 * k + 2] * o[2] + inv[4 * k + 3]);
+        ld[k] = (float)(inv[4 * k] * d[0] + inv[4 * k + 1] * d[1] + inv[4 * k + 2] * d[2]);
+    }
+    return tk_rayrec_make(sidx_v3(lo[0], lo[1], lo[2]), sidx_v3(ld[0], ld[1], ld[2]), r->tmin, tmax);
+}
+
+/* does the local ray come within the (padded) box at all?  double slabs */
+static int local_ray_meets_box(const tk_rayrec *lr, sidx_aabb b)
+{
+    const double pad = 1e-3 * sidx_v3_length(sidx_aabb_extent(b));
+    const double lo[3] = {b.min.x - pad, b.min.y - pad, b.min.z - pad}, hi[3] = {b.max.x + pad, b.max.y + pad, b.max.z + pad};
+    double t0 = 0.0, t1 = INFINITY;
+    for (int k = 0; k < 3; ++k) {
+        if (lr->d[k] == 0.0f) {
+            if (lr->o[k] < lo[k] || lr->o[k] > hi[k]) return 0;
+            continue;
+        }
+        double a = (lo[k] - lr->o[k]) / lr->d[k], c = (hi[k] - lr->o[k]) / lr->d[k];
+        if (a > c) { const double t = a; a = c; c = t; }
+        if (a > t0) t0 = a;
+        if (c < t1) t1 = c;
+    }
+    return t0 <= t1;
+}
+
+/* The reference: every instance, the one bunny structure `bunny` (a BVH, or
+ * NULL for testkit's brute force with a box cull), nearest t.  prim is
+ * reported flattened: instance·T + triangle. */
+static sidx_hit instanced_reference(const sidx_ray *r, const double (*inv)[12], uint32_t n, const sidx_accel *bunny,
+                                    const sidx_mesh *m)
+{
+    sidx_hit best = sidx_hit_none();
+    const sidx_aabb mb = sidx_mesh_bounds(m);
+    for (uint32_t i = 0; i < n; ++i) {
+        const tk_rayrec lr = local_ray(inv[i], r, best.t < INFINITY ? best.t : r->tmax);
+        sidx_hit h = sidx_hit_none();
+        if (bunny) {
+            sidx_ray ray;
+            if (tk_ray_from(&lr, &ray) != SIDX_OK) continue;
+            sidx_accel_intersect(bunny, &ray, NULL, &h);
+        } else {
+            if (!local_ray_meets_box(&lr, mb)) continue;
+            tk_ref_intersect(m, &lr, &h);
+        }
+        if (h.prim != SIDX_NO_HIT && h.t < best.t) {
+            best = h;
+            best.instance = i;
+            best.prim = i * m->num_triangles + h.prim;
+        }
+    }
+    return best;
+}
+
+static void ten_thousand_bunnies(void **state)
+{
+    (void)state;
+    const char *dir = getenv("SIDX_SCENES");
+    if (!dir || !*dir) {
+        printf("  SKIPPED ten_thousand_bunnies: set SIDX_SCENES to the directory holding bunny.obj\n");
+        return;
+    }
+    char path[4096];
+    snprintf(path, sizeof path, "%s/bunny.obj", dir);
+    sidx_mesh bunny;
+    sidx_error err;
+    const sidx_status st = sidx_scene_open(path, &bunny, &err);
+    if (st != SIDX_OK) fprintf(stderr, "%s\n", err.message);
+    assert_int_equal(st, SIDX_OK);
+    const uint32_t N = 10000, T = bunny.num_triangles;
+    sidx_accel *child = NULL;
+    assert_int_equal(sidx_accel_build(child_structure(), &bunny, NULL, &child, &err), SIDX_OK);
+
+    /* placements: random rotation about the bunny's centre, scale, and a
+     * translation spreading them over a cube 25 bunny diagonals wide (dense
+     * enough that rays pass through and behind many of them) */
+    const sidx_aabb bb = sidx_mesh_bounds(&bunny);
+    const sidx_vec3 ctr = sidx_aabb_centroid(bb);
+    const float diag = sidx_v3_length(sidx_aabb_extent(bb));
+    sidx_instance *inst = malloc(N * sizeof *inst);
+    double (*inv)[12] = malloc(N * sizeof *inv);
+    assert_true(inst && inv);
+    tk_rng g;
+    tk_rng_seed(&g, 10000);
+    for (uint32_t i = 0; i < N; ++i) {
+        float *m = inst[i].xform;
+        inst[i].accel = child;
+        random_xform(&g, 12.5f * diag, m);
+        /* world = R·S·(p − ctr) + t: fold −R·S·ctr into the translation */
+        for (int r = 0; r < 3; ++r) m[4 * r + 3] -= m[4 * r] * ctr.x + m[4 * r + 1] * ctr.y + m[4 * r + 2] * ctr.z;
+        invert_affine(m, inv[i]);
+    }
+    counting cnt = {0, 0, 0};
+    sidx_allocator al = {counting_alloc, counting_free, &cnt};
+    sidx_build_options bo;
+    memset(&bo, 0, sizeof bo);
+    bo.alloc = &al;
+    sidx_accel *agg = NULL;
+    const double t0 = tk_now_ms();
+    assert_int_equal(sidx_aggregate_build(inst, N, &bo, &agg, &err), SIDX_OK);
+    const double build_ms = tk_now_ms() - t0;
+
+    /* memory: one bunny BVH, plus instance records and the top tree */
+    sidx_aggregate_info info;
+    assert_int_equal(sidx_aggregate_info_get(agg, &info), SIDX_OK);
+    sidx_accel_stats cs;
+    sidx_accel_stats_get(child, &cs);
+    assert_int_equal(info.instances, N);
+    assert_int_equal(info.leaf_instances, N);
+    assert_int_equal(info.distinct_children, 1);
+    assert_int_equal(info.shared_bytes, cs.bytes);
+    assert_int_equal(info.world_triangles, (uint64_t)N * T);
+    /* what the aggregate holds is what it allocated (the build's
+     * temporaries are gone), and it is a few hundred bytes per instance,
+     * independent of the bunny's size */
+    assert_int_equal(cnt.live, info.own_bytes);
+    assert_true(cnt.peak < (size_t)N * 512);
+    assert_true(info.own_bytes < (size_t)N * 256);
+    assert_true(info.own_bytes + info.shared_bytes < cs.bytes + (size_t)N * 256);
+    const double flat_est = (double)N * ((double)cs.bytes + 12.0 * bunny.num_vertices + 12.0 * T);
+    printf("  %u bunnies (%u tris each, %.0f M in the scene): aggregate %.2f MB (%zu B/instance) + one %s of %.2f MB"
+           " + one mesh %.2f MB; 10,000 copies would be about %.0f MB; aggregate build %.1f ms\n",
+           N, T, (double)info.world_triangles / 1e6, info.own_bytes / 1048576.0, info.own_bytes / N, child_structure(),
+           cs.bytes / 1048576.0, (12.0 * bunny.num_vertices + 12.0 * T) / 1048576.0, flat_est / 1048576.0, build_ms);
+
+    /* rays: a quarter from outside the cloud, the rest from inside it; half
+     * aimed at a random bunny's centre (they hit often), half random */
+    const sidx_aabb world = {sidx_v3(-13.5f * diag, -13.5f * diag, -13.5f * diag), sidx_v3(13.5f * diag, 13.5f * diag, 13.5f * diag)};
+    const size_t nrays = tk_fast_tests() ? 200 : 2000;
+    sidx_ray *rays = malloc(nrays * sizeof *rays);
+    assert_non_null(rays);
+    for (size_t i = 0; i < nrays; ++i) {
+        sidx_vec3 o = sidx_v3((float)tk_rng_range(&g, world.min.x, world.max.x), (float)tk_rng_range(&g, world.min.y, world.max.y),
+                              (float)tk_rng_range(&g, world.min.z, world.max.z));
+        if (i % 4 == 0) o = sidx_v3_scale(tk_rng_sphere(&g), 30.0f * diag);
+        sidx_vec3 d = tk_rng_sphere(&g);
+        if (i % 2 == 0) {
+            const float *m = inst[tk_rng_below(&g, N)].xform;
+            d = sidx_v3_sub(sidx_v3(m[3], m[7], m[11]), o); /* the translation is where ctr went */
+        }
+        d = sidx_v3_scale(d, (float)tk_rng_range(&g, 0.5, 2.0));
+        assert_int_equal(sidx_ray_init(&rays[i], o, d, 0.0f, INFINITY), SIDX_OK);
+    }
+
+    /* the reference, spot-checked against brute force on the bunny: the
+     * first few aimed rays (even i) and one random ray */
+    const size_t spot = tk_fast_tests() ? 2 : 8;
+    size_t spot_hits = 0;
+    for (size_t k = 0; k <= spot; ++k) {
+        const size_t i = k < spot ? 2 * k : 1;
+        const sidx_hit a = instanced_reference(&rays[i], (const double (*)[12])inv, N, child, &bunny);
+        const sidx_hit b = instanced_reference(&rays[i], (const double (*)[12])inv, N, NULL, &bunny);
+        if (!tk_hits_agree(&b, &a))
+            fprintf(stderr, "ray %zu: brute instance %u prim %u t %.9g; bvh reference instance %u prim %u t %.9g\n", i,
+                    b.instance, b.prim, b.t, a.instance, a.prim, a.t);
+        assert_true(tk_hits_agree(&b, &a));
+        spot_hits += b.prim != SIDX_NO_HIT;
+    }
+    assert_true(spot_hits >= 1);
+
+    /* the aggregate against the reference, closest hit and any-hit */
+    size_t hits = 0, ref_instances = 0;
+    double agg_ms = 0.0;
+    for (size_t i = 0; i < nrays; ++i) {
+        const sidx_hit ref = instanced_reference(&rays[i], (const double (*)[12])inv, N, child, &bunny);
+        const double ta = tk_now_ms();
+        sidx_hit got;
+        sidx_accel_intersect(agg, &rays[i], NULL, &got);
+        agg_ms += tk_now_ms() - ta;
+        sidx_hit g2 = got;
+        if (got.prim != SIDX_NO_HIT) {
+            assert_true(got.instance < N);
+            assert_true(got.prim < T);
+            g2.prim = got.instance * T + got.prim;
+        }
+        if (!tk_hits_agree(&ref, &g2))
+            fprintf(stderr, "ray %zu: reference instance %u prim %u t %.9g; aggregate instance %u prim %u t %.9g\n", i,
+                    ref.instance, ref.prim == SIDX_NO_HIT ? ref.prim : ref.prim % T, ref.t, got.instance, got.prim,
+                    got.t);
+        assert_true(tk_hits_agree(&ref, &g2));
+        ref_instances += ref.prim != SIDX_NO_HIT && got.instance == ref.instance;
+        int occ;
+        sidx_accel_occluded(agg, &rays[i], NULL, &occ);
+        assert_int_equal(occ, ref.prim != SIDX_NO_HIT);
+        hits += ref.prim != SIDX_NO_HIT;
+    }
+    assert_true(hits > nrays / 5);
+    printf("  %zu rays: %zu hit (%zu on the reference's own instance), one BVH reference walk per instance per ray;"
+           " aggregate %.2f us/ray\n", nrays, hits, ref_instances, 1000.0 * agg_ms / (double)nrays);
+
+    free(rays);
+    sidx_accel_destroy(agg);
+    assert_int_equal(cnt.live, 0);
+    free(inv);
+    free(inst);
+    sidx_accel_destroy(child);
+    sidx_mesh_free(&bunny);
+}
+
 /* An aggregate of aggregates: 4 groups of 25 spheres, placed 40 times. */
 static void nested_aggregates(void **state)
 {
@@ -322,6 +582,7 @@ int main(void)
         cmocka_unit_test(events_and_errors),
         cmocka_unit_test(nested_aggregates),
         cmocka_unit_test(ten_thousand_instances),
+        cmocka_unit_test(ten_thousand_bunnies),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

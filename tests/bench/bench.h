@@ -49,6 +49,9 @@ typedef struct bench_embree_cfg {
 int bench_embree_parse(const char *name, bench_embree_cfg *cfg);
 int bench_embree_build(const sidx_mesh *m, bench_embree_cfg cfg, bench_embree **out, double *build_ms, char *msg,
                        size_t msg_size);
+/* The same on a "threads=N" device, build timed in wall-clock (parallel-build comparison). */
+int bench_embree_build_threads(const sidx_mesh *m, bench_embree_cfg cfg, unsigned threads, bench_embree **out,
+                               double *build_ms, char *msg, size_t msg_size);
 size_t bench_embree_bytes(const bench_embree *e);
 /* rtcIntersect1 / rtcOccluded1, one thread; packet = 1, 4, 8 or 16
  * (rtcIntersectN).  Returns elapsed ms.  u, v are filled. */
@@ -77,6 +80,7 @@ int bench_cmd_trace(int argc, char **argv);
 int bench_cmd_rays(int argc, char **argv);
 int bench_cmd_run(int argc, char **argv);
 int bench_cmd_scale(int argc, char **argv);
+int bench_cmd_extras(int argc, char **argv); /* extras.c */
 
 /* Comma-separated list helpers. */
 int bench_list_has(const char *list, const char *name); /* NULL list = everything */

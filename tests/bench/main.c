@@ -28,6 +28,8 @@ static void usage(FILE *out)
             "        the benchmark table: every structure x scene x ray kind, Embree rows, errors\n"
             "  scale [--scene icosphere|grid|soup] [--accel LIST] [--max-tris N] [--budget-ms MS] ...\n"
             "        build time and steps per ray against triangle count, fitted growth exponents\n"
+            "  extras [--scenes DIR] [--only instancing,lightbuffer,rayclass] [--instances N] ...\n"
+            "        instanced scenes, the light buffer (shadow rays), ray classification's trade-off\n"
             "  list  registered structures and built-in scenes\n"
             "\n"
             "SCENE is a mesh file (.obj, .ply) or a built-in scene name[:detail].\n"
@@ -101,6 +103,7 @@ int main(int argc, char **argv)
     if (!strcmp(cmd, "rays")) return bench_cmd_rays(argc - 1, argv + 1);
     if (!strcmp(cmd, "run")) return bench_cmd_run(argc - 1, argv + 1);
     if (!strcmp(cmd, "scale")) return bench_cmd_scale(argc - 1, argv + 1);
+    if (!strcmp(cmd, "extras")) return bench_cmd_extras(argc - 1, argv + 1);
     if (!strcmp(cmd, "list")) return cmd_list();
     fprintf(stderr, "sidx-bench: unknown command '%s'\n", cmd);
     usage(stderr);
