@@ -34,6 +34,9 @@
 #include <unistd.h>
 #include "bvh_internal.h"
 #include "sidx/parallel.h"
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 unsigned sidx_hardware_threads(void)
 {
@@ -192,10 +195,39 @@ typedef struct task {
     nodebuf out;
 } task;
 
+/* A bin's box as two 4-float rows (x, y, z, unused), so that the binning
+ * loop can grow it with one SSE min and one max: _mm_min_ps(a, b) is
+ * a < b ? a : b lane by lane, exactly sidx_v3_min's expression (and max
+ * sidx_v3_max's), so the boxes are bit for bit those of the scalar code
+ * and of the sequential builder. */
+typedef struct binbox {
+    float lo[4], hi[4];
+} binbox;
+
 typedef struct bins3 {
-    sidx_aabb box[3][1024];
+    binbox box[3][1024];
     uint32_t count[3][1024];
 } bins3;
+
+static inline sidx_aabb binbox_get(const binbox *b)
+{
+    sidx_aabb r = {{b->lo[0], b->lo[1], b->lo[2]}, {b->hi[0], b->hi[1], b->hi[2]}};
+    return r;
+}
+static inline void binbox_empty(binbox *b)
+{
+    for (int k = 0; k < 4; ++k) {
+        b->lo[k] = INFINITY;
+        b->hi[k] = -INFINITY;
+    }
+}
+static inline void binbox_union(binbox *d, const binbox *s)
+{
+    for (int k = 0; k < 4; ++k) {
+        d->lo[k] = d->lo[k] < s->lo[k] ? d->lo[k] : s->lo[k];
+        d->hi[k] = d->hi[k] > s->hi[k] ? d->hi[k] : s->hi[k];
+    }
+}
 
 
 typedef struct binspec {
@@ -221,37 +253,103 @@ static void bins_clear(bins3 *b, uint32_t nb)
 {
     for (int k = 0; k < 3; ++k)
         for (uint32_t i = 0; i < nb; ++i) {
-            b->box[k][i] = sidx_aabb_empty();
+            binbox_empty(&b->box[k][i]);
             b->count[k][i] = 0;
         }
 }
 
 /* All three axes in one pass over the triangles: one read of each box and
- * centroid instead of three (the sequential builder's axis loop). */
+ * centroid instead of three (the sequential builder's axis loop).
+ *
+ * With SSE2 (every x86-64) the three axes go through one set of 4-lane
+ * instructions, as in Wald 2007 and Embree's binner: centroid, bin
+ * coordinate and clamp for x, y, z at once, then one min and one max per
+ * axis to grow the bin.  That is most of the build (callgrind on the bunny:
+ * the scalar loop was 185 M of 196 M instructions).  Bit-identical to
+ * bin_of: f = (c − cmin)·scale in the same float operations; _mm_max_ps(f,
+ * 0) returns 0 for a NaN f (the second operand), as bin_of's !(f > 0);
+ * min(f, nb − 1) then truncation gives nb − 1 for f >= nb − 1, as bin_of's
+ * f >= nb test followed by truncation does.  A flat axis (scale 0) puts
+ * every triangle in bin 0, where best_split sees a single used bin and no
+ * plane, exactly as if it had not been binned. */
 static void bin_range(const pb *B, const binspec *s, uint32_t first, uint32_t count, bins3 *out)
 {
     const pref *pr = B->pr + first;
+#if defined(__SSE2__)
+    const __m128 cmin = _mm_setr_ps(s->cmin[0], s->cmin[1], s->cmin[2], 0.0f);
+    const __m128 scale = _mm_setr_ps(s->scale[0], s->scale[1], s->scale[2], 0.0f);
+    const __m128 top = _mm_set1_ps((float)(s->nb - 1)), half = _mm_set1_ps(0.5f), zero = _mm_setzero_ps();
+    const __m128 xyz = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0)); /* lane 3 holds the id: zeroed */
     for (uint32_t i = 0; i < count; ++i) {
-        const sidx_aabb pb_ = pref_box(&pr[i]);
+        const __m128 lo = _mm_and_ps(_mm_loadu_ps(pr[i].lo), xyz), hi = _mm_and_ps(_mm_loadu_ps(pr[i].hi), xyz);
+        const __m128 c = _mm_mul_ps(_mm_add_ps(lo, hi), half);
+        __m128 f = _mm_mul_ps(_mm_sub_ps(c, cmin), scale);
+        f = _mm_min_ps(_mm_max_ps(f, zero), top);
+        int32_t bj[4];
+        _mm_storeu_si128((__m128i *)(void *)bj, _mm_cvttps_epi32(f));
+        binbox *bx = &out->box[0][bj[0]], *by = &out->box[1][bj[1]], *bz = &out->box[2][bj[2]];
+        out->count[0][bj[0]]++;
+        out->count[1][bj[1]]++;
+        out->count[2][bj[2]]++;
+        _mm_storeu_ps(bx->lo, _mm_min_ps(_mm_loadu_ps(bx->lo), lo));
+        _mm_storeu_ps(bx->hi, _mm_max_ps(_mm_loadu_ps(bx->hi), hi));
+        _mm_storeu_ps(by->lo, _mm_min_ps(_mm_loadu_ps(by->lo), lo));
+        _mm_storeu_ps(by->hi, _mm_max_ps(_mm_loadu_ps(by->hi), hi));
+        _mm_storeu_ps(bz->lo, _mm_min_ps(_mm_loadu_ps(bz->lo), lo));
+        _mm_storeu_ps(bz->hi, _mm_max_ps(_mm_loadu_ps(bz->hi), hi));
+    }
+#else
+    for (uint32_t i = 0; i < count; ++i) {
+        binbox pb_;
+        for (int k = 0; k < 3; ++k) {
+            pb_.lo[k] = pr[i].lo[k];
+            pb_.hi[k] = pr[i].hi[k];
+        }
+        pb_.lo[3] = pb_.hi[3] = 0.0f;
         for (int k = 0; k < 3; ++k) {
             if (!s->use[k]) continue;
             const uint32_t j = bin_of(pref_c(&pr[i], k), s->cmin[k], s->scale[k], s->nb);
             out->count[k][j]++;
-            out->box[k][j] = sidx_aabb_union(out->box[k][j], pb_);
+            binbox_union(&out->box[k][j], &pb_);
         }
     }
+#endif
 }
 
+/* Node bounds and centroid bounds; the SSE2 loop is sidx_aabb_union /
+ * sidx_aabb_grow lane by lane (same operand order, same results). */
 static void bounds_range(const pb *B, uint32_t first, uint32_t count, sidx_aabb *bb, sidx_aabb *cb)
 {
-    sidx_aabb b = sidx_aabb_empty(), c = sidx_aabb_empty();
     const pref *pr = B->pr + first;
+#if defined(__SSE2__)
+    __m128 blo = _mm_set1_ps(INFINITY), bhi = _mm_set1_ps(-INFINITY), clo = blo, chi = bhi;
+    const __m128 half = _mm_set1_ps(0.5f);
+    /* lane 3 holds the id: zeroed, or as a float it would be a denormal (slow) */
+    const __m128 xyz = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0));
+    for (uint32_t i = 0; i < count; ++i) {
+        const __m128 lo = _mm_and_ps(_mm_loadu_ps(pr[i].lo), xyz), hi = _mm_and_ps(_mm_loadu_ps(pr[i].hi), xyz);
+        const __m128 c = _mm_mul_ps(_mm_add_ps(lo, hi), half);
+        blo = _mm_min_ps(blo, lo);
+        bhi = _mm_max_ps(bhi, hi);
+        clo = _mm_min_ps(clo, c);
+        chi = _mm_max_ps(chi, c);
+    }
+    float v[4][4];
+    _mm_storeu_ps(v[0], blo);
+    _mm_storeu_ps(v[1], bhi);
+    _mm_storeu_ps(v[2], clo);
+    _mm_storeu_ps(v[3], chi);
+    *bb = (sidx_aabb){{v[0][0], v[0][1], v[0][2]}, {v[1][0], v[1][1], v[1][2]}};
+    *cb = (sidx_aabb){{v[2][0], v[2][1], v[2][2]}, {v[3][0], v[3][1], v[3][2]}};
+#else
+    sidx_aabb b = sidx_aabb_empty(), c = sidx_aabb_empty();
     for (uint32_t i = 0; i < count; ++i) {
         b = sidx_aabb_union(b, pref_box(&pr[i]));
         c = sidx_aabb_grow(c, sidx_v3(pref_c(&pr[i], 0), pref_c(&pr[i], 1), pref_c(&pr[i], 2)));
     }
     *bb = b;
     *cb = c;
+#endif
 }
 
 /* The parallel versions: each thread a contiguous chunk. */
@@ -312,23 +410,36 @@ static int best_split(const pb *B, const bins3 *bn, uint32_t count, float inv_ar
     int found = 0;
     best->cost = INFINITY;
     for (int axis = 0; axis < 3; ++axis) {
-        const sidx_aabb *box = bn->box[axis];
+        const binbox *box = bn->box[axis];
         const uint32_t *cnt = bn->count[axis];
         uint32_t *used = S->used[axis];
         uint32_t k = 0;
+#if defined(__SSE2__)
+        /* the non-empty bins, 4 counts per compare (the scan over all 32
+         * bins of every small node was a tenth of the build) */
+        uint32_t p = 0;
+        for (; p + 4 <= nb; p += 4) {
+            const __m128i c4 = _mm_loadu_si128((const __m128i *)(const void *)(cnt + p));
+            unsigned m = 0xFu & ~(unsigned)_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(c4, _mm_setzero_si128())));
+            for (; m; m &= m - 1) used[k++] = p + (uint32_t)__builtin_ctz(m);
+        }
+        for (; p < nb; ++p)
+            if (cnt[p]) used[k++] = p;
+#else
         for (uint32_t p = 0; p < nb; ++p)
             if (cnt[p]) used[k++] = p;
+#endif
         S->nused[axis] = k;
         if (k < 2) continue; /* flat axis (not binned) or one bin: no plane */
         sidx_aabb acc = sidx_aabb_empty();
         for (uint32_t j = k; j-- > 1;) { /* right_area[j] = area of bins used[j..k) */
-            acc = sidx_aabb_union(acc, box[used[j]]);
+            acc = sidx_aabb_union(acc, binbox_get(&box[used[j]]));
             S->right_area[j] = sidx_aabb_area(acc);
         }
         acc = sidx_aabb_empty();
         uint32_t nl = 0;
         for (uint32_t j = 0; j + 1 < k; ++j) {
-            acc = sidx_aabb_union(acc, box[used[j]]);
+            acc = sidx_aabb_union(acc, binbox_get(&box[used[j]]));
             nl += cnt[used[j]];
             const float cost =
                 B->P.c_trav + B->P.c_tri * (sidx_aabb_area(acc) * (float)nl + S->right_area[j + 1] * (float)(count - nl)) *
@@ -424,7 +535,7 @@ static uint32_t build_rec(const pb *B, scratch *S, nodebuf *out, topctx *top, ui
                 for (int k = 0; k < 3; ++k)
                     for (uint32_t j = 0; j < s.nb; ++j) {
                         S->bins[0].count[k][j] += S->bins[t].count[k][j];
-                        S->bins[0].box[k][j] = sidx_aabb_union(S->bins[0].box[k][j], S->bins[t].box[k][j]);
+                        binbox_union(&S->bins[0].box[k][j], &S->bins[t].box[k][j]);
                     }
         } else {
             bin_range(B, &s, first, count, &S->bins[0]); /* bins[0] is clean on entry */
@@ -437,7 +548,7 @@ static uint32_t build_rec(const pb *B, scratch *S, nodebuf *out, topctx *top, ui
          * of a small node). */
         for (int k = 0; k < 3; ++k)
             for (uint32_t u = 0; u < S->nused[k]; ++u) {
-                S->bins[0].box[k][S->used[k][u]] = sidx_aabb_empty();
+                binbox_empty(&S->bins[0].box[k][S->used[k][u]]);
                 S->bins[0].count[k][S->used[k][u]] = 0;
             }
         if (!found) {
@@ -544,6 +655,29 @@ static void fill_worker(void *ctx, unsigned t)
         for (int k = 0; k < 3; ++k) c->b->tris[i].v[k] = sidx_mesh_vertex(c->m, c->b->prim_id[i], k);
 }
 
+/* The primitive references, split in chunks (a gather from the mesh that
+ * the calling thread alone would otherwise do before any split). */
+typedef struct pref_ctx {
+    const sidx_mesh *m;
+    pref *pr;
+    uint32_t n;
+    unsigned nt;
+} pref_ctx;
+static void pref_worker(void *ctx, unsigned t)
+{
+    pref_ctx *c = ctx;
+    const uint32_t lo = (uint32_t)((uint64_t)c->n * t / c->nt), hi = (uint32_t)((uint64_t)c->n * (t + 1) / c->nt);
+    for (uint32_t i = lo; i < hi; ++i) {
+        sidx_aabb bb = sidx_aabb_empty(); /* as sidx__prim_boxes */
+        for (int k = 0; k < 3; ++k) bb = sidx_aabb_grow(bb, sidx_mesh_vertex(c->m, i, k));
+        pref *r = &c->pr[i];
+        r->lo[0] = bb.min.x; r->lo[1] = bb.min.y; r->lo[2] = bb.min.z;
+        r->hi[0] = bb.max.x; r->hi[1] = bb.max.y; r->hi[2] = bb.max.z;
+        r->id = i;
+        r->pad = 0;
+    }
+}
+
 static int cmp_task_desc(const void *x, const void *y)
 {
     const task *a = x, *b = y;
@@ -571,14 +705,9 @@ sidx_status sidx__bvh_build_parallel(sidx_accel *a, const bvh_par_params *p, sid
     B.pr = sidx__alloc(a, n, sizeof *B.pr);
     b->prim_id = sidx__alloc(a, n, sizeof *b->prim_id);
     if (!B.pr || !b->prim_id) goto fail;
-    for (uint32_t i = 0; i < n; ++i) {
-        sidx_aabb bb = sidx_aabb_empty(); /* as sidx__prim_boxes */
-        for (int k = 0; k < 3; ++k) bb = sidx_aabb_grow(bb, sidx_mesh_vertex(m, i, k));
-        pref *r = &B.pr[i];
-        r->lo[0] = bb.min.x; r->lo[1] = bb.min.y; r->lo[2] = bb.min.z;
-        r->hi[0] = bb.max.x; r->hi[1] = bb.max.y; r->hi[2] = bb.max.z;
-        r->id = i;
-        r->pad = 0;
+    {
+        pref_ctx pc = {m, B.pr, n, n >= PAR_PASS_MIN ? B.threads : 1u};
+        par_run(pc.nt, pref_worker, &pc);
     }
 
     /* Top phase. */

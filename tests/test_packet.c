@@ -234,6 +234,43 @@ static void test_frustum_saves_box_tests(void **state)
     sidx_mesh_free(&m);
 }
 
+/* A dense mesh seen from afar (many triangles per pixel): rays part deep
+ * in the tree, so rays finish subtrees alone (the adaptive switch, both
+ * the last-group rule and the whole-packet rule below SWITCH_DEPTH), and
+ * the hits must still be those of single rays, closest and any-hit.  Also:
+ * 4x4 tiles never use the frustum (it could replace one group test at
+ * most), 8x8 tiles do. */
+static void test_dense_mesh_switch(void **state)
+{
+    (void)state;
+    sidx_mesh m;
+    sidx_error err;
+    if (sidx_scene_make("soup", 40000, &m, &err) != SIDX_OK) fail_msg("soup: %s", err.message);
+    const uint32_t W = 40, H = 40;
+    sidx_ray *rays = malloc((size_t)W * H * sizeof *rays);
+    assert_non_null(rays);
+    primary_rays(&m, W, H, rays);
+    sidx_accel *a = NULL;
+    assert_int_equal(sidx_accel_build("bvh", &m, NULL, &a, NULL), SIDX_OK);
+    check_tiles("soup 40000", a, a, rays, W, H, 0);
+    sidx_hit *h = malloc((size_t)W * H * sizeof *h);
+    assert_non_null(h);
+    const sidx_packet_options of = {SIDX_PACKET_FRUSTUM, 0, 0};
+    sidx_packet_stats s4, s8;
+    memset(&s4, 0, sizeof s4);
+    memset(&s8, 0, sizeof s8);
+    assert_int_equal(sidx_trace_tiles(a, rays, W, H, 4, &of, h, &s4), SIDX_OK);
+    assert_int_equal(sidx_trace_tiles(a, rays, W, H, 8, &of, h, &s8), SIDX_OK);
+    assert_int_equal(s4.frustum_tests, 0);
+    assert_true(s8.frustum_tests > 0);
+    assert_true(s4.switched_rays > 0);
+    assert_true(s8.switched_rays > 0);
+    sidx_accel_destroy(a);
+    free(h);
+    free(rays);
+    sidx_mesh_free(&m);
+}
+
 static void test_invalid_arguments(void **state)
 {
     (void)state;
@@ -263,6 +300,7 @@ int main(void)
         cmocka_unit_test(test_primary_tiles_match_single), cmocka_unit_test(test_inside_icosphere_no_leaks),
         cmocka_unit_test(test_shadow_packets),             cmocka_unit_test(test_incoherent_and_other_structures),
         cmocka_unit_test(test_frustum_saves_box_tests),    cmocka_unit_test(test_invalid_arguments),
+        cmocka_unit_test(test_dense_mesh_switch),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

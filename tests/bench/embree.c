@@ -3,6 +3,8 @@
  * Set-up (documented in the table's header too):
  *   device  rtcNewDevice("threads=1"): builds on one thread, like sidx's
  *           builders by default; tracing is one thread (rtcIntersect1).
+ *           bench_embree_build_threads makes a "threads=N" device for the
+ *           parallel-build comparison.
  *   scene   RTC_SCENE_FLAG_ROBUST for the "-robust" rows, no flags otherwise;
  *           build quality MEDIUM (Embree's default: binned SAH BVH, the same
  *           family as sidx's bvh) or HIGH for the "-hq" rows (adds spatial
@@ -56,8 +58,28 @@ int bench_embree_parse(const char *name, bench_embree_cfg *cfg)
 
 const char *bench_embree_version(void) { return RTC_VERSION_STRING; }
 
+/* threads = 0: the table's rows (a "threads=1" device, timed with the
+ * bench's build clock like sidx's one-thread builds).  threads >= 1: the
+ * parallel-build comparison (run.c's packet and parallel section), where
+ * the device gets "threads=N" and the build is timed in wall-clock (CPU
+ * time would add the threads up). */
+static int embree_build(const sidx_mesh *m, bench_embree_cfg cfg, unsigned threads, bench_embree **out,
+                        double *build_ms, char *msg, size_t msg_size);
+
 int bench_embree_build(const sidx_mesh *m, bench_embree_cfg cfg, bench_embree **out, double *build_ms, char *msg,
                        size_t msg_size)
+{
+    return embree_build(m, cfg, 0, out, build_ms, msg, msg_size);
+}
+
+int bench_embree_build_threads(const sidx_mesh *m, bench_embree_cfg cfg, unsigned threads, bench_embree **out,
+                               double *build_ms, char *msg, size_t msg_size)
+{
+    return embree_build(m, cfg, threads ? threads : 1, out, build_ms, msg, msg_size);
+}
+
+static int embree_build(const sidx_mesh *m, bench_embree_cfg cfg, unsigned threads, bench_embree **out,
+                        double *build_ms, char *msg, size_t msg_size)
 {
     *out = NULL;
     struct bench_embree *e = calloc(1, sizeof *e);
@@ -66,14 +88,17 @@ int bench_embree_build(const sidx_mesh *m, bench_embree_cfg cfg, bench_embree **
         return 0;
     }
     atomic_init(&e->bytes, 0);
-    e->device = rtcNewDevice("threads=1");
+    char devcfg[32];
+    snprintf(devcfg, sizeof devcfg, "threads=%u", threads ? threads : 1u);
+    e->device = rtcNewDevice(devcfg);
     if (!e->device) {
         snprintf(msg, msg_size, "embree: rtcNewDevice failed (error %d)", (int)rtcGetDeviceError(NULL));
         free(e);
         return 0;
     }
     rtcSetDeviceMemoryMonitorFunction(e->device, memory_monitor, e);
-    const double t0 = bench_build_clock_ms();
+    double (*clock_ms)(void) = threads ? tk_now_ms : bench_build_clock_ms;
+    const double t0 = clock_ms();
     e->scene = rtcNewScene(e->device);
     rtcSetSceneFlags(e->scene, cfg.robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
     rtcSetSceneBuildQuality(e->scene, (enum RTCBuildQuality)cfg.quality);
@@ -102,7 +127,7 @@ int bench_embree_build(const sidx_mesh *m, bench_embree_cfg cfg, bench_embree **
     rtcAttachGeometry(e->scene, g);
     rtcReleaseGeometry(g);
     rtcCommitScene(e->scene);
-    *build_ms = bench_build_clock_ms() - t0;
+    *build_ms = clock_ms() - t0;
     enum RTCError rerr = rtcGetDeviceError(e->device);
     if (rerr != RTC_ERROR_NONE) {
         snprintf(msg, msg_size, "embree: build failed (error %d)", (int)rerr);

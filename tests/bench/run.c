@@ -25,6 +25,8 @@
 #include <unistd.h>
 
 #include "bench.h"
+#include "sidx/packet.h"
+#include "sidx/parallel.h"
 
 typedef struct run_opts {
     const char *scenes_dir, *accel_list, *kinds_list, *builtin_list, *csv, *plot, *method_scenes;
@@ -506,6 +508,203 @@ static void bench_embree_rows(const char *name, bench_embree_cfg cfg, const sidx
     bench_embree_free(e);
 }
 
+/* ---- packets and threads (issue 8) --------------------------------------------- */
+
+/* The issue-8 figures on the primary rays of one scene, beside Embree's:
+ *   packets  sidx_trace_tiles (4x4, 8x8, plain and frustum) against
+ *            single rays through the same "bvh", hits checked equal, and
+ *            Embree's rtcIntersect4/8/16 on the same image.  Embree gets
+ *            the rays reordered into 4x4 tiles (outside the timing), so
+ *            each of its packets is as compact as sidx's; sidx gathers
+ *            its tiles inside the timed call.  Times: thread CPU time,
+ *            best of 3.
+ *   threads  the "bvh" build on 1 and 2 threads against Embree's on a
+ *            "threads=1" and a "threads=2" device, and sidx_trace_parallel
+ *            on 1 and 2 threads: wall-clock, best of 5, so they mean
+ *            something only on a quiet machine (efficiency = T1 / (2·T2)). */
+static double pp_wall_build(const sidx_mesh *m, uint32_t threads, uint32_t *nodes)
+{
+    double best = INFINITY;
+    for (int rep = 0; rep < 5; ++rep) {
+        sidx_build_options bo;
+        memset(&bo, 0, sizeof bo);
+        bo.threads = threads;
+        sidx_accel *a = NULL;
+        const double t0 = tk_now_ms();
+        const sidx_status s = sidx_accel_build("bvh", m, &bo, &a, NULL);
+        const double t = tk_now_ms() - t0;
+        if (s != SIDX_OK) return -1;
+        sidx_accel_stats st;
+        sidx_accel_stats_get(a, &st);
+        *nodes = st.nodes;
+        sidx_accel_destroy(a);
+        if (t < best) best = t;
+    }
+    return best;
+}
+
+static size_t pp_mismatches(const sidx_hit *a, const sidx_hit *b, size_t n)
+{
+    size_t bad = 0;
+    for (size_t i = 0; i < n; ++i)
+        if (a[i].prim != b[i].prim || (a[i].prim != SIDX_NO_HIT && a[i].t != b[i].t)) ++bad;
+    return bad;
+}
+
+static void packet_parallel_rows(FILE *f, const run_opts *o, const scene_spec *sc, const sidx_mesh *m,
+                                 const kind_data *k)
+{
+    const size_t n = k->br.n;
+    size_t w = (size_t)ceil(sqrt((double)n)); /* tk_make_rays' primary image width */
+    if (w == 0) w = 1;
+    const uint32_t W = (uint32_t)w, H = (uint32_t)(n / w); /* whole rows only */
+    const size_t N = (size_t)W * H;
+    if (N < 64) return;
+    sidx_accel *a = NULL;
+    sidx_build_options bo;
+    memset(&bo, 0, sizeof bo);
+    if (sidx_accel_build("bvh", m, &bo, &a, NULL) != SIDX_OK) return;
+    sidx_hit *ref = malloc(N * sizeof *ref), *got = malloc(N * sizeof *got);
+    tk_rayrec *tiled = malloc(N * sizeof *tiled);
+    sidx_hit *eh = malloc(N * sizeof *eh);
+    if (!ref || !got || !tiled || !eh) goto done;
+
+    /* single rays: the reference hits and the time to beat */
+    double single = INFINITY;
+    for (int rep = 0; rep < 3; ++rep) {
+        const double t0 = bench_clock_ms();
+        for (size_t i = 0; i < N; ++i) sidx_accel_intersect(a, &k->br.r[i], NULL, &ref[i]);
+        const double t = bench_clock_ms() - t0;
+        if (t < single) single = t;
+    }
+    fprintf(f, "\npackets %s: %ux%u primary rays, \"bvh\"; single rays %.3f Mrays/s (thread CPU time, best of 3)\n",
+            sc->name, W, H, (double)N / (single * 1e3));
+    double best_sidx = 0;
+    const char *best_sidx_name = "";
+    static const char *const pname[2] = {"plain", "frustum"};
+    for (uint32_t tile = 4; tile <= 8; tile += 4) {
+        uint64_t plain_boxes = 0;
+        for (int mode = 0; mode < 2; ++mode) {
+            const sidx_packet_options po = {mode ? SIDX_PACKET_FRUSTUM : SIDX_PACKET_PLAIN, 0, 0};
+            sidx_packet_stats ps;
+            memset(&ps, 0, sizeof ps);
+            double best = INFINITY;
+            for (int rep = 0; rep < 3; ++rep) {
+                sidx_packet_stats scratch;
+                memset(&scratch, 0, sizeof scratch);
+                const double t0 = bench_clock_ms();
+                sidx_trace_tiles(a, k->br.r, W, H, tile, &po, got, rep ? &scratch : &ps);
+                const double t = bench_clock_ms() - t0;
+                if (t < best) best = t;
+            }
+            const double mr = (double)N / (best * 1e3);
+            const size_t bad = pp_mismatches(ref, got, N);
+            if (!mode) plain_boxes = ps.box_tests;
+            fprintf(f, "packet sidx-%ux%u-%-8s %-12s %9.3f Mrays/s  %.2fx single  boxes/ray %.2f", tile, tile,
+                    pname[mode], sc->name, mr, single / best, (double)ps.box_tests / (double)N);
+            if (mode)
+                fprintf(f, " + frustum %.2f (%+.0f%% box tests vs plain, %.0f%% culled)",
+                        (double)ps.frustum_tests / (double)N,
+                        plain_boxes ? 100.0 * ((double)ps.box_tests - (double)plain_boxes) / (double)plain_boxes : 0.0,
+                        ps.frustum_tests ? 100.0 * (double)ps.frustum_culls / (double)ps.frustum_tests : 0.0);
+            fprintf(f, "  tris/ray %.2f%s\n", (double)ps.prim_tests / (double)N,
+                    bad ? "  ** hits differ from single rays **" : "");
+            if (bad) fprintf(f, "   (%zu of %zu hits differ)\n", bad, N);
+            if (mr > best_sidx) {
+                best_sidx = mr;
+                best_sidx_name = tile == 4 ? (mode ? "4x4-frustum" : "4x4-plain") : (mode ? "8x8-frustum" : "8x8-plain");
+            }
+        }
+    }
+    if (o->embree) {
+        /* the same image in 4x4 tiles (rows of whole tiles only) */
+        const uint32_t TW = W / 4 * 4, TH = H / 4 * 4;
+        size_t nt = 0;
+        for (uint32_t y0 = 0; y0 < TH; y0 += 4)
+            for (uint32_t x0 = 0; x0 < TW; x0 += 4)
+                for (uint32_t y = 0; y < 4; ++y)
+                    for (uint32_t x = 0; x < 4; ++x) tiled[nt++] = k->rec[(size_t)(y0 + y) * W + x0 + x];
+        bench_embree_cfg cfg;
+        bench_embree_parse("embree", &cfg);
+        bench_embree *e = NULL;
+        double bms;
+        char msg[256];
+        if (bench_embree_build(m, cfg, &e, &bms, msg, sizeof msg)) {
+            double best_e = 0;
+            int best_p = 0;
+            static const int widths[4] = {1, 4, 8, 16};
+            for (int p = 0; p < 4; ++p) {
+                double best = INFINITY;
+                for (int rep = 0; rep < 3; ++rep) {
+                    const double t = bench_embree_trace(e, tiled, nt, 0, widths[p], eh);
+                    if (t < best) best = t;
+                }
+                const double mr = (double)nt / (best * 1e3);
+                fprintf(f, "packet embree-p%-2d(4x4 tiles) %-12s %9.3f Mrays/s\n", widths[p], sc->name, mr);
+                if (widths[p] > 1 && mr > best_e) {
+                    best_e = mr;
+                    best_p = widths[p];
+                }
+            }
+            fprintf(f, "packet ratio %-12s best sidx (%s) / best Embree packet (p%d) = %.2f  (target >= 1.0)\n",
+                    sc->name, best_sidx_name, best_p, best_e > 0 ? best_sidx / best_e : 0.0);
+            bench_embree_free(e);
+        } else {
+            fprintf(stderr, "sidx-bench run: embree on %s: %s\n", sc->name, msg);
+        }
+    }
+
+    /* threads: builds */
+    uint32_t n1 = 0, n2 = 0;
+    const double b1 = pp_wall_build(m, 1, &n1), b2 = pp_wall_build(m, 2, &n2);
+    fprintf(f, "parallel %s build \"bvh\": 1 thread %.2f ms, 2 threads %.2f ms (%.2fx)%s; wall-clock, best of 5\n",
+            sc->name, b1, b2, b2 > 0 ? b1 / b2 : 0.0, n1 == n2 ? "" : "  ** node counts differ **");
+    if (o->embree) {
+        double eb[2] = {INFINITY, INFINITY};
+        for (unsigned t = 1; t <= 2; ++t)
+            for (int rep = 0; rep < 5; ++rep) {
+                bench_embree_cfg cfg;
+                bench_embree_parse("embree", &cfg);
+                bench_embree *e = NULL;
+                double ms;
+                char msg[256];
+                if (!bench_embree_build_threads(m, cfg, t, &e, &ms, msg, sizeof msg)) break;
+                bench_embree_free(e);
+                if (ms < eb[t - 1]) eb[t - 1] = ms;
+            }
+        fprintf(f, "parallel %s build embree: threads=1 %.2f ms, threads=2 %.2f ms; sidx/embree at 1 thread %.2f, "
+                   "at 2 threads %.2f (target <= 1.5)\n",
+                sc->name, eb[0], eb[1], b1 / eb[0], b2 / eb[1]);
+    }
+    /* threads: tracing (single rays, batches over threads), repeated to ~100 ms per run */
+    {
+        double t1 = INFINITY, t2 = INFINITY, cpu2 = 0;
+        const int reps = single > 0 ? (int)(100.0 / single) + 1 : 1;
+        for (unsigned th = 1; th <= 2; ++th)
+            for (int rep = 0; rep < 5; ++rep) {
+                const double c0 = tk_process_cpu_ms(), t0 = tk_now_ms();
+                for (int r = 0; r < reps; ++r) sidx_trace_parallel(a, k->br.r, N, NULL, got, th);
+                const double t = tk_now_ms() - t0, c = tk_process_cpu_ms() - c0;
+                if (th == 1 && t < t1) t1 = t;
+                if (th == 2 && t < t2) {
+                    t2 = t;
+                    cpu2 = c;
+                }
+            }
+        const size_t bad = pp_mismatches(ref, got, N);
+        fprintf(f, "parallel %s trace \"bvh\" primary: 1 thread %.2f ms, 2 threads %.2f ms (CPU/wall %.2f): "
+                   "efficiency %.0f%% (target >= 90%%); wall-clock, best of 5, %d passes%s\n",
+                sc->name, t1, t2, t2 > 0 ? cpu2 / t2 : 0.0, t2 > 0 ? 100.0 * t1 / (2.0 * t2) : 0.0, reps,
+                bad ? "  ** hits differ **" : "");
+    }
+done:
+    free(ref);
+    free(got);
+    free(tiled);
+    free(eh);
+    sidx_accel_destroy(a);
+}
+
 /* ---- output ------------------------------------------------------------------ */
 
 static void print_header(FILE *f)
@@ -914,7 +1113,12 @@ static void run_usage(FILE *out)
             "prim and |t - t_ref| > 1e-5 max(1,|t_ref|)), max relative t error.\n"
             "Embree rows: rtcIntersect1 on one thread (device \"threads=1\"), scene flags none or\n"
             "ROBUST, build quality MEDIUM (HIGH for -hq); -p4/-p8/-p16 rows use rtcIntersect4/8/16\n"
-            "on primary rays.\n");
+            "on primary rays.\n"
+            "Packets and threads (primary rays, \"bvh\" in --accel; --no-packets skips them):\n"
+            "sidx_trace_tiles 4x4/8x8 plain/frustum vs single rays and vs Embree rtcIntersect4/8/16\n"
+            "on the same image in 4x4 tiles (thread CPU time); the bvh build on 1 and 2 threads vs\n"
+            "Embree on threads=1/2 devices, sidx_trace_parallel 1 vs 2 threads (wall-clock: quiet\n"
+            "machine only).\n");
 }
 
 int bench_cmd_run(int argc, char **argv)
@@ -1098,6 +1302,9 @@ int bench_cmd_run(int argc, char **argv)
                     rs.v[i].box == SIDX_BOX_ROBUST)
                     print_row(f, &rs.v[i]);
         auto_line(f, &rs, first, sc, &m, kd, nk);
+        for (int k = 0; k < nk; ++k) /* packets and threads: primary rays over "bvh" */
+            if (o.packets && kinds[k] == TK_RAYS_PRIMARY && bench_list_has(o.accel_list, "bvh"))
+                packet_parallel_rows(f, &o, sc, &m, &kd[k]);
         fflush(f);
         for (int k = 0; k < nk; ++k) kind_data_free(&kd[k]);
         sidx_mesh_free(&m);

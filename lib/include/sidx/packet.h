@@ -17,8 +17,9 @@
  *   - early exit: a node no ray of the packet hits is dropped at once;
  *   - adaptive switch (the deck's "hybrid mix with adaptive switch"): a
  *     packet whose rays do not share direction signs is traced ray by ray
- *     from the start, and when only 1 or 2 rays of the last group still
- *     hit an inner node, those rays finish that subtree alone;
+ *     from the start, and when only 1 or 2 rays of the last group — or,
+ *     deeper than 8 levels, of the whole packet — still hit an inner
+ *     node, those rays finish that subtree alone;
  *   - frustum culling (SIDX_PACKET_FRUSTUM; Reshetov, Soupikov, Hurley
  *     2005; Benthin & Wald): when every ray starts at one point (a pinhole
  *     camera), the 4 corner rays of the tile span a pyramid holding every
@@ -26,6 +27,9 @@
  *     one test instead of up to 64 ray-box tests — that pays in the upper
  *     levels, where boxes are large and the frustum is small relative to
  *     them; deeper than frustum_depth the walk switches to per-ray tests.
+ *     The frustum is tested only where the first active group of 8 rays
+ *     missed and at least 2 more groups remain (it replaces those tests),
+ *     so a 4x4 tile (2 groups) never uses it.
  *
  * Results are those of single-ray sidx_accel_intersect (same watertight
  * test, same robust box test, every ray keeps its own closest hit; on an
