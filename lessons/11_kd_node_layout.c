@@ -8,16 +8,17 @@
  * Bounding Box!" ("Would be 24 bytes: 4X explosion (!)"), "Memory Layout"
  * and "Other Data".
  *
- * What it shows: a kd-tree (default over the teapot) as its build events
- * describe it, and for the first few nodes the two 32-bit words of the
- * deck's compact node, bit by bit: the split position as an IEEE float,
- * and the child index shifted left by two with the axis (or 3 = leaf) in
- * the low bits.  The words are encoded here from the events, following
- * the layout documented in lib/kdtree_internal.h; what is checked is what
- * the layout relies on: both children of every inner node have
- * consecutive ids (so one index is enough), and the encoding decodes back
- * to the same node.  Then memory: 8 bytes per node against a node that
- * also stores its box, measured with sidx_accel_stats.
+ * What it shows: a kd-tree (default over the teapot) and, for the first
+ * few nodes, the two 32-bit words of the deck's compact node, bit by bit,
+ * read from the built tree's own memory (sidx_kdtree_nodes, sidx/kdtree.h):
+ * the split position as an IEEE float, and the child index shifted left
+ * by two with the axis (or 3 = leaf) in the low bits.  What is checked is
+ * what the layout relies on, against what the build said it did (its
+ * BUILD_* events, recorded): every word decodes to the split or leaf the
+ * build reported for that node, and the two children of every inner node
+ * are the nodes at ids k and k+1 (so one index is enough).  Then memory:
+ * 8 bytes per node against a node that also stores its box, measured with
+ * sidx_accel_stats.
  *
  * Run:   build/lessons/11_kd_node_layout [SCENE]
  *        SCENE = a built-in scene name or .obj/.ply (default teapot)
@@ -28,6 +29,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include "sidx/sidx.h"
+#include "sidx/kdtree.h"
 
 static void usage(FILE *f)
 {
@@ -47,9 +49,10 @@ static void bits32(uint32_t w, int groups)
     }
 }
 
+/* What the build events say about one node. */
 typedef struct {
     int seen, leaf, axis;
-    uint32_t count, parent, first_child, nchild;
+    uint32_t count, parent;
     float pos;
 } node_info;
 
@@ -90,84 +93,102 @@ int main(int argc, char **argv)
     }
     sidx_accel_stats st;
     sidx_accel_stats_get(kd, &st);
-    node_info *ni = calloc(st.nodes ? st.nodes : 1, sizeof *ni);
+    /* the tree's own node array: these are the bytes the traversal reads */
+    const sidx_kd_node *nodes = NULL;
+    uint32_t num_nodes = 0;
+    if (sidx_kdtree_nodes(kd, &nodes, &num_nodes, &err) != SIDX_OK) {
+        fprintf(stderr, "11_kd_node_layout: %s\n", err.message);
+        return 1;
+    }
+    /* what the build reported, node by node */
+    node_info *ni = calloc(num_nodes ? num_nodes : 1, sizeof *ni);
     if (!ni) return 1;
+    int events_ok = !rec.overflow;
     for (size_t i = 0; i < rec.count; ++i) {
         const sidx_event *e = &rec.events[i];
-        if (e->node >= st.nodes) continue;
+        if (e->type != SIDX_EV_BUILD_NODE && e->type != SIDX_EV_BUILD_SPLIT && e->type != SIDX_EV_BUILD_LEAF) continue;
+        if (e->node >= num_nodes) { events_ok = 0; continue; }
         node_info *n = &ni[e->node];
         if (e->type == SIDX_EV_BUILD_NODE) {
             n->seen = 1;
             n->parent = e->parent;
-            n->first_child = UINT32_MAX;
-            if (e->parent < st.nodes) {
-                node_info *p = &ni[e->parent];
-                if (p->nchild == 0 || e->node < p->first_child) p->first_child = e->node;
-                p->nchild++;
-            }
         } else if (e->type == SIDX_EV_BUILD_SPLIT) {
             n->axis = e->axis;
             n->pos = e->pos;
-        } else if (e->type == SIDX_EV_BUILD_LEAF) {
+        } else {
             n->leaf = 1;
             n->count = e->count;
         }
     }
-    /* children side by side, and the leaves' offsets in leaf order */
-    int side_by_side = 1, roundtrip = 1;
-    uint32_t offset = 0, inner = 0;
-    uint32_t *leaf_off = calloc(st.nodes ? st.nodes : 1, sizeof *leaf_off);
-    if (!leaf_off) return 1;
-    for (uint32_t i = 0; i < st.nodes; ++i) {
-        if (!ni[i].seen) continue;
-        if (ni[i].leaf) { leaf_off[i] = offset; offset += ni[i].count; continue; }
+    /* decode every real node and compare with the events; an inner
+     * node's children are read from its word, and the build must have
+     * created exactly those two nodes as its children */
+    int decoded = events_ok, side_by_side = events_ok;
+    uint32_t inner = 0;
+    for (uint32_t i = 0; i < num_nodes; ++i) {
+        const uint32_t w0 = nodes[i].u.count, w1 = nodes[i].bits; /* word 0 read as raw bits */
+        const int is_leaf = (w1 & 3u) == SIDX_KD_LEAF;
+        if (!ni[i].seen || is_leaf != ni[i].leaf) { decoded = 0; continue; }
+        if (is_leaf) {
+            if (w0 != ni[i].count) decoded = 0;
+            continue;
+        }
         ++inner;
-        if (ni[i].nchild != 2) side_by_side = 0;
-        /* the other child must be first_child + 1 */
-        uint32_t other = UINT32_MAX;
-        for (uint32_t j = ni[i].first_child + 1; j < st.nodes && j <= ni[i].first_child + 1; ++j)
-            if (ni[j].seen && ni[j].parent == i) other = j;
-        if (other == UINT32_MAX) side_by_side = 0;
+        float split;
+        memcpy(&split, &w0, sizeof split);
+        if (split != ni[i].pos || (int)(w1 & 3u) != ni[i].axis) decoded = 0;
+        const uint32_t c = w1 >> 2;
+        if (c + 1u >= num_nodes || !ni[c].seen || !ni[c + 1u].seen || ni[c].parent != i || ni[c + 1u].parent != i)
+            side_by_side = 0;
     }
-    printf("== '%s': kd-tree of %u nodes (%u inner, %u leaves), %llu triangle references\n", spec, st.nodes, inner,
+    printf("== '%s': kd-tree of %u nodes (%u inner, %u leaves), %llu triangle references\n", spec, num_nodes, inner,
            st.leaves, (unsigned long long)st.prim_refs);
-    printf("\n== The first nodes, as two 32-bit words each\n"
+    printf("\n== The first nodes, as the two 32-bit words stored in the tree (sidx_kdtree_nodes)\n"
            "   inner: word 0 = split position (float);  word 1 = left child << 2 | axis (0 x, 1 y, 2 z)\n"
            "   leaf:  word 0 = triangle count;          word 1 = offset into the reference array << 2 | 3\n\n");
-    int shown = 0;
-    for (uint32_t i = 0; i < st.nodes && shown < 8; ++i) {
-        if (!ni[i].seen) continue;
-        uint32_t w0, w1;
-        if (ni[i].leaf) {
-            w0 = ni[i].count;
-            w1 = leaf_off[i] << 2 | 3u;
+    /* the first six nodes (the top of the tree: inner nodes), then the
+     * first leaf holding triangles and the first empty leaf */
+    uint32_t show[8], nshow = 0, full = UINT32_MAX, empty = UINT32_MAX;
+    for (uint32_t i = 0; i < num_nodes && i < 6; ++i) show[nshow++] = i;
+    for (uint32_t i = 0; i < num_nodes; ++i) {
+        if ((nodes[i].bits & 3u) != SIDX_KD_LEAF) continue;
+        if (nodes[i].u.count && full == UINT32_MAX) full = i;
+        if (!nodes[i].u.count && empty == UINT32_MAX) empty = i;
+    }
+    if (full != UINT32_MAX && full >= 6) show[nshow++] = full;
+    if (empty != UINT32_MAX && empty >= 6) show[nshow++] = empty;
+    if (nshow == 8 && show[6] > show[7]) { const uint32_t t = show[6]; show[6] = show[7]; show[7] = t; }
+    const uint32_t *refs = NULL;
+    uint32_t num_refs = 0;
+    if (sidx_kdtree_refs(kd, &refs, &num_refs, &err) != SIDX_OK) {
+        fprintf(stderr, "11_kd_node_layout: %s\n", err.message);
+        return 1;
+    }
+    for (uint32_t k = 0; k < nshow; ++k) {
+        const uint32_t i = show[k];
+        const uint32_t w0 = nodes[i].u.count, w1 = nodes[i].bits;
+        const int is_leaf = (w1 & 3u) == SIDX_KD_LEAF;
+        printf("  node %u (at byte %zu of the node array): ", i, (size_t)i * sizeof *nodes);
+        if (is_leaf) {
+            printf("leaf, %u triangles from reference %u", w0, w1 >> 2);
+            if (w0 && (w1 >> 2) + w0 <= num_refs) {
+                printf(": triangles");
+                for (uint32_t j = 0; j < w0 && j < 6; ++j) printf(" %u", refs[(w1 >> 2) + j]);
+                if (w0 > 6) printf(" ...");
+            }
+            printf("\n");
         } else {
-            memcpy(&w0, &ni[i].pos, sizeof w0);
-            w1 = ni[i].first_child << 2 | (uint32_t)ni[i].axis;
+            float split;
+            memcpy(&split, &w0, sizeof split);
+            printf("inner, split %c at %g, children %u and %u\n", "xyz"[w1 & 3u], split, w1 >> 2, (w1 >> 2) + 1u);
         }
-        /* decode back */
-        const int is_leaf = (w1 & 3u) == 3u;
-        if (is_leaf != ni[i].leaf) roundtrip = 0;
-        if (!is_leaf) {
-            float p;
-            memcpy(&p, &w0, sizeof p);
-            if (p != ni[i].pos || (int)(w1 & 3u) != ni[i].axis || (w1 >> 2) != ni[i].first_child) roundtrip = 0;
-        } else if (w0 != ni[i].count || (w1 >> 2) != leaf_off[i]) {
-            roundtrip = 0;
-        }
-        printf("  node %u: ", i);
-        if (ni[i].leaf)
-            printf("leaf, %u triangles from reference %u\n", ni[i].count, leaf_off[i]);
-        else
-            printf("inner, split %c at %g, children %u and %u\n", "xyz"[ni[i].axis], ni[i].pos, ni[i].first_child,
-                   ni[i].first_child + 1);
         printf("    word 0  0x%08x  ", w0);
         bits32(w0, 0);
         printf("\n    word 1  0x%08x  ", w1);
         bits32(w1, 1);
         printf("  (low 2 bits: %u = %s)\n", w1 & 3u, is_leaf ? "leaf" : (w1 & 3u) == 0 ? "x" : (w1 & 3u) == 1 ? "y" : "z");
-        ++shown;
     }
+    printf("\n  sizeof(sidx_kd_node) = %zu bytes\n", sizeof(sidx_kd_node));
     const double compact = 8.0 * st.nodes, boxed = (8.0 + 24.0) * st.nodes;
     printf("\n== Memory\n");
     printf("  nodes x 8 bytes                  %10.1f KiB\n", compact / 1024);
@@ -175,11 +196,11 @@ int main(int argc, char **argv)
     printf("  references x 4 bytes             %10.1f KiB\n", 4.0 * st.prim_refs / 1024);
     printf("  the whole structure (stats)      %10.1f KiB  (also triangle copies, allocation slack)\n", st.bytes / 1024.0);
     printf("  A node needs no box: the traversal knows its cell as the ray interval [t_near, t_far].\n");
+    printf("  Every stored word decodes to the split or leaf the build reported: %s\n", decoded ? "yes" : "NO");
     printf("  Both children of every inner node sit side by side (ids k and k+1): %s\n", side_by_side ? "yes" : "NO");
-    printf("CHECK decoded_matches=%d\n", roundtrip);
+    printf("CHECK decoded_matches=%d\n", decoded && num_nodes == st.nodes);
     printf("CHECK children_side_by_side=%d\n", side_by_side && inner > 0);
     free(ni);
-    free(leaf_off);
     sidx_recorder_free(&rec);
     sidx_accel_destroy(kd);
     sidx_mesh_free(&mesh);

@@ -104,7 +104,7 @@ static void leaf_finish(kd_builder *b, uint32_t idx, uint32_t depth, sidx_aabb c
     const float cost = b->c_tri * (float)n;
     b->sah += rel_area(b, idx, cell) * cost;
     SIDX_EMIT(1, b->hook, SIDX_EV_BUILD_LEAF, e_.structure = b->name; e_.node = idx; e_.depth = depth; e_.count = n;
-              e_.cost = cost; e_.reason = reason; e_.bounds = cell);
+              e_.cost = cost; e_.reason = reason; e_.bounds = cell; e_.prims = n ? b->prims + offset : NULL);
 }
 
 static void inner_finish(kd_builder *b, uint32_t idx, uint32_t depth, sidx_aabb cell, uint32_t axis, float pos,
@@ -596,10 +596,12 @@ static sidx_status binned_choice(kd_builder *b, uint32_t idx, sidx_aabb cell, co
         memset(cnt, 0, (size_t)B * 2u * sizeof *cnt);
         const float scale = (float)B / (hi - lo);
         for (uint32_t i = 0; i < n; ++i) {
-            int s0 = (int)((axis_of(refs[i].box.min, k) - lo) * scale);
-            int s1 = (int)((axis_of(refs[i].box.max, k) - lo) * scale);
-            s0 = s0 < 0 ? 0 : s0 >= (int)B ? (int)B - 1 : s0;
-            s1 = s1 < 0 ? 0 : s1 >= (int)B ? (int)B - 1 : s1;
+            /* clamp in float: when hi - lo overflows, scale is 0 and
+             * inf·0 = NaN, which no int holds (found by fuzz_build) */
+            const float f0 = (axis_of(refs[i].box.min, k) - lo) * scale;
+            const float f1 = (axis_of(refs[i].box.max, k) - lo) * scale;
+            const int s0 = f0 > 0.0f ? (f0 < (float)B ? (int)f0 : (int)B - 1) : 0;
+            const int s1 = f1 > 0.0f ? (f1 < (float)B ? (int)f1 : (int)B - 1) : 0;
             start[s0]++;
             end[s1]++;
         }
@@ -891,4 +893,40 @@ void sidx__kd_stats(const sidx_accel *a, sidx_accel_stats *s)
     s->bytes = sizeof *kd + (size_t)kd->num_nodes * sizeof(kd_node) + (size_t)kd->num_refs * sizeof(uint32_t) +
                (size_t)kd->num_refs * sizeof(kd_tri);
     s->sah_cost = kd->sah_cost;
+}
+
+/* ==== the read-only view (sidx/kdtree.h) =================================== */
+
+/* Every registry name of the family shares the one vtable (kdtree_traverse.c,
+ * declared through accel_registry.def), so the vtable identifies a kd-tree
+ * whatever builder made it. */
+
+static sidx_status kd_view(const sidx_accel *a, const void *p, const void *q, sidx_error *err, const char *fn,
+                           const kd_tree **out)
+{
+    if (!a || !p || !q) return sidx__fail(err, SIDX_ERR_INVALID_ARG, "%s: NULL argument", fn);
+    if (a->vt != &sidx__kdtree_vtable || !a->impl)
+        return sidx__fail(err, SIDX_ERR_INVALID_ARG, "%s: '%s' is not a kd-tree", fn, a->name ? a->name : "?");
+    *out = a->impl;
+    return SIDX_OK;
+}
+
+sidx_status sidx_kdtree_nodes(const sidx_accel *a, const sidx_kd_node **nodes, uint32_t *count, sidx_error *err)
+{
+    const kd_tree *kd = NULL;
+    const sidx_status s = kd_view(a, nodes, count, err, "sidx_kdtree_nodes", &kd);
+    if (s != SIDX_OK) return s;
+    *nodes = kd->nodes;
+    *count = kd->num_nodes;
+    return SIDX_OK;
+}
+
+sidx_status sidx_kdtree_refs(const sidx_accel *a, const uint32_t **refs, uint32_t *count, sidx_error *err)
+{
+    const kd_tree *kd = NULL;
+    const sidx_status s = kd_view(a, refs, count, err, "sidx_kdtree_refs", &kd);
+    if (s != SIDX_OK) return s;
+    *refs = kd->prims;
+    *count = kd->num_refs;
+    return SIDX_OK;
 }

@@ -32,6 +32,7 @@
 #define SIDX_KDTREE_INTERNAL_H
 
 #include "sidx_internal.h"
+#include "sidx/kdtree.h"
 
 /* Low 2 bits of kd_node.bits: the split axis, or 3 for a leaf. */
 #define KD_LEAF_FLAG 3u
@@ -42,13 +43,13 @@
  * pushes at most one far child), so opt.max_depth is clamped to it. */
 #define KD_MAX_DEPTH 64u
 
-typedef struct kd_node {
-    union {
-        float split;    /* inner: split plane position on `axis` */
-        uint32_t count; /* leaf: number of primitive references */
-    } u;
-    uint32_t bits;      /* inner: child << 2 | axis;  leaf: offset << 2 | 3 */
-} kd_node;
+/* The node is the public sidx_kd_node (sidx/kdtree.h), so that
+ * sidx_kdtree_nodes can hand out the tree's own array:
+ *   u.split  inner: split plane position on `axis`
+ *   u.count  leaf: number of primitive references
+ *   bits     inner: child << 2 | axis;  leaf: offset << 2 | 3 */
+typedef sidx_kd_node kd_node;
+_Static_assert(KD_LEAF_FLAG == SIDX_KD_LEAF, "one leaf flag");
 
 _Static_assert(sizeof(kd_node) == 8, "the deck's compact kd-tree node is 8 bytes");
 
@@ -57,7 +58,21 @@ static inline uint32_t kd_axis(const kd_node *n) { return n->bits & 3u; }
 static inline uint32_t kd_child(const kd_node *n) { return n->bits >> 2; }    /* left; right = +1 */
 static inline uint32_t kd_offset(const kd_node *n) { return n->bits >> 2; }   /* into kd_tree.prims */
 static inline uint32_t kd_count(const kd_node *n) { return n->u.count; }
-static inline int kd_is_empty(const kd_node *n) { return kd_is_leaf(n) & (n->u.count == 0u); }
+/* An empty leaf is always written with offset 0 (kd_make_leaf), so all
+ * 8 bytes of it are one fixed pattern: the traversal, which peeks at both
+ * children at every step, tests it with a single 64-bit compare. */
+static inline uint64_t kd_word(const kd_node *n)
+{
+    uint64_t w;
+    memcpy(&w, n, sizeof w);
+    return w;
+}
+static inline uint64_t kd_word_empty(void)
+{
+    const kd_node empty = {{.count = 0u}, KD_LEAF_FLAG};
+    return kd_word(&empty);
+}
+static inline int kd_is_empty(const kd_node *n) { return kd_word(n) == kd_word_empty(); }
 
 static inline kd_node kd_make_inner(uint32_t axis, float split, uint32_t child)
 {
@@ -70,7 +85,7 @@ static inline kd_node kd_make_leaf(uint32_t count, uint32_t offset)
 {
     kd_node n;
     n.u.count = count;
-    n.bits = (offset << 2) | KD_LEAF_FLAG;
+    n.bits = ((count ? offset : 0u) << 2) | KD_LEAF_FLAG; /* empty: offset 0, see kd_is_empty */
     return n;
 }
 

@@ -52,6 +52,13 @@
  * deck's naive variant instead: left child first whatever the ray's
  * direction, every overlapped cell visited, no early termination.
  *
+ * Measured and rejected (bunny, 20k primary + 20k diffuse rays, callgrind
+ * and interleaved timings against "bvh"): the deck's branchy three-way
+ * step executes ~30% fewer instructions but ran ~10% slower (the near/far
+ * branch is a coin toss); a step that also selects the next node's word
+ * and interval by bit masks, with no branch at all, halves the
+ * mispredictions but adds enough instructions to run no faster.
+ *
  * Mailboxing (the deck's grid slide: "Per-ray cache of object IDs — data
  * local to a ray (better!)"): a triangle referenced by several leaves is
  * tested once per ray.  The cache is a 16-entry direct-mapped table on the
@@ -104,6 +111,7 @@ static SIDX_INLINE int kd_walk(const sidx_accel *a, const sidx_ray *r, const sid
     if (mailbox) memset(mbox, 0xff, sizeof mbox);
     int may_stop = !naive; /* early termination allowed (see the NaN case) */
     uint32_t node = 0, depth = 0;
+    const uint64_t empty = kd_word_empty();
 
     for (;;) {
         const kd_node *nd = &nodes[node];
@@ -135,9 +143,9 @@ static SIDX_INLINE int kd_walk(const sidx_accel *a, const sidx_ray *r, const sid
                  * one of them is the next load anyway: peeking at both lets
                  * the walk skip empty leaves (the SAH's "big empty cells")
                  * instead of entering each and popping right back. */
-                const kd_node *nf = &nodes[first], *ns = &nodes[second];
-                const int vf = !far_only & !kd_is_empty(nf);
-                const int vs = !near_only & !kd_is_empty(ns);
+                const uint64_t wf = kd_word(&nodes[first]), ws = kd_word(&nodes[second]);
+                const int vf = !far_only & (wf != empty);
+                const int vs = !near_only & (ws != empty);
                 stack[sp].node = second;
                 stack[sp].t0 = s0;
                 stack[sp].t1 = t1;

@@ -14,6 +14,9 @@
  *  - Menger sponge (coplanar faces) builds and traces correctly;
  *  - mailboxing: same hits, fewer tests, MAILBOX_HIT events;
  *  - exact build and traversal event sequences on a two-triangle scene;
+ *  - the public view (sidx/kdtree.h): the tree's own node words decode to
+ *    the splits and leaves the build events reported; errors for NULL
+ *    arguments and for a structure that is not a kd-tree;
  *  - allocation failures at every point of every build: clean NOMEM. */
 #include <math.h>
 #include <setjmp.h>
@@ -25,6 +28,7 @@
 #include <string.h>
 #include <cmocka.h>
 #include "sidx/sidx.h"
+#include "sidx/kdtree.h"
 #include "common/testkit.h"
 #include "kdtree_internal.h"
 
@@ -894,6 +898,112 @@ static void test_build_stream(void **state)
     sidx_mesh_free(&m);
 }
 
+/* ---- the public view (sidx/kdtree.h) ------------------------------------------------------------ */
+
+/* sidx_kdtree_nodes / _refs hand out the tree's own arrays, and the words
+ * decode to exactly the splits and leaves the build events reported. */
+static void test_public_view(void **state)
+{
+    (void)state;
+    sidx_mesh m;
+    make_scene("teapot", 0, &m);
+    for (size_t k = 0; k < N_BUILDERS; ++k) {
+        sidx_recorder rec;
+        sidx_recorder_init(&rec);
+        const sidx_hook hook = sidx_recorder_hook(&rec);
+        sidx_build_options opt;
+        memset(&opt, 0, sizeof opt);
+        opt.hook = &hook;
+        sidx_accel *a = build(builders[k], &m, &opt);
+        assert_false(rec.overflow);
+        const sidx_kd_node *nodes = NULL;
+        const uint32_t *refs = NULL;
+        uint32_t nn = 0, nr = 0;
+        sidx_error err;
+        assert_int_equal(sidx_kdtree_nodes(a, &nodes, &nn, &err), SIDX_OK);
+        assert_int_equal(sidx_kdtree_refs(a, &refs, &nr, &err), SIDX_OK);
+        /* the real memory, not a copy */
+        assert_ptr_equal(nodes, tree_of(a)->nodes);
+        assert_ptr_equal(refs, tree_of(a)->prims);
+        sidx_accel_stats st;
+        sidx_accel_stats_get(a, &st);
+        assert_int_equal(nn, st.nodes);
+        assert_int_equal(nr, st.prim_refs);
+        assert_true(nn > 1);
+
+        uint32_t *parent = malloc(nn * sizeof *parent);
+        assert_non_null(parent);
+        for (uint32_t i = 0; i < nn; ++i) parent[i] = UINT32_MAX - 1u;
+        uint32_t splits = 0, leaves = 0, refs_seen = 0;
+        for (size_t i = 0; i < rec.count; ++i) {
+            const sidx_event *e = &rec.events[i];
+            if (e->type == SIDX_EV_BUILD_NODE) {
+                assert_true(e->node < nn);
+                parent[e->node] = e->parent;
+            } else if (e->type == SIDX_EV_BUILD_SPLIT) {
+                assert_true(e->node < nn);
+                const sidx_kd_node *n = &nodes[e->node];
+                assert_int_equal(n->bits & 3u, (uint32_t)e->axis);
+                assert_true(n->u.split == e->pos);
+                ++splits;
+            } else if (e->type == SIDX_EV_BUILD_LEAF) {
+                assert_true(e->node < nn);
+                const sidx_kd_node *n = &nodes[e->node];
+                assert_int_equal(n->bits & 3u, SIDX_KD_LEAF);
+                assert_int_equal(n->u.count, e->count);
+                const uint32_t off = n->bits >> 2;
+                assert_true(off + n->u.count <= nr);
+                if (n->u.count == 0) assert_int_equal(off, 0);
+                for (uint32_t j = 0; j < n->u.count; ++j) {
+                    assert_true(refs[off + j] < m.num_triangles);
+                    if (e->prims) assert_int_equal(refs[off + j], e->prims[j]);
+                }
+                refs_seen += n->u.count;
+                ++leaves;
+            }
+        }
+        assert_int_equal(splits + leaves, nn);
+        assert_int_equal(refs_seen, nr);
+        /* every inner node's children, decoded from its word, are the
+         * nodes the build reported as its children */
+        assert_int_equal(parent[0], UINT32_MAX);
+        for (uint32_t i = 0; i < nn; ++i) {
+            if ((nodes[i].bits & 3u) == SIDX_KD_LEAF) continue;
+            const uint32_t c = nodes[i].bits >> 2;
+            assert_true(c + 1u < nn);
+            assert_int_equal(parent[c], i);
+            assert_int_equal(parent[c + 1u], i);
+        }
+        free(parent);
+        sidx_recorder_free(&rec);
+        sidx_accel_destroy(a);
+    }
+
+    /* errors: NULL arguments, and a structure that is not a kd-tree */
+    sidx_accel *kd = build("kdtree", &m, NULL);
+    sidx_accel *bvh = build("bvh", &m, NULL);
+    const sidx_kd_node *nodes = (const sidx_kd_node *)&m; /* sentinels: must stay untouched */
+    const uint32_t *refs = (const uint32_t *)&m;
+    uint32_t count = 12345u;
+    sidx_error err;
+    memset(&err, 0, sizeof err);
+    assert_int_equal(sidx_kdtree_nodes(bvh, &nodes, &count, &err), SIDX_ERR_INVALID_ARG);
+    assert_int_equal(err.status, SIDX_ERR_INVALID_ARG);
+    assert_non_null(strstr(err.message, "not a kd-tree"));
+    assert_int_equal(sidx_kdtree_refs(bvh, &refs, &count, &err), SIDX_ERR_INVALID_ARG);
+    assert_int_equal(sidx_kdtree_nodes(NULL, &nodes, &count, &err), SIDX_ERR_INVALID_ARG);
+    assert_int_equal(sidx_kdtree_nodes(kd, NULL, &count, &err), SIDX_ERR_INVALID_ARG);
+    assert_int_equal(sidx_kdtree_nodes(kd, &nodes, NULL, NULL), SIDX_ERR_INVALID_ARG);
+    assert_int_equal(sidx_kdtree_refs(kd, NULL, &count, NULL), SIDX_ERR_INVALID_ARG);
+    assert_int_equal(sidx_kdtree_refs(kd, &refs, NULL, &err), SIDX_ERR_INVALID_ARG);
+    assert_ptr_equal(nodes, (const sidx_kd_node *)&m);
+    assert_ptr_equal(refs, (const uint32_t *)&m);
+    assert_int_equal(count, 12345u);
+    sidx_accel_destroy(kd);
+    sidx_accel_destroy(bvh);
+    sidx_mesh_free(&m);
+}
+
 /* ---- allocation failures ------------------------------------------------------------------------ */
 
 typedef struct fail_alloc {
@@ -974,6 +1084,7 @@ int main(void)
         cmocka_unit_test(test_node_layout),
         cmocka_unit_test(test_event_sequence),
         cmocka_unit_test(test_build_stream),
+        cmocka_unit_test(test_public_view),
         cmocka_unit_test(test_cannot_terminate),
         cmocka_unit_test(test_ray_inside_split_plane),
         cmocka_unit_test(test_zero_dirs_and_origin_on_split),
