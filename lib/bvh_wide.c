@@ -2,15 +2,13 @@
  * 8-wide nodes, traversed with SSE4.1 / AVX2 (bvh_wide_walk.h).
  *
  * Build = the ordinary binary build (bvh_build.c, binned SAH, Wald 2007),
- * then a top-down collapse (Dammertz et al. 2008; the same greedy rule as
- * Embree's BVH4/8 builders): a wide node starts with its binary node's two
- * children and repeatedly replaces the child of LARGEST SURFACE AREA by
- * its own two children until it has W of them or none is left to open.
- * The largest box is the one rays are most likely to enter (the SAH's
- * probability), so pulling its children up saves the most node visits.
- * A binary subtree of at most WIDE_LEAF_MERGE triangles is not opened at
- * all but becomes one leaf: its triangles are contiguous in the binary
- * tree's order and one SIMD pass tests all 4.
+ * then a collapse that picks, by dynamic programming on the SAH, which
+ * binary nodes become wide nodes, which subtrees become leaves (runs of
+ * 4-triangle blocks) and which dissolve into their parent's slots (see
+ * "collapse" below; Ylitie et al. 2017).  It replaces the greedy rule of
+ * Dammertz et al. 2008 and Embree's BVH4/8 builders (open the child of
+ * largest surface area until W are there), which never weighs a fuller
+ * node against a bigger leaf.
  *
  * The collapse keeps the binary tree's boxes, so the wide tree bounds
  * exactly what the binary one does; only the grouping changes.
@@ -77,37 +75,114 @@ wide_isa sidx__wide_pick_isa(uint32_t width)
     return WIDE_ISA_SCALAR;
 }
 
-static void set_kernels(wide_bvh *w)
+static void set_kernels(wide_bvh *w, sidx_tri_method tri)
 {
-    w->isect = w->width == 8 ? sidx__wide_isect_8_0 : sidx__wide_isect_4_0;
-    w->occl = w->width == 8 ? sidx__wide_occl_8_0 : sidx__wide_occl_4_0;
+    const wide_kernels *k = w->width == 8 ? &sidx__wide_kernels_8_0 : &sidx__wide_kernels_4_0;
 #ifdef SIDX_WIDE_X86
-    if (w->isa == WIDE_ISA_AVX2) {
-        w->isect = sidx__wide_isect_8_2;
-        w->occl = sidx__wide_occl_8_2;
-    } else if (w->isa == WIDE_ISA_SSE41) {
-        w->isect = sidx__wide_isect_4_1;
-        w->occl = sidx__wide_occl_4_1;
-    }
+    if (w->isa == WIDE_ISA_AVX2) k = &sidx__wide_kernels_8_2;
+    else if (w->isa == WIDE_ISA_SSE41) k = &sidx__wide_kernels_4_1;
 #endif
+    /* The triangle test is fixed at build: decide here, not per ray. */
+    const int simd_tri = tri == SIDX_TRI_WATERTIGHT;
+    w->isect = simd_tri ? k->isect_simd : k->isect_other;
+    w->occl = simd_tri ? k->occl_simd : k->occl_other;
+    w->isect_traced = k->isect_traced;
+    w->occl_traced = k->occl_traced;
 }
 
 /* ---- collapse ------------------------------------------------------------------ */
+
+/* Which binary subtrees become wide nodes, which become leaves and which
+ * are dissolved into their parent's slots is chosen to minimise the SAH
+ * cost of the wide tree, by dynamic programming over the binary tree
+ * (Ylitie, Karras, Laine 2017, "Efficient incoherent ray traversal on GPUs
+ * through compressed wide BVHs", sec. 4.1).  For every binary node n and
+ * every slot budget j = 1..W, cost[n][j] is the cheapest way to stand for
+ * n's subtree with at most j slots of the parent:
+ *   one slot:  a leaf,  A(n)·C_BLOCK·⌈N/4⌉  (a block tests 4 triangles),
+ *              or a wide node,  A(n)·C_NODE + split(n, W);
+ *   j slots:   the one-slot answer, or split(n, j) = min over k of
+ *              cost[left][k] + cost[right][j − k].
+ * A(n) is the surface area of n's box (the SAH's hit probability, up to
+ * the root's area, which is common to all terms).  Costs are per node
+ * visit (one pass over W boxes) and per block (one pass over 4
+ * triangles): both are one SIMD pass and a few cache lines, so 1 : 1,
+ * as in Embree's builders.  This replaces a greedy "open the child of
+ * largest area" rule: it fills nodes where that pays and keeps subtrees
+ * of up to WIDE_MAX_LEAF triangles as multi-block leaves where that pays. */
+#define WIDE_MAX_LEAF 8u
+#define WIDE_C_NODE 1.0f
+#define WIDE_C_BLOCK 1.0f
 
 typedef struct collapse {
     const bvh *b;
     uint32_t W;
     const uint32_t *sub_count, *sub_first; /* per binary node: triangles below it and the first one */
+    float *cost;                           /* [node][j − 1], W per node */
+    uint8_t *how;                          /* [node][j − 1]: 0 leaf, 1 wide node, 2 + k split (k slots left) */
+    uint8_t *node_k;                       /* [node]: slots given to the left child when n is a wide node */
     float *nodes;
     uint32_t num_inner;
     wide_tri4 *blocks;
     uint32_t num_blocks, num_leaves, max_depth;
-    uint32_t merge;
 } collapse;
 
-static int openable(const collapse *C, uint32_t n2)
+enum { HOW_LEAF = 0, HOW_NODE = 1, HOW_SPLIT = 2 };
+
+static void collapse_costs(collapse *C)
 {
-    return !bvh_is_leaf(&C->b->nodes[n2]) && C->sub_count[n2] > C->merge;
+    const uint32_t W = C->W, nn = C->b->num_nodes;
+    const bvh_node *bn = C->b->nodes;
+    for (uint32_t i = nn; i-- > 0;) {
+        float *c = C->cost + (size_t)i * W;
+        uint8_t *h = C->how + (size_t)i * W;
+        const float area = sidx_aabb_area(bvh_node_box(&bn[i]));
+        const uint32_t N = C->sub_count[i];
+        const int is_leaf = bvh_is_leaf(&bn[i]);
+        const float leaf = (is_leaf || N <= WIDE_MAX_LEAF) ? area * WIDE_C_BLOCK * (float)((N + 3u) / 4u) : INFINITY;
+        if (is_leaf) {
+            for (uint32_t j = 0; j < W; ++j) { c[j] = leaf; h[j] = HOW_LEAF; }
+            C->node_k[i] = 0;
+            continue;
+        }
+        const float *cl = C->cost + (size_t)(i + 1) * W, *cr = C->cost + (size_t)bn[i].left_or_first * W;
+        float split[8];
+        uint8_t split_k[8];
+        for (uint32_t j = 2; j <= W; ++j) {
+            split[j - 1] = INFINITY;
+            split_k[j - 1] = 1;
+            for (uint32_t k = 1; k < j; ++k) {
+                const float s = cl[k - 1] + cr[j - k - 1];
+                if (s < split[j - 1]) { split[j - 1] = s; split_k[j - 1] = (uint8_t)k; }
+            }
+        }
+        C->node_k[i] = split_k[W - 1];
+        const float node = area * WIDE_C_NODE + split[W - 1];
+        const float one = leaf <= node ? leaf : node;
+        const uint8_t one_how = leaf <= node ? HOW_LEAF : HOW_NODE;
+        c[0] = one;
+        h[0] = one_how;
+        for (uint32_t j = 2; j <= W; ++j) {
+            c[j - 1] = split[j - 1] < one ? split[j - 1] : one;
+            h[j - 1] = split[j - 1] < one ? (uint8_t)(HOW_SPLIT + split_k[j - 1]) : one_how;
+        }
+    }
+}
+
+/* The slots binary node n stands for with budget j: (node, is_leaf) pairs
+ * in the binary tree's left-to-right order. */
+static void gather(const collapse *C, uint32_t n, uint32_t j, uint32_t *kids, uint8_t *leaf, uint32_t *k)
+{
+    const uint8_t h = C->how[(size_t)n * C->W + j - 1];
+    if (h < HOW_SPLIT) {
+        kids[*k] = n;
+        leaf[*k] = h == HOW_LEAF;
+        ++*k;
+        return;
+    }
+    const uint32_t kl = h - HOW_SPLIT;
+    gather(C, n + 1, kl, kids, leaf, k);
+    gather(C, C->b->nodes[n].left_or_first, j - kl, kids, leaf, k);
 }
 
 /* Triangles [first, first + count) of the binary tree's order as a run of
@@ -139,9 +214,9 @@ static void set_slot(float *n, uint32_t W, uint32_t s, sidx_aabb bb)
     n[3 * W + s] = bb.max.x; n[4 * W + s] = bb.max.y; n[5 * W + s] = bb.max.z;
 }
 
-/* Wide node for binary node n2 (openable, or the root whatever it is);
- * nodes are numbered in pre-order, so a child's index is above its
- * parent's and refit can run backwards. */
+/* Wide node for binary node n2 (an inner node the costs made a wide node,
+ * or the root whatever it is); nodes are numbered in pre-order, so a
+ * child's index is above its parent's and refit can run backwards. */
 static uint32_t make_node(collapse *C, uint32_t n2, uint32_t depth)
 {
     const uint32_t W = C->W;
@@ -149,30 +224,14 @@ static uint32_t make_node(collapse *C, uint32_t n2, uint32_t depth)
     const uint32_t idx = C->num_inner++;
     if (depth > C->max_depth) C->max_depth = depth;
     uint32_t kids[8], k = 0;
-    if (openable(C, n2)) {
-        kids[k++] = n2 + 1;
-        kids[k++] = bn[n2].left_or_first;
-        while (k < W) {
-            int pick = -1;
-            float pick_area = -1.0f;
-            for (uint32_t i = 0; i < k; ++i) {
-                if (!openable(C, kids[i])) continue;
-                const float ar = sidx_aabb_area(bvh_node_box(&bn[kids[i]]));
-                if (ar > pick_area) {
-                    pick_area = ar;
-                    pick = (int)i;
-                }
-            }
-            if (pick < 0) break;
-            /* Replace it by its children in place (keeps spatial order). */
-            const uint32_t c = kids[pick];
-            for (uint32_t j = k; j > (uint32_t)pick + 1; --j) kids[j] = kids[j - 1];
-            kids[pick] = c + 1;
-            kids[pick + 1] = bn[c].left_or_first;
-            ++k;
-        }
+    uint8_t is_leaf[8];
+    if (!bvh_is_leaf(&bn[n2])) {
+        const uint32_t kl = C->node_k[n2];
+        gather(C, n2 + 1, kl, kids, is_leaf, &k);
+        gather(C, bn[n2].left_or_first, W - kl, kids, is_leaf, &k);
     } else {
-        kids[k++] = n2;
+        kids[k] = n2;
+        is_leaf[k++] = 1;
     }
     float *n = C->nodes + (size_t)idx * 8u * W;
     uint32_t *ch = (uint32_t *)(void *)(n + 6u * W), *id = (uint32_t *)(void *)(n + 7u * W);
@@ -183,7 +242,7 @@ static uint32_t make_node(collapse *C, uint32_t n2, uint32_t depth)
     }
     for (uint32_t s = 0; s < k; ++s) {
         set_slot(n, W, s, bvh_node_box(&bn[kids[s]]));
-        if (openable(C, kids[s])) {
+        if (!is_leaf[s]) {
             const uint32_t c = make_node(C, kids[s], depth + 1);
             ch[s] = c;
             id[s] = c;
@@ -247,8 +306,18 @@ static void emit_build(const sidx_accel *a, const wide_bvh *w, const uint32_t *c
         const float cost = (float)np * (a->opt.c_tri > 0.0f ? a->opt.c_tri : 1.0f);
         SIDX_EMIT(1, h, SIDX_EV_BUILD_NODE, e_.node = id; e_.parent = i; e_.depth = depth + 1;
                   e_.bounds = wide_slot_box(n, W, s); e_.count = np);
+        /* The event lists the leaf's ids in one run; the blocks interleave them with the
+         * vertices, so they are gathered (this runs only with a hook; no memory: no list). */
+        uint32_t *ids = sidx__alloc(a, np, sizeof *ids), nid = 0;
+        for (const wide_tri4 *B = w->blocks + (c & ~WIDE_LEAF_BIT); ids; ++B) {
+            for (int l = 0; l < 4; ++l)
+                if ((B->prim[l] & WIDE_PRIM_MASK) != WIDE_PAD_PRIM && nid < np)
+                    ids[nid++] = B->prim[l] & WIDE_PRIM_MASK;
+            if (B->prim[0] & WIDE_LAST_BLOCK) break;
+        }
         SIDX_EMIT(1, h, SIDX_EV_BUILD_LEAF, e_.node = id; e_.depth = depth + 1; e_.count = np; e_.cost = cost;
-                  e_.reason = SIDX_LEAF_FEW_PRIMS; e_.bounds = wide_slot_box(n, W, s));
+                  e_.reason = SIDX_LEAF_FEW_PRIMS; e_.bounds = wide_slot_box(n, W, s); e_.prims = ids);
+        sidx__free(a, ids);
     }
 }
 
@@ -354,21 +423,24 @@ static sidx_status wide_build(sidx_accel *a, sidx_error *err)
 
     s = SIDX_ERR_NOMEM;
     uint32_t *sub = NULL, *counts = NULL;
-    float *tmp_nodes = NULL;
+    float *tmp_nodes = NULL, *dp_cost = NULL;
+    uint8_t *dp_how = NULL;
     wide_tri4 *tmp_blocks = NULL;
     wide_bvh *w = sidx__calloc(a, 1, sizeof *w);
     if (!w) goto fail;
     w->width = W;
     w->num_prims = b->num_prims;
     w->isa = sidx__wide_pick_isa(W);
-    set_kernels(w);
+    set_kernels(w, a->opt.tri);
     w->bounds = sidx_aabb_empty();
     if (b->num_nodes > 0) {
         const uint32_t nn = b->num_nodes;
         sub = sidx__alloc(a, 2u * (size_t)nn, sizeof *sub);
         tmp_nodes = sidx__alloc(a, (size_t)nn * 8u * W, sizeof(float));
         tmp_blocks = sidx__alloc(a, b->num_prims + 1u, sizeof *tmp_blocks);
-        if (!sub || !tmp_nodes || !tmp_blocks) goto fail;
+        dp_cost = sidx__alloc(a, (size_t)nn * W, sizeof *dp_cost);
+        dp_how = sidx__alloc(a, (size_t)nn * (W + 1u), 1);
+        if (!sub || !tmp_nodes || !tmp_blocks || !dp_cost || !dp_how) goto fail;
         uint32_t *sub_count = sub, *sub_first = sub + nn;
         for (uint32_t i = nn; i-- > 0;) {
             const bvh_node *n = &b->nodes[i];
@@ -380,8 +452,14 @@ static sidx_status wide_build(sidx_accel *a, sidx_error *err)
                 sub_first[i] = sub_first[i + 1];
             }
         }
-        collapse C = {b, W, sub_count, sub_first, tmp_nodes, 0, tmp_blocks, 0, 0, 0, WIDE_LEAF_MERGE};
+        collapse C = {b, W, sub_count, sub_first, dp_cost, dp_how, dp_how + (size_t)nn * W, tmp_nodes, 0,
+                      tmp_blocks, 0, 0, 0};
+        collapse_costs(&C);
         make_node(&C, 0, 0);
+        sidx__free(a, dp_cost);
+        sidx__free(a, dp_how);
+        dp_cost = NULL;
+        dp_how = NULL;
         /* Exact-size, aligned copies: a node is whole cache lines. */
         w->nodes_mem = sidx__alloc(a, (size_t)C.num_inner * 8u * W * sizeof(float) + 64u, 1);
         w->blocks_mem = sidx__alloc(a, (size_t)C.num_blocks * sizeof(wide_tri4) + 64u, 1);
@@ -422,6 +500,7 @@ static sidx_status wide_build(sidx_accel *a, sidx_error *err)
     sidx__free(a, tmp_blocks);
     sidx__bvh_vtable.destroy(&bin);
     a->impl = w;
+    a->fills_uv = 1; /* the walk sets u, v from its leaf blocks (bvh_wide_walk.h) */
     return SIDX_OK;
 
 fail:
@@ -429,6 +508,8 @@ fail:
     sidx__free(a, counts);
     sidx__free(a, tmp_nodes);
     sidx__free(a, tmp_blocks);
+    sidx__free(a, dp_cost);
+    sidx__free(a, dp_how);
     wide_free(a, w);
     sidx__bvh_vtable.destroy(&bin);
     a->impl = NULL;
@@ -458,12 +539,15 @@ static void wide_stats(const sidx_accel *a, sidx_accel_stats *s)
 
 static void wide_intersect(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
 {
-    ((const wide_bvh *)a->impl)->isect(a, r, q, hit);
+    const wide_bvh *w = a->impl;
+    if (SIDX_QUERY_TRACED(q)) w->isect_traced(a, r, q, hit);
+    else w->isect(a, r, q, hit);
 }
 
 static int wide_occluded(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
 {
-    return ((const wide_bvh *)a->impl)->occl(a, r, q);
+    const wide_bvh *w = a->impl;
+    return SIDX_QUERY_TRACED(q) ? w->occl_traced(a, r, q) : w->occl(a, r, q);
 }
 
 const sidx_accel_vtable sidx__wide_vtable = {wide_build, wide_intersect, wide_occluded,

@@ -43,11 +43,6 @@
 #define WIDE_PRIM_MASK 0x7FFFFFFFu
 #define WIDE_PAD_PRIM 0x7FFFFFFFu
 
-/* A BVH2 subtree of at most this many triangles becomes one wide leaf of
- * one block: testing 4 triangles in one SIMD pass costs about what one
- * box test does, so splitting them further only adds box tests. */
-#define WIDE_LEAF_MERGE 4u
-
 /* Closest-hit traversal pushes at most W − 1 deferred children per level
  * and the tree is at most BVH_DEPTH_LIMIT deep: 64 · 7 + 1 < 512. */
 #define WIDE_STACK 512
@@ -65,6 +60,13 @@ struct wide_bvh;
 typedef void (*wide_isect_fn)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit);
 typedef int (*wide_occl_fn)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q);
 
+/* The walks of one (width, instruction set): traced, untraced with the
+ * SIMD watertight triangle test, untraced with another triangle test. */
+typedef struct wide_kernels {
+    wide_isect_fn isect_traced, isect_simd, isect_other;
+    wide_occl_fn occl_traced, occl_simd, occl_other;
+} wide_kernels;
+
 typedef struct wide_bvh {
     uint32_t width;        /* W: 4 or 8 */
     wide_isa isa;          /* kernels in use */
@@ -76,8 +78,8 @@ typedef struct wide_bvh {
     uint32_t num_blocks;
     double sah_cost;
     sidx_aabb bounds;      /* scene box (union of the root's slots) */
-    wide_isect_fn isect;
-    wide_occl_fn occl;
+    wide_isect_fn isect, isect_traced; /* untraced walk for the structure's triangle test; traced walk */
+    wide_occl_fn occl, occl_traced;
 } wide_bvh;
 
 static SIDX_INLINE const float *wide_node(const wide_bvh *w, uint32_t i) { return w->nodes + (size_t)i * 8u * w->width; }
@@ -97,16 +99,10 @@ static inline sidx_aabb wide_slot_box(const float *n, uint32_t W, uint32_t s)
 
 /* Traversal entry points, one set per width and instruction set
  * (bvh_wide.c instantiates bvh_wide_walk.h for each). */
-void sidx__wide_isect_4_0(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit);
-int sidx__wide_occl_4_0(const sidx_accel *a, const sidx_ray *r, const sidx_query *q);
-void sidx__wide_isect_8_0(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit);
-int sidx__wide_occl_8_0(const sidx_accel *a, const sidx_ray *r, const sidx_query *q);
+extern const wide_kernels sidx__wide_kernels_4_0, sidx__wide_kernels_8_0;
 #if defined(__x86_64__) || defined(__i386__)
 #define SIDX_WIDE_X86 1
-void sidx__wide_isect_4_1(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit);
-int sidx__wide_occl_4_1(const sidx_accel *a, const sidx_ray *r, const sidx_query *q);
-void sidx__wide_isect_8_2(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit);
-int sidx__wide_occl_8_2(const sidx_accel *a, const sidx_ray *r, const sidx_query *q);
+extern const wide_kernels sidx__wide_kernels_4_1, sidx__wide_kernels_8_2;
 #endif
 
 /* The instruction set bvh4/bvh8 pick on this machine: the best the CPU

@@ -191,15 +191,21 @@ WINL int WFN(tri4_)(const wide_tri4 *B, const WFN(wray_) * R, float best, float 
     const __m128 zero = _mm_setzero_ps();
     const __m128 anyzero = _mm_or_ps(_mm_or_ps(_mm_cmpeq_ps(U, zero), _mm_cmpeq_ps(V, zero)), _mm_cmpeq_ps(W, zero));
     if (SIDX_UNLIKELY(_mm_movemask_ps(anyzero))) return -1;
-    const __m128 neg = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(U, zero), _mm_cmplt_ps(V, zero)), _mm_cmplt_ps(W, zero));
-    const __m128 pos = _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(U, zero), _mm_cmpgt_ps(V, zero)), _mm_cmpgt_ps(W, zero));
+    /* No edge function is ±0 now, so "some < 0 and some > 0" is "the sign
+     * bits differ": two XORs instead of six compares.  Lanes whose det is
+     * 0 or NaN (padding: NaN vertices) drop out through the ordered
+     * compare; their t below would fail anyway.  Most blocks a ray reaches
+     * are missed on every lane, and they stop here, before T and the
+     * division (Embree's kernels defer the division the same way). */
+    const __m128 mixed = _mm_castsi128_ps(
+        _mm_srai_epi32(_mm_castps_si128(_mm_or_ps(_mm_xor_ps(U, V), _mm_xor_ps(U, W))), 31)); /* sign to all bits */
     const __m128 det = _mm_add_ps(_mm_add_ps(U, V), W);
+    const __m128 cand = _mm_andnot_ps(mixed, _mm_or_ps(_mm_cmplt_ps(det, zero), _mm_cmpgt_ps(det, zero)));
+    if (!_mm_movemask_ps(cand)) return 0;
     const __m128 T = _mm_add_ps(_mm_add_ps(_mm_mul_ps(U, _mm_mul_ps(R->sz, az)), _mm_mul_ps(V, _mm_mul_ps(R->sz, bz))),
                                 _mm_mul_ps(W, _mm_mul_ps(R->sz, cz)));
     const __m128 t = _mm_div_ps(T, det);
-    const __m128 ok = _mm_andnot_ps(_mm_and_ps(neg, pos),
-                                    _mm_and_ps(_mm_cmpneq_ps(det, zero),
-                                               _mm_and_ps(_mm_cmpge_ps(t, R->ttmin), _mm_cmplt_ps(t, _mm_set1_ps(best)))));
+    const __m128 ok = _mm_and_ps(cand, _mm_and_ps(_mm_cmpge_ps(t, R->ttmin), _mm_cmplt_ps(t, _mm_set1_ps(best))));
     const unsigned m = (unsigned)_mm_movemask_ps(ok);
     if (!m) return 0;
     const __m128 tt = _mm_blendv_ps(_mm_set1_ps(INFINITY), t, ok);
@@ -215,7 +221,8 @@ WINL int WFN(tri4_)(const wide_tri4 *B, const WFN(wray_) * R, float best, float 
 /* One leaf: its blocks in order.  Returns 1 when an any-hit query may stop. */
 WINL int WFN(leaf_)(const sidx_accel *a, const wide_bvh *w, uint32_t first_block, const sidx_ray *r,
                     const WFN(wray_) * R, const sidx_query *q, uint32_t node_id, float *best, uint32_t *prim,
-                    const int anyhit, const int traced, const int simd_tri)
+                    const wide_tri4 **hit_block, unsigned *hit_lane, const int anyhit, const int traced,
+                    const int simd_tri)
 {
     (void)R;
     (void)node_id;
@@ -233,6 +240,8 @@ WINL int WFN(leaf_)(const sidx_accel *a, const wide_bvh *w, uint32_t first_block
                     *prim = B->prim[lane] & WIDE_PRIM_MASK;
                     if (anyhit) return 1;
                     *best = t;
+                    *hit_block = B;
+                    *hit_lane = lane;
                 }
             }
         }
@@ -254,11 +263,30 @@ WINL int WFN(leaf_)(const sidx_accel *a, const wide_bvh *w, uint32_t first_block
                     *prim = id;
                     if (anyhit) return 1;
                     *best = t;
+                    *hit_block = B;
+                    *hit_lane = (unsigned)l;
                     SIDX_EMIT(traced, q->hook, SIDX_EV_HIT_UPDATE, e_.ray_id = q->ray_id; e_.prim = id; e_.t = t);
                 }
             }
         }
         if (B->prim[0] & WIDE_LAST_BLOCK) return 0;
+    }
+}
+
+/* u, v of the final hit, from the leaf block's copy of the triangle (so no
+ * index and vertex look-ups in the mesh, which a diffuse ray mostly misses
+ * in cache): the same scalar test the core would run (accel.c finish_hit),
+ * on the same floats, so the same u, v.  The bound only has to exceed t,
+ * which was accepted below the old best, so +inf does. */
+WINL void WFN(uv_)(const sidx_accel *a, const sidx_ray *r, const wide_tri4 *B, unsigned l, sidx_hit *hit)
+{
+    const sidx_vec3 p0 = {B->v[0][0][l], B->v[0][1][l], B->v[0][2][l]};
+    const sidx_vec3 p1 = {B->v[1][0][l], B->v[1][1][l], B->v[1][2][l]};
+    const sidx_vec3 p2 = {B->v[2][0][l], B->v[2][1][l], B->v[2][2][l]};
+    float t, u = 0.0f, v = 0.0f;
+    if (sidx__tri_test(a->opt.tri, r, p0, p1, p2, INFINITY, &t, &u, &v)) {
+        hit->u = u;
+        hit->v = v;
     }
 }
 
@@ -271,6 +299,8 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
     const float *nodes = w->nodes;
     float best = anyhit ? r->tmax : hit->t;
     uint32_t prim = SIDX_NO_HIT, visited = 0;
+    const wide_tri4 *hit_block = NULL;
+    unsigned hit_lane = 0;
     if (w->num_inner == 0) {
         SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = SIDX_TERM_MISS_ROOT;
                   e_.count = 0);
@@ -411,8 +441,8 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
                 ++depth;
                 continue;
             }
-        } else if (WFN(leaf_)(a, w, cur & ~WIDE_LEAF_BIT, r, &R, q, cur_id, &best, &prim, anyhit, traced,
-                              simd_tri)) {
+        } else if (WFN(leaf_)(a, w, cur & ~WIDE_LEAF_BIT, r, &R, q, cur_id, &best, &prim, &hit_block, &hit_lane,
+                              anyhit, traced, simd_tri)) {
             SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = SIDX_TERM_ANY_HIT;
                       e_.count = visited);
             return 1;
@@ -426,6 +456,7 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
                 if (!anyhit && prim != SIDX_NO_HIT) {
                     hit->t = best;
                     hit->prim = prim;
+                    if (q && (q->flags & SIDX_QUERY_UV)) WFN(uv_)(a, r, hit_block, hit_lane, hit);
                 }
                 return 0;
             }
@@ -446,19 +477,41 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
     }
 }
 
-WALK_TARGET void WFN(sidx__wide_isect_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
+/* Each instantiation is its own (not inlined) function, so the untraced
+ * walks get the same code, registers and stack frame whether or not the
+ * library is built with hooks: the hooks then cost one test per ray here
+ * (the traced copy is much larger and would otherwise share a frame). */
+#define WNOINL static __attribute__((noinline)) WALK_TARGET
+WNOINL void WFN(isect_traced_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
 {
-    if (SIDX_QUERY_TRACED(q)) WFN(walk_)(a, r, q, hit, 0, 1, 0);
-    else if (a->opt.tri == SIDX_TRI_WATERTIGHT) WFN(walk_)(a, r, q, hit, 0, 0, 1);
-    else WFN(walk_)(a, r, q, hit, 0, 0, 0);
+    WFN(walk_)(a, r, q, hit, 0, 1, 0);
 }
-
-WALK_TARGET int WFN(sidx__wide_occl_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
+WNOINL void WFN(isect_simd_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
 {
-    if (SIDX_QUERY_TRACED(q)) return WFN(walk_)(a, r, q, NULL, 1, 1, 0);
-    if (a->opt.tri == SIDX_TRI_WATERTIGHT) return WFN(walk_)(a, r, q, NULL, 1, 0, 1);
+    WFN(walk_)(a, r, q, hit, 0, 0, 1);
+}
+WNOINL void WFN(isect_other_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
+{
+    WFN(walk_)(a, r, q, hit, 0, 0, 0);
+}
+WNOINL int WFN(occl_traced_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
+{
+    return WFN(walk_)(a, r, q, NULL, 1, 1, 0);
+}
+WNOINL int WFN(occl_simd_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
+{
+    return WFN(walk_)(a, r, q, NULL, 1, 0, 1);
+}
+WNOINL int WFN(occl_other_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
+{
     return WFN(walk_)(a, r, q, NULL, 1, 0, 0);
 }
+#undef WNOINL
+
+/* bvh_wide.c picks the untraced pair for the structure's triangle test
+ * once, at build, and calls the traced one when a query has a hook. */
+const wide_kernels WFN(sidx__wide_kernels_) = {WFN(isect_traced_), WFN(isect_simd_), WFN(isect_other_),
+                                               WFN(occl_traced_),  WFN(occl_simd_),  WFN(occl_other_)};
 
 #undef WJOIN_
 #undef WJOIN

@@ -58,6 +58,10 @@ struct sidx_accel {
     sidx_build_options opt;    /* copy; opt.hook is only valid during build */
     sidx_allocator alloc;      /* resolved allocator (never NULL fns) */
     void *impl;
+    /* 1 when vt->intersect also sets hit->u, hit->v (when SIDX_QUERY_UV asks)
+     * from its own copy of the triangle, so the core skips its re-test on
+     * the mesh (bvh_wide.c: saves the cache misses of that look-up). */
+    int fills_uv;
 };
 
 /* Registry entries live in accel_registry.def as

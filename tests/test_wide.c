@@ -163,6 +163,59 @@ static void test_match_brute(void **state)
     }
 }
 
+/* ---- u, v from the leaf blocks ----------------------------------------------------
+ * The wide walk sets u, v itself from its block's copy of the triangle
+ * (a->fills_uv), so the core skips its re-test on the mesh; the numbers
+ * must be the core's, bit for bit: compare with brute force, whose u, v
+ * the core computes from the mesh, on every ray both hit on the same
+ * triangle, for the SIMD and the scalar kernels, traced and untraced. */
+
+static void test_uv_matches_core(void **state)
+{
+    (void)state;
+    for (size_t si = 0; si < NSCENES; ++si) {
+        sidx_mesh m = scene(scenes[si]);
+        sidx_ray *rays;
+        const size_t n = make_rays(&m, per_kind(200), 23, &rays);
+        for (int tri = 0; tri < SIDX_TRI_METHOD_COUNT; ++tri) {
+            sidx_build_options o;
+            memset(&o, 0, sizeof o);
+            o.tri = (sidx_tri_method)tri;
+            sidx_accel *brute = NULL;
+            assert_int_equal(sidx_accel_build("brute", &m, &o, &brute, NULL), SIDX_OK);
+            for (int w = 0; w < NWIDES; ++w)
+                for (int simd = 0; simd < 2; ++simd) {
+                    sidx_accel *a = build(wides[w], &m, &o, simd);
+                    uint64_t events = 0;
+                    const sidx_hook hook = {count_fn, &events, 0};
+                    const sidx_query q = {SIDX_QUERY_UV | SIDX_QUERY_NORMAL, SIDX_TRAVERSE_DEFAULT, NULL, 0};
+                    const sidx_query qt = {SIDX_QUERY_UV | SIDX_QUERY_NORMAL, SIDX_TRAVERSE_DEFAULT, &hook, 0};
+                    size_t same = 0;
+                    for (size_t i = 0; i < n; ++i) {
+                        sidx_hit ref, h, ht;
+                        sidx_accel_intersect(brute, &rays[i], &q, &ref);
+                        sidx_accel_intersect(a, &rays[i], &q, &h);
+                        sidx_accel_intersect(a, &rays[i], &qt, &ht);
+                        assert_memory_equal(&h, &ht, sizeof h);
+                        if (h.prim == SIDX_NO_HIT || h.prim != ref.prim) continue;
+                        ++same;
+                        if (memcmp(&h.t, &ref.t, sizeof h.t) || memcmp(&h.u, &ref.u, sizeof h.u) ||
+                            memcmp(&h.v, &ref.v, sizeof h.v) || memcmp(&h.ng, &ref.ng, sizeof h.ng))
+                            fail_msg("%s %s tri %d simd %d ray %zu prim %u: u %.9g v %.9g, core u %.9g v %.9g",
+                                     scenes[si], wides[w], tri, simd, i, h.prim, (double)h.u, (double)h.v,
+                                     (double)ref.u, (double)ref.v);
+                    }
+                    assert_true(same > n / 10); /* the comparison really ran */
+                    assert_true(events > 0);
+                    sidx_accel_destroy(a);
+                }
+            sidx_accel_destroy(brute);
+        }
+        free(rays);
+        sidx_mesh_free(&m);
+    }
+}
+
 /* ---- zero leaks ----------------------------------------------------------------- */
 
 static void test_no_leaks_icosphere(void **state)
@@ -453,6 +506,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_simd_equals_scalar), cmocka_unit_test(test_match_brute),
+        cmocka_unit_test(test_uv_matches_core),
         cmocka_unit_test(test_no_leaks_icosphere), cmocka_unit_test(test_structure),
         cmocka_unit_test(test_event_ids),          cmocka_unit_test(test_refit_matches_rebuild),
         cmocka_unit_test(test_alloc_failures),     cmocka_unit_test(test_tiny_and_empty),
