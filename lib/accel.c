@@ -45,8 +45,8 @@ static sidx_status build_entry(const registry_entry *e, const sidx_mesh *mesh, c
     sidx_build_options o;
     memset(&o, 0, sizeof o);
     if (opt) o = *opt;
-    if ((unsigned)o.tri >= SIDX_TRI_METHOD_COUNT || (unsigned)o.box >= SIDX_BOX_METHOD_COUNT || o.c_trav < 0.0f ||
-        o.c_tri < 0.0f || !(o.empty_bonus >= 0.0f && o.empty_bonus < 1.0f) || !(o.grid_density >= 0.0f) ||
+    if ((unsigned)o.tri >= SIDX_TRI_METHOD_COUNT || (unsigned)o.box >= SIDX_BOX_METHOD_COUNT || !(o.c_trav >= 0.0f) ||
+        !(o.c_tri >= 0.0f) || !(o.empty_bonus >= 0.0f && o.empty_bonus < 1.0f) || !(o.grid_density >= 0.0f) ||
         isinf(o.grid_density) || isinf(o.c_trav) || isinf(o.c_tri))
         return sidx__fail(err, SIDX_ERR_INVALID_ARG, "build options out of range");
     sidx_status s = sidx_mesh_validate(mesh, err);
@@ -164,11 +164,11 @@ static void finish_hit(const sidx_accel *a, const sidx_ray *r, const sidx_query 
     /* Aggregates (instance.c) set the instance and fill u, v, ng in world
      * space themselves: their a->mesh is not where the hit lies. */
     if (hit->instance != SIDX_NO_HIT) return;
-    if (!(q->flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL))) return;
+    if (!(q->flags & (a->fills_uv ? SIDX_QUERY_NORMAL : SIDX_QUERY_UV | SIDX_QUERY_NORMAL))) return;
     const sidx_mesh *m = a->mesh;
     const sidx_vec3 p0 = sidx_mesh_vertex(m, hit->prim, 0), p1 = sidx_mesh_vertex(m, hit->prim, 1),
                     p2 = sidx_mesh_vertex(m, hit->prim, 2);
-    if (q->flags & SIDX_QUERY_UV) {
+    if ((q->flags & SIDX_QUERY_UV) && !a->fills_uv) {
         float t, u = 0.0f, v = 0.0f;
         /* Re-run the same test on the one triangle with a slightly larger
          * bound so it reproduces the hit; identical arithmetic, identical t. */

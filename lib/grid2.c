@@ -169,7 +169,8 @@ static sidx_status build_level(sidx_accel *a, grid2 *G, const sidx_aabb *boxes, 
             G->empty += cnt == 0;
             if (cnt) {
                 SIDX_EMIT(1, hook, SIDX_EV_BUILD_LEAF, e_.node = first + c; e_.depth = level; e_.count = cnt;
-                          e_.reason = level >= G->max_depth ? SIDX_LEAF_MAX_DEPTH : SIDX_LEAF_FEW_PRIMS);
+                          e_.reason = level >= G->max_depth ? SIDX_LEAF_MAX_DEPTH : SIDX_LEAF_FEW_PRIMS;
+                          e_.prims = local + off[c]);
             }
         }
     }
@@ -271,8 +272,9 @@ static SIDX_INLINE int grid2_walk(const sidx_accel *a, const sidx_ray *r, const 
             level_enter(&st[k], r, &G->grids[cell.begin], L->t_in, t_out);
             continue;
         }
-        if (sidx__cell_prims(a, r, q, hit, G->refs + cell.begin, cell.n, gc, (uint32_t)k, &mb, use_mb, traced,
-                             any)) {
+        /* a grid without references has refs NULL: no offset on it (UBSan, fuzz_build) */
+        if (sidx__cell_prims(a, r, q, hit, cell.n ? G->refs + cell.begin : NULL, cell.n, gc, (uint32_t)k, &mb,
+                             use_mb, traced, any)) {
             SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = SIDX_TERM_ANY_HIT;
                       e_.count = visited);
             return 1;

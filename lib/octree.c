@@ -27,6 +27,17 @@
  * dense, so 16 costs nothing elsewhere. */
 #define OCT_DEFAULT_DEPTH 16u
 #define OCT_MAX_DEPTH 24u
+/* Bounds (so no scene can blow the build up): besides the depth limit and
+ * the duplication rule of build_node (which already keeps lesson 13's star
+ * in one leaf), the tree never holds more than OCT_NODES_PER_TRI·n + 1
+ * nodes; a node that would cross that budget stays a leaf (reported as
+ * max_depth: the build's size limit, not the scene, ended it).  Memory is
+ * then O(n) nodes and the build O(budget · n) triangle tests at worst;
+ * the queries stay exact, only slower in the leaves it made.  Tested in
+ * tests/test_octree.c: a star and a fan of slivers (the duplication rule
+ * stops them at the root) and two pairs of specks that only separate 20+
+ * levels down (the budget stops them). */
+#define OCT_NODES_PER_TRI 64u
 
 #define OCT_INNER 0xffffffffu
 
@@ -43,6 +54,7 @@ typedef struct octree {
     size_t cap_nodes, cap_refs, cap_scratch;
     uint32_t n_nodes, n_refs, leaves, empty, depth_seen;
     uint32_t leaf_max, depth_max;
+    uint64_t node_budget;             /* OCT_NODES_PER_TRI·n + 1 */
     int nsplit;                       /* axes cut: 3 (octree) or 2 (quadtree) */
     int mailbox;
     const sidx_aabb *tri_boxes;       /* build only */
@@ -88,7 +100,7 @@ static sidx_status make_leaf(sidx_accel *a, octree *T, uint32_t node, size_t s, 
     T->empty += n == 0;
     if (n == 0) reason = SIDX_LEAF_EMPTY;
     SIDX_EMIT(1, a->opt.hook, SIDX_EV_BUILD_LEAF, e_.node = node; e_.depth = depth; e_.count = n;
-              e_.reason = reason);
+              e_.reason = reason; e_.prims = n ? T->refs + T->nodes[node].a : NULL);
     return SIDX_OK;
 }
 
@@ -112,6 +124,8 @@ static sidx_status build_node(sidx_accel *a, octree *T, uint32_t node, uint32_t 
               e_.bounds = box);
     if (n <= T->leaf_max) return make_leaf(a, T, node, s, n, depth, SIDX_LEAF_FEW_PRIMS);
     if (depth >= T->depth_max) return make_leaf(a, T, node, s, n, depth, SIDX_LEAF_MAX_DEPTH);
+    if ((uint64_t)T->n_nodes + (1u << T->nsplit) > T->node_budget)
+        return make_leaf(a, T, node, s, n, depth, SIDX_LEAF_MAX_DEPTH);
     {
         /* Children must stay well above the float spacing of the
          * coordinates (a scene at 1e6 has an ulp of 0.06). */
@@ -176,6 +190,7 @@ static sidx_status octree_build(sidx_accel *a, sidx_error *err)
     T->leaf_max = a->opt.leaf_size ? a->opt.leaf_size : OCT_DEFAULT_LEAF;
     T->depth_max = a->opt.max_depth ? a->opt.max_depth : OCT_DEFAULT_DEPTH;
     if (T->depth_max > OCT_MAX_DEPTH) T->depth_max = OCT_MAX_DEPTH;
+    T->node_budget = (uint64_t)OCT_NODES_PER_TRI * m->num_triangles + 1u;
     sidx_status st = SIDX_ERR_NOMEM;
     if (m->num_triangles && sidx__prim_boxes(a, &boxes, NULL) != SIDX_OK) goto fail;
     T->tri_boxes = boxes;

@@ -22,11 +22,11 @@ needs() {
     03_*|04_*|05_*) echo "bvh bvh-sweep bvh-everyb bvh-median bvh-middle" ;;
     06_*) echo "bvh kdtree" ;;
     07_*) echo "grid grid-nomailbox" ;;
-    08_*) echo "grid grid2 kdtree" ;;
+    08_*) echo "grid grid2 grid-irregular kdtree" ;;
     09_*) echo "kdtree kdtree-median kdtree-middle" ;;
     10_*|11_*) echo "kdtree" ;;
     12_*) echo "octree quadtree bsp" ;;
-    13_*) echo "bvh kdtree grid" ;;
+    13_*) echo "bvh kdtree grid octree" ;;
     14_*) echo "bvh bvh4 bvh8" ;;
     15_*) echo "bvh rayclass" ;;
     16_*) echo "bvh" ;;
@@ -47,7 +47,7 @@ expect() {
     05_bvh_traversal) echo "same_hit=1 ordered_visits_fewer=1 ordered_fewer_on_average=1" ;;
     06_object_vs_space) echo "same_hits=1 bvh_boxes_overlap=1 kd_cells_disjoint=1 kd_stops_at_first_hit=1" ;;
     07_uniform_grid) echo "resolution_formula=1 dda_cells_in_order=1 mailbox_saves_tests=1 middle_lambda_best=1" ;;
-    08_teapot_in_stadium) echo "same_hits=1 uniform_grid_worst=1 adaptive_beats_uniform=1" ;;
+    08_teapot_in_stadium) echo "same_hits=1 uniform_grid_worst=1 adaptive_beats_uniform=1 irregular_adapts=1" ;;
     09_kdtree_build) echo "same_hits=1 sah_cost_lower=1 sah_thin_leaves=1 cost_curve_min_is_split=1" ;;
     10_kdtree_traversal) echo "same_hit=1 stack_trace_consistent=1 cannot_terminate_seen=1" ;;
     11_kd_node_layout) echo "decoded_matches=1 children_side_by_side=1" ;;

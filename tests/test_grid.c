@@ -505,25 +505,76 @@ static void test_grid2_stadium(void **state)
     free(rays);
 }
 
+/* Remembers the irregular grid's "base cells" NOTE (count = cells before
+ * merging, depth = octant levels used). */
+typedef struct base_note { uint32_t cells, depth; int seen; } base_note;
+static void base_note_fn(const sidx_event *ev, void *user)
+{
+    base_note *b = user;
+    if (ev->type == SIDX_EV_NOTE && ev->text && strstr(ev->text, "base cells")) {
+        b->cells = ev->count;
+        b->depth = ev->depth;
+        b->seen = 1;
+    }
+}
+
 static void test_irregular_merges(void **state)
 {
     (void)state;
     if (!have("grid-irregular")) return;
-    const char *const sc[] = {"teapot", "stadium", "cornell"};
-    for (size_t s = 0; s < 3; ++s) {
+    const char *const sc[] = {"teapot", "stadium", "cornell", "flat2d"};
+    for (size_t s = 0; s < 4; ++s) {
         sidx_mesh m;
         make_scene(sc[s], &m);
-        sidx_accel *a = build("grid-irregular", &m, NULL);
+        base_note bn = {0, 0, 0};
+        const sidx_hook h = {base_note_fn, &bn, SIDX_EVMASK(SIDX_EV_NOTE)};
+        sidx_build_options o;
+        memset(&o, 0, sizeof o);
+        o.hook = &h;
+        sidx_accel *a = build("grid-irregular", &m, &o);
         sidx_accel_stats st;
         sidx_accel_stats_get(a, &st);
-        const uint64_t base = (uint64_t)st.res[0] * st.res[1] * st.res[2];
-        assert_true(base > 0);
-        assert_true(st.nodes < base);
-        /* Every base-grid power of two. */
-        for (int i = 0; i < 3; ++i) assert_int_equal(st.res[i] & (st.res[i] - 1), 0);
+        assert_true(bn.seen);
+        fprintf(stderr, "grid-irregular on %s: %u base cells (%u octant levels) -> %u merged cells\n", sc[s],
+                bn.cells, bn.depth, st.nodes);
+        /* Merging must join cells: fewer cells than the base had. */
+        assert_true(st.nodes > 0 && st.nodes < bn.cells);
+        /* The virtual grid is the top grid times a power of two: a
+         * subdivided axis is a multiple of 2^depth. */
+        for (int i = 0; i < 3; ++i) assert_true(st.res[i] == 1 || st.res[i] % (1u << bn.depth) == 0);
+        if (s == 1) assert_true(bn.depth >= 4); /* the teapot forces deep octants */
         sidx_accel_destroy(a);
         sidx_mesh_free(&m);
     }
+}
+
+/* The irregular grid fixes the teapot in a stadium as the nested grid does. */
+static void test_irregular_stadium(void **state)
+{
+    (void)state;
+    if (!have("grid-irregular")) return;
+    const size_t n = 400;
+    tk_rayrec *rays = malloc(n * sizeof *rays);
+    assert_non_null(rays);
+    sidx_mesh m;
+    make_scene("stadium", &m);
+    sidx_accel *g = build("grid", &m, NULL), *gi = build("grid-irregular", &m, NULL), *ref = build("brute", &m, NULL);
+    teapot_view(n, rays);
+    check_rays(ref, gi, rays, n, "stadium", "teapot view");
+    const sidx_counters c1 = count_events(g, rays, n), c3 = count_events(gi, rays, n);
+    fprintf(stderr, "stadium, teapot view: cells/ray grid %.2f grid-irregular %.2f; tests/ray grid %.2f "
+                    "grid-irregular %.2f\n",
+            (double)c1.n[SIDX_EV_NODE_ENTER] / n, (double)c3.n[SIDX_EV_NODE_ENTER] / n,
+            (double)c1.n[SIDX_EV_PRIM_TEST] / n, (double)c3.n[SIDX_EV_PRIM_TEST] / n);
+    assert_true(c3.n[SIDX_EV_PRIM_TEST] * 20 < c1.n[SIDX_EV_PRIM_TEST]);
+    /* Expanded cells: fewer steps than the uniform grid even though the
+     * cells around the teapot are far finer. */
+    assert_true(c3.n[SIDX_EV_NODE_ENTER] < c1.n[SIDX_EV_NODE_ENTER] * 4);
+    sidx_accel_destroy(g);
+    sidx_accel_destroy(gi);
+    sidx_accel_destroy(ref);
+    sidx_mesh_free(&m);
+    free(rays);
 }
 
 static void test_octree_quadtree(void **state)
@@ -667,6 +718,7 @@ int main(void)
         cmocka_unit_test(test_exact_vs_boxonly),
         cmocka_unit_test(test_grid2_stadium),
         cmocka_unit_test(test_irregular_merges),
+        cmocka_unit_test(test_irregular_stadium),
         cmocka_unit_test(test_octree_quadtree),
         cmocka_unit_test(test_build_events),
         cmocka_unit_test(test_alloc_failures),

@@ -2,7 +2,16 @@
  * against triangle count (1k … 4M, procedural), with growth exponents
  * fitted by least squares on log-log axes (n log n build shows as an
  * exponent a little above 1; log n steps as a small exponent, and as the
- * slope per doubling of n; n^(1/3) for uniform grids as about 0.33). */
+ * slope per doubling of n; n^(1/3) for uniform grids as about 0.33).
+ *
+ * --scene stadium is the teapot in a stadium with a growing teapot: a
+ * fixed stadium shell (floor and stands of the built-in "stadium", 770
+ * triangles, 2200 units across) around a teapot of growing detail scaled
+ * to one unit, rays from a camera looking at the teapot (lesson 08's
+ * view).  The uniform grid's resolution follows n over the whole stadium
+ * volume, so the teapot stays in a few cells and the tests per ray grow
+ * about linearly with n (exponent near 1); the nested and irregular grids
+ * refine where the triangles are and stay near constant (exponent ~0). */
 #include <errno.h>
 #include <math.h>
 #include <stdlib.h>
@@ -24,8 +33,12 @@ static void scale_usage(FILE *out)
             "time, steps per ray (NODE_ENTER events), primitive tests per ray and Mrays/s on\n"
             "primary rays, then the growth fitted by least squares on log-log axes.\n"
             "options:\n"
-            "  --scene icosphere|grid|soup  icosphere: levels (1280 x 4^k triangles); grid: d x d\n"
-            "                     quads (2 d^2); soup: random triangles of fixed size (default icosphere)\n"
+            "  --scene icosphere|grid|soup|stadium  icosphere: levels (1280 x 4^k triangles); grid:\n"
+            "                     d x d quads (2 d^2); soup: random triangles of fixed size; stadium:\n"
+            "                     teapot in a stadium, the stadium fixed (770 triangles, 2200 units\n"
+            "                     across), the teapot (1 unit) growing in detail, rays from a camera\n"
+            "                     looking at the teapot: the uniform grid's tests per ray grow ~n,\n"
+            "                     the nested and irregular grids' stay flat (default icosphere)\n"
             "  --accel LIST       structures (default: every registered one but brute)\n"
             "  --min-tris N       smallest size (default 1000)\n"
             "  --max-tris N       largest size (default 4200000)\n"
@@ -51,6 +64,85 @@ static int fit(const double *x, const double *y, int n, double *slope, double *i
     *slope = (n * sxy - sx * sy) / den;
     *icpt = (sy - *slope * sx) / n;
     return 1;
+}
+
+/* The stadium sweep's mesh: the floor and stands of "stadium:128" (the
+ * triangles after its own teapot) around "teapot:detail" scaled to one
+ * unit wide, standing 0.001 above the floor at the origin. */
+#define STADIUM_STANDS 128u
+static sidx_status make_stadium_sweep(uint32_t detail, sidx_mesh *out, sidx_error *err)
+{
+    sidx_mesh st = {0}, tp = {0};
+    char spec[32];
+    snprintf(spec, sizeof spec, "stadium:%u", STADIUM_STANDS);
+    sidx_status rc = sidx_scene_open(spec, &st, err);
+    if (rc != SIDX_OK) return rc;
+    snprintf(spec, sizeof spec, "teapot:%u", detail);
+    if ((rc = sidx_scene_open(spec, &tp, err)) != SIDX_OK) {
+        sidx_mesh_free(&st);
+        return rc;
+    }
+    const uint32_t shell = 2u + 6u * STADIUM_STANDS; /* floor quad + 3 rings of quads */
+    const uint32_t first = st.num_triangles - shell;
+    const uint32_t nv = tp.num_vertices + st.num_vertices, nt = tp.num_triangles + shell;
+    float *xyz = malloc((size_t)nv * 3 * sizeof *xyz);
+    uint32_t *idx = malloc((size_t)nt * 3 * sizeof *idx);
+    if (!xyz || !idx) {
+        free(xyz);
+        free(idx);
+        sidx_mesh_free(&st);
+        sidx_mesh_free(&tp);
+        if (err) {
+            err->status = SIDX_ERR_NOMEM;
+            snprintf(err->message, sizeof err->message, "out of memory");
+        }
+        return SIDX_ERR_NOMEM;
+    }
+    const sidx_aabb tb = sidx_mesh_bounds(&tp);
+    const float s = 1.0f / (tb.max.x - tb.min.x), cx = 0.5f * (tb.min.x + tb.max.x), cz = 0.5f * (tb.min.z + tb.max.z);
+    for (uint32_t v = 0; v < tp.num_vertices; ++v) {
+        const sidx_vec3 p = tp.positions[v];
+        xyz[3 * v] = (p.x - cx) * s;
+        xyz[3 * v + 1] = (p.y - tb.min.y) * s + 0.001f;
+        xyz[3 * v + 2] = (p.z - cz) * s;
+    }
+    for (uint32_t v = 0; v < st.num_vertices; ++v) {
+        const sidx_vec3 p = st.positions[v];
+        float *o = xyz + 3 * ((size_t)tp.num_vertices + v);
+        o[0] = p.x;
+        o[1] = p.y;
+        o[2] = p.z;
+    }
+    memcpy(idx, tp.indices, (size_t)tp.num_triangles * 3 * sizeof *idx);
+    for (uint32_t t = 0; t < shell; ++t)
+        for (int k = 0; k < 3; ++k)
+            idx[3 * ((size_t)tp.num_triangles + t) + (size_t)k] = st.indices[3 * ((size_t)first + t) + (size_t)k] + tp.num_vertices;
+    rc = sidx_mesh_from_arrays(out, xyz, nv, idx, nt, err);
+    free(xyz);
+    free(idx);
+    sidx_mesh_free(&st);
+    sidx_mesh_free(&tp);
+    return rc;
+}
+
+/* Camera rays at the teapot (lesson 08's view): eye 2.3 units away, a
+ * square image of about n pixels covering the teapot and some floor. */
+static void teapot_rays(size_t n, tk_rayrec *out)
+{
+    const sidx_vec3 look = sidx_v3(0.0f, 0.3f, 0.0f), eye = sidx_v3(0.66f, 1.07f, 2.2f);
+    sidx_vec3 fwd = sidx_v3_sub(look, eye);
+    fwd = sidx_v3_scale(fwd, 1.0f / sidx_v3_length(fwd));
+    sidx_vec3 right = sidx_v3_cross(fwd, sidx_v3(0, 1, 0));
+    right = sidx_v3_scale(right, 1.0f / sidx_v3_length(right));
+    const sidx_vec3 up = sidx_v3_cross(right, fwd);
+    size_t w = 1;
+    while ((w + 1) * (w + 1) <= n) ++w;
+    for (size_t i = 0; i < n; ++i) {
+        const float u = (((float)(i % w) + 0.5f) / (float)w * 2.0f - 1.0f) * 0.35f;
+        const float v = (((float)((i / w) % w) + 0.5f) / (float)w * 2.0f - 1.0f) * 0.35f;
+        const sidx_vec3 d = sidx_v3_add(fwd, sidx_v3_add(sidx_v3_scale(right, u), sidx_v3_scale(up, v)));
+        out[i] = (tk_rayrec){{eye.x, eye.y, eye.z}, {d.x, d.y, d.z}, 0.0f, INFINITY};
+    }
 }
 
 int bench_cmd_scale(int argc, char **argv)
@@ -90,8 +182,9 @@ int bench_cmd_scale(int argc, char **argv)
         fprintf(stderr, "sidx-bench scale: bad value '%s' for %s\n", val, a);
         return BENCH_USAGE;
     }
-    if (strcmp(scene, "icosphere") && strcmp(scene, "grid") && strcmp(scene, "soup")) {
-        fprintf(stderr, "sidx-bench scale: --scene must be icosphere, grid or soup\n");
+    const int stadium = !strcmp(scene, "stadium");
+    if (strcmp(scene, "icosphere") && strcmp(scene, "grid") && strcmp(scene, "soup") && !stadium) {
+        fprintf(stderr, "sidx-bench scale: --scene must be icosphere, grid, soup or stadium\n");
         return BENCH_USAGE;
     }
     /* the sizes: details of the scene */
@@ -103,6 +196,12 @@ int bench_cmd_scale(int argc, char **argv)
         if (!strcmp(scene, "icosphere")) {
             d = (uint32_t)k;
             tris = 20.0 * pow(4.0, k);
+        } else if (stadium) {
+            /* teapot detail 8·2^(k/2): about twice the triangles per size
+             * (a teapot of detail d has about 8.3 d^2 triangles) */
+            d = (uint32_t)lround(8.0 * pow(2.0, 0.5 * k));
+            if (d > 1024) break;
+            tris = 8.3 * d * d + 2.0 + 6.0 * STADIUM_STANDS;
         } else {
             tris = 1024.0 * pow(4.0, k);
             d = !strcmp(scene, "grid") ? (uint32_t)lround(sqrt(tris / 2)) : (uint32_t)tris;
@@ -137,7 +236,8 @@ int bench_cmd_scale(int argc, char **argv)
     }
     bench_cpu_time = 1;
     FILE *f = stdout;
-    fprintf(f, "sidx-bench scale: scene %s, %zu primary rays per size, build budget %.0f ms\n", scene, nrays, budget);
+    fprintf(f, "sidx-bench scale: scene %s, %zu %s rays per size, build budget %.0f ms\n", scene, nrays,
+            stadium ? "camera-at-the-teapot" : "primary", budget);
     fprintf(f, "%-14s %10s %10s %9s %8s %8s %9s\n", "accel", "tris", "build_ms", "Mrays/s", "steps", "prims", "MB");
     int rc = BENCH_OK;
     for (int si = 0; si < nsizes; ++si) {
@@ -146,13 +246,14 @@ int bench_cmd_scale(int argc, char **argv)
         sidx_mesh m = {0};
         sidx_error err = {SIDX_OK, ""};
         bench_progress("scale: making %s", spec);
-        if (sidx_scene_open(spec, &m, &err) != SIDX_OK) {
+        if ((stadium ? make_stadium_sweep(details[si], &m, &err) : sidx_scene_open(spec, &m, &err)) != SIDX_OK) {
             bench_progress_done();
             fprintf(stderr, "sidx-bench scale: %s: %s\n", spec, err.message);
             rc = BENCH_FAIL;
             break;
         }
-        tk_make_rays(&m, TK_RAYS_PRIMARY, nrays, 7, rec);
+        if (stadium) teapot_rays(nrays, rec);
+        else tk_make_rays(&m, TK_RAYS_PRIMARY, nrays, 7, rec);
         bench_rays br;
         if (!bench_rays_prepare(rec, nrays, &br)) {
             sidx_mesh_free(&m);
