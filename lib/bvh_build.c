@@ -378,7 +378,7 @@ static uint32_t build_node(builder *B, uint32_t first, uint32_t count, uint32_t 
         B->nodes[ni].count_axis = count;
         B->num_leaves++;
         SIDX_EMIT(1, B->hook, SIDX_EV_BUILD_LEAF, e_.node = ni; e_.depth = depth; e_.count = count;
-                  e_.cost = leaf_cost; e_.reason = reason; e_.bounds = bb);
+                  e_.cost = leaf_cost; e_.reason = reason; e_.bounds = bb; e_.prims = B->idx + first);
         return ni;
     }
     SIDX_EMIT(1, B->hook, SIDX_EV_BUILD_SPLIT, e_.node = ni; e_.depth = depth; e_.axis = sp.axis; e_.pos = sp.pos;
