@@ -166,28 +166,42 @@ bench: deps
 	@mkdir -p $(BUILD)/bench
 	$(BUILD)/bin/sidx-bench run --csv $(BUILD)/bench/table.csv --plot $(BUILD)/bench/error_vs_speed.svg \
 	  $(if $(wildcard ../shared/scenes),--scenes ../shared/scenes) | tee $(BUILD)/bench/table.txt
+	$(BUILD)/bin/sidx-bench extras $(if $(wildcard ../shared/scenes),--scenes ../shared/scenes) | tee $(BUILD)/bench/extras.txt
 
 # Fuzzing with libFuzzer (clang): every tests/fuzz/fuzz_*.c target runs for
 # FUZZ_SECONDS, starting from the checked-in seeds in tests/fuzz/corpus/<name>
-# (copied, so the checked-in corpus stays small); crashes go to build/fuzz/.
+# (copied, so the checked-in corpus stays small); crashes go to
+# $(BUILDDIR)/fuzz/crashes/<name>/.  FUZZ_TARGETS=rays picks targets;
+# FUZZ_ARGS passes more libFuzzer options.
 FUZZ_SECONDS ?= 60
 FUZZ_CC ?= clang
-FUZZ_FLAGS := -std=c11 -O1 -g $(FPFLAGS) -D_DEFAULT_SOURCE -Ilib/include -Ilib -fsanitize=address,undefined -fno-sanitize-recover=all
+FUZZ_ARGS ?=
+FUZZ_FLAGS := -std=c11 -O1 -g $(FPFLAGS) -D_DEFAULT_SOURCE -Ilib/include -Ilib -Itests -fsanitize=address,undefined -fno-sanitize-recover=all
 FUZZ_SRC := $(wildcard tests/fuzz/fuzz_*.c)
-FUZZ_BINS := $(FUZZ_SRC:tests/fuzz/%.c=build/fuzz/%)
+FUZZ_TARGETS ?= $(FUZZ_SRC:tests/fuzz/fuzz_%.c=%)
+FUZZ_DIR := $(BUILDDIR)/fuzz
+FUZZ_BINS := $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%)
 
-build/fuzz/fuzz_%: tests/fuzz/fuzz_%.c $(LIB_SRC) $(wildcard lib/*.h lib/include/sidx/*.h lib/*.def)
+# The library and test kit are compiled once (instrumented) and shared by
+# every target.
+FUZZ_OBJ := $(LIB_SRC:%.c=$(FUZZ_DIR)/obj/%.o) $(TEST_COMMON_SRC:%.c=$(FUZZ_DIR)/obj/%.o)
+
+$(FUZZ_DIR)/obj/%.o: %.c
 	@mkdir -p $(dir $@)
-	$(FUZZ_CC) $(FUZZ_FLAGS) -fsanitize=fuzzer -o $@ $< $(LIB_SRC) -lm -pthread
+	$(FUZZ_CC) $(FUZZ_FLAGS) -fsanitize=fuzzer-no-link -MMD -MP -c $< -o $@
+
+$(FUZZ_DIR)/fuzz_%: $(FUZZ_DIR)/obj/tests/fuzz/fuzz_%.o $(FUZZ_OBJ)
+	@mkdir -p $(dir $@)
+	$(FUZZ_CC) $(FUZZ_FLAGS) -fsanitize=fuzzer -o $@ $^ -lm -pthread
 
 fuzz: $(FUZZ_BINS)
 	@for f in $(FUZZ_BINS); do \
 	  name=$$(basename $$f | sed 's/^fuzz_//'); \
-	  mkdir -p build/fuzz/corpus/$$name build/fuzz/crashes/$$name; \
-	  cp -n tests/fuzz/corpus/$$name/* build/fuzz/corpus/$$name/ 2>/dev/null || true; \
+	  mkdir -p $(FUZZ_DIR)/corpus/$$name $(FUZZ_DIR)/crashes/$$name; \
+	  cp -n tests/fuzz/corpus/$$name/* $(FUZZ_DIR)/corpus/$$name/ 2>/dev/null || true; \
 	  echo "== fuzz $$name for $(FUZZ_SECONDS) s"; \
-	  $$f -max_total_time=$(FUZZ_SECONDS) -print_final_stats=1 -artifact_prefix=build/fuzz/crashes/$$name/ \
-	    build/fuzz/corpus/$$name 2>&1 | grep -E "^(#[0-9]+.*DONE|stat::number_of_executed_units|stat::peak_rss|==[0-9]+==ERROR|SUMMARY)|cov:" | tail -4 \
+	  $$f -max_total_time=$(FUZZ_SECONDS) -print_final_stats=1 -artifact_prefix=$(FUZZ_DIR)/crashes/$$name/ $(FUZZ_ARGS) \
+	    $(FUZZ_DIR)/corpus/$$name 2>&1 | grep -E "^(#[0-9]+.*DONE|stat::number_of_executed_units|stat::peak_rss|==[0-9]+==ERROR|SUMMARY)|cov:" | tail -4 \
 	    || exit 1; \
 	done
 
@@ -196,6 +210,7 @@ fuzz: $(FUZZ_BINS)
 docs: deps
 	@$(MAKE) --no-print-directory build
 	sh viz/make_docs_pictures.sh $(BUILD) docs/img
+	sh docs/make_tutorial.sh $(BUILD) docs/tutorial.md
 	@$(MAKE) --no-print-directory apidocs
 
 # API reference from lib/include/sidx/*.h and docs/*.md (Doxygen), into

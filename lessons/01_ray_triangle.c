@@ -318,12 +318,20 @@ int main(int argc, char **argv)
     printf("     (A ray lying in the plane does touch the triangle along a segment, but a surface seen\n"
            "      exactly edge-on covers no area of the image: a miss is the right answer.)\n");
 
-    printf("\n  \"Q: What if t is negative?\"  Case 6 with tmin = -inf instead of 0:\n");
-    const int neg_mask = run_case(&cases[5], -INFINITY, &hook);
-    printf("     The solution exists (t = -1) but lies behind the origin: the intersection is in the\n"
-           "     negative direction.  With the usual tmin = 0 every method rejects it (%s);\n"
-           "     allow t < 0 and every method finds it (%s).\n",
-           masks[5] == 0 ? "measured: all miss" : "NOT measured so", neg_mask == 7 ? "measured: all hit" : "NOT measured so");
+    printf("\n  \"Q: What if t is negative?\"  Case 6 again:\n");
+    sidx_ray probe;
+    const int tmin_refused =
+        sidx_ray_init(&probe, cases[5].org, cases[5].dir, -INFINITY, INFINITY) == SIDX_ERR_INVALID_ARG;
+    tcase mirrored = cases[5];
+    mirrored.dir = sidx_v3_scale(cases[5].dir, -1.0f);
+    printf("     The line meets the plane at t = -1: behind the origin, in the negative direction.\n"
+           "     With tmin = 0 every method rejects it (%s).  sidx does not let a ray start\n"
+           "     behind its origin: sidx_ray_init refuses tmin < 0 (%s), because a conservative\n"
+           "     box test widens only positive distances.  The same line traced the other way:\n",
+           masks[5] == 0 ? "measured: all miss" : "NOT measured so", tmin_refused ? "measured" : "NOT so");
+    const int neg_mask = run_case(&mirrored, 0.0f, &hook);
+    printf("     every method finds it at t = +1 (%s): t < 0 only means \"the other side\".\n",
+           neg_mask == 7 ? "measured: all hit" : "NOT measured so");
 
     /* ---- 3 ---- */
     printf("\n== 3. Rounding: rays aimed at the shared edges and shared vertex of a fan of %d triangles\n", FAN);
@@ -373,7 +381,7 @@ int main(int argc, char **argv)
            leaks[1], leaks[2], fan_rays);
     printf("CHECK worked_example_agrees=%d\n", agree);
     printf("CHECK d_zero_all_miss=%d\n", (masks[2] | masks[3] | masks[4]) == 0);
-    printf("CHECK negative_t_rejected=%d\n", masks[5] == 0 && neg_mask == 7);
+    printf("CHECK negative_t_rejected=%d\n", masks[5] == 0 && neg_mask == 7 && tmin_refused);
     printf("CHECK edge_vertex_hit=%d\n", masks[0] == 7 && masks[1] == 7);
     printf("CHECK watertight_leaks=%ld\n", leaks[0]);
     printf("CHECK moller_leaks_more=%d\n", leaks[1] > leaks[0]);

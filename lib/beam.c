@@ -171,6 +171,7 @@ static int tri_candidate(const bundle *b, const sidx_mesh *m, uint32_t tri, cons
 
 void sidx_cone_split(const sidx_cone *c, sidx_cone out[4])
 {
+    if (!c || !out) return; /* documented no-op (docs/errors.md) */
     /* planar picture: 4 discs of radius θ/√2 centred at (±θ/2, ±θ/2) cover
      * the disc of radius θ exactly; 0.78θ instead of 0.707θ leaves room
      * for the sphere's curvature (tested in tests/test_beam.c) */
@@ -189,6 +190,7 @@ void sidx_cone_split(const sidx_cone *c, sidx_cone out[4])
 
 void sidx_beam_split(const sidx_beam *b, sidx_beam out[4])
 {
+    if (!b || !out) return; /* documented no-op (docs/errors.md) */
     /* bilinear split through the edge midpoints and the centre: the
      * shared faces are planes through the apex, so the 4 tile the parent */
     sidx_vec3 d[4];

@@ -36,7 +36,7 @@ sidx_status sidx__fail(sidx_error *err, sidx_status s, const char *fmt, ...)
 
 sidx_status sidx_ray_init(sidx_ray *r, sidx_vec3 org, sidx_vec3 dir, float tmin, float tmax)
 {
-    if (!r || !sidx_v3_isfinite(org) || !sidx_v3_isfinite(dir) || isnan(tmin) || isnan(tmax) || tmin > tmax)
+    if (!r || !sidx_v3_isfinite(org) || !sidx_v3_isfinite(dir) || !(tmin >= 0.0f) || isnan(tmax) || tmin > tmax)
         return SIDX_ERR_INVALID_ARG;
     if (dir.x == 0.0f && dir.y == 0.0f && dir.z == 0.0f) return SIDX_ERR_INVALID_ARG;
     r->org = org;

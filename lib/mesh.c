@@ -32,6 +32,10 @@ sidx_status sidx_mesh_validate(const sidx_mesh *m, sidx_error *err)
     if (!m) return sidx__fail(err, SIDX_ERR_INVALID_ARG, "mesh is NULL");
     if ((m->num_vertices && !m->positions) || (m->num_triangles && !m->indices))
         return sidx__fail(err, SIDX_ERR_INVALID_ARG, "mesh has counts but NULL arrays");
+    /* 3·tri + k must fit the 32-bit index arithmetic (sidx_mesh_vertex) */
+    if (m->num_triangles > UINT32_MAX / 3u)
+        return sidx__fail(err, SIDX_ERR_LIMIT, "%u triangles: more than 32-bit indices address (%u)",
+                          (unsigned)m->num_triangles, (unsigned)(UINT32_MAX / 3u));
     for (uint32_t i = 0; i < m->num_vertices; ++i) {
         const sidx_vec3 p = m->positions[i];
         if (!sidx_v3_isfinite(p))
@@ -53,6 +57,9 @@ sidx_status sidx_mesh_from_arrays(sidx_mesh *out, const float *xyz, uint32_t num
     if (!out) return sidx__fail(err, SIDX_ERR_INVALID_ARG, "out is NULL");
     if ((num_vertices && !xyz) || (num_triangles && !indices))
         return sidx__fail(err, SIDX_ERR_INVALID_ARG, "counts given with NULL arrays");
+    if (num_triangles > UINT32_MAX / 3u)
+        return sidx__fail(err, SIDX_ERR_LIMIT, "%u triangles: more than 32-bit indices address (%u)",
+                          (unsigned)num_triangles, (unsigned)(UINT32_MAX / 3u));
     /* Only a 32-bit size_t can overflow here. */
     if ((uint64_t)num_triangles * 3u * sizeof(uint32_t) > (uint64_t)SIZE_MAX ||
         (uint64_t)num_vertices * sizeof(sidx_vec3) > (uint64_t)SIZE_MAX)

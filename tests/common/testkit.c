@@ -181,6 +181,16 @@ sidx_status tk_parse_hits(const void *data, size_t size, tk_hitrec **out, size_t
         h[i].prim = (int32_t)get_le32(p + 4);
         h[i].u = get_f32(p + 8);
         h[i].v = get_f32(p + 12);
+        /* Refuse records no tracer writes, so a consumer never indexes a
+         * mesh with a negative primitive or compares a NaN distance. */
+        const char *bad = h[i].prim < -1                                  ? "primitive index below -1"
+                          : h[i].prim == -1 && !(isinf(h[i].t) && h[i].t > 0) ? "miss (prim -1) with t != +inf"
+                          : h[i].prim >= 0 && isnan(h[i].t)                  ? "hit with t = NaN"
+                                                                             : NULL;
+        if (bad) {
+            free(h);
+            return fail(err, SIDX_ERR_PARSE, "hit file: record %zu (byte %zu): %s", i, i * TK_HIT_BYTES, bad);
+        }
     }
     *out = h;
     *n = count;

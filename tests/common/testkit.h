@@ -39,7 +39,10 @@ typedef struct tk_hitrec { float t; int32_t prim; float u, v; } tk_hitrec; /* 16
 #define TK_HIT_BYTES 16u
 
 /* Read a whole file of records.  SIDX_ERR_IO if it cannot be read,
- * SIDX_ERR_PARSE if its size is not a multiple of the record size.  On
+ * SIDX_ERR_PARSE if its size is not a multiple of the record size, or (hit
+ * files) a record is not one a tracer writes: prim < -1, a miss (prim -1)
+ * whose t is not +inf, a hit whose t is NaN.  Ray records are taken as they
+ * are (tk_ray_from refuses unusable rays one by one).  On
  * success *out is malloc'ed (NULL when the file is empty) and *n set. */
 sidx_status tk_read_rays(const char *path, tk_rayrec **out, size_t *n, sidx_error *err);
 sidx_status tk_read_hits(const char *path, tk_hitrec **out, size_t *n, sidx_error *err);

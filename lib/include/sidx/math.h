@@ -95,7 +95,11 @@ typedef struct sidx_ray {
 
 /* Fills *r.  Fails with SIDX_ERR_INVALID_ARG (and leaves *r untouched) if
  * any component of org or dir is NaN/Inf, if dir is the zero vector, if
- * tmin or tmax is NaN, or if tmin > tmax.  The direction is not normalized:
+ * tmin or tmax is NaN, if tmin < 0, or if tmin > tmax.  A ray starts at
+ * its origin: a negative tmin would ask the conservative box tests to
+ * widen intervals that lie behind the origin (Ize's 1 + 2γ factor on
+ * t_far only widens positive distances), so it is refused here instead
+ * of being answered differently by different structures (fuzz_rays).  The direction is not normalized:
  * t is measured in units of |dir|. */
 sidx_status sidx_ray_init(sidx_ray *r, sidx_vec3 org, sidx_vec3 dir, float tmin, float tmax);
 
