@@ -43,6 +43,13 @@
 #define RC_DEFAULT_LEAF 8u
 #define RC_DEFAULT_DEPTH 8u
 #define RC_MAX_DEPTH 24u
+/* Budgets that bound memory and build time whatever the options: a 5D
+ * tree doubles per level, so max_depth 24 on a handful of large triangles
+ * asks for 6·2^25 nodes (fuzz_build: over 2 GB for 24 triangles).  Past
+ * either budget the build stops with SIDX_ERR_LIMIT and says which option
+ * to lower; the defaults (depth 8) stay far below both on any scene. */
+#define RC_NODE_BUDGET (1u << 20)  /* nodes: 16 MB (depth 16 needs at most 6·2^17) */
+#define RC_CAND_BUDGET (1u << 25)  /* candidate references: 256 MB */
 #define RC_LEAF UINT32_MAX
 
 typedef struct rc_node {
@@ -71,6 +78,7 @@ typedef struct rc_build {
     uint32_t leaf_size, max_depth;
     double margin;          /* slack of the beam test, relative to the scene size */
     int failed;
+    int over_budget;        /* failed because of RC_NODE_BUDGET / RC_CAND_BUDGET, not memory */
 } rc_build;
 
 /* 5D cell: lo/hi over x, y, z, u, v */
@@ -118,6 +126,10 @@ static int cmp_keyed(const void *x, const void *y)
 
 static uint32_t rc_new_node(rc_build *b)
 {
+    if (b->t->num_nodes >= RC_NODE_BUDGET) {
+        b->failed = b->over_budget = 1;
+        return UINT32_MAX;
+    }
     if (!sidx__grow(b->a, (void **)&b->t->nodes, &b->cap_nodes, (size_t)b->t->num_nodes + 1, sizeof *b->t->nodes)) {
         b->failed = 1;
         return UINT32_MAX;
@@ -135,6 +147,10 @@ static void build_cell(rc_build *b, uint32_t id, const rc_cell *c, int k, double
     if (depth > t->info.max_depth) t->info.max_depth = depth;
     if (n <= b->leaf_size || depth >= b->max_depth) {
         const size_t need = (size_t)t->num_cand + n;
+        if (need > RC_CAND_BUDGET) {
+            b->failed = b->over_budget = 1;
+            return;
+        }
         if (need > UINT32_MAX || !sidx__grow(b->a, (void **)&t->cand, &b->cap_cand, need, sizeof *t->cand) ||
             !sidx__grow(b->a, (void **)&t->key, &b->cap_key, need, sizeof *t->key)) {
             b->failed = 1;
@@ -264,6 +280,11 @@ static sidx_status rc_build_fn(sidx_accel *a, sidx_error *err)
     sidx__free(a, tri_box);
     if (b.failed) {
         rc_free_tree(a, t);
+        if (b.over_budget)
+            return sidx__fail(err, SIDX_ERR_LIMIT,
+                              "rayclass: the 5D tree would exceed %u nodes or %u candidate references "
+                              "(max_depth %u, leaf_size %u); lower max_depth or raise leaf_size",
+                              RC_NODE_BUDGET, RC_CAND_BUDGET, b.max_depth, b.leaf_size);
         return sidx__fail(err, SIDX_ERR_NOMEM, "rayclass: out of memory");
     }
     t->info.nodes = t->num_nodes;

@@ -8,6 +8,7 @@
 #include <setjmp.h>
 #include <stdint.h>
 #include <cmocka.h>
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -149,6 +150,36 @@ static void nomem(void **state)
     sidx_mesh_free(&m);
 }
 
+/* A few big triangles at the deepest allowed tree: the 5D tree doubles
+ * per level, so without a budget this asked for gigabytes (fuzz_build).
+ * It must stop with SIDX_ERR_LIMIT, a message naming the option to lower,
+ * nothing leaked; and the same scene at the default depth still builds. */
+static void budget(void **state)
+{
+    (void)state;
+    sidx_mesh m;
+    make_scene("soup", 24, &m);
+    tk_failing f = {LONG_MAX, 0}; /* never fails: only counts live blocks */
+    sidx_allocator al = tk_failing_allocator(&f);
+    sidx_build_options opt;
+    memset(&opt, 0, sizeof opt);
+    opt.alloc = &al;
+    opt.max_depth = 24;
+    opt.leaf_size = 1;
+    sidx_accel *a = NULL;
+    sidx_error err;
+    memset(&err, 0, sizeof err);
+    assert_int_equal(sidx_accel_build("rayclass", &m, &opt, &a, &err), SIDX_ERR_LIMIT);
+    assert_null(a);
+    assert_non_null(strstr(err.message, "max_depth"));
+    assert_int_equal(f.live, 0);
+    opt.max_depth = 0;
+    assert_int_equal(sidx_accel_build("rayclass", &m, &opt, &a, &err), SIDX_OK);
+    sidx_accel_destroy(a);
+    assert_int_equal(f.live, 0);
+    sidx_mesh_free(&m);
+}
+
 /* ---- the trade-off, in numbers ---------------------------------------------------- */
 
 static double time_rays(const sidx_accel *a, const sidx_ray *rays, size_t n, sidx_hit *hits)
@@ -226,6 +257,7 @@ int main(void)
         cmocka_unit_test(rays_deep),
         cmocka_unit_test(rays_shallow),
         cmocka_unit_test(nomem),
+        cmocka_unit_test(budget),
         cmocka_unit_test(measure),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
