@@ -73,6 +73,14 @@ static float fb_float(fb_reader *r)
     return special[(b - 128) % (sizeof special / sizeof special[0])];
 }
 
+/* Denormal (subnormal) magnitudes: the watertight test's products
+ * underflow there, so brute force itself may report a hit at t = 0 for an
+ * origin a few 1e-40 off the triangle's plane, where the structures' box
+ * tests (exact at that scale) say miss.  Documented in docs/errors.md;
+ * such inputs are traced (no crash, no sanitizer report) but not compared
+ * (regress/build/bvh-t0-denormal.bin). */
+static int fb_tiny(float x) { return x != 0.0f && fabsf(x) < FLT_MIN; }
+
 static int fb_agree(const sidx_hit *a, const sidx_hit *b)
 {
     if ((a->prim == SIDX_NO_HIT) != (b->prim == SIDX_NO_HIT)) return 0;
@@ -138,8 +146,12 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
      * "no crash, no sanitizer report" is checked */
     int sane = 1;
     for (uint32_t i = 0; i < m.num_vertices; ++i)
-        if (fabsf(m.positions[i].x) > 1e6f || fabsf(m.positions[i].y) > 1e6f || fabsf(m.positions[i].z) > 1e6f)
+        if (fabsf(m.positions[i].x) > 1e6f || fabsf(m.positions[i].y) > 1e6f || fabsf(m.positions[i].z) > 1e6f ||
+            fb_tiny(m.positions[i].x) || fb_tiny(m.positions[i].y) || fb_tiny(m.positions[i].z))
             sane = 0;
+    for (uint32_t i = 0; i < nr; ++i)
+        for (int k = 0; k < 3; ++k)
+            if (fb_tiny(sidx_v3_get(rays[i].org, k)) || fb_tiny(sidx_v3_get(rays[i].dir, k))) sane = 0;
 
     sidx_accel *ref = NULL, *a = NULL;
     if (sidx_accel_build("brute", &m, NULL, &ref, NULL) != SIDX_OK) abort(); /* a validated mesh always builds */
