@@ -32,6 +32,10 @@
  * compiler may fuse some of them into FMAs and let rays slip through edges
  * (found by fuzzing clang's AVX2 kernels; tests/fuzz/regress/build/).
  *
+ * Denormal coordinates (0 < |x| < FLT_MIN) underflow in the products: the
+ * watertight test may then report t = 0 for an origin ~1e-40 off the plane
+ * (docs/errors.md).  Scale such geometry up.
+ *
  * A negative t ("What if t is negative?" on the slides) is an intersection
  * behind the origin: every test reports it as a miss when t < tmin.
  *
