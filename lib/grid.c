@@ -176,6 +176,26 @@ int sidx__tri_box_overlap(sidx_vec3 c, sidx_vec3 h, sidx_vec3 v0, sidx_vec3 v1, 
     return tri_box_overlap(c, h, v0, v1, v2);
 }
 
+uint32_t sidx__clip_to_cell(const sidx_mesh *m, const sidx_aabb *tri_boxes, const uint32_t *in, uint32_t n,
+                            sidx_aabb cell, uint32_t *out)
+{
+    const sidx_vec3 c = sidx_aabb_centroid(cell);
+    const sidx_vec3 half = sidx__overlap_pad(c, sidx_v3_scale(sidx_aabb_extent(cell), 0.5f));
+    uint32_t w = 0;
+    for (uint32_t k = 0; k < n; ++k) {
+        const uint32_t prim = in[k];
+        const sidx_aabb tb = tri_boxes[prim];
+        if (tb.min.x > c.x + half.x || tb.max.x < c.x - half.x || tb.min.y > c.y + half.y ||
+            tb.max.y < c.y - half.y || tb.min.z > c.z + half.z || tb.max.z < c.z - half.z)
+            continue;
+        if (!sidx__tri_box_overlap(c, half, sidx_mesh_vertex(m, prim, 0), sidx_mesh_vertex(m, prim, 1),
+                                   sidx_mesh_vertex(m, prim, 2)))
+            continue;
+        out[w++] = prim;
+    }
+    return w;
+}
+
 /* ---- binning (grid_internal.h §3) ------------------------------------- */
 
 static int32_t clamp_cell(float f, uint32_t res)

@@ -66,6 +66,14 @@ int sidx__tri_box_overlap(sidx_vec3 center, sidx_vec3 half, sidx_vec3 v0, sidx_v
  * coordinates' magnitude (rounding in v − c grows with |c|). */
 sidx_vec3 sidx__overlap_pad(sidx_vec3 center, sidx_vec3 half);
 
+/* Copies to out[] those of in[0..n) (triangle ids of m, boxes in
+ * tri_boxes) that overlap `cell`: the cheap box rejection first, then the
+ * exact test above on the padded cell.  Returns how many were kept.  in
+ * and out must not overlap.  Shared by the octree and the irregular grid,
+ * which both distribute a cell's triangles over its children. */
+uint32_t sidx__clip_to_cell(const sidx_mesh *m, const sidx_aabb *tri_boxes, const uint32_t *in, uint32_t n,
+                            sidx_aabb cell, uint32_t *out);
+
 /* ---- 3. binning ------------------------------------------------------- */
 
 /* Inserts triangles ids[0..n) (ids NULL = 0..n-1) into every cell of grid g

@@ -221,23 +221,9 @@ static sidx_status build_node(sidx_accel *a, ibuild *B, uint32_t k, const uint32
             if (i & (1u << j)) clo[i][G->axes[j]] += csize[G->axes[j]];
         const uint32_t chi[3] = {clo[i][0] + csize[0], clo[i][1] + csize[1], clo[i][2] + csize[2]};
         const sidx_aabb cb = vbox(G, clo[i], chi);
-        const sidx_vec3 c = sidx_aabb_centroid(cb);
-        const sidx_vec3 half = sidx__overlap_pad(c, sidx_v3_scale(sidx_aabb_extent(cb), 0.5f));
         if (!sidx__grow(a, (void **)&B->scratch, &B->cap_scratch, off[i] + n, sizeof *B->scratch))
             return SIDX_ERR_NOMEM;
-        size_t w = off[i];
-        for (uint32_t t = 0; t < n; ++t) {
-            const uint32_t prim = B->scratch[s + t];
-            const sidx_aabb tb = B->tri_boxes[prim];
-            if (tb.min.x > c.x + half.x || tb.max.x < c.x - half.x || tb.min.y > c.y + half.y ||
-                tb.max.y < c.y - half.y || tb.min.z > c.z + half.z || tb.max.z < c.z - half.z)
-                continue;
-            if (!sidx__tri_box_overlap(c, half, sidx_mesh_vertex(m, prim, 0), sidx_mesh_vertex(m, prim, 1),
-                                       sidx_mesh_vertex(m, prim, 2)))
-                continue;
-            B->scratch[w++] = prim;
-        }
-        off[i + 1] = w;
+        off[i + 1] = off[i] + sidx__clip_to_cell(m, B->tri_boxes, B->scratch + s, n, cb, B->scratch + off[i]);
     }
     if ((double)(off[nch] - top) > IRR_MAX_DUP * (double)n) return make_cell(a, B, k, lo, size, s, n);
     const uint32_t first = G->n_nodes;

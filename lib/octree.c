@@ -141,24 +141,9 @@ static sidx_status build_node(sidx_accel *a, octree *T, uint32_t node, uint32_t 
     off[0] = top;
     for (uint32_t i = 0; i < nch; ++i) {
         const sidx_aabb cb = child_box(box, i, T->nsplit);
-        const sidx_vec3 c = sidx_aabb_centroid(cb);
-        const sidx_vec3 half = sidx__overlap_pad(c, sidx_v3_scale(sidx_aabb_extent(cb), 0.5f));
         if (!sidx__grow(a, (void **)&T->scratch, &T->cap_scratch, off[i] + n, sizeof *T->scratch))
             return SIDX_ERR_NOMEM;
-        size_t w = off[i];
-        for (uint32_t k = 0; k < n; ++k) {
-            const uint32_t prim = T->scratch[s + k];
-            const sidx_aabb tb = T->tri_boxes[prim];
-            /* Cheap box rejection first, then the exact test. */
-            if (tb.min.x > c.x + half.x || tb.max.x < c.x - half.x || tb.min.y > c.y + half.y ||
-                tb.max.y < c.y - half.y || tb.min.z > c.z + half.z || tb.max.z < c.z - half.z)
-                continue;
-            if (!sidx__tri_box_overlap(c, half, sidx_mesh_vertex(m, prim, 0), sidx_mesh_vertex(m, prim, 1),
-                                       sidx_mesh_vertex(m, prim, 2)))
-                continue;
-            T->scratch[w++] = prim;
-        }
-        off[i + 1] = w;
+        off[i + 1] = off[i] + sidx__clip_to_cell(m, T->tri_boxes, T->scratch + s, n, cb, T->scratch + off[i]);
     }
     if ((double)(off[nch] - top) > OCT_MAX_DUP * (double)n)
         return make_leaf(a, T, node, s, n, depth, SIDX_LEAF_NO_SPLIT);
