@@ -16,7 +16,8 @@
  * hits exactly 0 in some lane redoes that lane with the scalar test (which
  * recomputes it in double). */
 #include "bvh_internal.h"
-#include "sidx/packet.h"
+#include "bvh_wide_internal.h"
+#include "packet_internal.h"
 #if defined(__x86_64__) || defined(__i386__)
 #include <immintrin.h>
 #define PKT_X86 1
@@ -540,7 +541,7 @@ static int packet_capable(const sidx_accel *a)
 
 /* Checked per call (a getenv and a cached cpuid bit), so SIDX_SIMD=scalar
  * can be switched on between calls; sidx_trace_tiles asks once per image. */
-static int have_avx2(void)
+int sidx__packet_have_avx2(void)
 {
 #ifdef PKT_X86
     const char *env = getenv("SIDX_SIMD");
@@ -552,7 +553,7 @@ static int have_avx2(void)
 #endif
 }
 
-static void finish(const sidx_accel *a, const sidx_ray *r, uint32_t flags, sidx_hit *h)
+void sidx__packet_finish(const sidx_accel *a, const sidx_ray *r, uint32_t flags, sidx_hit *h)
 {
     if (h->prim == SIDX_NO_HIT) {
         *h = sidx_hit_none();
@@ -587,6 +588,11 @@ static sidx_status run_packet(const sidx_accel *a, const sidx_ray *rays, uint32_
     stats->packets++;
     const int anyhit = hits == NULL;
     const float scale = a->opt.box == SIDX_BOX_ROBUST ? SIDX_ROBUST_TFAR_SCALE : 1.0f;
+    if (avx < 0) avx = sidx__packet_have_avx2();
+    /* The wide BVHs have their own packet walk (packet_wide.c). */
+    if (o.mode != SIDX_PACKET_SINGLE && n && sidx__is_wide(a) &&
+        sidx__packet_wide(a, rays, n, n, n, &o, hits, occ, stats, avx))
+        return SIDX_OK;
     pkt P;
     if (o.mode == SIDX_PACKET_SINGLE || !packet_capable(a) || n == 0 || !pkt_setup(&P, rays, n, scale, anyhit)) {
         stats->single_packets++;
@@ -606,7 +612,7 @@ static sidx_status run_packet(const sidx_accel *a, const sidx_ray *rays, uint32_
     W.a = a;
     W.b = a->impl;
     W.scale = scale;
-    W.avx = avx < 0 ? have_avx2() : avx;
+    W.avx = avx;
     W.simd_tri = a->opt.tri == SIDX_TRI_WATERTIGHT && P.uniform_k;
     W.st = stats;
     if (o.mode == SIDX_PACKET_FRUSTUM && P.ngroups >= 3) frustum_setup(&P, rays, n, w); /* see packet_walk_impl */
@@ -623,7 +629,7 @@ static sidx_status run_packet(const sidx_accel *a, const sidx_ray *rays, uint32_
         if (P.prim[i] != SIDX_NO_HIT) {
             hits[i].t = P.best[i];
             hits[i].prim = P.prim[i];
-            finish(a, &rays[i], o.flags, &hits[i]);
+            sidx__packet_finish(a, &rays[i], o.flags, &hits[i]);
         }
     }
     return SIDX_OK;
@@ -650,10 +656,27 @@ sidx_status sidx_trace_tiles(const sidx_accel *a, const sidx_ray *rays, uint32_t
         return SIDX_ERR_INVALID_ARG;
     sidx_ray pr[SIDX_PACKET_MAX];
     sidx_hit ph[SIDX_PACKET_MAX];
-    const int avx = have_avx2(); /* once per image: getenv scans the environment (a third of an empty tile) */
+    const int avx = sidx__packet_have_avx2(); /* once per image: getenv scans the environment (a third of an empty tile) */
+    const int wide = sidx__is_wide(a) && !(opt && opt->mode == SIDX_PACKET_SINGLE);
+    sidx_packet_stats dummy;
+    memset(&dummy, 0, sizeof dummy);
+    if (!stats) stats = &dummy;
     for (uint32_t y0 = 0; y0 < H; y0 += tile)
         for (uint32_t x0 = 0; x0 < W; x0 += tile) {
             const uint32_t tw = W - x0 < tile ? W - x0 : tile, th = H - y0 < tile ? H - y0 : tile;
+            /* Wide BVHs: the tile is read and written in place. */
+            const size_t at = (size_t)y0 * W + x0;
+            if (wide) {
+                stats->packets++;
+                if (sidx__packet_wide(a, rays + at, tw * th, tw, W, opt, hits + at, NULL, stats, avx)) continue;
+                /* mixed direction signs: ray by ray, as run_packet does */
+                stats->single_packets++;
+                const sidx_query q = {opt ? opt->flags : 0, SIDX_TRAVERSE_DEFAULT, NULL, 0};
+                for (uint32_t y = 0; y < th; ++y)
+                    for (uint32_t x = 0; x < tw; ++x)
+                        sidx_accel_intersect(a, &rays[at + (size_t)y * W + x], &q, &hits[at + (size_t)y * W + x]);
+                continue;
+            }
             for (uint32_t y = 0; y < th; ++y)
                 memcpy(&pr[y * tw], &rays[(size_t)(y0 + y) * W + x0], tw * sizeof *pr);
             const sidx_status s = run_packet(a, pr, tw * th, tw, opt, ph, NULL, stats, avx);

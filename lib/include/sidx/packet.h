@@ -73,6 +73,9 @@ typedef struct sidx_packet_stats {
     uint64_t frustum_culls;     /* nodes culled by the frustum alone */
     uint64_t prim_tests;        /* ray-triangle tests */
     uint64_t switched_rays;     /* rays that finished a subtree alone (adaptive switch) */
+    /* wide BVHs (bvh4, bvh8); appended last so the fields above keep their offsets */
+    uint64_t interval_tests;    /* child boxes tested against the packet's interval bounds */
+    uint64_t interval_culls;    /* child boxes those bounds culled for the whole packet */
 } sidx_packet_stats;
 
 /* Closest hits for rays[0, n), n <= SIDX_PACKET_MAX.  For FRUSTUM, rays

@@ -1,0 +1,34 @@
+/* packet_internal.h — what the two packet walks share: packet.c (the
+ * binary "bvh", and the entry points of sidx/packet.h) and packet_wide.c
+ * (the 4- and 8-wide "bvh4" / "bvh8").
+ *
+ * The entry points decide which walk a packet takes: a wide structure and
+ * an untraced query go to sidx__packet_wide; everything else stays in
+ * packet.c (the binary walk, or one ray at a time). */
+#ifndef SIDX_PACKET_INTERNAL_H
+#define SIDX_PACKET_INTERNAL_H
+
+#include "sidx_internal.h"
+#include "sidx/packet.h"
+
+/* AVX2 kernels allowed?  The CPU has them and SIDX_SIMD (scalar, 0,
+ * sse4.1) does not ask for less.  A getenv and a cached cpuid bit: asked
+ * per call by the packet calls, once per image by sidx_trace_tiles. */
+int sidx__packet_have_avx2(void);
+
+/* u, v and the geometric normal of a finished hit when flags ask for
+ * them (prim = SIDX_NO_HIT: the empty hit); the mesh is not touched
+ * otherwise. */
+void sidx__packet_finish(const sidx_accel *a, const sidx_ray *r, uint32_t flags, sidx_hit *h);
+
+/* One packet over a bvh4 / bvh8 (sidx__is_wide(a)): rays are a tile of
+ * w x (n / w) rays read in place, row y starting at rays + y·stride
+ * (a plain packet: w = n, stride = n).  Closest hits into hits (same
+ * layout as rays) or, for hits == NULL, any-hit flags into occ (packed,
+ * n entries).  Returns 0 without touching the outputs when the packet's
+ * rays do not share direction signs (the caller then traces them one by
+ * one).  avx: as sidx__packet_have_avx2 answered. */
+int sidx__packet_wide(const sidx_accel *a, const sidx_ray *rays, uint32_t n, uint32_t w, size_t stride,
+                      const sidx_packet_options *opt, sidx_hit *hits, uint8_t *occ, sidx_packet_stats *stats, int avx);
+
+#endif

@@ -1,0 +1,652 @@
+/* packet_wide.c — coherent ray packets over the 4- and 8-wide BVHs
+ * ("bvh4", "bvh8"; layout in bvh_wide_internal.h).
+ *
+ * packet.c walks the binary BVH the way Wald, Boulos, Shirley 2007 do: a
+ * node is one box, tested against the packet group by group.  A wide node
+ * holds W = 4 or 8 child boxes, so the question at a node becomes "which
+ * rays hit which child" — a W x 64 table of bits.  The walk here fills it
+ * in the cheapest of three ways and keeps, per child, the mask of rays
+ * that hit it (the packet's active mask below that child; Wald, Benthin,
+ * Boulos 2008 "Getting rid of packets" and Embree's hybrid traversal keep
+ * the same per-child masks):
+ *
+ *   1. interval arithmetic (Boulos et al. 2007, "Packet-based Whitted and
+ *      distribution ray tracing"; Wald et al. 2006 "Ray tracing animated
+ *      scenes using coherent grid traversal"): the packet's rays are
+ *      bounded by a box of origins [omin, omax] and of inverse directions
+ *      [imin, imax] (the rays share direction signs, so each axis has one
+ *      sign).  From it one pass over the W child boxes gives, per child, a
+ *      lower bound of every ray's entry distance and an upper bound of
+ *      every ray's exit distance; a child whose bounds do not overlap is
+ *      missed by every ray and is dropped before any per-ray work.  The
+ *      same lower bound orders the surviving children near to far.
+ *   2. few active rays (<= THIN): each ray tests all W boxes in one SIMD
+ *      pass, exactly as a single ray does in bvh_wide_walk.h, and its W
+ *      result bits are scattered into the children's masks;
+ *   3. many active rays: each surviving child box is tested against the
+ *      rays 8 at a time (one AVX pass per group of 8), over every group
+ *      without branching on which groups are active — the result is
+ *      masked instead.
+ *
+ * Leaves are the wide tree's runs of 4-triangle blocks: each active ray
+ * runs the 4-triangle watertight test of the single-ray walk on each block
+ * (the leaf is small and the block's vertices stay in cache across rays).
+ *
+ * Why the interval test is conservative in floating point: every per-ray
+ * slab value is fl(fl(p − o)·inv), and rounding is monotone, so evaluating
+ * the same two operations on the interval ends (origin end chosen by the
+ * axis' sign, min / max over the two inverse-direction ends) bounds every
+ * ray's value from the correct side; the far planes use 1/d·S (S the Ize
+ * factor) as the rays do.  It needs finite inverse directions: a packet
+ * with a ±0 direction component (inv = ±inf, where 0·inf would be NaN)
+ * skips the interval test and relies on the per-ray tests.
+ *
+ * Results equal the single-ray walk's: the per-ray box test is the same
+ * robust slab test against the ray's own [tmin, best], the triangle test
+ * is the same 4-lane watertight kernel (same operations in the same order,
+ * smallest t per block, ties to the lowest lane; a lane with an edge
+ * function of exactly 0 sends the block to the scalar test), so the same t
+ * and prim come out; only on an exact tie of two triangles in different
+ * blocks may the packet, visiting them in another order, keep the other.
+ *
+ * Like packet.c the walk is written once and instantiated per width and
+ * instruction set: AVX2 (8-lane ray groups; 8 boxes per pass for bvh8, 4
+ * with SSE for bvh4; the SSE4.1 triangle kernel) and a scalar copy doing
+ * the same arithmetic in loops — the readable reference, run by the tests
+ * with SIDX_SIMD=scalar. */
+#include "bvh_wide_internal.h"
+#include "packet_internal.h"
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#define PW_X86 1
+#endif
+
+#define GL 8u                      /* rays per group (one AVX register) */
+#define NLANES SIDX_PACKET_MAX     /* 64: the active mask is one uint64_t */
+#define THIN 16u                   /* at most this many active rays: per-ray W-box tests */
+
+_Static_assert(SIDX_PACKET_MAX == 64, "active ray masks are 64-bit");
+
+/* The packet: rays in structure-of-arrays form, padded to whole groups of
+ * 8; a padding lane has tmin = +inf and best = −inf, so it misses every
+ * box.  The rays themselves are read in place (ray[i] points into the
+ * caller's image) for the triangle tests. */
+typedef struct wpk {
+    _Alignas(32) float ox[NLANES], oy[NLANES], oz[NLANES];
+    _Alignas(32) float ix[NLANES], iy[NLANES], iz[NLANES];
+    _Alignas(32) float fx[NLANES], fy[NLANES], fz[NLANES]; /* 1/d · Ize factor (far planes) */
+    _Alignas(32) float tmin[NLANES], best[NLANES];
+    uint32_t prim[NLANES];
+    const sidx_ray *ray[NLANES];
+    uint64_t live;         /* the real rays: bits 0 .. n−1 */
+    uint64_t done;         /* any-hit: rays already occluded */
+    uint32_t n, ngroups;
+    uint32_t no[3], fo[3]; /* near / far plane row of each axis in a node (k or 3 + k), from the common signs */
+    int anyhit;
+    /* interval arithmetic: ia = 0 when some inverse direction is not finite */
+    int ia;
+    float ia_on[3], ia_of[3];  /* origin end giving the smallest entry / the largest exit */
+    float ia_i0[3], ia_i1[3];  /* inverse direction range */
+    float ia_f0[3], ia_f1[3];  /* the same times the Ize factor */
+    float ia_tmin, ia_tmax;    /* smallest tmin, largest tmax */
+} wpk;
+
+/* Work counters, in locals during the walk (see packet.c: through the
+ * stats pointer each would cost a load and a store per node). */
+typedef struct wcount {
+    uint64_t visits, boxes, prims, ia_tests, ia_culls;
+} wcount;
+
+/* ---- set-up ---------------------------------------------------------------------- */
+
+/* 0 when the rays do not share direction signs. */
+static int wpk_setup(wpk *P, const sidx_ray *rays, uint32_t n, uint32_t w, size_t stride, float scale, int anyhit)
+{
+    const sidx_ray *r0 = rays;
+    float omin[3], omax[3], imin[3], imax[3], fmin[3], fmax[3], tmn = INFINITY, tmx = -INFINITY;
+    int finite = 1;
+    for (int k = 0; k < 3; ++k) {
+        omin[k] = imin[k] = fmin[k] = INFINITY;
+        omax[k] = imax[k] = fmax[k] = -INFINITY;
+    }
+    P->n = n;
+    P->ngroups = (n + GL - 1) / GL;
+    P->anyhit = anyhit;
+    P->done = 0;
+    P->live = n == 64 ? ~0ull : (1ull << n) - 1u;
+    uint32_t x = 0;
+    const sidx_ray *row = rays;
+    for (uint32_t i = 0; i < n; ++i) {
+        const sidx_ray *r = row + x;
+        if (++x == w) {
+            x = 0;
+            row += stride;
+        }
+        if (r->sign[0] != r0->sign[0] || r->sign[1] != r0->sign[1] || r->sign[2] != r0->sign[2]) return 0;
+        P->ray[i] = r;
+        const float o[3] = {r->org.x, r->org.y, r->org.z}, inv[3] = {r->inv_dir.x, r->inv_dir.y, r->inv_dir.z};
+        const float f[3] = {inv[0] * scale, inv[1] * scale, inv[2] * scale};
+        P->ox[i] = o[0]; P->oy[i] = o[1]; P->oz[i] = o[2];
+        P->ix[i] = inv[0]; P->iy[i] = inv[1]; P->iz[i] = inv[2];
+        P->fx[i] = f[0]; P->fy[i] = f[1]; P->fz[i] = f[2];
+        P->tmin[i] = r->tmin;
+        P->best[i] = r->tmax;
+        P->prim[i] = SIDX_NO_HIT;
+        for (int k = 0; k < 3; ++k) {
+            omin[k] = o[k] < omin[k] ? o[k] : omin[k];
+            omax[k] = o[k] > omax[k] ? o[k] : omax[k];
+            imin[k] = inv[k] < imin[k] ? inv[k] : imin[k];
+            imax[k] = inv[k] > imax[k] ? inv[k] : imax[k];
+            fmin[k] = f[k] < fmin[k] ? f[k] : fmin[k];
+            fmax[k] = f[k] > fmax[k] ? f[k] : fmax[k];
+            finite &= isfinite(inv[k]) && isfinite(f[k]);
+        }
+        tmn = r->tmin < tmn ? r->tmin : tmn;
+        tmx = r->tmax > tmx ? r->tmax : tmx;
+    }
+    for (uint32_t i = n; i < P->ngroups * GL; ++i) { /* padding: misses everything */
+        P->ox[i] = P->oy[i] = P->oz[i] = 0.0f;
+        P->ix[i] = P->iy[i] = P->iz[i] = P->fx[i] = P->fy[i] = P->fz[i] = 1.0f;
+        P->tmin[i] = INFINITY;
+        P->best[i] = -INFINITY;
+        P->prim[i] = SIDX_NO_HIT;
+        P->ray[i] = NULL;
+    }
+    for (int k = 0; k < 3; ++k) {
+        const int s = r0->sign[k];
+        /* rows of a node: 0..2 lo, 3..5 hi; a negative direction enters through hi */
+        P->no[k] = (uint32_t)(s ? 3 + k : k);
+        P->fo[k] = (uint32_t)(s ? k : 3 + k);
+        /* The entry t = (p − o)·inv is smallest for the largest p − o when
+         * inv < 0 (o = omin), for the smallest when inv > 0 (o = omax); the
+         * exit the other way round. */
+        P->ia_on[k] = s ? omin[k] : omax[k];
+        P->ia_of[k] = s ? omax[k] : omin[k];
+        P->ia_i0[k] = imin[k];
+        P->ia_i1[k] = imax[k];
+        P->ia_f0[k] = fmin[k];
+        P->ia_f1[k] = fmax[k];
+    }
+    P->ia_tmin = tmn;
+    P->ia_tmax = tmx;
+    P->ia = finite;
+    return 1;
+}
+
+/* ---- kernels: the portable reference ---------------------------------------------- */
+
+/* Interval test of the W child boxes; key[s] receives the lower bound of
+ * every ray's entry into slot s (the order of the children). */
+static SIDX_INLINE unsigned ia_slots_scalar(const float *nd, const uint32_t W, const wpk *P, float *key)
+{
+    unsigned m = 0;
+    for (uint32_t s = 0; s < W; ++s) {
+        float L = P->ia_tmin, U = P->ia_tmax;
+        for (int k = 0; k < 3; ++k) {
+            const float dn = nd[P->no[k] * W + s] - P->ia_on[k], df = nd[P->fo[k] * W + s] - P->ia_of[k];
+            const float a0 = dn * P->ia_i0[k], a1 = dn * P->ia_i1[k];
+            const float b0 = df * P->ia_f0[k], b1 = df * P->ia_f1[k];
+            const float lo = a0 < a1 ? a0 : a1, hi = b0 > b1 ? b0 : b1;
+            L = lo > L ? lo : L;
+            U = hi < U ? hi : U;
+        }
+        key[s] = L;
+        m |= (unsigned)(L <= U) << s;
+    }
+    return m;
+}
+
+/* Ray i against the W child boxes: the single-ray test of bvh_wide_walk.h
+ * (slab value first, so a NaN one never narrows the interval). */
+static SIDX_INLINE unsigned ray_slots_scalar(const float *nd, const uint32_t W, const wpk *P, uint32_t i)
+{
+    const float o[3] = {P->ox[i], P->oy[i], P->oz[i]}, inv[3] = {P->ix[i], P->iy[i], P->iz[i]},
+                fin[3] = {P->fx[i], P->fy[i], P->fz[i]};
+    unsigned m = 0;
+    for (uint32_t s = 0; s < W; ++s) {
+        float t0 = P->tmin[i], t1 = P->best[i];
+        for (int k = 0; k < 3; ++k) {
+            const float a = (nd[P->no[k] * W + s] - o[k]) * inv[k];
+            const float b = (nd[P->fo[k] * W + s] - o[k]) * fin[k];
+            t0 = a > t0 ? a : t0;
+            t1 = b < t1 ? b : t1;
+        }
+        m |= (unsigned)(t0 <= t1) << s;
+    }
+    return m;
+}
+
+/* Slot s of a node against rays 8g .. 8g+7: bit l for ray 8g + l. */
+static SIDX_INLINE unsigned group_slot_scalar(const float *nd, const uint32_t W, uint32_t s, const wpk *P, uint32_t g)
+{
+    unsigned m = 0;
+    for (uint32_t l = 0; l < GL; ++l) {
+        const uint32_t i = g * GL + l;
+        const float o[3] = {P->ox[i], P->oy[i], P->oz[i]}, inv[3] = {P->ix[i], P->iy[i], P->iz[i]},
+                    fin[3] = {P->fx[i], P->fy[i], P->fz[i]};
+        float t0 = P->tmin[i], t1 = P->best[i];
+        for (int k = 0; k < 3; ++k) {
+            const float a = (nd[P->no[k] * W + s] - o[k]) * inv[k];
+            const float b = (nd[P->fo[k] * W + s] - o[k]) * fin[k];
+            t0 = a > t0 ? a : t0;
+            t1 = b < t1 ? b : t1;
+        }
+        m |= (unsigned)(t0 <= t1) << l;
+    }
+    return m;
+}
+
+/* Ray i against one leaf (a run of blocks), one triangle after another
+ * with a shrinking bound; returns 1 when an any-hit ray is done. */
+static SIDX_INLINE int leaf_ray_scalar(const sidx_accel *a, const wide_tri4 *B, wpk *P, uint32_t i)
+{
+    const sidx_ray *r = P->ray[i];
+    for (;; ++B) {
+        for (int l = 0; l < 4; ++l) {
+            const uint32_t id = B->prim[l] & WIDE_PRIM_MASK;
+            if (id == WIDE_PAD_PRIM) continue;
+            const sidx_vec3 p0 = {B->v[0][0][l], B->v[0][1][l], B->v[0][2][l]};
+            const sidx_vec3 p1 = {B->v[1][0][l], B->v[1][1][l], B->v[1][2][l]};
+            const sidx_vec3 p2 = {B->v[2][0][l], B->v[2][1][l], B->v[2][2][l]};
+            float t;
+            if (sidx__tri_test(a->opt.tri, r, p0, p1, p2, P->best[i], &t, NULL, NULL)) {
+                P->prim[i] = id;
+                if (P->anyhit) {
+                    P->best[i] = -INFINITY; /* misses every box from now on */
+                    return 1;
+                }
+                P->best[i] = t;
+            }
+        }
+        if (B->prim[0] & WIDE_LAST_BLOCK) return 0;
+    }
+}
+
+/* ---- kernels: AVX2 (and SSE for 4-wide nodes and triangle blocks) ------------------ */
+
+#ifdef PW_X86
+/* Not always_inline: the scalar walks mention these calls in branches that
+ * fold away, and an always_inline AVX2 callee there would not compile;
+ * the flatten attribute of the AVX2 walks inlines them. */
+#define AVX __attribute__((target("avx2,fma"))) static inline
+
+AVX unsigned ia_slots_avx(const float *nd, const uint32_t W, const wpk *P, float *key)
+{
+    if (W == 8) {
+        __m256 L = _mm256_set1_ps(P->ia_tmin), U = _mm256_set1_ps(P->ia_tmax);
+        for (int k = 0; k < 3; ++k) {
+            const __m256 dn = _mm256_sub_ps(_mm256_load_ps(nd + P->no[k] * 8u), _mm256_set1_ps(P->ia_on[k]));
+            const __m256 df = _mm256_sub_ps(_mm256_load_ps(nd + P->fo[k] * 8u), _mm256_set1_ps(P->ia_of[k]));
+            const __m256 lo = _mm256_min_ps(_mm256_mul_ps(dn, _mm256_set1_ps(P->ia_i0[k])),
+                                            _mm256_mul_ps(dn, _mm256_set1_ps(P->ia_i1[k])));
+            const __m256 hi = _mm256_max_ps(_mm256_mul_ps(df, _mm256_set1_ps(P->ia_f0[k])),
+                                            _mm256_mul_ps(df, _mm256_set1_ps(P->ia_f1[k])));
+            L = _mm256_max_ps(lo, L);
+            U = _mm256_min_ps(hi, U);
+        }
+        _mm256_storeu_ps(key, L);
+        return (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(L, U, _CMP_LE_OQ));
+    }
+    __m128 L = _mm_set1_ps(P->ia_tmin), U = _mm_set1_ps(P->ia_tmax);
+    for (int k = 0; k < 3; ++k) {
+        const __m128 dn = _mm_sub_ps(_mm_load_ps(nd + P->no[k] * 4u), _mm_set1_ps(P->ia_on[k]));
+        const __m128 df = _mm_sub_ps(_mm_load_ps(nd + P->fo[k] * 4u), _mm_set1_ps(P->ia_of[k]));
+        const __m128 lo = _mm_min_ps(_mm_mul_ps(dn, _mm_set1_ps(P->ia_i0[k])), _mm_mul_ps(dn, _mm_set1_ps(P->ia_i1[k])));
+        const __m128 hi = _mm_max_ps(_mm_mul_ps(df, _mm_set1_ps(P->ia_f0[k])), _mm_mul_ps(df, _mm_set1_ps(P->ia_f1[k])));
+        L = _mm_max_ps(lo, L);
+        U = _mm_min_ps(hi, U);
+    }
+    _mm_storeu_ps(key, L);
+    return (unsigned)_mm_movemask_ps(_mm_cmple_ps(L, U));
+}
+
+AVX unsigned ray_slots_avx(const float *nd, const uint32_t W, const wpk *P, uint32_t i)
+{
+    if (W == 8) {
+        const __m256 ox = _mm256_broadcast_ss(P->ox + i), oy = _mm256_broadcast_ss(P->oy + i),
+                     oz = _mm256_broadcast_ss(P->oz + i);
+        const __m256 nx = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(nd + P->no[0] * 8u), ox), _mm256_broadcast_ss(P->ix + i));
+        const __m256 ny = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(nd + P->no[1] * 8u), oy), _mm256_broadcast_ss(P->iy + i));
+        const __m256 nz = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(nd + P->no[2] * 8u), oz), _mm256_broadcast_ss(P->iz + i));
+        const __m256 fx = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(nd + P->fo[0] * 8u), ox), _mm256_broadcast_ss(P->fx + i));
+        const __m256 fy = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(nd + P->fo[1] * 8u), oy), _mm256_broadcast_ss(P->fy + i));
+        const __m256 fz = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(nd + P->fo[2] * 8u), oz), _mm256_broadcast_ss(P->fz + i));
+        __m256 t0 = _mm256_max_ps(nx, _mm256_broadcast_ss(P->tmin + i));
+        t0 = _mm256_max_ps(ny, t0);
+        t0 = _mm256_max_ps(nz, t0);
+        __m256 t1 = _mm256_min_ps(fx, _mm256_broadcast_ss(P->best + i));
+        t1 = _mm256_min_ps(fy, t1);
+        t1 = _mm256_min_ps(fz, t1);
+        return (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(t0, t1, _CMP_LE_OQ));
+    }
+    const __m128 ox = _mm_broadcast_ss(P->ox + i), oy = _mm_broadcast_ss(P->oy + i), oz = _mm_broadcast_ss(P->oz + i);
+    const __m128 nx = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(nd + P->no[0] * 4u), ox), _mm_broadcast_ss(P->ix + i));
+    const __m128 ny = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(nd + P->no[1] * 4u), oy), _mm_broadcast_ss(P->iy + i));
+    const __m128 nz = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(nd + P->no[2] * 4u), oz), _mm_broadcast_ss(P->iz + i));
+    const __m128 fx = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(nd + P->fo[0] * 4u), ox), _mm_broadcast_ss(P->fx + i));
+    const __m128 fy = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(nd + P->fo[1] * 4u), oy), _mm_broadcast_ss(P->fy + i));
+    const __m128 fz = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(nd + P->fo[2] * 4u), oz), _mm_broadcast_ss(P->fz + i));
+    __m128 t0 = _mm_max_ps(nx, _mm_broadcast_ss(P->tmin + i));
+    t0 = _mm_max_ps(ny, t0);
+    t0 = _mm_max_ps(nz, t0);
+    __m128 t1 = _mm_min_ps(fx, _mm_broadcast_ss(P->best + i));
+    t1 = _mm_min_ps(fy, t1);
+    t1 = _mm_min_ps(fz, t1);
+    return (unsigned)_mm_movemask_ps(_mm_cmple_ps(t0, t1));
+}
+
+AVX unsigned group_slot_avx(const float *nd, const uint32_t W, uint32_t s, const wpk *P, uint32_t g)
+{
+    const uint32_t i = g * GL;
+    const __m256 ox = _mm256_load_ps(P->ox + i), oy = _mm256_load_ps(P->oy + i), oz = _mm256_load_ps(P->oz + i);
+    const __m256 nx = _mm256_mul_ps(_mm256_sub_ps(_mm256_broadcast_ss(nd + P->no[0] * W + s), ox), _mm256_load_ps(P->ix + i));
+    const __m256 ny = _mm256_mul_ps(_mm256_sub_ps(_mm256_broadcast_ss(nd + P->no[1] * W + s), oy), _mm256_load_ps(P->iy + i));
+    const __m256 nz = _mm256_mul_ps(_mm256_sub_ps(_mm256_broadcast_ss(nd + P->no[2] * W + s), oz), _mm256_load_ps(P->iz + i));
+    const __m256 fx = _mm256_mul_ps(_mm256_sub_ps(_mm256_broadcast_ss(nd + P->fo[0] * W + s), ox), _mm256_load_ps(P->fx + i));
+    const __m256 fy = _mm256_mul_ps(_mm256_sub_ps(_mm256_broadcast_ss(nd + P->fo[1] * W + s), oy), _mm256_load_ps(P->fy + i));
+    const __m256 fz = _mm256_mul_ps(_mm256_sub_ps(_mm256_broadcast_ss(nd + P->fo[2] * W + s), oz), _mm256_load_ps(P->fz + i));
+    __m256 t0 = _mm256_max_ps(nx, _mm256_load_ps(P->tmin + i));
+    t0 = _mm256_max_ps(ny, t0);
+    t0 = _mm256_max_ps(nz, t0);
+    __m256 t1 = _mm256_min_ps(fx, _mm256_load_ps(P->best + i));
+    t1 = _mm256_min_ps(fy, t1);
+    t1 = _mm256_min_ps(fz, t1);
+    return (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(t0, t1, _CMP_LE_OQ));
+}
+
+/* The 4-triangle watertight test of bvh_wide_walk.h (tri4_), operation
+ * for operation, for one ray: 1 hit (smallest t, lowest lane on ties),
+ * 0 none, −1 an edge function is exactly 0 (the scalar test decides). */
+AVX int tri4_avx(const wide_tri4 *B, const sidx_ray *r, float best, float *t_out, unsigned *lane_out)
+{
+    const float *o = &r->org.x, *v = &B->v[0][0][0];
+    const uint32_t kx4 = 4u * r->kx, ky4 = 4u * r->ky, kz4 = 4u * r->kz;
+    const __m128 okx = _mm_set1_ps(o[r->kx]), oky = _mm_set1_ps(o[r->ky]), okz = _mm_set1_ps(o[r->kz]);
+    const __m128 sx = _mm_set1_ps(r->sx), sy = _mm_set1_ps(r->sy), sz = _mm_set1_ps(r->sz);
+    const __m128 ax = _mm_sub_ps(_mm_load_ps(v + kx4), okx);
+    const __m128 ay = _mm_sub_ps(_mm_load_ps(v + ky4), oky);
+    const __m128 az = _mm_sub_ps(_mm_load_ps(v + kz4), okz);
+    const __m128 bx = _mm_sub_ps(_mm_load_ps(v + 12 + kx4), okx);
+    const __m128 by = _mm_sub_ps(_mm_load_ps(v + 12 + ky4), oky);
+    const __m128 bz = _mm_sub_ps(_mm_load_ps(v + 12 + kz4), okz);
+    const __m128 cx = _mm_sub_ps(_mm_load_ps(v + 24 + kx4), okx);
+    const __m128 cy = _mm_sub_ps(_mm_load_ps(v + 24 + ky4), oky);
+    const __m128 cz = _mm_sub_ps(_mm_load_ps(v + 24 + kz4), okz);
+    const __m128 Ax = _mm_sub_ps(ax, _mm_mul_ps(sx, az)), Ay = _mm_sub_ps(ay, _mm_mul_ps(sy, az));
+    const __m128 Bx = _mm_sub_ps(bx, _mm_mul_ps(sx, bz)), By = _mm_sub_ps(by, _mm_mul_ps(sy, bz));
+    const __m128 Cx = _mm_sub_ps(cx, _mm_mul_ps(sx, cz)), Cy = _mm_sub_ps(cy, _mm_mul_ps(sy, cz));
+    const __m128 U = _mm_sub_ps(_mm_mul_ps(Cx, By), _mm_mul_ps(Cy, Bx));
+    const __m128 V = _mm_sub_ps(_mm_mul_ps(Ax, Cy), _mm_mul_ps(Ay, Cx));
+    const __m128 Wv = _mm_sub_ps(_mm_mul_ps(Bx, Ay), _mm_mul_ps(By, Ax));
+    const __m128 zero = _mm_setzero_ps();
+    const __m128 anyzero = _mm_or_ps(_mm_or_ps(_mm_cmpeq_ps(U, zero), _mm_cmpeq_ps(V, zero)), _mm_cmpeq_ps(Wv, zero));
+    if (SIDX_UNLIKELY(_mm_movemask_ps(anyzero))) return -1;
+    const __m128 mixed = _mm_castsi128_ps(
+        _mm_srai_epi32(_mm_castps_si128(_mm_or_ps(_mm_xor_ps(U, V), _mm_xor_ps(U, Wv))), 31));
+    const __m128 det = _mm_add_ps(_mm_add_ps(U, V), Wv);
+    const __m128 cand = _mm_andnot_ps(mixed, _mm_or_ps(_mm_cmplt_ps(det, zero), _mm_cmpgt_ps(det, zero)));
+    if (!_mm_movemask_ps(cand)) return 0;
+    const __m128 T = _mm_add_ps(_mm_add_ps(_mm_mul_ps(U, _mm_mul_ps(sz, az)), _mm_mul_ps(V, _mm_mul_ps(sz, bz))),
+                                _mm_mul_ps(Wv, _mm_mul_ps(sz, cz)));
+    const __m128 t = _mm_div_ps(T, det);
+    const __m128 ok = _mm_and_ps(cand, _mm_and_ps(_mm_cmpge_ps(t, _mm_set1_ps(r->tmin)), _mm_cmplt_ps(t, _mm_set1_ps(best))));
+    const unsigned m = (unsigned)_mm_movemask_ps(ok);
+    if (!m) return 0;
+    const __m128 tt = _mm_blendv_ps(_mm_set1_ps(INFINITY), t, ok);
+    __m128 mn = _mm_min_ps(tt, _mm_shuffle_ps(tt, tt, _MM_SHUFFLE(1, 0, 3, 2)));
+    mn = _mm_min_ps(mn, _mm_shuffle_ps(mn, mn, _MM_SHUFFLE(2, 3, 0, 1)));
+    *lane_out = (unsigned)__builtin_ctz((unsigned)_mm_movemask_ps(_mm_cmpeq_ps(tt, mn)) & m);
+    *t_out = _mm_cvtss_f32(mn);
+    return 1;
+}
+
+/* Ray i against one leaf, a block per SSE pass; a block with a zero edge
+ * function goes through the scalar loop (on that block only). */
+AVX int leaf_ray_avx(const sidx_accel *a, const wide_tri4 *B, wpk *P, uint32_t i)
+{
+    const sidx_ray *r = P->ray[i];
+    for (;; ++B) {
+        float t;
+        unsigned lane;
+        const int h = tri4_avx(B, r, P->best[i], &t, &lane);
+        if (h > 0) {
+            P->prim[i] = B->prim[lane] & WIDE_PRIM_MASK;
+            if (P->anyhit) {
+                P->best[i] = -INFINITY;
+                return 1;
+            }
+            P->best[i] = t;
+        } else if (SIDX_UNLIKELY(h < 0)) {
+            for (int l = 0; l < 4; ++l) {
+                const uint32_t id = B->prim[l] & WIDE_PRIM_MASK;
+                if (id == WIDE_PAD_PRIM) continue;
+                const sidx_vec3 p0 = {B->v[0][0][l], B->v[0][1][l], B->v[0][2][l]};
+                const sidx_vec3 p1 = {B->v[1][0][l], B->v[1][1][l], B->v[1][2][l]};
+                const sidx_vec3 p2 = {B->v[2][0][l], B->v[2][1][l], B->v[2][2][l]};
+                if (sidx__tri_test(a->opt.tri, r, p0, p1, p2, P->best[i], &t, NULL, NULL)) {
+                    P->prim[i] = id;
+                    if (P->anyhit) {
+                        P->best[i] = -INFINITY;
+                        return 1;
+                    }
+                    P->best[i] = t;
+                }
+            }
+        }
+        if (B->prim[0] & WIDE_LAST_BLOCK) return 0;
+    }
+}
+#undef AVX
+#endif
+
+/* ---- the walk ---------------------------------------------------------------------- */
+
+/* A deferred child: its reference (node index, or WIDE_LEAF_BIT | first
+ * block), the rays that hit its box, and the interval lower bound of
+ * their entry (the order). */
+typedef struct wstack {
+    uint32_t ref;
+    float key;
+    uint64_t rays;
+} wstack;
+
+/* Written once, instantiated for W = 4, 8 and avx = 0, 1 (constants, so
+ * every branch on them folds away); simd_tri: the watertight SIMD kernel
+ * applies (the structure's triangle test is the watertight one). */
+static SIDX_INLINE void wide_walk_impl(const sidx_accel *a, wpk *P, wcount *C, const uint32_t W, const int avx,
+                                       const int simd_tri)
+{
+    const wide_bvh *wb = a->impl;
+    if (wb->num_inner == 0) return;
+    const float *nodes = wb->nodes;
+    const unsigned all_slots = (1u << W) - 1u;
+    wstack stk[WIDE_STACK];
+    uint32_t sp = 0, ref = 0;
+    uint64_t M = P->live;
+    uint64_t visits = 0, boxes = 0, prims = 0, ia_tests = 0, ia_culls = 0;
+    for (;;) {
+        if (!(ref & WIDE_LEAF_BIT)) {
+            const float *nd = nodes + (size_t)ref * 8u * W;
+            const uint32_t *ch = wide_child(nd, W);
+            _Alignas(32) float key[8];
+            uint64_t cm[8];
+            ++visits;
+            /* 1. the interval test: children no ray can hit */
+            unsigned cand = all_slots;
+            if (P->ia) {
+#ifdef PW_X86
+                cand = avx ? ia_slots_avx(nd, W, P, key) : ia_slots_scalar(nd, W, P, key);
+#else
+                cand = ia_slots_scalar(nd, W, P, key);
+#endif
+                ia_tests += W;
+                ia_culls += (uint64_t)(W - (uint32_t)__builtin_popcount(cand));
+            } else {
+                for (uint32_t s = 0; s < W; ++s) key[s] = (float)s;
+            }
+            unsigned hitm = 0;
+            if (cand) {
+                const uint32_t active = (uint32_t)__builtin_popcountll(M);
+                if (active <= THIN) {
+                    /* 2. few rays: each tests the W boxes at once */
+                    for (uint32_t s = 0; s < W; ++s) cm[s] = 0;
+                    for (uint64_t mm = M; mm; mm &= mm - 1) {
+                        const uint32_t i = (uint32_t)__builtin_ctzll(mm);
+#ifdef PW_X86
+                        unsigned r = avx ? ray_slots_avx(nd, W, P, i) : ray_slots_scalar(nd, W, P, i);
+#else
+                        unsigned r = ray_slots_scalar(nd, W, P, i);
+#endif
+                        r &= cand;
+                        hitm |= r;
+                        for (; r; r &= r - 1) cm[__builtin_ctz(r)] |= 1ull << i;
+                    }
+                    boxes += (uint64_t)active * W;
+                } else {
+                    /* 3. many rays: each candidate box against every group of 8 */
+                    for (unsigned cc = cand; cc; cc &= cc - 1) {
+                        const uint32_t s = (uint32_t)__builtin_ctz(cc);
+                        uint64_t mm = 0;
+                        for (uint32_t g = 0; g < P->ngroups; ++g) {
+#ifdef PW_X86
+                            const unsigned r = avx ? group_slot_avx(nd, W, s, P, g) : group_slot_scalar(nd, W, s, P, g);
+#else
+                            const unsigned r = group_slot_scalar(nd, W, s, P, g);
+#endif
+                            mm |= (uint64_t)r << (g * GL);
+                        }
+                        mm &= M;
+                        cm[s] = mm;
+                        hitm |= (unsigned)(mm != 0) << s;
+                    }
+                    boxes += (uint64_t)__builtin_popcount(cand) * P->ngroups * GL;
+                }
+            }
+            if (hitm) {
+                const uint32_t s0 = (uint32_t)__builtin_ctz(hitm);
+                if (!(hitm & (hitm - 1))) { /* one child: descend, no stack */
+                    ref = ch[s0];
+                    M = cm[s0];
+                    continue;
+                }
+                /* Several: append, order nearest on top (insertion sort
+                 * on the interval entry bound, stable), descend into the
+                 * nearest. */
+                const uint32_t base = sp;
+                for (unsigned hh = hitm; hh; hh &= hh - 1) {
+                    const uint32_t s = (uint32_t)__builtin_ctz(hh);
+                    const wstack e = {ch[s], key[s], cm[s]};
+                    uint32_t j = sp++;
+                    if (!P->anyhit)
+                        while (j > base && stk[j - 1].key <= e.key) {
+                            stk[j] = stk[j - 1];
+                            --j;
+                        }
+                    stk[j] = e;
+                }
+                --sp;
+                ref = stk[sp].ref;
+                M = stk[sp].rays;
+                continue;
+            }
+        } else {
+            /* a leaf: each ray of the mask against its blocks */
+            const wide_tri4 *B = wb->blocks + (ref & ~WIDE_LEAF_BIT);
+            uint32_t nb = 1;
+            for (const wide_tri4 *b = B; !(b->prim[0] & WIDE_LAST_BLOCK); ++b) ++nb;
+            for (uint64_t mm = M; mm; mm &= mm - 1) {
+                const uint32_t i = (uint32_t)__builtin_ctzll(mm);
+                int done;
+#ifdef PW_X86
+                if (avx && simd_tri) done = leaf_ray_avx(a, B, P, i);
+                else done = leaf_ray_scalar(a, B, P, i);
+#else
+                (void)simd_tri;
+                done = leaf_ray_scalar(a, B, P, i);
+#endif
+                if (done) P->done |= 1ull << i;
+            }
+            prims += (uint64_t)__builtin_popcountll(M) * nb * 4u;
+            if (P->anyhit && P->done == P->live) break;
+        }
+        /* Pop the next deferred child that still has rays to trace. */
+        for (;;) {
+            if (sp == 0) goto out;
+            --sp;
+            ref = stk[sp].ref;
+            M = stk[sp].rays & ~P->done;
+            if (M) break;
+        }
+    }
+out:
+    C->visits += visits;
+    C->boxes += boxes;
+    C->prims += prims;
+    C->ia_tests += ia_tests;
+    C->ia_culls += ia_culls;
+}
+
+#ifdef PW_X86
+__attribute__((target("avx2,fma"), flatten)) static void walk8_avx(const sidx_accel *a, wpk *P, wcount *C, int st)
+{
+    if (st) wide_walk_impl(a, P, C, 8, 1, 1);
+    else wide_walk_impl(a, P, C, 8, 1, 0);
+}
+__attribute__((target("avx2,fma"), flatten)) static void walk4_avx(const sidx_accel *a, wpk *P, wcount *C, int st)
+{
+    if (st) wide_walk_impl(a, P, C, 4, 1, 1);
+    else wide_walk_impl(a, P, C, 4, 1, 0);
+}
+#endif
+static void walk8_scalar(const sidx_accel *a, wpk *P, wcount *C) { wide_walk_impl(a, P, C, 8, 0, 0); }
+static void walk4_scalar(const sidx_accel *a, wpk *P, wcount *C) { wide_walk_impl(a, P, C, 4, 0, 0); }
+
+/* ---- entry (from packet.c) ----------------------------------------------------------- */
+
+int sidx__packet_wide(const sidx_accel *a, const sidx_ray *rays, uint32_t n, uint32_t w, size_t stride,
+                      const sidx_packet_options *opt, sidx_hit *hits, uint8_t *occ, sidx_packet_stats *stats, int avx)
+{
+    const wide_bvh *wb = a->impl;
+    const int anyhit = hits == NULL;
+    const float scale = a->opt.box == SIDX_BOX_ROBUST ? SIDX_ROBUST_TFAR_SCALE : 1.0f;
+    wpk P;
+    if (!wpk_setup(&P, rays, n, w, stride, scale, anyhit)) return 0;
+    wcount C = {0, 0, 0, 0, 0};
+#ifdef PW_X86
+    if (avx) {
+        const int st = a->opt.tri == SIDX_TRI_WATERTIGHT;
+        if (wb->width == 8) walk8_avx(a, &P, &C, st);
+        else walk4_avx(a, &P, &C, st);
+    } else
+#else
+    (void)avx;
+#endif
+    {
+        if (wb->width == 8) walk8_scalar(a, &P, &C);
+        else walk4_scalar(a, &P, &C);
+    }
+    stats->node_visits += C.visits;
+    stats->box_tests += C.boxes;
+    stats->prim_tests += C.prims;
+    stats->interval_tests += C.ia_tests;
+    stats->interval_culls += C.ia_culls;
+    const uint32_t flags = opt ? opt->flags : 0;
+    for (uint32_t i = 0, x = 0, y = 0; i < n; ++i) {
+        if (anyhit) {
+            occ[i] = P.prim[i] != SIDX_NO_HIT;
+        } else {
+            sidx_hit *h = &hits[(size_t)y * stride + x];
+            *h = sidx_hit_none();
+            if (P.prim[i] != SIDX_NO_HIT) {
+                h->t = P.best[i];
+                h->prim = P.prim[i];
+                sidx__packet_finish(a, P.ray[i], flags, h);
+            }
+        }
+        if (++x == w) {
+            x = 0;
+            ++y;
+        }
+    }
+    return 1;
+}
