@@ -94,83 +94,133 @@ typedef struct wpk {
 /* Work counters, in locals during the walk (see packet.c: through the
  * stats pointer each would cost a load and a store per node). */
 typedef struct wcount {
-    uint64_t visits, boxes, prims, ia_tests, ia_culls;
+    uint64_t visits, boxes, prims, ia_tests, ia_culls, split;
 } wcount;
 
 /* ---- set-up ---------------------------------------------------------------------- */
 
-/* 0 when the rays do not share direction signs. */
-static int wpk_setup(wpk *P, const sidx_ray *rays, uint32_t n, uint32_t w, size_t stride, float scale, int anyhit)
+/* Direction-sign class of a ray: bit k set when d_k < 0 (-0 included). */
+static SIDX_INLINE unsigned sign_class(const sidx_ray *r)
 {
-    const sidx_ray *r0 = rays;
-    float omin[3], omax[3], imin[3], imax[3], fmin[3], fmax[3], tmn = INFINITY, tmx = -INFINITY;
-    int finite = 1;
-    for (int k = 0; k < 3; ++k) {
-        omin[k] = imin[k] = fmin[k] = INFINITY;
-        omax[k] = imax[k] = fmax[k] = -INFINITY;
-    }
+    return (unsigned)r->sign[0] | (unsigned)r->sign[1] << 1 | (unsigned)r->sign[2] << 2;
+}
+
+/* The rays into the packet's arrays (a plain copy, the arithmetic comes
+ * in wpk_bounds); returns the mask of sign classes present.  Padding
+ * lanes repeat ray 0 (so they never widen the interval bounds) with
+ * tmin = +inf, best = −inf (so they miss every box). */
+static SIDX_INLINE unsigned wpk_load(wpk *P, const sidx_ray *rays, uint32_t n, uint32_t w, size_t stride, int anyhit,
+                                     uint8_t *cls)
+{
+    unsigned classes = 0;
     P->n = n;
     P->ngroups = (n + GL - 1) / GL;
     P->anyhit = anyhit;
     P->done = 0;
-    P->live = n == 64 ? ~0ull : (1ull << n) - 1u;
     uint32_t x = 0;
     const sidx_ray *row = rays;
-    for (uint32_t i = 0; i < n; ++i) {
-        const sidx_ray *r = row + x;
+    for (uint32_t i = 0; i < P->ngroups * GL; ++i) {
+        const sidx_ray *r = i < n ? row + x : rays;
         if (++x == w) {
             x = 0;
             row += stride;
         }
-        if (r->sign[0] != r0->sign[0] || r->sign[1] != r0->sign[1] || r->sign[2] != r0->sign[2]) return 0;
         P->ray[i] = r;
-        const float o[3] = {r->org.x, r->org.y, r->org.z}, inv[3] = {r->inv_dir.x, r->inv_dir.y, r->inv_dir.z};
-        const float f[3] = {inv[0] * scale, inv[1] * scale, inv[2] * scale};
-        P->ox[i] = o[0]; P->oy[i] = o[1]; P->oz[i] = o[2];
-        P->ix[i] = inv[0]; P->iy[i] = inv[1]; P->iz[i] = inv[2];
-        P->fx[i] = f[0]; P->fy[i] = f[1]; P->fz[i] = f[2];
-        P->tmin[i] = r->tmin;
-        P->best[i] = r->tmax;
+        P->ox[i] = r->org.x; P->oy[i] = r->org.y; P->oz[i] = r->org.z;
+        P->ix[i] = r->inv_dir.x; P->iy[i] = r->inv_dir.y; P->iz[i] = r->inv_dir.z;
+        P->tmin[i] = i < n ? r->tmin : INFINITY;
+        P->best[i] = i < n ? r->tmax : -INFINITY;
         P->prim[i] = SIDX_NO_HIT;
+        cls[i] = (uint8_t)sign_class(r);
+        classes |= 1u << cls[i];
+    }
+    return classes;
+}
+
+/* Far-plane factors 1/d·S for every lane, and the interval bounds of the
+ * rays in `live` (all of them share sign class c). */
+static SIDX_INLINE void wpk_bounds(wpk *P, uint64_t live, unsigned c, float scale, const int avx)
+{
+    float omin[3], omax[3], imin[3], imax[3], tmn = INFINITY, tmx = -INFINITY;
+    P->live = live;
+    const uint32_t nl = P->ngroups * GL;
+    for (uint32_t i = 0; i < nl; ++i) {
+        P->fx[i] = P->ix[i] * scale;
+        P->fy[i] = P->iy[i] * scale;
+        P->fz[i] = P->iz[i] * scale;
+    }
+    const float *const arr[3][2] = {{P->ox, P->ix}, {P->oy, P->iy}, {P->oz, P->iz}};
+    const uint64_t real = P->n == 64 ? ~0ull : (1ull << P->n) - 1u;
+#ifdef PW_X86
+    if (avx && live == real) {
+        /* every lane counts (padding repeats ray 0): 4 lanes at a time */
         for (int k = 0; k < 3; ++k) {
-            omin[k] = o[k] < omin[k] ? o[k] : omin[k];
-            omax[k] = o[k] > omax[k] ? o[k] : omax[k];
-            imin[k] = inv[k] < imin[k] ? inv[k] : imin[k];
-            imax[k] = inv[k] > imax[k] ? inv[k] : imax[k];
-            fmin[k] = f[k] < fmin[k] ? f[k] : fmin[k];
-            fmax[k] = f[k] > fmax[k] ? f[k] : fmax[k];
-            finite &= isfinite(inv[k]) && isfinite(f[k]);
+            __m128 o0 = _mm_load_ps(arr[k][0]), o1 = o0, i0 = _mm_load_ps(arr[k][1]), i1 = i0;
+            for (uint32_t i = 4; i < nl; i += 4) {
+                const __m128 o = _mm_load_ps(arr[k][0] + i), v = _mm_load_ps(arr[k][1] + i);
+                o0 = _mm_min_ps(o, o0); o1 = _mm_max_ps(o, o1);
+                i0 = _mm_min_ps(v, i0); i1 = _mm_max_ps(v, i1);
+            }
+            o0 = _mm_min_ps(o0, _mm_shuffle_ps(o0, o0, _MM_SHUFFLE(1, 0, 3, 2)));
+            o0 = _mm_min_ps(o0, _mm_shuffle_ps(o0, o0, _MM_SHUFFLE(2, 3, 0, 1)));
+            o1 = _mm_max_ps(o1, _mm_shuffle_ps(o1, o1, _MM_SHUFFLE(1, 0, 3, 2)));
+            o1 = _mm_max_ps(o1, _mm_shuffle_ps(o1, o1, _MM_SHUFFLE(2, 3, 0, 1)));
+            i0 = _mm_min_ps(i0, _mm_shuffle_ps(i0, i0, _MM_SHUFFLE(1, 0, 3, 2)));
+            i0 = _mm_min_ps(i0, _mm_shuffle_ps(i0, i0, _MM_SHUFFLE(2, 3, 0, 1)));
+            i1 = _mm_max_ps(i1, _mm_shuffle_ps(i1, i1, _MM_SHUFFLE(1, 0, 3, 2)));
+            i1 = _mm_max_ps(i1, _mm_shuffle_ps(i1, i1, _MM_SHUFFLE(2, 3, 0, 1)));
+            omin[k] = _mm_cvtss_f32(o0); omax[k] = _mm_cvtss_f32(o1);
+            imin[k] = _mm_cvtss_f32(i0); imax[k] = _mm_cvtss_f32(i1);
         }
-        tmn = r->tmin < tmn ? r->tmin : tmn;
-        tmx = r->tmax > tmx ? r->tmax : tmx;
+        for (uint32_t i = 0; i < P->n; ++i) {
+            tmn = P->tmin[i] < tmn ? P->tmin[i] : tmn;
+            tmx = P->best[i] > tmx ? P->best[i] : tmx;
+        }
+    } else
+#else
+    (void)avx;
+    (void)real;
+#endif
+    {
+        for (int k = 0; k < 3; ++k) {
+            omin[k] = imin[k] = INFINITY;
+            omax[k] = imax[k] = -INFINITY;
+        }
+        for (uint64_t mm = live; mm; mm &= mm - 1) {
+            const uint32_t i = (uint32_t)__builtin_ctzll(mm);
+            for (int k = 0; k < 3; ++k) {
+                const float o = arr[k][0][i], v = arr[k][1][i];
+                omin[k] = o < omin[k] ? o : omin[k];
+                omax[k] = o > omax[k] ? o : omax[k];
+                imin[k] = v < imin[k] ? v : imin[k];
+                imax[k] = v > imax[k] ? v : imax[k];
+            }
+            tmn = P->tmin[i] < tmn ? P->tmin[i] : tmn;
+            tmx = P->best[i] > tmx ? P->best[i] : tmx;
+        }
     }
-    for (uint32_t i = n; i < P->ngroups * GL; ++i) { /* padding: misses everything */
-        P->ox[i] = P->oy[i] = P->oz[i] = 0.0f;
-        P->ix[i] = P->iy[i] = P->iz[i] = P->fx[i] = P->fy[i] = P->fz[i] = 1.0f;
-        P->tmin[i] = INFINITY;
-        P->best[i] = -INFINITY;
-        P->prim[i] = SIDX_NO_HIT;
-        P->ray[i] = NULL;
-    }
+    int finite = 1;
     for (int k = 0; k < 3; ++k) {
-        const int s = r0->sign[k];
+        const int s = (int)(c >> k) & 1;
         /* rows of a node: 0..2 lo, 3..5 hi; a negative direction enters through hi */
         P->no[k] = (uint32_t)(s ? 3 + k : k);
         P->fo[k] = (uint32_t)(s ? k : 3 + k);
         /* The entry t = (p − o)·inv is smallest for the largest p − o when
          * inv < 0 (o = omin), for the smallest when inv > 0 (o = omax); the
-         * exit the other way round. */
+         * exit the other way round.  x·S is monotone, so the far factors'
+         * range is the ends times S. */
         P->ia_on[k] = s ? omin[k] : omax[k];
         P->ia_of[k] = s ? omax[k] : omin[k];
         P->ia_i0[k] = imin[k];
         P->ia_i1[k] = imax[k];
-        P->ia_f0[k] = fmin[k];
-        P->ia_f1[k] = fmax[k];
+        P->ia_f0[k] = imin[k] * scale;
+        P->ia_f1[k] = imax[k] * scale;
+        /* an infinite inverse direction would be at one of the ends */
+        finite &= isfinite(P->ia_f0[k]) && isfinite(P->ia_f1[k]);
     }
     P->ia_tmin = tmn;
     P->ia_tmax = tmx;
     P->ia = finite;
-    return 1;
 }
 
 /* ---- kernels: the portable reference ---------------------------------------------- */
@@ -486,8 +536,17 @@ static SIDX_INLINE void wide_walk_impl(const sidx_accel *a, wpk *P, wcount *C, c
             }
             unsigned hitm = 0;
             if (cand) {
+                /* Per-ray or per-group tests, whichever costs fewer SIMD
+                 * passes: a ray's pass covers all W boxes, a group's pass
+                 * one box for 8 rays (groups without an active ray are
+                 * skipped). */
                 const uint32_t active = (uint32_t)__builtin_popcountll(M);
-                if (active <= THIN) {
+                uint64_t gb = M | M >> 4; /* bit 8g: group g has an active ray */
+                gb |= gb >> 2;
+                gb |= gb >> 1;
+                gb &= 0x0101010101010101ull;
+                const uint32_t ncand = (uint32_t)__builtin_popcount(cand);
+                if (active <= THIN && active < ncand * (uint32_t)__builtin_popcountll(gb)) {
                     /* 2. few rays: each tests the W boxes at once */
                     for (uint32_t s = 0; s < W; ++s) cm[s] = 0;
                     for (uint64_t mm = M; mm; mm &= mm - 1) {
@@ -503,11 +562,12 @@ static SIDX_INLINE void wide_walk_impl(const sidx_accel *a, wpk *P, wcount *C, c
                     }
                     boxes += (uint64_t)active * W;
                 } else {
-                    /* 3. many rays: each candidate box against every group of 8 */
+                    /* 3. many rays: each candidate box against the groups of 8 */
                     for (unsigned cc = cand; cc; cc &= cc - 1) {
                         const uint32_t s = (uint32_t)__builtin_ctz(cc);
                         uint64_t mm = 0;
-                        for (uint32_t g = 0; g < P->ngroups; ++g) {
+                        for (uint64_t gg = gb; gg; gg &= gg - 1) {
+                            const uint32_t g = (uint32_t)__builtin_ctzll(gg) / GL;
 #ifdef PW_X86
                             const unsigned r = avx ? group_slot_avx(nd, W, s, P, g) : group_slot_scalar(nd, W, s, P, g);
 #else
@@ -519,7 +579,7 @@ static SIDX_INLINE void wide_walk_impl(const sidx_accel *a, wpk *P, wcount *C, c
                         cm[s] = mm;
                         hitm |= (unsigned)(mm != 0) << s;
                     }
-                    boxes += (uint64_t)__builtin_popcount(cand) * P->ngroups * GL;
+                    boxes += (uint64_t)ncand * (uint64_t)__builtin_popcountll(gb) * GL;
                 }
             }
             if (hitm) {
@@ -567,7 +627,7 @@ static SIDX_INLINE void wide_walk_impl(const sidx_accel *a, wpk *P, wcount *C, c
                 if (done) P->done |= 1ull << i;
             }
             prims += (uint64_t)__builtin_popcountll(M) * nb * 4u;
-            if (P->anyhit && P->done == P->live) break;
+            if (P->anyhit && !(P->live & ~P->done)) break;
         }
         /* Pop the next deferred child that still has rays to trace. */
         for (;;) {
@@ -586,20 +646,55 @@ out:
     C->ia_culls += ia_culls;
 }
 
+/* Load a tile, then one walk per direction-sign class present (a tile
+ * straddling an axis of the camera holds 2 or 4; each class is its own
+ * packet with its own near planes and interval bounds). */
+static SIDX_INLINE void wide_packet_impl(const sidx_accel *a, wpk *P, wcount *C, const sidx_ray *rays, uint32_t n,
+                                         uint32_t w, size_t stride, int anyhit, const uint32_t W, const int avx,
+                                         const int simd_tri)
+{
+    uint8_t cls[NLANES];
+    const float scale = a->opt.box == SIDX_BOX_ROBUST ? SIDX_ROBUST_TFAR_SCALE : 1.0f;
+    const unsigned classes = wpk_load(P, rays, n, w, stride, anyhit, cls);
+    const uint64_t real = n == 64 ? ~0ull : (1ull << n) - 1u;
+    if (!(classes & (classes - 1))) {
+        wpk_bounds(P, real, (unsigned)__builtin_ctz(classes), scale, avx);
+        wide_walk_impl(a, P, C, W, avx, simd_tri);
+        return;
+    }
+    C->split++;
+    for (unsigned cc = classes; cc; cc &= cc - 1) {
+        const unsigned c = (unsigned)__builtin_ctz(cc);
+        uint64_t live = 0;
+        for (uint32_t i = 0; i < n; ++i) live |= (uint64_t)(cls[i] == c) << i;
+        wpk_bounds(P, live, c, scale, avx);
+        wide_walk_impl(a, P, C, W, avx, simd_tri);
+    }
+}
+
 #ifdef PW_X86
-__attribute__((target("avx2,fma"), flatten)) static void walk8_avx(const sidx_accel *a, wpk *P, wcount *C, int st)
-{
-    if (st) wide_walk_impl(a, P, C, 8, 1, 1);
-    else wide_walk_impl(a, P, C, 8, 1, 0);
-}
-__attribute__((target("avx2,fma"), flatten)) static void walk4_avx(const sidx_accel *a, wpk *P, wcount *C, int st)
-{
-    if (st) wide_walk_impl(a, P, C, 4, 1, 1);
-    else wide_walk_impl(a, P, C, 4, 1, 0);
-}
+#define PW_AVX_WALK(name, Wd)                                                                                          \
+    __attribute__((target("avx2,fma"), flatten)) static void name(const sidx_accel *a, wpk *P, wcount *C,              \
+                                                                  const sidx_ray *rays, uint32_t n, uint32_t w,        \
+                                                                  size_t stride, int anyhit, int simd_tri)             \
+    {                                                                                                                  \
+        if (simd_tri) wide_packet_impl(a, P, C, rays, n, w, stride, anyhit, Wd, 1, 1);                               \
+        else wide_packet_impl(a, P, C, rays, n, w, stride, anyhit, Wd, 1, 0);                                        \
+    }
+PW_AVX_WALK(walk8_avx, 8)
+PW_AVX_WALK(walk4_avx, 4)
+#undef PW_AVX_WALK
 #endif
-static void walk8_scalar(const sidx_accel *a, wpk *P, wcount *C) { wide_walk_impl(a, P, C, 8, 0, 0); }
-static void walk4_scalar(const sidx_accel *a, wpk *P, wcount *C) { wide_walk_impl(a, P, C, 4, 0, 0); }
+static void walk8_scalar(const sidx_accel *a, wpk *P, wcount *C, const sidx_ray *rays, uint32_t n, uint32_t w,
+                         size_t stride, int anyhit)
+{
+    wide_packet_impl(a, P, C, rays, n, w, stride, anyhit, 8, 0, 0);
+}
+static void walk4_scalar(const sidx_accel *a, wpk *P, wcount *C, const sidx_ray *rays, uint32_t n, uint32_t w,
+                         size_t stride, int anyhit)
+{
+    wide_packet_impl(a, P, C, rays, n, w, stride, anyhit, 4, 0, 0);
+}
 
 /* ---- entry (from packet.c) ----------------------------------------------------------- */
 
@@ -608,28 +703,27 @@ int sidx__packet_wide(const sidx_accel *a, const sidx_ray *rays, uint32_t n, uin
 {
     const wide_bvh *wb = a->impl;
     const int anyhit = hits == NULL;
-    const float scale = a->opt.box == SIDX_BOX_ROBUST ? SIDX_ROBUST_TFAR_SCALE : 1.0f;
     wpk P;
-    if (!wpk_setup(&P, rays, n, w, stride, scale, anyhit)) return 0;
-    wcount C = {0, 0, 0, 0, 0};
+    wcount C = {0, 0, 0, 0, 0, 0};
 #ifdef PW_X86
     if (avx) {
         const int st = a->opt.tri == SIDX_TRI_WATERTIGHT;
-        if (wb->width == 8) walk8_avx(a, &P, &C, st);
-        else walk4_avx(a, &P, &C, st);
+        if (wb->width == 8) walk8_avx(a, &P, &C, rays, n, w, stride, anyhit, st);
+        else walk4_avx(a, &P, &C, rays, n, w, stride, anyhit, st);
     } else
 #else
     (void)avx;
 #endif
     {
-        if (wb->width == 8) walk8_scalar(a, &P, &C);
-        else walk4_scalar(a, &P, &C);
+        if (wb->width == 8) walk8_scalar(a, &P, &C, rays, n, w, stride, anyhit);
+        else walk4_scalar(a, &P, &C, rays, n, w, stride, anyhit);
     }
     stats->node_visits += C.visits;
     stats->box_tests += C.boxes;
     stats->prim_tests += C.prims;
     stats->interval_tests += C.ia_tests;
     stats->interval_culls += C.ia_culls;
+    stats->split_packets += C.split;
     const uint32_t flags = opt ? opt->flags : 0;
     for (uint32_t i = 0, x = 0, y = 0; i < n; ++i) {
         if (anyhit) {

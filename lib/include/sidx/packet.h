@@ -76,6 +76,7 @@ typedef struct sidx_packet_stats {
     /* wide BVHs (bvh4, bvh8); appended last so the fields above keep their offsets */
     uint64_t interval_tests;    /* child boxes tested against the packet's interval bounds */
     uint64_t interval_culls;    /* child boxes those bounds culled for the whole packet */
+    uint64_t split_packets;     /* packets of mixed direction signs walked once per sign class */
 } sidx_packet_stats;
 
 /* Closest hits for rays[0, n), n <= SIDX_PACKET_MAX.  For FRUSTUM, rays
