@@ -590,9 +590,10 @@ static sidx_status run_packet(const sidx_accel *a, const sidx_ray *rays, uint32_
     const float scale = a->opt.box == SIDX_BOX_ROBUST ? SIDX_ROBUST_TFAR_SCALE : 1.0f;
     if (avx < 0) avx = sidx__packet_have_avx2();
     /* The wide BVHs have their own packet walk (packet_wide.c). */
-    if (o.mode != SIDX_PACKET_SINGLE && n && sidx__is_wide(a) &&
-        sidx__packet_wide(a, rays, n, n, n, &o, hits, occ, stats, avx))
+    if (o.mode != SIDX_PACKET_SINGLE && n && sidx__is_wide(a)) {
+        sidx__packet_wide(a, rays, n, n, n, &o, hits, occ, stats, avx);
         return SIDX_OK;
+    }
     pkt P;
     if (o.mode == SIDX_PACKET_SINGLE || !packet_capable(a) || n == 0 || !pkt_setup(&P, rays, n, scale, anyhit)) {
         stats->single_packets++;
@@ -668,13 +669,7 @@ sidx_status sidx_trace_tiles(const sidx_accel *a, const sidx_ray *rays, uint32_t
             const size_t at = (size_t)y0 * W + x0;
             if (wide) {
                 stats->packets++;
-                if (sidx__packet_wide(a, rays + at, tw * th, tw, W, opt, hits + at, NULL, stats, avx)) continue;
-                /* mixed direction signs: ray by ray, as run_packet does */
-                stats->single_packets++;
-                const sidx_query q = {opt ? opt->flags : 0, SIDX_TRAVERSE_DEFAULT, NULL, 0};
-                for (uint32_t y = 0; y < th; ++y)
-                    for (uint32_t x = 0; x < tw; ++x)
-                        sidx_accel_intersect(a, &rays[at + (size_t)y * W + x], &q, &hits[at + (size_t)y * W + x]);
+                sidx__packet_wide(a, rays + at, tw * th, tw, W, opt, hits + at, NULL, stats, avx);
                 continue;
             }
             for (uint32_t y = 0; y < th; ++y)

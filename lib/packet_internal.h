@@ -25,10 +25,10 @@ void sidx__packet_finish(const sidx_accel *a, const sidx_ray *r, uint32_t flags,
  * w x (n / w) rays read in place, row y starting at rays + y·stride
  * (a plain packet: w = n, stride = n).  Closest hits into hits (same
  * layout as rays) or, for hits == NULL, any-hit flags into occ (packed,
- * n entries).  Returns 0 without touching the outputs when the packet's
- * rays do not share direction signs (the caller then traces them one by
- * one).  avx: as sidx__packet_have_avx2 answered. */
-int sidx__packet_wide(const sidx_accel *a, const sidx_ray *rays, uint32_t n, uint32_t w, size_t stride,
-                      const sidx_packet_options *opt, sidx_hit *hits, uint8_t *occ, sidx_packet_stats *stats, int avx);
+ * n entries).  A packet whose rays do not share direction signs is
+ * walked once per sign class present.  avx: as sidx__packet_have_avx2
+ * answered.  n in 1 .. SIDX_PACKET_MAX, n a multiple of w. */
+void sidx__packet_wide(const sidx_accel *a, const sidx_ray *rays, uint32_t n, uint32_t w, size_t stride,
+                       const sidx_packet_options *opt, sidx_hit *hits, uint8_t *occ, sidx_packet_stats *stats, int avx);
 
 #endif

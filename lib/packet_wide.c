@@ -99,42 +99,67 @@ typedef struct wcount {
 
 /* ---- set-up ---------------------------------------------------------------------- */
 
-/* Direction-sign class of a ray: bit k set when d_k < 0 (-0 included). */
-static SIDX_INLINE unsigned sign_class(const sidx_ray *r)
+/* The rays into the packet's arrays, a plain copy (the arithmetic comes
+ * in wpk_bounds), row by row from the caller's image.  Padding lanes
+ * repeat ray 0 (so they never widen the interval bounds nor change the
+ * sign class) with tmin = +inf, best = −inf (so they miss every box). */
+static SIDX_INLINE void wpk_load(wpk *P, const sidx_ray *rays, uint32_t n, uint32_t w, size_t stride, int anyhit)
 {
-    return (unsigned)r->sign[0] | (unsigned)r->sign[1] << 1 | (unsigned)r->sign[2] << 2;
-}
-
-/* The rays into the packet's arrays (a plain copy, the arithmetic comes
- * in wpk_bounds); returns the mask of sign classes present.  Padding
- * lanes repeat ray 0 (so they never widen the interval bounds) with
- * tmin = +inf, best = −inf (so they miss every box). */
-static SIDX_INLINE unsigned wpk_load(wpk *P, const sidx_ray *rays, uint32_t n, uint32_t w, size_t stride, int anyhit,
-                                     uint8_t *cls)
-{
-    unsigned classes = 0;
     P->n = n;
     P->ngroups = (n + GL - 1) / GL;
     P->anyhit = anyhit;
     P->done = 0;
-    uint32_t x = 0;
-    const sidx_ray *row = rays;
-    for (uint32_t i = 0; i < P->ngroups * GL; ++i) {
-        const sidx_ray *r = i < n ? row + x : rays;
-        if (++x == w) {
-            x = 0;
-            row += stride;
+    uint32_t i = 0;
+    for (const sidx_ray *row = rays; i < n; row += stride)
+        for (uint32_t x = 0; x < w; ++x, ++i) {
+            const sidx_ray *r = row + x;
+            P->ray[i] = r;
+            P->ox[i] = r->org.x; P->oy[i] = r->org.y; P->oz[i] = r->org.z;
+            P->ix[i] = r->inv_dir.x; P->iy[i] = r->inv_dir.y; P->iz[i] = r->inv_dir.z;
+            P->tmin[i] = r->tmin;
+            P->best[i] = r->tmax;
+            P->prim[i] = SIDX_NO_HIT;
         }
-        P->ray[i] = r;
-        P->ox[i] = r->org.x; P->oy[i] = r->org.y; P->oz[i] = r->org.z;
-        P->ix[i] = r->inv_dir.x; P->iy[i] = r->inv_dir.y; P->iz[i] = r->inv_dir.z;
-        P->tmin[i] = i < n ? r->tmin : INFINITY;
-        P->best[i] = i < n ? r->tmax : -INFINITY;
+    for (; i < P->ngroups * GL; ++i) {
+        P->ray[i] = rays;
+        P->ox[i] = P->ox[0]; P->oy[i] = P->oy[0]; P->oz[i] = P->oz[0];
+        P->ix[i] = P->ix[0]; P->iy[i] = P->iy[0]; P->iz[i] = P->iz[0];
+        P->tmin[i] = INFINITY;
+        P->best[i] = -INFINITY;
         P->prim[i] = SIDX_NO_HIT;
-        cls[i] = (uint8_t)sign_class(r);
-        classes |= 1u << cls[i];
     }
-    return classes;
+}
+
+/* Direction-sign class of lane i: bit k set when d_k < 0 (−0 included:
+ * 1/−0 = −inf keeps the sign, as sidx_ray.sign does). */
+static SIDX_INLINE unsigned lane_class(const wpk *P, uint32_t i)
+{
+    return (unsigned)(signbit(P->ix[i]) != 0) | (unsigned)(signbit(P->iy[i]) != 0) << 1 |
+           (unsigned)(signbit(P->iz[i]) != 0) << 2;
+}
+
+/* Do all lanes share lane 0's sign class?  (With SSE: the sign bits of 4
+ * lanes per movemask.) */
+static SIDX_INLINE int wpk_uniform(const wpk *P, const int avx)
+{
+    const uint32_t nl = P->ngroups * GL;
+#ifdef PW_X86
+    if (avx) {
+        const float *const arr[3] = {P->ix, P->iy, P->iz};
+        unsigned bad = 0;
+        for (int k = 0; k < 3; ++k) {
+            const unsigned want = signbit(arr[k][0]) ? 0xFu : 0u;
+            for (uint32_t i = 0; i < nl; i += 4) bad |= (unsigned)_mm_movemask_ps(_mm_load_ps(arr[k] + i)) ^ want;
+        }
+        return bad == 0;
+    }
+#else
+    (void)avx;
+#endif
+    const unsigned c0 = lane_class(P, 0);
+    for (uint32_t i = 1; i < nl; ++i)
+        if (lane_class(P, i) != c0) return 0;
+    return 1;
 }
 
 /* Far-plane factors 1/d·S for every lane, and the interval bounds of the
@@ -172,10 +197,18 @@ static SIDX_INLINE void wpk_bounds(wpk *P, uint64_t live, unsigned c, float scal
             omin[k] = _mm_cvtss_f32(o0); omax[k] = _mm_cvtss_f32(o1);
             imin[k] = _mm_cvtss_f32(i0); imax[k] = _mm_cvtss_f32(i1);
         }
-        for (uint32_t i = 0; i < P->n; ++i) {
-            tmn = P->tmin[i] < tmn ? P->tmin[i] : tmn;
-            tmx = P->best[i] > tmx ? P->best[i] : tmx;
+        /* padding lanes (tmin +inf, best −inf) change neither */
+        __m128 t0 = _mm_load_ps(P->tmin), t1 = _mm_load_ps(P->best);
+        for (uint32_t i = 4; i < nl; i += 4) {
+            t0 = _mm_min_ps(_mm_load_ps(P->tmin + i), t0);
+            t1 = _mm_max_ps(_mm_load_ps(P->best + i), t1);
         }
+        t0 = _mm_min_ps(t0, _mm_shuffle_ps(t0, t0, _MM_SHUFFLE(1, 0, 3, 2)));
+        t0 = _mm_min_ps(t0, _mm_shuffle_ps(t0, t0, _MM_SHUFFLE(2, 3, 0, 1)));
+        t1 = _mm_max_ps(t1, _mm_shuffle_ps(t1, t1, _MM_SHUFFLE(1, 0, 3, 2)));
+        t1 = _mm_max_ps(t1, _mm_shuffle_ps(t1, t1, _MM_SHUFFLE(2, 3, 0, 1)));
+        tmn = _mm_cvtss_f32(t0);
+        tmx = _mm_cvtss_f32(t1);
     } else
 #else
     (void)avx;
@@ -407,7 +440,7 @@ AVX unsigned group_slot_avx(const float *nd, const uint32_t W, uint32_t s, const
 /* The 4-triangle watertight test of bvh_wide_walk.h (tri4_), operation
  * for operation, for one ray: 1 hit (smallest t, lowest lane on ties),
  * 0 none, −1 an edge function is exactly 0 (the scalar test decides). */
-AVX int tri4_avx(const wide_tri4 *B, const sidx_ray *r, float best, float *t_out, unsigned *lane_out)
+__attribute__((always_inline)) AVX int tri4_avx(const wide_tri4 *B, const sidx_ray *r, float best, float *t_out, unsigned *lane_out)
 {
     const float *o = &r->org.x, *v = &B->v[0][0][0];
     const uint32_t kx4 = 4u * r->kx, ky4 = 4u * r->ky, kz4 = 4u * r->kz;
@@ -452,7 +485,7 @@ AVX int tri4_avx(const wide_tri4 *B, const sidx_ray *r, float best, float *t_out
 
 /* Ray i against one leaf, a block per SSE pass; a block with a zero edge
  * function goes through the scalar loop (on that block only). */
-AVX int leaf_ray_avx(const sidx_accel *a, const wide_tri4 *B, wpk *P, uint32_t i)
+__attribute__((always_inline)) AVX int leaf_ray_avx(const sidx_accel *a, const wide_tri4 *B, wpk *P, uint32_t i)
 {
     const sidx_ray *r = P->ray[i];
     for (;; ++B) {
@@ -485,6 +518,18 @@ AVX int leaf_ray_avx(const sidx_accel *a, const wide_tri4 *B, wpk *P, uint32_t i
         }
         if (B->prim[0] & WIDE_LAST_BLOCK) return 0;
     }
+}
+/* Every ray of the mask against one leaf: one call per leaf visit (the
+ * per-ray tests inline into it); returns the rays an any-hit query is
+ * done with. */
+__attribute__((target("avx2,fma"), noinline)) static uint64_t leaf_rays_avx(const sidx_accel *a, const wide_tri4 *B, wpk *P, uint64_t M)
+{
+    uint64_t done = 0;
+    for (uint64_t mm = M; mm; mm &= mm - 1) {
+        const uint32_t i = (uint32_t)__builtin_ctzll(mm);
+        done |= (uint64_t)leaf_ray_avx(a, B, P, i) << i;
+    }
+    return done;
 }
 #undef AVX
 #endif
@@ -614,17 +659,18 @@ static SIDX_INLINE void wide_walk_impl(const sidx_accel *a, wpk *P, wcount *C, c
             const wide_tri4 *B = wb->blocks + (ref & ~WIDE_LEAF_BIT);
             uint32_t nb = 1;
             for (const wide_tri4 *b = B; !(b->prim[0] & WIDE_LAST_BLOCK); ++b) ++nb;
-            for (uint64_t mm = M; mm; mm &= mm - 1) {
-                const uint32_t i = (uint32_t)__builtin_ctzll(mm);
-                int done;
 #ifdef PW_X86
-                if (avx && simd_tri) done = leaf_ray_avx(a, B, P, i);
-                else done = leaf_ray_scalar(a, B, P, i);
+            if (avx && simd_tri) {
+                P->done |= leaf_rays_avx(a, B, P, M);
+            } else
 #else
-                (void)simd_tri;
-                done = leaf_ray_scalar(a, B, P, i);
+            (void)simd_tri;
 #endif
-                if (done) P->done |= 1ull << i;
+            {
+                for (uint64_t mm = M; mm; mm &= mm - 1) {
+                    const uint32_t i = (uint32_t)__builtin_ctzll(mm);
+                    P->done |= (uint64_t)leaf_ray_scalar(a, B, P, i) << i;
+                }
             }
             prims += (uint64_t)__builtin_popcountll(M) * nb * 4u;
             if (P->anyhit && !(P->live & ~P->done)) break;
@@ -653,21 +699,20 @@ static SIDX_INLINE void wide_packet_impl(const sidx_accel *a, wpk *P, wcount *C,
                                          uint32_t w, size_t stride, int anyhit, const uint32_t W, const int avx,
                                          const int simd_tri)
 {
-    uint8_t cls[NLANES];
     const float scale = a->opt.box == SIDX_BOX_ROBUST ? SIDX_ROBUST_TFAR_SCALE : 1.0f;
-    const unsigned classes = wpk_load(P, rays, n, w, stride, anyhit, cls);
+    wpk_load(P, rays, n, w, stride, anyhit);
     const uint64_t real = n == 64 ? ~0ull : (1ull << n) - 1u;
-    if (!(classes & (classes - 1))) {
-        wpk_bounds(P, real, (unsigned)__builtin_ctz(classes), scale, avx);
+    if (wpk_uniform(P, avx)) {
+        wpk_bounds(P, real, lane_class(P, 0), scale, avx);
         wide_walk_impl(a, P, C, W, avx, simd_tri);
         return;
     }
+    uint64_t live[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+    for (uint32_t i = 0; i < n; ++i) live[lane_class(P, i)] |= 1ull << i;
     C->split++;
-    for (unsigned cc = classes; cc; cc &= cc - 1) {
-        const unsigned c = (unsigned)__builtin_ctz(cc);
-        uint64_t live = 0;
-        for (uint32_t i = 0; i < n; ++i) live |= (uint64_t)(cls[i] == c) << i;
-        wpk_bounds(P, live, c, scale, avx);
+    for (unsigned c = 0; c < 8; ++c) {
+        if (!live[c]) continue;
+        wpk_bounds(P, live[c], c, scale, avx);
         wide_walk_impl(a, P, C, W, avx, simd_tri);
     }
 }
@@ -698,7 +743,7 @@ static void walk4_scalar(const sidx_accel *a, wpk *P, wcount *C, const sidx_ray 
 
 /* ---- entry (from packet.c) ----------------------------------------------------------- */
 
-int sidx__packet_wide(const sidx_accel *a, const sidx_ray *rays, uint32_t n, uint32_t w, size_t stride,
+void sidx__packet_wide(const sidx_accel *a, const sidx_ray *rays, uint32_t n, uint32_t w, size_t stride,
                       const sidx_packet_options *opt, sidx_hit *hits, uint8_t *occ, sidx_packet_stats *stats, int avx)
 {
     const wide_bvh *wb = a->impl;
@@ -725,22 +770,18 @@ int sidx__packet_wide(const sidx_accel *a, const sidx_ray *rays, uint32_t n, uin
     stats->interval_culls += C.ia_culls;
     stats->split_packets += C.split;
     const uint32_t flags = opt ? opt->flags : 0;
-    for (uint32_t i = 0, x = 0, y = 0; i < n; ++i) {
-        if (anyhit) {
-            occ[i] = P.prim[i] != SIDX_NO_HIT;
-        } else {
-            sidx_hit *h = &hits[(size_t)y * stride + x];
-            *h = sidx_hit_none();
-            if (P.prim[i] != SIDX_NO_HIT) {
-                h->t = P.best[i];
-                h->prim = P.prim[i];
-                sidx__packet_finish(a, P.ray[i], flags, h);
-            }
-        }
-        if (++x == w) {
-            x = 0;
-            ++y;
-        }
+    if (anyhit) {
+        for (uint32_t i = 0; i < n; ++i) occ[i] = P.prim[i] != SIDX_NO_HIT;
+        return;
     }
-    return 1;
+    uint32_t i = 0;
+    for (sidx_hit *row = hits; i < n; row += stride)
+        for (uint32_t x = 0; x < w; ++x, ++i) {
+            sidx_hit *h = row + x;
+            *h = sidx_hit_none();
+            if (P.prim[i] == SIDX_NO_HIT) continue;
+            h->t = P.best[i];
+            h->prim = P.prim[i];
+            if (flags) sidx__packet_finish(a, P.ray[i], flags, h);
+        }
 }
