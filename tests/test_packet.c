@@ -9,7 +9,15 @@
  *  - incoherent packets (random directions) fall back to single rays and
  *    still agree; other structures (bvh8, kdtree) work through the fallback;
  *  - frustum culling saves ray-box tests against plain packets;
- *  - NULL / oversized arguments are rejected. */
+ *  - NULL / oversized arguments are rejected.
+ * Wide BVHs ("bvh4", "bvh8", packet_wide.c), AVX2 and scalar kernels:
+ *  - tiles (4x4, 8x8, plain and frustum) give exactly the single-ray hit
+ *    of the same structure (same prim, same t, same u, v) and agree with
+ *    brute force, on every built-in scene and from inside the icosphere;
+ *  - tiles straddling an axis are walked once per sign class, and rays
+ *    with a zero direction component (no interval test) still agree;
+ *  - shadow packets (any-hit) equal single-ray occlusion;
+ *  - the interval test culls children for whole packets. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -17,6 +25,7 @@
 #include <cmocka.h>
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -194,7 +203,9 @@ static void test_incoherent_and_other_structures(void **state)
         sidx_packet_stats st;
         memset(&st, 0, sizeof st);
         assert_int_equal(sidx_packet_intersect(a, rays, n, 8, NULL, h, &st), SIDX_OK);
-        assert_int_equal(st.single_packets, 1);
+        /* the binary walk traces mixed signs ray by ray, the wide one once per sign class */
+        assert_int_equal(st.single_packets, k == 1 ? 0 : 1);
+        assert_int_equal(st.split_packets, k == 1 ? 1 : 0);
         for (uint32_t i = 0; i < n; ++i) {
             sidx_accel_intersect(a, &rays[i], NULL, &r[i]);
             assert_true(tk_hits_agree(&r[i], &h[i]));
@@ -271,6 +282,231 @@ static void test_dense_mesh_switch(void **state)
     sidx_mesh_free(&m);
 }
 
+/* ---- wide BVHs ---------------------------------------------------------------------- */
+
+/* Same prim, same t (bit for bit), same u, v when asked. */
+static int hits_identical(const sidx_hit *a, const sidx_hit *b, int uv)
+{
+    if (a->prim != b->prim) return 0;
+    if (a->prim == SIDX_NO_HIT) return 1;
+    if (memcmp(&a->t, &b->t, sizeof a->t)) return 0;
+    return !uv || (!memcmp(&a->u, &b->u, sizeof a->u) && !memcmp(&a->v, &b->v, sizeof a->v));
+}
+
+/* Every tile size and mode, AVX2 and scalar kernels: against the single
+ * ray of the same structure exactly, against brute force up to ties. */
+static void check_wide_tiles(const char *label, const sidx_accel *a, const sidx_accel *brute, const sidx_ray *rays,
+                             uint32_t W, uint32_t H, int require_hit, sidx_packet_stats *total)
+{
+    const size_t n = (size_t)W * H;
+    sidx_hit *h = malloc(n * sizeof *h), *r = malloc(n * sizeof *r), *bf = malloc(n * sizeof *bf);
+    assert_non_null(h);
+    assert_non_null(r);
+    assert_non_null(bf);
+    const sidx_query quv = {SIDX_QUERY_UV, SIDX_TRAVERSE_DEFAULT, NULL, 0};
+    for (size_t i = 0; i < n; ++i) {
+        sidx_accel_intersect(a, &rays[i], &quv, &r[i]);
+        sidx_accel_intersect(brute, &rays[i], NULL, &bf[i]);
+        if (!tk_hits_agree(&bf[i], &r[i])) fail_msg("%s ray %zu: single ray disagrees with brute force", label, i);
+    }
+    const uint32_t tiles[] = {4, 8};
+    const sidx_packet_mode modes[] = {SIDX_PACKET_PLAIN, SIDX_PACKET_FRUSTUM};
+    size_t near_ties = 0, compared = 0;
+    for (int simd = 0; simd < 2; ++simd) {
+        if (!simd) setenv("SIDX_SIMD", "scalar", 1);
+        for (int t = 0; t < 2; ++t)
+            for (int md = 0; md < 2; ++md)
+                for (int uv = 0; uv < 2; ++uv) {
+                    const sidx_packet_options o = {modes[md], 0, uv ? SIDX_QUERY_UV : 0};
+                    sidx_packet_stats st;
+                    memset(&st, 0, sizeof st);
+                    memset(h, 0xCD, n * sizeof *h);
+                    assert_int_equal(sidx_trace_tiles(a, rays, W, H, tiles[t], &o, h, &st), SIDX_OK);
+                    assert_int_equal(st.single_packets, 0);
+                    for (size_t i = 0; i < n; ++i) {
+                        /* A near tie (two triangles within a few ulps of t)
+                         * may resolve differently: the single-ray walk drops
+                         * a box whose rounded entry distance lies above its
+                         * best t while a triangle inside lies an ulp below;
+                         * visiting boxes in another order, the packet may
+                         * keep the other one.  Then both must still agree
+                         * with brute force up to the tie tolerance. */
+                        if (!hits_identical(&r[i], &h[i], uv) &&
+                            (++near_ties, !tk_hits_agree(&r[i], &h[i]) || !tk_hits_agree(&bf[i], &r[i])))
+                            fail_msg("%s simd %d tile %u mode %d uv %d ray %zu: prim %u t %.9g, single prim %u t %.9g",
+                                     label, simd, tiles[t], md, uv, i, h[i].prim, (double)h[i].t, r[i].prim,
+                                     (double)r[i].t);
+                        if (!tk_hits_agree(&bf[i], &h[i])) fail_msg("%s ray %zu: brute force disagrees", label, i);
+                        if (require_hit && h[i].prim == SIDX_NO_HIT) fail_msg("%s: leak at ray %zu", label, i);
+                    }
+                    compared += n;
+                    if (total) {
+                        total->packets += st.packets;
+                        total->split_packets += st.split_packets;
+                        total->interval_tests += st.interval_tests;
+                        total->interval_culls += st.interval_culls;
+                    }
+                }
+        unsetenv("SIDX_SIMD");
+    }
+    /* near ties are rare: not more than one ray in a thousand */
+    if (near_ties * 1000 > compared) fail_msg("%s: %zu of %zu hits differ from single rays", label, near_ties, compared);
+    if (near_ties) print_message("%s: %zu of %zu packet hits resolve a near tie differently\n", label, near_ties, compared);
+    free(h);
+    free(r);
+    free(bf);
+}
+
+static void test_wide_tiles_match_single(void **state)
+{
+    (void)state;
+    const uint32_t W = 48, H = 40; /* edge tiles are partial */
+    sidx_ray *rays = malloc((size_t)W * H * sizeof *rays);
+    assert_non_null(rays);
+    const char *names[] = {"bvh4", "bvh8"};
+    for (size_t si = 0; si < NSCENES; ++si) {
+        sidx_mesh m = scene(scenes[si]);
+        primary_rays(&m, W, H, rays);
+        sidx_accel *brute = NULL;
+        assert_int_equal(sidx_accel_build("brute", &m, NULL, &brute, NULL), SIDX_OK);
+        for (int k = 0; k < 2; ++k) {
+            sidx_accel *a = NULL;
+            assert_int_equal(sidx_accel_build(names[k], &m, NULL, &a, NULL), SIDX_OK);
+            char label[64];
+            snprintf(label, sizeof label, "%s %s", scenes[si], names[k]);
+            sidx_packet_stats st;
+            memset(&st, 0, sizeof st);
+            check_wide_tiles(label, a, brute, rays, W, H, 0, &st);
+            assert_true(st.interval_tests > 0);
+            sidx_accel_destroy(a);
+        }
+        sidx_accel_destroy(brute);
+        sidx_mesh_free(&m);
+    }
+    free(rays);
+}
+
+/* From inside the closed icosphere, looking along axes and between them:
+ * every ray hits (no leaks), tiles straddle the axes (split by sign
+ * class), and with an odd image width looking down -z the middle column
+ * has d.x = 0 exactly (inverse direction inf: those packets skip the
+ * interval test). */
+static void test_wide_inside_and_axis_rays(void **state)
+{
+    (void)state;
+    sidx_mesh m = scene("icosphere");
+    const uint32_t W = 33, H = 31;
+    sidx_ray *rays = malloc((size_t)W * H * sizeof *rays);
+    assert_non_null(rays);
+    sidx_accel *brute = NULL;
+    assert_int_equal(sidx_accel_build("brute", &m, NULL, &brute, NULL), SIDX_OK);
+    const sidx_vec3 looks[] = {{1, 0.1f, 0.2f}, {-0.3f, 1, 0.05f}, {0.013f, -0.007f, -1}};
+    const char *names[] = {"bvh4", "bvh8"};
+    for (int k = 0; k < 2; ++k) {
+        sidx_accel *a = NULL;
+        assert_int_equal(sidx_accel_build(names[k], &m, NULL, &a, NULL), SIDX_OK);
+        sidx_packet_stats st;
+        memset(&st, 0, sizeof st);
+        for (int l = 0; l < 3; ++l) {
+            camera(sidx_v3(0.013f, -0.007f, 0.003f), looks[l], 1.3f, W, H, rays);
+            check_wide_tiles("inside icosphere", a, brute, rays, W, H, 1, &st);
+        }
+        assert_true(st.split_packets > 0);
+        int zero_dir = 0;
+        for (size_t i = 0; i < (size_t)W * H; ++i) zero_dir |= rays[i].dir.x == 0.0f;
+        assert_true(zero_dir); /* the last camera really has axis-parallel rays */
+        sidx_accel_destroy(a);
+    }
+    sidx_accel_destroy(brute);
+    free(rays);
+    sidx_mesh_free(&m);
+}
+
+/* Shadow rays from the teapot's visible points to a point light, as
+ * packets of 16 and 64, AVX2 and scalar: occlusion equals single rays. */
+static void test_wide_shadow_packets(void **state)
+{
+    (void)state;
+    sidx_mesh m = scene("teapot");
+    const uint32_t W = 32, H = 32, n = W * H;
+    sidx_ray *prim = malloc(n * sizeof *prim), *shadow = malloc(n * sizeof *shadow);
+    uint8_t *occ = malloc(n);
+    assert_non_null(prim);
+    assert_non_null(shadow);
+    assert_non_null(occ);
+    primary_rays(&m, W, H, prim);
+    const sidx_aabb b = sidx_mesh_bounds(&m);
+    const sidx_vec3 light = sidx_v3_add(b.max, sidx_aabb_extent(b));
+    const char *names[] = {"bvh4", "bvh8"};
+    for (int k = 0; k < 2; ++k) {
+        sidx_accel *a = NULL;
+        assert_int_equal(sidx_accel_build(names[k], &m, NULL, &a, NULL), SIDX_OK);
+        uint32_t ns = 0, nocc = 0;
+        for (uint32_t i = 0; i < n; ++i) {
+            sidx_hit h;
+            sidx_accel_intersect(a, &prim[i], NULL, &h);
+            if (h.prim == SIDX_NO_HIT) continue;
+            const sidx_vec3 p = sidx_ray_at(&prim[i], h.t);
+            assert_int_equal(sidx_ray_init(&shadow[ns++], p, sidx_v3_sub(light, p), 1e-4f, 1.0f), SIDX_OK);
+        }
+        assert_true(ns > 64);
+        for (int simd = 0; simd < 2; ++simd) {
+            if (!simd) setenv("SIDX_SIMD", "scalar", 1);
+            for (uint32_t size = 16; size <= 64; size *= 4)
+                for (uint32_t base = 0; base < ns; base += size) {
+                    const uint32_t cnt = ns - base < size ? ns - base : size;
+                    const sidx_packet_options o = {SIDX_PACKET_PLAIN, 0, 0};
+                    sidx_packet_stats st;
+                    memset(&st, 0, sizeof st);
+                    assert_int_equal(sidx_packet_occluded(a, shadow + base, cnt, 0, &o, occ + base, &st), SIDX_OK);
+                    assert_int_equal(st.single_packets, 0);
+                    for (uint32_t i = 0; i < cnt; ++i) {
+                        int ref;
+                        sidx_accel_occluded(a, &shadow[base + i], NULL, &ref);
+                        assert_int_equal(occ[base + i], ref);
+                        nocc += (uint32_t)ref;
+                    }
+                }
+            unsetenv("SIDX_SIMD");
+        }
+        assert_true(nocc > 0); /* the spout and handle shadow the body */
+        sidx_accel_destroy(a);
+    }
+    free(prim);
+    free(shadow);
+    free(occ);
+    sidx_mesh_free(&m);
+}
+
+/* A dense mesh from afar (many triangles per pixel, rays part deep in the
+ * tree): exact agreement with single rays, and the interval test culls
+ * children for whole packets. */
+static void test_wide_dense_mesh(void **state)
+{
+    (void)state;
+    sidx_mesh m;
+    sidx_error err;
+    if (sidx_scene_make("soup", 40000, &m, &err) != SIDX_OK) fail_msg("soup: %s", err.message);
+    const uint32_t W = 40, H = 40;
+    sidx_ray *rays = malloc((size_t)W * H * sizeof *rays);
+    assert_non_null(rays);
+    primary_rays(&m, W, H, rays);
+    sidx_accel *brute = NULL, *a = NULL;
+    assert_int_equal(sidx_accel_build("brute", &m, NULL, &brute, NULL), SIDX_OK);
+    assert_int_equal(sidx_accel_build("bvh8", &m, NULL, &a, NULL), SIDX_OK);
+    sidx_packet_stats st;
+    memset(&st, 0, sizeof st);
+    check_wide_tiles("soup 40000 bvh8", a, brute, rays, W, H, 0, &st);
+    assert_true(st.interval_culls > 0);
+    assert_true(st.interval_culls < st.interval_tests);
+    print_message("soup 40000, bvh8: interval test culled %llu of %llu child boxes\n",
+                  (unsigned long long)st.interval_culls, (unsigned long long)st.interval_tests);
+    sidx_accel_destroy(a);
+    sidx_accel_destroy(brute);
+    free(rays);
+    sidx_mesh_free(&m);
+}
+
 static void test_invalid_arguments(void **state)
 {
     (void)state;
@@ -300,7 +536,9 @@ int main(void)
         cmocka_unit_test(test_primary_tiles_match_single), cmocka_unit_test(test_inside_icosphere_no_leaks),
         cmocka_unit_test(test_shadow_packets),             cmocka_unit_test(test_incoherent_and_other_structures),
         cmocka_unit_test(test_frustum_saves_box_tests),    cmocka_unit_test(test_invalid_arguments),
-        cmocka_unit_test(test_dense_mesh_switch),
+        cmocka_unit_test(test_dense_mesh_switch),          cmocka_unit_test(test_wide_tiles_match_single),
+        cmocka_unit_test(test_wide_inside_and_axis_rays),  cmocka_unit_test(test_wide_shadow_packets),
+        cmocka_unit_test(test_wide_dense_mesh),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
