@@ -511,13 +511,15 @@ static void bench_embree_rows(const char *name, bench_embree_cfg cfg, const sidx
 /* ---- packets and threads (issue 8) --------------------------------------------- */
 
 /* The issue-8 figures on the primary rays of one scene, beside Embree's:
- *   packets  sidx_trace_tiles (4x4, 8x8, plain and frustum) against
- *            single rays through the same "bvh", hits checked equal, and
- *            Embree's rtcIntersect4/8/16 on the same image.  Embree gets
- *            the rays reordered into 4x4 tiles (outside the timing), so
- *            each of its packets is as compact as sidx's; sidx gathers
- *            its tiles inside the timed call.  Times: thread CPU time,
- *            best of 3.
+ *   packets  sidx_trace_tiles (4x4, 8x8, plain and frustum) over "bvh",
+ *            "bvh8" and "bvh4", each against single rays through the
+ *            same structure, hits checked equal, and Embree's
+ *            rtcIntersect4/8/16 on the same image; the ratio line takes
+ *            the fastest sidx row of all.  Embree gets the rays reordered
+ *            into 4x4 tiles (outside the timing), so each of its packets
+ *            is as compact as sidx's; sidx reads its tiles in place
+ *            (wide BVHs) or gathers them (bvh) inside the timed call.
+ *            Times: thread CPU time, best of 3.
  *   threads  the "bvh" build on 1 and 2 threads against Embree's on a
  *            "threads=1" and a "threads=2" device, and sidx_trace_parallel
  *            on 1 and 2 threads: wall-clock, best of 5, so they mean
@@ -551,6 +553,59 @@ static size_t pp_mismatches(const sidx_hit *a, const sidx_hit *b, size_t n)
     return bad;
 }
 
+/* Packet rows of one structure: sidx_trace_tiles in 4x4 and 8x8 tiles,
+ * plain and frustum, hits checked against that structure's single rays
+ * (ref, traced in single_ms); the fastest row so far lands in *best
+ * (name: "structure tile-mode").  Rows over "bvh" keep their old names
+ * (sidx-8x8-plain ...), the others name their structure (sidx-bvh8-8x8-plain). */
+static void pp_packet_rows(FILE *f, const scene_spec *sc, const char *accel, const sidx_accel *a, const kind_data *k,
+                           uint32_t W, uint32_t H, const sidx_hit *ref, double single_ms, sidx_hit *got, double *best_mr,
+                           char *best_name, size_t best_size)
+{
+    const size_t N = (size_t)W * H;
+    const int wide = strcmp(accel, "bvh") != 0;
+    static const char *const pname[2] = {"plain", "frustum"};
+    for (uint32_t tile = 4; tile <= 8; tile += 4) {
+        uint64_t plain_boxes = 0;
+        for (int mode = 0; mode < 2; ++mode) {
+            const sidx_packet_options po = {mode ? SIDX_PACKET_FRUSTUM : SIDX_PACKET_PLAIN, 0, 0};
+            sidx_packet_stats ps;
+            memset(&ps, 0, sizeof ps);
+            double best = INFINITY;
+            for (int rep = 0; rep < 3; ++rep) {
+                sidx_packet_stats scratch;
+                memset(&scratch, 0, sizeof scratch);
+                const double t0 = bench_clock_ms();
+                sidx_trace_tiles(a, k->br.r, W, H, tile, &po, got, rep ? &scratch : &ps);
+                const double t = bench_clock_ms() - t0;
+                if (t < best) best = t;
+            }
+            const double mr = (double)N / (best * 1e3);
+            const size_t bad = pp_mismatches(ref, got, N);
+            if (!mode) plain_boxes = ps.box_tests;
+            char label[40];
+            snprintf(label, sizeof label, "%s%s%ux%u-%s", wide ? accel : "", wide ? "-" : "", tile, tile, pname[mode]);
+            fprintf(f, "packet sidx-%-17s %-12s %9.3f Mrays/s  %.2fx single  boxes/ray %.2f", label, sc->name, mr,
+                    single_ms / best, (double)ps.box_tests / (double)N);
+            if (wide)
+                fprintf(f, " + interval %.2f (%.0f%% culled)", (double)ps.interval_tests / (double)N,
+                        ps.interval_tests ? 100.0 * (double)ps.interval_culls / (double)ps.interval_tests : 0.0);
+            else if (mode)
+                fprintf(f, " + frustum %.2f (%+.0f%% box tests vs plain, %.0f%% culled)",
+                        (double)ps.frustum_tests / (double)N,
+                        plain_boxes ? 100.0 * ((double)ps.box_tests - (double)plain_boxes) / (double)plain_boxes : 0.0,
+                        ps.frustum_tests ? 100.0 * (double)ps.frustum_culls / (double)ps.frustum_tests : 0.0);
+            fprintf(f, "  tris/ray %.2f%s\n", (double)ps.prim_tests / (double)N,
+                    bad ? "  ** hits differ from single rays **" : "");
+            if (bad) fprintf(f, "   (%zu of %zu hits differ)\n", bad, N);
+            if (mr > *best_mr) {
+                *best_mr = mr;
+                snprintf(best_name, best_size, "%s %ux%u-%s", accel, tile, tile, pname[mode]);
+            }
+        }
+    }
+}
+
 static void packet_parallel_rows(FILE *f, const run_opts *o, const scene_spec *sc, const sidx_mesh *m,
                                  const kind_data *k)
 {
@@ -580,41 +635,28 @@ static void packet_parallel_rows(FILE *f, const run_opts *o, const scene_spec *s
     fprintf(f, "\npackets %s: %ux%u primary rays, \"bvh\"; single rays %.3f Mrays/s (thread CPU time, best of 3)\n",
             sc->name, W, H, (double)N / (single * 1e3));
     double best_sidx = 0;
-    const char *best_sidx_name = "";
-    static const char *const pname[2] = {"plain", "frustum"};
-    for (uint32_t tile = 4; tile <= 8; tile += 4) {
-        uint64_t plain_boxes = 0;
-        for (int mode = 0; mode < 2; ++mode) {
-            const sidx_packet_options po = {mode ? SIDX_PACKET_FRUSTUM : SIDX_PACKET_PLAIN, 0, 0};
-            sidx_packet_stats ps;
-            memset(&ps, 0, sizeof ps);
-            double best = INFINITY;
+    char best_sidx_name[48] = "";
+    pp_packet_rows(f, sc, "bvh", a, k, W, H, ref, single, got, &best_sidx, best_sidx_name, sizeof best_sidx_name);
+    /* the same over the wide BVHs (packet_wide.c), against their own single rays */
+    static const char *const wide_names[2] = {"bvh8", "bvh4"};
+    for (int wi = 0; wi < 2; ++wi) {
+        sidx_accel *wa = NULL;
+        sidx_hit *wref = malloc(N * sizeof *wref);
+        if (wref && sidx_accel_build(wide_names[wi], m, &bo, &wa, NULL) == SIDX_OK) {
+            double wsingle = INFINITY;
             for (int rep = 0; rep < 3; ++rep) {
-                sidx_packet_stats scratch;
-                memset(&scratch, 0, sizeof scratch);
                 const double t0 = bench_clock_ms();
-                sidx_trace_tiles(a, k->br.r, W, H, tile, &po, got, rep ? &scratch : &ps);
+                for (size_t i = 0; i < N; ++i) sidx_accel_intersect(wa, &k->br.r[i], NULL, &wref[i]);
                 const double t = bench_clock_ms() - t0;
-                if (t < best) best = t;
+                if (t < wsingle) wsingle = t;
             }
-            const double mr = (double)N / (best * 1e3);
-            const size_t bad = pp_mismatches(ref, got, N);
-            if (!mode) plain_boxes = ps.box_tests;
-            fprintf(f, "packet sidx-%ux%u-%-8s %-12s %9.3f Mrays/s  %.2fx single  boxes/ray %.2f", tile, tile,
-                    pname[mode], sc->name, mr, single / best, (double)ps.box_tests / (double)N);
-            if (mode)
-                fprintf(f, " + frustum %.2f (%+.0f%% box tests vs plain, %.0f%% culled)",
-                        (double)ps.frustum_tests / (double)N,
-                        plain_boxes ? 100.0 * ((double)ps.box_tests - (double)plain_boxes) / (double)plain_boxes : 0.0,
-                        ps.frustum_tests ? 100.0 * (double)ps.frustum_culls / (double)ps.frustum_tests : 0.0);
-            fprintf(f, "  tris/ray %.2f%s\n", (double)ps.prim_tests / (double)N,
-                    bad ? "  ** hits differ from single rays **" : "");
-            if (bad) fprintf(f, "   (%zu of %zu hits differ)\n", bad, N);
-            if (mr > best_sidx) {
-                best_sidx = mr;
-                best_sidx_name = tile == 4 ? (mode ? "4x4-frustum" : "4x4-plain") : (mode ? "8x8-frustum" : "8x8-plain");
-            }
+            fprintf(f, "packets %s: \"%s\" single rays %.3f Mrays/s\n", sc->name, wide_names[wi],
+                    (double)N / (wsingle * 1e3));
+            pp_packet_rows(f, sc, wide_names[wi], wa, k, W, H, wref, wsingle, got, &best_sidx, best_sidx_name,
+                           sizeof best_sidx_name);
         }
+        sidx_accel_destroy(wa);
+        free(wref);
     }
     if (o->embree) {
         /* the same image in 4x4 tiles (rows of whole tiles only) */
@@ -1115,7 +1157,8 @@ static void run_usage(FILE *out)
             "ROBUST, build quality MEDIUM (HIGH for -hq); -p4/-p8/-p16 rows use rtcIntersect4/8/16\n"
             "on primary rays.\n"
             "Packets and threads (primary rays, \"bvh\" in --accel; --no-packets skips them):\n"
-            "sidx_trace_tiles 4x4/8x8 plain/frustum vs single rays and vs Embree rtcIntersect4/8/16\n"
+            "sidx_trace_tiles 4x4/8x8 plain/frustum over bvh, bvh8, bvh4 vs single rays and vs\n"
+            "Embree rtcIntersect4/8/16\n"
             "on the same image in 4x4 tiles (thread CPU time); the bvh build on 1 and 2 threads vs\n"
             "Embree on threads=1/2 devices, sidx_trace_parallel 1 vs 2 threads (wall-clock: quiet\n"
             "machine only).\n");
