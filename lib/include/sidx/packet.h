@@ -31,13 +31,36 @@
  *     missed and at least 2 more groups remain (it replaces those tests),
  *     so a 4x4 tile (2 groups) never uses it.
  *
+ * Over the wide BVHs "bvh4" and "bvh8" (packet_wide.c) a node holds 4 or
+ * 8 child boxes and the walk keeps, per child, the mask of the packet's
+ * rays that hit it (Wald, Benthin, Boulos 2008; Embree's hybrid walk):
+ *
+ *   - interval arithmetic (Boulos et al. 2007): the box of the packet's
+ *     origins and inverse directions bounds every ray's entry and exit
+ *     distance for all children in one SIMD pass; children no ray can hit
+ *     are culled for the whole packet, the rest are ordered near to far by
+ *     the entry bound.  This is the wide walk's frustum: PLAIN and FRUSTUM
+ *     both use it there (frustum_depth is not used);
+ *   - then, whichever costs fewer SIMD passes, each active ray tests all
+ *     children at once (few rays), or each surviving child is tested
+ *     against the active groups of 8 rays (many rays);
+ *   - leaves: each ray of the child's mask runs the 4-triangle block test
+ *     of the single-ray walk;
+ *   - a tile whose rays do not share direction signs (it straddles an
+ *     axis) is walked once per sign class instead of ray by ray;
+ *   - tiles are read and written in place in the caller's image.
+ *
  * Results are those of single-ray sidx_accel_intersect (same watertight
- * test, same robust box test, every ray keeps its own closest hit; on an
- * exact tie of two triangles at the same t the packet may report the
- * other one).  Packets run over "bvh" (binned SAH; not bvh-obb); any other
- * structure is traced one ray at a time through sidx_accel_intersect, so
- * the calls work everywhere.  No hooks: a query with a hook is traced ray
- * by ray too (events then come from the single-ray walk). */
+ * test, same robust box test, every ray keeps its own closest hit, same t
+ * bit for bit); only a near tie may resolve differently: two triangles
+ * whose t differ by an ulp or so, where the walk that visits one box first
+ * may drop the other box (its rounded entry distance lies above the best
+ * t found, the triangle inside an ulp below) — both answers then agree
+ * with brute force within the tie tolerance.  Packets run over "bvh"
+ * (binned SAH; not bvh-obb), "bvh4" and "bvh8"; any other structure is
+ * traced one ray at a time through sidx_accel_intersect, so the calls work
+ * everywhere.  No hooks: a query with a hook is traced ray by ray too
+ * (events then come from the single-ray walk). */
 #ifndef SIDX_PACKET_H
 #define SIDX_PACKET_H
 
@@ -66,10 +89,10 @@ typedef struct sidx_packet_options {
 /* Work counters, accumulated (zero them first). */
 typedef struct sidx_packet_stats {
     uint64_t packets;           /* packets traced */
-    uint64_t single_packets;    /* packets traced ray by ray (incoherent or unsupported structure) */
+    uint64_t single_packets;    /* packets traced ray by ray (binary bvh: mixed signs; unsupported structure) */
     uint64_t node_visits;       /* nodes the packet walk processed */
-    uint64_t box_tests;         /* ray-box slab tests (one per ray per group of 8 tested) */
-    uint64_t frustum_tests;     /* frustum-box tests */
+    uint64_t box_tests;         /* ray-box slab tests (bvh: one per ray per group of 8 tested; wide: per ray and child) */
+    uint64_t frustum_tests;     /* frustum-box tests (binary bvh) */
     uint64_t frustum_culls;     /* nodes culled by the frustum alone */
     uint64_t prim_tests;        /* ray-triangle tests */
     uint64_t switched_rays;     /* rays that finished a subtree alone (adaptive switch) */
