@@ -634,8 +634,20 @@ static SIDX_INLINE void wide_walk_impl(const sidx_accel *a, wpk *P, wcount *C, c
                     M = cm[s0];
                     continue;
                 }
-                /* Several: append, order nearest on top (insertion sort
-                 * on the interval entry bound, stable), descend into the
+                const unsigned rest = hitm & (hitm - 1);
+                if (!(rest & (rest - 1))) {
+                    /* Two (the common case of several): one compare, the
+                     * farther waits; ties go to the lower slot. */
+                    const uint32_t s1 = (uint32_t)__builtin_ctz(rest);
+                    const int first0 = P->anyhit || key[s0] <= key[s1];
+                    const uint32_t nr = first0 ? s0 : s1, fr = first0 ? s1 : s0;
+                    stk[sp++] = (wstack){ch[fr], key[fr], cm[fr]};
+                    ref = ch[nr];
+                    M = cm[nr];
+                    continue;
+                }
+                /* More: append, order nearest on top (insertion sort on
+                 * the interval entry bound, stable), descend into the
                  * nearest. */
                 const uint32_t base = sp;
                 for (unsigned hh = hitm; hh; hh &= hh - 1) {
@@ -675,7 +687,10 @@ static SIDX_INLINE void wide_walk_impl(const sidx_accel *a, wpk *P, wcount *C, c
             prims += (uint64_t)__builtin_popcountll(M) * nb * 4u;
             if (P->anyhit && !(P->live & ~P->done)) break;
         }
-        /* Pop the next deferred child that still has rays to trace. */
+        /* Pop the next deferred child that still has rays to trace.  (Also
+         * dropping the rays whose best hit lies before the child's interval
+         * entry bound saved 8% of the node visits on the bunny but cost
+         * more instructions than it saved.) */
         for (;;) {
             if (sp == 0) goto out;
             --sp;
