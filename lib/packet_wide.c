@@ -49,6 +49,15 @@
  * and prim come out; only on an exact tie of two triangles in different
  * blocks may the packet, visiting them in another order, keep the other.
  *
+ * A tile whose rays do not all share direction signs (it straddles an
+ * axis of the camera) is walked once per sign class present, each class
+ * a packet of its own (its own near planes and interval bounds), instead
+ * of ray by ray as packet.c does on the binary tree.
+ *
+ * No events: the packet calls take no query and no hook, so there is
+ * nothing to emit; a traced query goes through sidx_accel_intersect and
+ * the traced copy of the single-ray walk (bvh_wide_walk.h), as before.
+ *
  * Like packet.c the walk is written once and instantiated per width and
  * instruction set: AVX2 (8-lane ray groups; 8 boxes per pass for bvh8, 4
  * with SSE for bvh4; the SSE4.1 triangle kernel) and a scalar copy doing
