@@ -558,11 +558,9 @@ __attribute__((target("avx2,fma"), noinline)) static uint64_t leaf_rays_avx(cons
 /* ---- the walk ---------------------------------------------------------------------- */
 
 /* A deferred child: its reference (node index, or WIDE_LEAF_BIT | first
- * block), the rays that hit its box, and the interval lower bound of
- * their entry (the order). */
+ * block) and the rays that hit its box. */
 typedef struct wstack {
     uint32_t ref;
-    float key;
     uint64_t rays;
 } wstack;
 
@@ -684,29 +682,29 @@ static SIDX_INLINE void wide_walk_impl(const sidx_accel *a, wpk *P, wcount *C, c
                     const uint32_t s1 = (uint32_t)__builtin_ctz(rest);
                     const int first0 = P->anyhit || key[s0] <= key[s1];
                     const uint32_t nr = first0 ? s0 : s1, fr = first0 ? s1 : s0;
-                    stk[sp++] = (wstack){ch[fr], key[fr], cm[fr]};
+                    stk[sp++] = (wstack){ch[fr], cm[fr]};
                     ref = ch[nr];
                     M = cm[nr];
                     continue;
                 }
-                /* More: append, order nearest on top (insertion sort on
-                 * the interval entry bound, stable), descend into the
-                 * nearest. */
-                const uint32_t base = sp;
+                /* More: order the slots farthest first (insertion sort on
+                 * the entry key, stable, so equal keys keep slot order and
+                 * the lower slot is visited first), defer all but the
+                 * nearest, descend into it. */
+                uint32_t ord[8], no = 0;
                 for (unsigned hh = hitm; hh; hh &= hh - 1) {
                     const uint32_t s = (uint32_t)__builtin_ctz(hh);
-                    const wstack e = {ch[s], key[s], cm[s]};
-                    uint32_t j = sp++;
+                    uint32_t j = no++;
                     if (!P->anyhit)
-                        while (j > base && stk[j - 1].key <= e.key) {
-                            stk[j] = stk[j - 1];
+                        while (j > 0 && key[ord[j - 1]] <= key[s]) {
+                            ord[j] = ord[j - 1];
                             --j;
                         }
-                    stk[j] = e;
+                    ord[j] = s;
                 }
-                --sp;
-                ref = stk[sp].ref;
-                M = stk[sp].rays;
+                for (uint32_t k = 0; k + 1 < no; ++k) stk[sp++] = (wstack){ch[ord[k]], cm[ord[k]]};
+                ref = ch[ord[no - 1]];
+                M = cm[ord[no - 1]];
                 continue;
             }
         } else {
