@@ -571,6 +571,7 @@ static SIDX_INLINE void wide_walk_impl(const sidx_accel *a, wpk *P, wcount *C, c
                                        const int simd_tri)
 {
     const wide_bvh *wb = a->impl;
+    (void)avx; /* only read by the x86 kernels */
     if (wb->num_inner == 0) return;
     const float *nodes = wb->nodes;
     const unsigned all_slots = (1u << W) - 1u;
