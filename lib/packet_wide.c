@@ -67,9 +67,9 @@
  * with SIDX_SIMD=scalar. */
 #include "bvh_wide_internal.h"
 #include "packet_internal.h"
-#if defined(__x86_64__) || defined(__i386__)
+#if (defined(__x86_64__) || defined(__i386__)) && defined(__SSE2__)
 #include <immintrin.h>
-#define PW_X86 1
+#define PW_X86 1 /* SSE2 (the set-up, the triangle blocks) always; AVX2 chosen at run time */
 #endif
 
 #define GL 8u                      /* rays per group (one AVX register) */
@@ -459,9 +459,10 @@ AVX unsigned group_slot_avx(const float *nd, const uint32_t W, uint32_t s, const
 }
 
 /* The 4-triangle watertight test of bvh_wide_walk.h (tri4_), operation
- * for operation, for one ray: 1 hit (smallest t, lowest lane on ties),
+ * for operation (SSE2 only, the blend done with and/or, so it inlines
+ * into the AVX2 walk without a call), for one ray: 1 hit (smallest t, lowest lane on ties),
  * 0 none, −1 an edge function is exactly 0 (the scalar test decides). */
-__attribute__((always_inline)) AVX int tri4_avx(const wide_tri4 *B, const sidx_ray *r, float best, float *t_out, unsigned *lane_out)
+static SIDX_INLINE int tri4_sse(const wide_tri4 *B, const sidx_ray *r, float best, float *t_out, unsigned *lane_out)
 {
     const float *o = &r->org.x, *v = &B->v[0][0][0];
     const uint32_t kx4 = 4u * r->kx, ky4 = 4u * r->ky, kz4 = 4u * r->kz;
@@ -496,7 +497,7 @@ __attribute__((always_inline)) AVX int tri4_avx(const wide_tri4 *B, const sidx_r
     const __m128 ok = _mm_and_ps(cand, _mm_and_ps(_mm_cmpge_ps(t, _mm_set1_ps(r->tmin)), _mm_cmplt_ps(t, _mm_set1_ps(best))));
     const unsigned m = (unsigned)_mm_movemask_ps(ok);
     if (!m) return 0;
-    const __m128 tt = _mm_blendv_ps(_mm_set1_ps(INFINITY), t, ok);
+    const __m128 tt = _mm_or_ps(_mm_and_ps(ok, t), _mm_andnot_ps(ok, _mm_set1_ps(INFINITY))); /* SSE2 blend */
     __m128 mn = _mm_min_ps(tt, _mm_shuffle_ps(tt, tt, _MM_SHUFFLE(1, 0, 3, 2)));
     mn = _mm_min_ps(mn, _mm_shuffle_ps(mn, mn, _MM_SHUFFLE(2, 3, 0, 1)));
     *lane_out = (unsigned)__builtin_ctz((unsigned)_mm_movemask_ps(_mm_cmpeq_ps(tt, mn)) & m);
@@ -506,13 +507,13 @@ __attribute__((always_inline)) AVX int tri4_avx(const wide_tri4 *B, const sidx_r
 
 /* Ray i against one leaf, a block per SSE pass; a block with a zero edge
  * function goes through the scalar loop (on that block only). */
-__attribute__((always_inline)) AVX int leaf_ray_avx(const sidx_accel *a, const wide_tri4 *B, wpk *P, uint32_t i)
+static SIDX_INLINE int leaf_ray_sse(const sidx_accel *a, const wide_tri4 *B, wpk *P, uint32_t i)
 {
     const sidx_ray *r = P->ray[i];
     for (;; ++B) {
         float t;
         unsigned lane;
-        const int h = tri4_avx(B, r, P->best[i], &t, &lane);
+        const int h = tri4_sse(B, r, P->best[i], &t, &lane);
         if (h > 0) {
             P->prim[i] = B->prim[lane] & WIDE_PRIM_MASK;
             if (P->anyhit) {
@@ -539,18 +540,6 @@ __attribute__((always_inline)) AVX int leaf_ray_avx(const sidx_accel *a, const w
         }
         if (B->prim[0] & WIDE_LAST_BLOCK) return 0;
     }
-}
-/* Every ray of the mask against one leaf: one call per leaf visit (the
- * per-ray tests inline into it); returns the rays an any-hit query is
- * done with. */
-__attribute__((target("avx2,fma"), noinline)) static uint64_t leaf_rays_avx(const sidx_accel *a, const wide_tri4 *B, wpk *P, uint64_t M)
-{
-    uint64_t done = 0;
-    for (uint64_t mm = M; mm; mm &= mm - 1) {
-        const uint32_t i = (uint32_t)__builtin_ctzll(mm);
-        done |= (uint64_t)leaf_ray_avx(a, B, P, i) << i;
-    }
-    return done;
 }
 #undef AVX
 #endif
@@ -715,7 +704,10 @@ static SIDX_INLINE void wide_walk_impl(const sidx_accel *a, wpk *P, wcount *C, c
             for (const wide_tri4 *b = B; !(b->prim[0] & WIDE_LAST_BLOCK); ++b) ++nb;
 #ifdef PW_X86
             if (avx && simd_tri) {
-                P->done |= leaf_rays_avx(a, B, P, M);
+                for (uint64_t mm = M; mm; mm &= mm - 1) {
+                    const uint32_t i = (uint32_t)__builtin_ctzll(mm);
+                    P->done |= (uint64_t)leaf_ray_sse(a, B, P, i) << i;
+                }
             } else
 #else
             (void)simd_tri;

@@ -507,6 +507,49 @@ static void test_wide_dense_mesh(void **state)
     sidx_mesh_free(&m);
 }
 
+/* Rays aimed exactly at vertices and edge points (grazing, incoherent:
+ * packets of up to 8 sign classes), so edge functions of exactly 0 send
+ * blocks to the scalar fallback: packets of 64 equal single rays. */
+static void test_wide_grazing_packets(void **state)
+{
+    (void)state;
+    const char *scn[] = {"teapot", "icosphere", "cornell"};
+    const char *names[] = {"bvh4", "bvh8"};
+    enum { NR = 1024 };
+    static tk_rayrec rec[NR];
+    static sidx_ray rays[NR];
+    static sidx_hit h[NR], r[NR];
+    for (int si = 0; si < 3; ++si) {
+        sidx_mesh m = scene(scn[si]);
+        tk_make_rays(&m, TK_RAYS_GRAZING, NR, 5, rec);
+        uint32_t n = 0;
+        for (uint32_t i = 0; i < NR; ++i)
+            if (tk_ray_from(&rec[i], &rays[n]) == SIDX_OK) ++n;
+        for (int k = 0; k < 2; ++k) {
+            sidx_accel *a = NULL;
+            assert_int_equal(sidx_accel_build(names[k], &m, NULL, &a, NULL), SIDX_OK);
+            for (uint32_t i = 0; i < n; ++i) sidx_accel_intersect(a, &rays[i], NULL, &r[i]);
+            for (int simd = 0; simd < 2; ++simd) {
+                if (!simd) setenv("SIDX_SIMD", "scalar", 1);
+                sidx_packet_stats st;
+                memset(&st, 0, sizeof st);
+                for (uint32_t base = 0; base < n; base += 64) {
+                    const uint32_t cnt = n - base < 64 ? n - base : 64;
+                    assert_int_equal(sidx_packet_intersect(a, rays + base, cnt, 0, NULL, h + base, &st), SIDX_OK);
+                }
+                for (uint32_t i = 0; i < n; ++i)
+                    if (!hits_identical(&r[i], &h[i], 0) && !tk_hits_agree(&r[i], &h[i]))
+                        fail_msg("%s %s simd %d grazing ray %u: prim %u t %.9g, single prim %u t %.9g", scn[si],
+                                 names[k], simd, i, h[i].prim, (double)h[i].t, r[i].prim, (double)r[i].t);
+                assert_true(st.split_packets > 0);
+                unsetenv("SIDX_SIMD");
+            }
+            sidx_accel_destroy(a);
+        }
+        sidx_mesh_free(&m);
+    }
+}
+
 static void test_invalid_arguments(void **state)
 {
     (void)state;
@@ -538,7 +581,7 @@ int main(void)
         cmocka_unit_test(test_frustum_saves_box_tests),    cmocka_unit_test(test_invalid_arguments),
         cmocka_unit_test(test_dense_mesh_switch),          cmocka_unit_test(test_wide_tiles_match_single),
         cmocka_unit_test(test_wide_inside_and_axis_rays),  cmocka_unit_test(test_wide_shadow_packets),
-        cmocka_unit_test(test_wide_dense_mesh),
+        cmocka_unit_test(test_wide_dense_mesh),            cmocka_unit_test(test_wide_grazing_packets),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
