@@ -33,6 +33,7 @@
 #include <stdatomic.h>
 #include <unistd.h>
 #include "bvh_internal.h"
+#include "pool.h"
 #include "sidx/parallel.h"
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -44,33 +45,11 @@ unsigned sidx_hardware_threads(void)
     return n > 0 ? (unsigned)n : 1u;
 }
 
-/* Run fn(ctx, t) for t in [0, nt): t = 0 on the caller, the others on new
- * threads.  A thread that cannot be created has its share run here. */
-typedef void (*par_fn)(void *ctx, unsigned t);
-typedef struct par_arg { par_fn fn; void *ctx; unsigned t; } par_arg;
-static void *par_main(void *p)
-{
-    par_arg *a = p;
-    a->fn(a->ctx, a->t);
-    return NULL;
-}
-#define MAX_THREADS 64u
-static void par_run(unsigned nt, par_fn fn, void *ctx)
-{
-    pthread_t th[MAX_THREADS];
-    par_arg args[MAX_THREADS];
-    int started[MAX_THREADS];
-    if (nt > MAX_THREADS) nt = MAX_THREADS;
-    for (unsigned t = 1; t < nt; ++t) {
-        args[t] = (par_arg){fn, ctx, t};
-        started[t] = pthread_create(&th[t], NULL, par_main, &args[t]) == 0;
-    }
-    fn(ctx, 0);
-    for (unsigned t = 1; t < nt; ++t) {
-        if (started[t]) pthread_join(th[t], NULL);
-        else fn(ctx, t);
-    }
-}
+/* Every run of work on several threads goes through the persistent pool
+ * (pool.c): fn(ctx, t) for t in [0, nt), t = 0 on the caller. */
+#define MAX_THREADS SIDX_POOL_MAX_THREADS
+typedef sidx_pool_fn par_fn;
+static void par_run(unsigned nt, par_fn fn, void *ctx) { sidx__pool_run(nt, fn, ctx); }
 
 /* ---- tracing ------------------------------------------------------------------ */
 
