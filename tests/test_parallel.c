@@ -208,6 +208,36 @@ static void test_parallel_build_identical(void **state)
     sidx_mesh_free(&one);
 }
 
+/* Signed zeros: -0.0 == +0.0, so which of the two a min or max keeps
+ * depends on the order the boxes are combined in (sidx_v3_min keeps its
+ * second operand on a tie).  The parallel build combines them in chunks
+ * and gathers the children's bounds while partitioning, in a different
+ * order than the one-thread builder's loop; its boxes must still be the
+ * same bits.  Here half of the x and y coordinates are zeros of both signs
+ * (by vertex parity), so most nodes have a zero min or max whose sign a
+ * wrong order would flip — and the comparison is bitwise. */
+static void test_parallel_build_signed_zero(void **state)
+{
+    (void)state;
+    const uint32_t details[] = {20000, 300}; /* with and without the parallel passes of the top phase */
+    for (size_t d = 0; d < 2; ++d) {
+        sidx_mesh m = scene("soup", details[d]);
+        sidx_aabb b = sidx_mesh_bounds(&m);
+        const float mx = 0.5f * (b.min.x + b.max.x), my = 0.5f * (b.min.y + b.max.y);
+        for (uint32_t v = 0; v < m.num_vertices; ++v) {
+            sidx_vec3 *p = &m.positions[v];
+            if (p->x < mx) p->x = (v & 1) ? -0.0f : 0.0f;
+            if (p->y > my) p->y = (v & 2) ? -0.0f : 0.0f;
+        }
+        sidx_build_options o;
+        memset(&o, 0, sizeof o);
+        check_same_tree(&m, &o);
+        o.leaf_size = 1;
+        check_same_tree(&m, &o);
+        sidx_mesh_free(&m);
+    }
+}
+
 static void test_wide_parallel_same_answers(void **state)
 {
     (void)state;
@@ -418,6 +448,7 @@ int main(void)
         cmocka_unit_test(test_trace_matches_serial),       cmocka_unit_test(test_traced_query_serial),
         cmocka_unit_test(test_parallel_build_identical),   cmocka_unit_test(test_wide_parallel_same_answers),
         cmocka_unit_test(test_parallel_build_alloc_failures), cmocka_unit_test(test_invalid_arguments),
+        cmocka_unit_test(test_parallel_build_signed_zero),
         cmocka_unit_test(test_pool_concurrent_callers),     cmocka_unit_test(test_pool_after_fork),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
