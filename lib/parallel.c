@@ -413,6 +413,21 @@ typedef struct split {
     float cost;
 } split;
 
+#if defined(__SSE2__)
+/* sidx_aabb_area of a NON-EMPTY box held as two 4-lane rows (x, y, z, 0):
+ * e = hi − lo, then 2·((e.x·e.y + e.y·e.z) + e.z·e.x) — the products in
+ * one multiply, the sums in the scalar expression's order, so the result
+ * is bit for bit sidx_aabb_area's. */
+static inline float area_sse(__m128 lo, __m128 hi)
+{
+    const __m128 e = _mm_sub_ps(hi, lo);
+    const __m128 p = _mm_mul_ps(e, _mm_shuffle_ps(e, e, _MM_SHUFFLE(3, 0, 2, 1))); /* x·y, y·z, z·x, 0 */
+    __m128 sum = _mm_add_ss(p, _mm_shuffle_ps(p, p, _MM_SHUFFLE(3, 3, 3, 1)));
+    sum = _mm_add_ss(sum, _mm_shuffle_ps(p, p, _MM_SHUFFLE(3, 3, 3, 2)));
+    return 2.0f * _mm_cvtss_f32(sum);
+}
+#endif
+
 /* The sequential builder's find_binned: the same costs from the same float
  * expressions, the same tie rule (first minimum over axis, then plane) —
  * but only at planes right after a NON-EMPTY bin.  Behind an empty bin
@@ -448,18 +463,42 @@ static int best_split(const pb *B, const bins3 *bn, uint32_t count, float inv_ar
 #endif
         S->nused[axis] = k;
         if (k < 2) continue; /* flat axis (not binned) or one bin: no plane */
+#if defined(__SSE2__)
+        /* The sweeps with a box in one register pair: one min and one max
+         * per bin instead of six scalar selects, and the area without the
+         * empty-box test (a union of non-empty bins is never empty, so the
+         * test always fails there).  Same results as the scalar code below:
+         * _mm_min_ps(acc, b) is sidx_v3_min(acc, b) lane by lane, and
+         * area_sse sums the products in sidx_aabb_area's order. */
+        __m128 lo = _mm_set1_ps(INFINITY), hi = _mm_set1_ps(-INFINITY);
+        for (uint32_t j = k; j-- > 1;) { /* right_area[j] = area of bins used[j..k) */
+            lo = _mm_min_ps(lo, _mm_loadu_ps(box[used[j]].lo));
+            hi = _mm_max_ps(hi, _mm_loadu_ps(box[used[j]].hi));
+            S->right_area[j] = area_sse(lo, hi);
+        }
+        lo = _mm_set1_ps(INFINITY);
+        hi = _mm_set1_ps(-INFINITY);
+#else
         sidx_aabb acc = sidx_aabb_empty();
         for (uint32_t j = k; j-- > 1;) { /* right_area[j] = area of bins used[j..k) */
             acc = sidx_aabb_union(acc, binbox_get(&box[used[j]]));
             S->right_area[j] = sidx_aabb_area(acc);
         }
         acc = sidx_aabb_empty();
+#endif
         uint32_t nl = 0;
         for (uint32_t j = 0; j + 1 < k; ++j) {
+#if defined(__SSE2__)
+            lo = _mm_min_ps(lo, _mm_loadu_ps(box[used[j]].lo));
+            hi = _mm_max_ps(hi, _mm_loadu_ps(box[used[j]].hi));
+            const float left_area = area_sse(lo, hi);
+#else
             acc = sidx_aabb_union(acc, binbox_get(&box[used[j]]));
+            const float left_area = sidx_aabb_area(acc);
+#endif
             nl += cnt[used[j]];
             const float cost =
-                B->P.c_trav + B->P.c_tri * (sidx_aabb_area(acc) * (float)nl + S->right_area[j + 1] * (float)(count - nl)) *
+                B->P.c_trav + B->P.c_tri * (left_area * (float)nl + S->right_area[j + 1] * (float)(count - nl)) *
                                   inv_area;
             if (cost < best->cost) {
                 best->cost = cost;
