@@ -161,6 +161,10 @@ sidx_status sidx_occluded_parallel(const sidx_accel *a, const sidx_ray *rays, si
  * triangles, giving several tasks per thread to balance. */
 #define TASK_SPLIT 8u
 #define TASK_MIN 256u
+/* The calling thread's top phase stops at subtrees of at most
+ * n / (threads · MID_SPLIT) triangles: those are mid tasks, top-phase
+ * subtrees that the threads build at the same time. */
+#define MID_SPLIT 2u
 /* Marks a top-phase node that is the root of a task (left_or_first = task). */
 #define TASK_MARK 0xFFFFFFFFu
 
@@ -207,11 +211,39 @@ typedef struct nodebox {
 
 typedef struct task {
     uint32_t first, count, depth, top_node;
+    int mid;     /* a mid task: a top-phase subtree of its own (see sidx__bvh_build_parallel) */
+    int state;   /* TASK_WAITING (no region yet), TASK_READY, TASK_TAKEN; under taskset.mu */
     int has_box;
     nodebox box; /* the subtree root's boxes, when its parent's partition gathered them */
     uint32_t off; /* reserved region in the final array: 2·count − 1 nodes from here */
     nodebuf out;
 } task;
+
+enum { TASK_WAITING = 0, TASK_READY, TASK_TAKEN };
+#define NO_TASK 0xFFFFFFFFu
+
+/* Every task of one build, and what the threads need to hand them out. */
+typedef struct taskset {
+    task *tasks;
+    uint32_t num, cap;
+    uint32_t active_mids;  /* mid tasks not finished: they may still add tasks */
+    pthread_mutex_t mu;
+    pthread_cond_t cv;     /* a mid task finished: new tasks may be ready */
+} taskset;
+
+/* A new task slot, or NO_TASK when the array is full (the node is then
+ * built where it is, which changes nothing but the balance). */
+static uint32_t task_new(taskset *ts)
+{
+    pthread_mutex_lock(&ts->mu);
+    uint32_t i = NO_TASK;
+    if (ts->num < ts->cap) {
+        i = ts->num++;
+        ts->tasks[i].state = TASK_WAITING;
+    }
+    pthread_mutex_unlock(&ts->mu);
+    return i;
+}
 
 /* A bin's box as two 4-float rows (x, y, z, unused), so that the binning
  * loop can grow it with one SSE min and one max: _mm_min_ps(a, b) is
@@ -595,8 +627,10 @@ static uint32_t partition(const pb *B, const binspec *s, uint32_t first, uint32_
 /* One node and its subtree into out.  top: the top phase (parallel passes,
  * small subtrees become tasks) or 0 inside a task. */
 typedef struct topctx {
-    task *tasks;
-    uint32_t num_tasks, cap_tasks, task_max;
+    taskset *ts;
+    uint32_t task_max; /* subtrees of at most this many triangles become tasks */
+    uint32_t mid_max;  /* ... mid tasks above task_max and up to this (0: none) */
+    int par_passes;    /* the caller's top phase: large nodes' passes on all threads */
 } topctx;
 
 static uint32_t build_rec(const pb *B, scratch *S, nodebuf *out, topctx *top, uint32_t first, uint32_t count,
@@ -604,20 +638,22 @@ static uint32_t build_rec(const pb *B, scratch *S, nodebuf *out, topctx *top, ui
 {
     const uint32_t ni = out->num++;
     bvh_node *n = &out->nodes[ni];
-    if (top && count <= top->task_max && count > B->P.leaf_size && depth < B->P.max_depth &&
-        top->num_tasks < top->cap_tasks) {
-        task *t = &top->tasks[top->num_tasks];
+    uint32_t ti;
+    if (top && count <= (top->mid_max > top->task_max ? top->mid_max : top->task_max) &&
+        count > B->P.leaf_size && depth < B->P.max_depth && (ti = task_new(top->ts)) != NO_TASK) {
+        task *t = &top->ts->tasks[ti];
+        t->mid = count > top->task_max;
         t->first = first;
         t->count = count;
         t->depth = depth;
         t->has_box = given != NULL;
         if (given) t->box = *given;
         t->top_node = ni;
-        n->left_or_first = top->num_tasks++;
+        n->left_or_first = ti;
         n->count_axis = TASK_MARK;
         return ni;
     }
-    const int par = top && count >= PAR_PASS_MIN && B->threads > 1;
+    const int par = top && top->par_passes && count >= PAR_PASS_MIN && B->threads > 1;
     sidx_aabb bb, cb;
     if (given) { /* gathered by the parent's partition */
         bb = given->bb;
@@ -705,21 +741,51 @@ static uint32_t build_rec(const pb *B, scratch *S, nodebuf *out, topctx *top, ui
 
 typedef struct task_job {
     const pb *B;
-    task *tasks;
-    uint32_t num;
+    taskset *ts;
+    uint32_t task_max;
     scratch *S; /* one per thread; allocated by the caller (a user allocator need not be thread-safe) */
-    atomic_uint next;
+    bvh_node *F; /* the final node array */
 } task_job;
 
-static void task_worker(void *ctx, unsigned t)
+static void reserve(const nodebuf *top, task *tasks, uint32_t ti, uint32_t *off, bvh_node *F);
+
+/* Take the largest ready task (longest processing time first balances
+ * the threads), build it, repeat; wait while none is ready but a mid task
+ * is still running (it will add some); stop when neither is left. */
+static void task_worker(void *ctx, unsigned w)
 {
     task_job *j = ctx;
+    taskset *ts = j->ts;
+    pthread_mutex_lock(&ts->mu);
     for (;;) {
-        const uint32_t k = atomic_fetch_add(&j->next, 1u);
-        if (k >= j->num) return;
-        task *tk = &j->tasks[k];
-        build_rec(j->B, &j->S[t], &tk->out, NULL, tk->first, tk->count, tk->depth, tk->has_box ? &tk->box : NULL);
+        uint32_t best = NO_TASK;
+        for (uint32_t i = 0; i < ts->num; ++i)
+            if (ts->tasks[i].state == TASK_READY && (best == NO_TASK || ts->tasks[i].count > ts->tasks[best].count))
+                best = i;
+        if (best == NO_TASK) {
+            if (ts->active_mids == 0) break;
+            pthread_cond_wait(&ts->cv, &ts->mu);
+            continue;
+        }
+        task *tk = &ts->tasks[best];
+        tk->state = TASK_TAKEN;
+        pthread_mutex_unlock(&ts->mu);
+        const nodebox *box = tk->has_box ? &tk->box : NULL;
+        if (tk->mid) {
+            /* the top phase continued on this thread: its small subtrees become tasks */
+            topctx tc = {ts, j->task_max, 0, 0};
+            build_rec(j->B, &j->S[w], &tk->out, &tc, tk->first, tk->count, tk->depth, box);
+            pthread_mutex_lock(&ts->mu);
+            uint32_t off = tk->off;
+            reserve(&tk->out, ts->tasks, 0, &off, j->F); /* its tasks get regions inside its own: ready */
+            ts->active_mids--;
+            pthread_cond_broadcast(&ts->cv);
+        } else {
+            build_rec(j->B, &j->S[w], &tk->out, NULL, tk->first, tk->count, tk->depth, box);
+            pthread_mutex_lock(&ts->mu);
+        }
     }
+    pthread_mutex_unlock(&ts->mu);
 }
 
 /* Final layout without a second array: before the tasks run, every top
@@ -730,19 +796,24 @@ static void task_worker(void *ctx, unsigned t)
  * forward copy is safe).  Fresh memory costs page faults — in a virtual
  * machine as much as the building itself — so the nodes are written
  * once and moved once within the same pages. */
-static void reserve(const nodebuf *top, task *tasks, uint32_t ti, uint32_t *off)
+static void reserve(const nodebuf *top, task *tasks, uint32_t ti, uint32_t *off, bvh_node *F)
 {
     const bvh_node *n = &top->nodes[ti];
     if (n->count_axis == TASK_MARK) {
         task *t = &tasks[n->left_or_first];
         t->off = *off;
         *off += 2u * t->count - 1u;
+        if (F) { /* a mid task's: build straight into the final array */
+            t->out.nodes = F + t->off;
+            t->out.base = t->off;
+            t->state = TASK_READY;
+        }
         return;
     }
     *off += 1u;
     if (bvh_is_leaf(n)) return;
-    reserve(top, tasks, ti + 1, off);
-    reserve(top, tasks, n->left_or_first, off);
+    reserve(top, tasks, ti + 1, off, F);
+    reserve(top, tasks, n->left_or_first, off, F);
 }
 
 static uint32_t place(const nodebuf *top, const task *tasks, uint32_t ti, bvh_node *F, uint32_t *pos)
@@ -750,6 +821,7 @@ static uint32_t place(const nodebuf *top, const task *tasks, uint32_t ti, bvh_no
     const bvh_node *n = &top->nodes[ti];
     if (n->count_axis == TASK_MARK) {
         const task *t = &tasks[n->left_or_first];
+        if (t->mid) return place(&t->out, tasks, 0, F, pos); /* its nodes are laid out like the top's */
         const uint32_t base = *pos, delta = t->off - base;
         for (uint32_t i = 0; i < t->out.num; ++i) {
             bvh_node c = F[t->off + i];
@@ -805,12 +877,6 @@ static void pref_worker(void *ctx, unsigned t)
     }
 }
 
-static int cmp_task_desc(const void *x, const void *y)
-{
-    const task *a = x, *b = y;
-    return (a->count < b->count) - (a->count > b->count);
-}
-
 sidx_status sidx__bvh_build_parallel(sidx_accel *a, const bvh_par_params *p, sidx_error *err)
 {
     const sidx_mesh *m = a->mesh;
@@ -822,10 +888,11 @@ sidx_status sidx__bvh_build_parallel(sidx_accel *a, const bvh_par_params *p, sid
     B.threads = a->opt.threads > MAX_THREADS ? MAX_THREADS : a->opt.threads;
     sidx_status s = SIDX_ERR_NOMEM;
     nodebuf top = {NULL, 0, 0, 0, 0};
-    topctx tc = {NULL, 0, 0, 0};
+    taskset ts;
+    memset(&ts, 0, sizeof ts);
+    int ts_init = 0;
     scratch *S = NULL, *wS = NULL;
     bins3 *bins = NULL, *wbins = NULL;
-    task *sorted = NULL;
     bvh *b = sidx__calloc(a, 1, sizeof *b);
     if (!b) goto fail;
     b->num_prims = n;
@@ -842,58 +909,71 @@ sidx_status sidx__bvh_build_parallel(sidx_accel *a, const bvh_par_params *p, sid
         par_run(pc.nt, pref_worker, &pc);
     }
 
-    /* Top phase. */
+    /* Top phase on this thread, down to the mid tasks. */
+    topctx tc;
+    tc.ts = &ts;
     tc.task_max = n / (B.threads * TASK_SPLIT);
     if (tc.task_max < TASK_MIN) tc.task_max = TASK_MIN;
-    tc.cap_tasks = 2u * (n / tc.task_max + 1u) + 8u;
-    tc.tasks = sidx__calloc(a, tc.cap_tasks, sizeof *tc.tasks);
+    tc.mid_max = n / (B.threads * MID_SPLIT);
+    tc.par_passes = 1;
+    ts.cap = 2u * (n / tc.task_max + 1u) + 8u;
+    ts.tasks = sidx__calloc(a, ts.cap, sizeof *ts.tasks);
     top.nodes = sidx__alloc(a, 2u * (size_t)n - 1u, sizeof *top.nodes);
     S = sidx__alloc(a, 1, sizeof *S);
     bins = sidx__alloc(a, B.threads, sizeof *bins);
-    if (!tc.tasks || !top.nodes || !S || !bins) goto fail;
+    wS = sidx__calloc(a, B.threads, sizeof *wS);
+    wbins = sidx__alloc(a, B.threads, sizeof *wbins);
+    if (!ts.tasks || !top.nodes || !S || !bins || !wS || !wbins) goto fail;
+    if (pthread_mutex_init(&ts.mu, NULL) != 0) goto fail;
+    if (pthread_cond_init(&ts.cv, NULL) != 0) {
+        pthread_mutex_destroy(&ts.mu);
+        goto fail;
+    }
+    ts_init = 1;
     S->bins = bins;
     bins_clear(&bins[0], B.P.bins);
     build_rec(&B, S, &top, &tc, 0, n, 0, NULL);
 
-    /* Task phase: largest first, every buffer allocated here. */
-    const unsigned workers = B.threads < tc.num_tasks ? B.threads : (tc.num_tasks ? tc.num_tasks : 1u);
+    /* Regions in the final array for the top's tasks (a mid task's
+     * region holds its own nodes and its tasks' regions); node buffers
+     * for the mid tasks' own nodes after the top's, in the same array
+     * (top nodes + 2·count − 1 per task never exceed its 2n − 1). */
     uint32_t reserved = 0;
-    reserve(&top, tc.tasks, 0, &reserved);
+    reserve(&top, ts.tasks, 0, &reserved, NULL);
     b->nodes_mem = sidx__alloc(a, (size_t)reserved + 2u, sizeof *b->nodes);
     if (!b->nodes_mem) goto fail;
     b->nodes = (bvh_node *)(void *)(((uintptr_t)b->nodes_mem + 63u) & ~(uintptr_t)63u);
-    for (uint32_t i = 0; i < tc.num_tasks; ++i) {
-        tc.tasks[i].out.nodes = b->nodes + tc.tasks[i].off;
-        tc.tasks[i].out.base = tc.tasks[i].off;
+    uint32_t mid_at = top.num;
+    for (uint32_t i = 0; i < ts.num; ++i) {
+        task *t = &ts.tasks[i];
+        if (t->mid) {
+            t->out.nodes = top.nodes + mid_at;
+            t->out.base = 0;
+            mid_at += 2u * t->count - 1u;
+            ts.active_mids++;
+        } else {
+            t->out.nodes = b->nodes + t->off;
+            t->out.base = t->off;
+        }
+        t->state = TASK_READY;
     }
-    wS = sidx__calloc(a, workers, sizeof *wS);
-    wbins = sidx__alloc(a, workers, sizeof *wbins);
-    sorted = sidx__alloc(a, tc.num_tasks ? tc.num_tasks : 1u, sizeof *sorted);
-    if (!wS || !wbins || !sorted) goto fail;
-    for (unsigned t = 0; t < workers; ++t) {
+
+    /* Task phase: mid and plain tasks on every thread, largest first. */
+    for (unsigned t = 0; t < B.threads; ++t) {
         wS[t].bins = &wbins[t];
         bins_clear(&wbins[t], B.P.bins);
     }
-    memcpy(sorted, tc.tasks, (size_t)tc.num_tasks * sizeof *sorted);
-    qsort(sorted, tc.num_tasks, sizeof *sorted, cmp_task_desc);
-    task_job j;
-    j.B = &B;
-    j.tasks = sorted;
-    j.num = tc.num_tasks;
-    j.S = wS;
-    atomic_init(&j.next, 0u);
-    par_run(workers, task_worker, &j);
-    /* Back in top order (stitch looks tasks up by index). */
-    for (uint32_t i = 0; i < tc.num_tasks; ++i) tc.tasks[top.nodes[sorted[i].top_node].left_or_first] = sorted[i];
+    task_job j = {&B, &ts, tc.task_max, wS, b->nodes};
+    par_run(ts.num ? B.threads : 1u, task_worker, &j);
 
     uint32_t total = top.num, leaves = top.leaves, maxd = top.max_depth;
-    for (uint32_t i = 0; i < tc.num_tasks; ++i) {
-        total += tc.tasks[i].out.num - 1u;
-        leaves += tc.tasks[i].out.leaves;
-        if (tc.tasks[i].out.max_depth > maxd) maxd = tc.tasks[i].out.max_depth;
+    for (uint32_t i = 0; i < ts.num; ++i) {
+        total += ts.tasks[i].out.num - 1u;
+        leaves += ts.tasks[i].out.leaves;
+        if (ts.tasks[i].out.max_depth > maxd) maxd = ts.tasks[i].out.max_depth;
     }
     uint32_t pos = 0;
-    place(&top, tc.tasks, 0, b->nodes, &pos);
+    place(&top, ts.tasks, 0, b->nodes, &pos);
     b->num_nodes = total;
     for (uint32_t i = 0; i < n; ++i) b->prim_id[i] = B.pr[i].id; /* before the copies overwrite the references */
     b->num_leaves = leaves;
@@ -921,13 +1001,16 @@ sidx_status sidx__bvh_build_parallel(sidx_accel *a, const bvh_par_params *p, sid
     a->impl = b;
     b = NULL;
 fail:
-    sidx__free(a, tc.tasks);
+    if (ts_init) {
+        pthread_cond_destroy(&ts.cv);
+        pthread_mutex_destroy(&ts.mu);
+    }
+    sidx__free(a, ts.tasks);
     sidx__free(a, top.nodes);
     sidx__free(a, S);
     sidx__free(a, bins);
     sidx__free(a, wS);
     sidx__free(a, wbins);
-    sidx__free(a, sorted);
     if (b) {
         sidx__free(a, b->nodes_mem);
         sidx__free(a, b->prim_id);
