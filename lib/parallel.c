@@ -12,20 +12,25 @@
  * way Wald ("On fast construction of SAH-based bounding volume
  * hierarchies", 2007) and Embree's parallel builders do it:
  *
- *   1. top phase, on the calling thread: nodes above TASK_MIN_FRACTION of
- *      the triangles are split one after another, but their two O(n)
- *      passes — the node's bounds and the binning of all three axes — run
- *      on every thread over disjoint chunks, each thread filling private
+ *   1. top phase, on the calling thread: the nodes above n / (2·threads)
+ *      triangles are split one after another, but their O(n) passes —
+ *      the binning of all three axes, and the root's bounds — run on
+ *      every thread over disjoint chunks, each thread filling private
  *      bins that are merged afterwards (box unions and counts are exact,
- *      so the merged bins equal sequential ones bit for bit);
- *   2. task phase: every smaller subtree the top phase reached becomes an
- *      independent task; the threads take tasks largest first from an
- *      atomic counter (longest-processing-time order balances them) and
- *      build each into a private node array;
- *   3. stitching: the top nodes and the task arrays are laid out in
- *      depth-first pre-order, the right-child indices of each task shifted
- *      by where its array lands.
- *
+ *      so the merged bins equal sequential ones bit for bit).  The
+ *      partition, which stays sequential, gathers both children's boxes
+ *      on the way, so no node below the root needs a bounds pass;
+ *   2. task phase: the subtrees the top phase reached are tasks.  The
+ *      larger ones, "mid tasks", are top-phase subtrees in their own right:
+ *      the threads build them at the same time, each cutting its own
+ *      subtrees of at most n / (8·threads) triangles into further tasks —
+ *      so the top of the tree is no longer one thread's work.  The threads
+ *      take the largest ready task first (longest processing time first
+ *      balances them), and build each straight into a region of the final
+ *      node array reserved in pre-order;
+ *   3. stitching: the regions are slid down over their unused tails in
+ *      pre-order, the right-child indices shifted by the distance moved.
+
  * Every split sees the same triangles in the same index order as in the
  * sequential build (partitioning stays sequential and in place, the same
  * two-pointer loop), so the tree is identical — node for node — to the

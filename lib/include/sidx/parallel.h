@@ -15,8 +15,15 @@
  * SAH builder of "bvh" (and of "bvh4"/"bvh8", which collapse it) bin the
  * large top nodes on all threads and then build the subtrees below them
  * as independent tasks.  The tree is IDENTICAL to the one-thread build
- * (same splits, same node order), only faster.  With a build hook attached
- * the build stays on one thread so events arrive in order.
+ * (same splits, same node order, same box bits), only faster.  With a
+ * build hook attached the build stays on one thread so events arrive in
+ * order.
+ *
+ * Threads: the library starts its worker threads on first use and keeps
+ * them (they sleep between calls; they are joined at exit, and a forked
+ * child starts its own).  Calls from several application threads at once
+ * are fine: one uses the workers, the others get threads of their own for
+ * that call.
  *
  * Hooks: a traced query (q->hook set) runs on the calling thread alone, so
  * the hook sees the rays' events in order and is never called
