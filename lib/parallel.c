@@ -795,8 +795,11 @@ static void task_worker(void *ctx, unsigned w)
 
 /* Final layout without a second array: before the tasks run, every top
  * node gets one slot and every task a region of 2·count − 1 (the most
- * nodes a binary tree over count primitives can have) in pre-order; the
- * tasks build straight into their regions; then the regions are slid
+ * nodes a binary tree over count primitives can have) in pre-order — a
+ * mid task, when its own top is built, lays out its nodes and its tasks'
+ * regions the same way inside its region (1 + (2·l − 1) + (2·r − 1) =
+ * 2·count − 1 for a split, so they fit); the tasks build straight into
+ * their regions; then the regions are slid
  * down over the unused tails, in order (a region never moves up, so a
  * forward copy is safe).  Fresh memory costs page faults — in a virtual
  * machine as much as the building itself — so the nodes are written
