@@ -334,7 +334,7 @@ int main(int argc, char **argv)
            plain_s[0] / fru_s[0], plain_s[1] / fru_s[1]);
 
     /* ---- 4. many cores: threads ------------------------------------------------------ */
-    printf("\n== 4. Threads (sidx_trace_parallel over bvh8: batches of %u rays handed out by an atomic counter)\n",
+    printf("\n== 4. Threads (sidx_trace_parallel over bvh8: a share of the rays per thread, in batches of %u, plus work stealing)\n",
            SIDX_PARALLEL_BATCH);
     printf("  %-8s %9s %9s %10s %9s\n", "threads", "wall ms", "CPU ms", "CPU/wall", "Mrays/s");
     double wall[2];

@@ -1,30 +1,36 @@
 /* parallel.c — multi-core tracing and the parallel binned-SAH BVH build.
  *
  * Tracing (sidx_trace_parallel): the calling thread and threads − 1
- * pthreads pull batches of SIDX_PARALLEL_BATCH rays from one atomic
- * counter until none are left.  Nothing else is shared: the structure is
+ * pool workers each trace a contiguous share of the rays in batches of
+ * SIDX_PARALLEL_BATCH and then steal batches from the shares of the others
+ * until none are left.  Nothing else is shared: the structure is
  * read-only and each ray writes its own hit, so there is no lock and no
- * false sharing except at batch borders (a batch of 256 hits is 12 KB).
+ * false sharing except at batch borders (a batch of 32 hits is 1.5 KB).
  *
  * Build (sidx__bvh_build_parallel, called by bvh_build.c): the same
  * decisions as the one-thread binned builder (Wald 2007), organised the
  * way Wald ("On fast construction of SAH-based bounding volume
  * hierarchies", 2007) and Embree's parallel builders do it:
  *
- *   1. top phase, on the calling thread: nodes above TASK_MIN_FRACTION of
- *      the triangles are split one after another, but their two O(n)
- *      passes — the node's bounds and the binning of all three axes — run
- *      on every thread over disjoint chunks, each thread filling private
+ *   1. top phase, on the calling thread: the nodes above n / (2·threads)
+ *      triangles are split one after another, but their O(n) passes —
+ *      the binning of all three axes, and the root's bounds — run on
+ *      every thread over disjoint chunks, each thread filling private
  *      bins that are merged afterwards (box unions and counts are exact,
- *      so the merged bins equal sequential ones bit for bit);
- *   2. task phase: every smaller subtree the top phase reached becomes an
- *      independent task; the threads take tasks largest first from an
- *      atomic counter (longest-processing-time order balances them) and
- *      build each into a private node array;
- *   3. stitching: the top nodes and the task arrays are laid out in
- *      depth-first pre-order, the right-child indices of each task shifted
- *      by where its array lands.
- *
+ *      so the merged bins equal sequential ones bit for bit).  The
+ *      partition, which stays sequential, gathers both children's boxes
+ *      on the way, so no node below the root needs a bounds pass;
+ *   2. task phase: the subtrees the top phase reached are tasks.  The
+ *      larger ones, "mid tasks", are top-phase subtrees in their own right:
+ *      the threads build them at the same time, each cutting its own
+ *      subtrees of at most n / (8·threads) triangles into further tasks —
+ *      so the top of the tree is no longer one thread's work.  The threads
+ *      take the largest ready task first (longest processing time first
+ *      balances them), and build each straight into a region of the final
+ *      node array reserved in pre-order;
+ *   3. stitching: the regions are slid down over their unused tails in
+ *      pre-order, the right-child indices shifted by the distance moved.
+
  * Every split sees the same triangles in the same index order as in the
  * sequential build (partitioning stays sequential and in place, the same
  * two-pointer loop), so the tree is identical — node for node — to the
@@ -33,6 +39,7 @@
 #include <stdatomic.h>
 #include <unistd.h>
 #include "bvh_internal.h"
+#include "pool.h"
 #include "sidx/parallel.h"
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -44,35 +51,29 @@ unsigned sidx_hardware_threads(void)
     return n > 0 ? (unsigned)n : 1u;
 }
 
-/* Run fn(ctx, t) for t in [0, nt): t = 0 on the caller, the others on new
- * threads.  A thread that cannot be created has its share run here. */
-typedef void (*par_fn)(void *ctx, unsigned t);
-typedef struct par_arg { par_fn fn; void *ctx; unsigned t; } par_arg;
-static void *par_main(void *p)
-{
-    par_arg *a = p;
-    a->fn(a->ctx, a->t);
-    return NULL;
-}
-#define MAX_THREADS 64u
-static void par_run(unsigned nt, par_fn fn, void *ctx)
-{
-    pthread_t th[MAX_THREADS];
-    par_arg args[MAX_THREADS];
-    int started[MAX_THREADS];
-    if (nt > MAX_THREADS) nt = MAX_THREADS;
-    for (unsigned t = 1; t < nt; ++t) {
-        args[t] = (par_arg){fn, ctx, t};
-        started[t] = pthread_create(&th[t], NULL, par_main, &args[t]) == 0;
-    }
-    fn(ctx, 0);
-    for (unsigned t = 1; t < nt; ++t) {
-        if (started[t]) pthread_join(th[t], NULL);
-        else fn(ctx, t);
-    }
-}
+/* Every run of work on several threads goes through the persistent pool
+ * (pool.c): fn(ctx, t) for t in [0, nt), t = 0 on the caller. */
+#define MAX_THREADS SIDX_POOL_MAX_THREADS
+typedef sidx_pool_fn par_fn;
+static void par_run(unsigned nt, par_fn fn, void *ctx) { sidx__pool_run(nt, fn, ctx); }
 
 /* ---- tracing ------------------------------------------------------------------ */
+
+/* Each thread starts on a contiguous share of the rays, n / threads of
+ * them, taken SIDX_PARALLEL_BATCH at a time from the front through the
+ * share's own counter; when its share is empty it steals batches from the
+ * others' shares through their counters.  Compared with one counter for
+ * everybody, a thread mostly walks its own run of consecutive (coherent)
+ * rays and touches only its own counter, a cache line no other thread
+ * writes until stealing starts — the shared counter bounced between the
+ * cores at every batch.  Stealing keeps the balance of the single counter:
+ * nobody idles while a batch is left.  So batches can be small (32 rays),
+ * and the last one to finish is short. */
+typedef struct trace_share {
+    atomic_size_t next;
+    size_t end;
+    char pad[64 - sizeof(atomic_size_t) - sizeof(size_t)]; /* one cache line each */
+} trace_share;
 
 typedef struct trace_job {
     const sidx_accel *a;
@@ -81,30 +82,36 @@ typedef struct trace_job {
     sidx_query q;
     sidx_hit *hits;
     uint8_t *occ;
-    atomic_size_t next;
+    unsigned nt;
+    trace_share share[MAX_THREADS];
 } trace_job;
 
-static void trace_worker(void *ctx, unsigned t)
+/* Trace batches from share s until it is empty. */
+static void trace_share_drain(trace_job *j, trace_share *s, sidx_query *q, uint32_t base)
 {
-    (void)t;
-    trace_job *j = ctx;
-    sidx_query q = j->q;
-    const uint32_t base = q.ray_id;
     for (;;) {
-        const size_t b = atomic_fetch_add_explicit(&j->next, SIDX_PARALLEL_BATCH, memory_order_relaxed);
-        if (b >= j->n) return;
-        const size_t e = b + SIDX_PARALLEL_BATCH < j->n ? b + SIDX_PARALLEL_BATCH : j->n;
+        const size_t b = atomic_fetch_add_explicit(&s->next, SIDX_PARALLEL_BATCH, memory_order_relaxed);
+        if (b >= s->end) return;
+        const size_t e = s->end - b > SIDX_PARALLEL_BATCH ? b + SIDX_PARALLEL_BATCH : s->end;
         for (size_t i = b; i < e; ++i) {
-            q.ray_id = base + (uint32_t)i;
+            q->ray_id = base + (uint32_t)i;
             if (j->hits) {
-                sidx_accel_intersect(j->a, &j->rays[i], &q, &j->hits[i]);
+                sidx_accel_intersect(j->a, &j->rays[i], q, &j->hits[i]);
             } else {
                 int o = 0;
-                sidx_accel_occluded(j->a, &j->rays[i], &q, &o);
+                sidx_accel_occluded(j->a, &j->rays[i], q, &o);
                 j->occ[i] = (uint8_t)o;
             }
         }
     }
+}
+
+static void trace_worker(void *ctx, unsigned t)
+{
+    trace_job *j = ctx;
+    sidx_query q = j->q;
+    const uint32_t base = q.ray_id;
+    for (unsigned k = 0; k < j->nt; ++k) trace_share_drain(j, &j->share[(t + k) % j->nt], &q, base);
 }
 
 static sidx_status trace_common(const sidx_accel *a, const sidx_ray *rays, size_t n, const sidx_query *q,
@@ -119,12 +126,19 @@ static sidx_status trace_common(const sidx_accel *a, const sidx_ray *rays, size_
     else memset(&j.q, 0, sizeof j.q);
     j.hits = hits;
     j.occ = occ;
-    atomic_init(&j.next, 0);
     if (threads == 0) threads = sidx_hardware_threads();
     /* A traced query stays on this thread: ordered events, no concurrent hook calls. */
     if (j.q.hook && j.q.hook->fn) threads = 1;
     const size_t batches = (n + SIDX_PARALLEL_BATCH - 1) / SIDX_PARALLEL_BATCH;
     if (threads > batches) threads = batches ? (unsigned)batches : 1u;
+    if (threads > MAX_THREADS) threads = MAX_THREADS;
+    j.nt = threads;
+    for (unsigned t = 0; t < threads; ++t) {
+        /* share boundaries on whole batches, so only the last batch is short */
+        const size_t lo = batches * t / threads * SIDX_PARALLEL_BATCH, hi = batches * (t + 1) / threads * SIDX_PARALLEL_BATCH;
+        atomic_init(&j.share[t].next, lo);
+        j.share[t].end = hi < n ? hi : n;
+    }
     par_run(threads, trace_worker, &j);
     return SIDX_OK;
 }
@@ -152,6 +166,10 @@ sidx_status sidx_occluded_parallel(const sidx_accel *a, const sidx_ray *rays, si
  * triangles, giving several tasks per thread to balance. */
 #define TASK_SPLIT 8u
 #define TASK_MIN 256u
+/* The calling thread's top phase stops at subtrees of at most
+ * n / (threads · MID_SPLIT) triangles: those are mid tasks, top-phase
+ * subtrees that the threads build at the same time. */
+#define MID_SPLIT 2u
 /* Marks a top-phase node that is the root of a task (left_or_first = task). */
 #define TASK_MARK 0xFFFFFFFFu
 
@@ -167,6 +185,7 @@ typedef struct pref {
     float hi[3];
     uint32_t pad;
 } pref;
+_Static_assert(sizeof(pref) <= sizeof(bvh_tri), "the references borrow the vertex copies' array");
 
 typedef struct pb {
     const sidx_accel *a;
@@ -189,11 +208,47 @@ typedef struct nodebuf {
     uint32_t base; /* added to stored child indices: where nodes[0] sits in the final array */
 } nodebuf;
 
+/* A node's box and its centroids' box: what the recursion needs before it
+ * can bin. */
+typedef struct nodebox {
+    sidx_aabb bb, cb;
+} nodebox;
+
 typedef struct task {
     uint32_t first, count, depth, top_node;
+    int mid;     /* a mid task: a top-phase subtree of its own (see sidx__bvh_build_parallel) */
+    int state;   /* TASK_WAITING (no region yet), TASK_READY, TASK_TAKEN; under taskset.mu */
+    int has_box;
+    nodebox box; /* the subtree root's boxes, when its parent's partition gathered them */
     uint32_t off; /* reserved region in the final array: 2·count − 1 nodes from here */
     nodebuf out;
 } task;
+
+enum { TASK_WAITING = 0, TASK_READY, TASK_TAKEN };
+#define NO_TASK 0xFFFFFFFFu
+
+/* Every task of one build, and what the threads need to hand them out. */
+typedef struct taskset {
+    task *tasks;
+    uint32_t num, cap;
+    uint32_t active_mids;  /* mid tasks not finished: they may still add tasks */
+    pthread_mutex_t mu;
+    pthread_cond_t cv;     /* a mid task finished: new tasks may be ready */
+} taskset;
+
+/* A new task slot, or NO_TASK when the array is full (the node is then
+ * built where it is, which changes nothing but the balance). */
+static uint32_t task_new(taskset *ts)
+{
+    pthread_mutex_lock(&ts->mu);
+    uint32_t i = NO_TASK;
+    if (ts->num < ts->cap) {
+        i = ts->num++;
+        ts->tasks[i].state = TASK_WAITING;
+    }
+    pthread_mutex_unlock(&ts->mu);
+    return i;
+}
 
 /* A bin's box as two 4-float rows (x, y, z, unused), so that the binning
  * loop can grow it with one SSE min and one max: _mm_min_ps(a, b) is
@@ -396,6 +451,21 @@ typedef struct split {
     float cost;
 } split;
 
+#if defined(__SSE2__)
+/* sidx_aabb_area of a NON-EMPTY box held as two 4-lane rows (x, y, z, 0):
+ * e = hi − lo, then 2·((e.x·e.y + e.y·e.z) + e.z·e.x) — the products in
+ * one multiply, the sums in the scalar expression's order, so the result
+ * is bit for bit sidx_aabb_area's. */
+static inline float area_sse(__m128 lo, __m128 hi)
+{
+    const __m128 e = _mm_sub_ps(hi, lo);
+    const __m128 p = _mm_mul_ps(e, _mm_shuffle_ps(e, e, _MM_SHUFFLE(3, 0, 2, 1))); /* x·y, y·z, z·x, 0 */
+    __m128 sum = _mm_add_ss(p, _mm_shuffle_ps(p, p, _MM_SHUFFLE(3, 3, 3, 1)));
+    sum = _mm_add_ss(sum, _mm_shuffle_ps(p, p, _MM_SHUFFLE(3, 3, 3, 2)));
+    return 2.0f * _mm_cvtss_f32(sum);
+}
+#endif
+
 /* The sequential builder's find_binned: the same costs from the same float
  * expressions, the same tie rule (first minimum over axis, then plane) —
  * but only at planes right after a NON-EMPTY bin.  Behind an empty bin
@@ -431,18 +501,42 @@ static int best_split(const pb *B, const bins3 *bn, uint32_t count, float inv_ar
 #endif
         S->nused[axis] = k;
         if (k < 2) continue; /* flat axis (not binned) or one bin: no plane */
+#if defined(__SSE2__)
+        /* The sweeps with a box in one register pair: one min and one max
+         * per bin instead of six scalar selects, and the area without the
+         * empty-box test (a union of non-empty bins is never empty, so the
+         * test always fails there).  Same results as the scalar code below:
+         * _mm_min_ps(acc, b) is sidx_v3_min(acc, b) lane by lane, and
+         * area_sse sums the products in sidx_aabb_area's order. */
+        __m128 lo = _mm_set1_ps(INFINITY), hi = _mm_set1_ps(-INFINITY);
+        for (uint32_t j = k; j-- > 1;) { /* right_area[j] = area of bins used[j..k) */
+            lo = _mm_min_ps(lo, _mm_loadu_ps(box[used[j]].lo));
+            hi = _mm_max_ps(hi, _mm_loadu_ps(box[used[j]].hi));
+            S->right_area[j] = area_sse(lo, hi);
+        }
+        lo = _mm_set1_ps(INFINITY);
+        hi = _mm_set1_ps(-INFINITY);
+#else
         sidx_aabb acc = sidx_aabb_empty();
         for (uint32_t j = k; j-- > 1;) { /* right_area[j] = area of bins used[j..k) */
             acc = sidx_aabb_union(acc, binbox_get(&box[used[j]]));
             S->right_area[j] = sidx_aabb_area(acc);
         }
         acc = sidx_aabb_empty();
+#endif
         uint32_t nl = 0;
         for (uint32_t j = 0; j + 1 < k; ++j) {
+#if defined(__SSE2__)
+            lo = _mm_min_ps(lo, _mm_loadu_ps(box[used[j]].lo));
+            hi = _mm_max_ps(hi, _mm_loadu_ps(box[used[j]].hi));
+            const float left_area = area_sse(lo, hi);
+#else
             acc = sidx_aabb_union(acc, binbox_get(&box[used[j]]));
+            const float left_area = sidx_aabb_area(acc);
+#endif
             nl += cnt[used[j]];
             const float cost =
-                B->P.c_trav + B->P.c_tri * (sidx_aabb_area(acc) * (float)nl + S->right_area[j + 1] * (float)(count - nl)) *
+                B->P.c_trav + B->P.c_tri * (left_area * (float)nl + S->right_area[j + 1] * (float)(count - nl)) *
                                   inv_area;
             if (cost < best->cost) {
                 best->cost = cost;
@@ -456,49 +550,120 @@ static int best_split(const pb *B, const bins3 *bn, uint32_t count, float inv_ar
     return found;
 }
 
-static uint32_t partition(const pb *B, const binspec *s, uint32_t first, uint32_t count, int axis, uint32_t plane)
+/* bvh_build.c's two-pointer loop, element for element, and while every
+ * reference passes through the registers anyway, the children's boxes
+ * (Wald 2007 gathers them the same way): the children then skip their own
+ * pass over the references, a third of the memory traffic of a node.
+ *
+ * The boxes must be the bits the children's own pass would compute, and
+ * min/max keep their SECOND operand on a tie (sidx_v3_min: a < b ? a : b),
+ * which matters for -0.0 against +0.0: the pass keeps the LAST of equal
+ * minima in index order.  The left side is finalised in index order (i
+ * only grows), so it folds like the pass.  The right side is finalised in
+ * REVERSE order (each element lands at --j), so it folds with the operands
+ * swapped, min(x, acc): a tie then keeps the accumulator, which is the
+ * element seen first in reverse, i.e. the last in index order.  (No NaN
+ * can occur: coordinates are finite, so lo + hi is never inf − inf.) */
+static uint32_t partition(const pb *B, const binspec *s, uint32_t first, uint32_t count, int axis, uint32_t plane,
+                          nodebox *left, nodebox *right)
 {
-    /* bvh_build.c's two-pointer loop, element for element. */
     pref *pr = B->pr;
     uint32_t i = first, j = first + count;
+#if defined(__SSE2__)
+    const __m128 half = _mm_set1_ps(0.5f), xyz = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0));
+    __m128 lblo = _mm_set1_ps(INFINITY), lbhi = _mm_set1_ps(-INFINITY), lclo = lblo, lchi = lbhi;
+    __m128 rblo = lblo, rbhi = lbhi, rclo = lblo, rchi = lbhi;
     while (i < j) {
+        const __m128 lo = _mm_and_ps(_mm_loadu_ps(pr[i].lo), xyz), hi = _mm_and_ps(_mm_loadu_ps(pr[i].hi), xyz);
+        const __m128 c = _mm_mul_ps(_mm_add_ps(lo, hi), half);
         if (bin_of(pref_c(&pr[i], axis), s->cmin[axis], s->scale[axis], s->nb) < plane) {
+            lblo = _mm_min_ps(lblo, lo);
+            lbhi = _mm_max_ps(lbhi, hi);
+            lclo = _mm_min_ps(lclo, c);
+            lchi = _mm_max_ps(lchi, c);
             ++i;
         } else {
+            rblo = _mm_min_ps(lo, rblo);
+            rbhi = _mm_max_ps(hi, rbhi);
+            rclo = _mm_min_ps(c, rclo);
+            rchi = _mm_max_ps(c, rchi);
             const pref t = pr[i];
             pr[i] = pr[--j];
             pr[j] = t;
         }
     }
+    float v[8][4];
+    _mm_storeu_ps(v[0], lblo);
+    _mm_storeu_ps(v[1], lbhi);
+    _mm_storeu_ps(v[2], lclo);
+    _mm_storeu_ps(v[3], lchi);
+    _mm_storeu_ps(v[4], rblo);
+    _mm_storeu_ps(v[5], rbhi);
+    _mm_storeu_ps(v[6], rclo);
+    _mm_storeu_ps(v[7], rchi);
+    left->bb = (sidx_aabb){{v[0][0], v[0][1], v[0][2]}, {v[1][0], v[1][1], v[1][2]}};
+    left->cb = (sidx_aabb){{v[2][0], v[2][1], v[2][2]}, {v[3][0], v[3][1], v[3][2]}};
+    right->bb = (sidx_aabb){{v[4][0], v[4][1], v[4][2]}, {v[5][0], v[5][1], v[5][2]}};
+    right->cb = (sidx_aabb){{v[6][0], v[6][1], v[6][2]}, {v[7][0], v[7][1], v[7][2]}};
+#else
+    nodebox l = {sidx_aabb_empty(), sidx_aabb_empty()}, r = l;
+    while (i < j) {
+        const sidx_aabb b = pref_box(&pr[i]);
+        const sidx_vec3 c = sidx_v3(pref_c(&pr[i], 0), pref_c(&pr[i], 1), pref_c(&pr[i], 2));
+        if (bin_of(pref_c(&pr[i], axis), s->cmin[axis], s->scale[axis], s->nb) < plane) {
+            l.bb = sidx_aabb_union(l.bb, b);
+            l.cb = sidx_aabb_grow(l.cb, c);
+            ++i;
+        } else {
+            r.bb = sidx_aabb_union(b, r.bb); /* swapped: see above */
+            r.cb.min = sidx_v3_min(c, r.cb.min);
+            r.cb.max = sidx_v3_max(c, r.cb.max);
+            const pref t = pr[i];
+            pr[i] = pr[--j];
+            pr[j] = t;
+        }
+    }
+    *left = l;
+    *right = r;
+#endif
     return i - first;
 }
 
 /* One node and its subtree into out.  top: the top phase (parallel passes,
  * small subtrees become tasks) or 0 inside a task. */
 typedef struct topctx {
-    task *tasks;
-    uint32_t num_tasks, cap_tasks, task_max;
+    taskset *ts;
+    uint32_t task_max; /* subtrees of at most this many triangles become tasks */
+    uint32_t mid_max;  /* ... mid tasks above task_max and up to this (0: none) */
+    int par_passes;    /* the caller's top phase: large nodes' passes on all threads */
 } topctx;
 
 static uint32_t build_rec(const pb *B, scratch *S, nodebuf *out, topctx *top, uint32_t first, uint32_t count,
-                          uint32_t depth)
+                          uint32_t depth, const nodebox *given)
 {
     const uint32_t ni = out->num++;
     bvh_node *n = &out->nodes[ni];
-    if (top && count <= top->task_max && count > B->P.leaf_size && depth < B->P.max_depth &&
-        top->num_tasks < top->cap_tasks) {
-        task *t = &top->tasks[top->num_tasks];
+    uint32_t ti;
+    if (top && count <= (top->mid_max > top->task_max ? top->mid_max : top->task_max) &&
+        count > B->P.leaf_size && depth < B->P.max_depth && (ti = task_new(top->ts)) != NO_TASK) {
+        task *t = &top->ts->tasks[ti];
+        t->mid = count > top->task_max;
         t->first = first;
         t->count = count;
         t->depth = depth;
+        t->has_box = given != NULL;
+        if (given) t->box = *given;
         t->top_node = ni;
-        n->left_or_first = top->num_tasks++;
+        n->left_or_first = ti;
         n->count_axis = TASK_MARK;
         return ni;
     }
-    const int par = top && count >= PAR_PASS_MIN && B->threads > 1;
+    const int par = top && top->par_passes && count >= PAR_PASS_MIN && B->threads > 1;
     sidx_aabb bb, cb;
-    if (par) {
+    if (given) { /* gathered by the parent's partition */
+        bb = given->bb;
+        cb = given->cb;
+    } else if (par) {
         sidx_aabb pbb[MAX_THREADS], pcb[MAX_THREADS];
         pass_ctx c = {B, NULL, first, count, B->threads, NULL, pbb, pcb};
         par_run(B->threads, bounds_worker, &c);
@@ -520,6 +685,8 @@ static uint32_t build_rec(const pb *B, scratch *S, nodebuf *out, topctx *top, ui
     const float leaf_cost = (float)count * B->P.c_tri;
     int leaf = 0, axis = -1;
     uint32_t nl = 0;
+    nodebox kids[2];
+    int have_kids = 0;
     if (count <= B->P.leaf_size || depth >= B->P.max_depth) {
         leaf = 1;
     } else if (!(cb.max.x > cb.min.x) && !(cb.max.y > cb.min.y) && !(cb.max.z > cb.min.z)) {
@@ -558,7 +725,8 @@ static uint32_t build_rec(const pb *B, scratch *S, nodebuf *out, topctx *top, ui
              * as the sequential builder does: the leaf's triangle order
              * (and so its tie-breaking) stays the same. */
             axis = sp.axis;
-            nl = partition(B, &s, first, count, sp.axis, sp.plane);
+            nl = partition(B, &s, first, count, sp.axis, sp.plane, &kids[0], &kids[1]);
+            have_kids = 1;
             if (!(sp.cost < leaf_cost) && count <= B->P.max_leaf) leaf = 1;
         }
     }
@@ -568,8 +736,8 @@ static uint32_t build_rec(const pb *B, scratch *S, nodebuf *out, topctx *top, ui
         out->leaves++;
         return ni;
     }
-    build_rec(B, S, out, top, first, nl, depth + 1);
-    const uint32_t right = build_rec(B, S, out, top, first + nl, count - nl, depth + 1);
+    build_rec(B, S, out, top, first, nl, depth + 1, have_kids ? &kids[0] : NULL);
+    const uint32_t right = build_rec(B, S, out, top, first + nl, count - nl, depth + 1, have_kids ? &kids[1] : NULL);
     n = &out->nodes[ni];
     n->left_or_first = right + out->base;
     n->count_axis = (uint32_t)(axis < 0 ? 0 : axis) << BVH_AXIS_SHIFT;
@@ -578,44 +746,82 @@ static uint32_t build_rec(const pb *B, scratch *S, nodebuf *out, topctx *top, ui
 
 typedef struct task_job {
     const pb *B;
-    task *tasks;
-    uint32_t num;
+    taskset *ts;
+    uint32_t task_max;
     scratch *S; /* one per thread; allocated by the caller (a user allocator need not be thread-safe) */
-    atomic_uint next;
+    bvh_node *F; /* the final node array */
 } task_job;
 
-static void task_worker(void *ctx, unsigned t)
+static void reserve(const nodebuf *top, task *tasks, uint32_t ti, uint32_t *off, bvh_node *F);
+
+/* Take the largest ready task (longest processing time first balances
+ * the threads), build it, repeat; wait while none is ready but a mid task
+ * is still running (it will add some); stop when neither is left. */
+static void task_worker(void *ctx, unsigned w)
 {
     task_job *j = ctx;
+    taskset *ts = j->ts;
+    pthread_mutex_lock(&ts->mu);
     for (;;) {
-        const uint32_t k = atomic_fetch_add(&j->next, 1u);
-        if (k >= j->num) return;
-        task *tk = &j->tasks[k];
-        build_rec(j->B, &j->S[t], &tk->out, NULL, tk->first, tk->count, tk->depth);
+        uint32_t best = NO_TASK;
+        for (uint32_t i = 0; i < ts->num; ++i)
+            if (ts->tasks[i].state == TASK_READY && (best == NO_TASK || ts->tasks[i].count > ts->tasks[best].count))
+                best = i;
+        if (best == NO_TASK) {
+            if (ts->active_mids == 0) break;
+            pthread_cond_wait(&ts->cv, &ts->mu);
+            continue;
+        }
+        task *tk = &ts->tasks[best];
+        tk->state = TASK_TAKEN;
+        pthread_mutex_unlock(&ts->mu);
+        const nodebox *box = tk->has_box ? &tk->box : NULL;
+        if (tk->mid) {
+            /* the top phase continued on this thread: its small subtrees become tasks */
+            topctx tc = {ts, j->task_max, 0, 0};
+            build_rec(j->B, &j->S[w], &tk->out, &tc, tk->first, tk->count, tk->depth, box);
+            pthread_mutex_lock(&ts->mu);
+            uint32_t off = tk->off;
+            reserve(&tk->out, ts->tasks, 0, &off, j->F); /* its tasks get regions inside its own: ready */
+            ts->active_mids--;
+            pthread_cond_broadcast(&ts->cv);
+        } else {
+            build_rec(j->B, &j->S[w], &tk->out, NULL, tk->first, tk->count, tk->depth, box);
+            pthread_mutex_lock(&ts->mu);
+        }
     }
+    pthread_mutex_unlock(&ts->mu);
 }
 
 /* Final layout without a second array: before the tasks run, every top
  * node gets one slot and every task a region of 2·count − 1 (the most
- * nodes a binary tree over count primitives can have) in pre-order; the
- * tasks build straight into their regions; then the regions are slid
+ * nodes a binary tree over count primitives can have) in pre-order — a
+ * mid task, when its own top is built, lays out its nodes and its tasks'
+ * regions the same way inside its region (1 + (2·l − 1) + (2·r − 1) =
+ * 2·count − 1 for a split, so they fit); the tasks build straight into
+ * their regions; then the regions are slid
  * down over the unused tails, in order (a region never moves up, so a
  * forward copy is safe).  Fresh memory costs page faults — in a virtual
  * machine as much as the building itself — so the nodes are written
  * once and moved once within the same pages. */
-static void reserve(const nodebuf *top, task *tasks, uint32_t ti, uint32_t *off)
+static void reserve(const nodebuf *top, task *tasks, uint32_t ti, uint32_t *off, bvh_node *F)
 {
     const bvh_node *n = &top->nodes[ti];
     if (n->count_axis == TASK_MARK) {
         task *t = &tasks[n->left_or_first];
         t->off = *off;
         *off += 2u * t->count - 1u;
+        if (F) { /* a mid task's: build straight into the final array */
+            t->out.nodes = F + t->off;
+            t->out.base = t->off;
+            t->state = TASK_READY;
+        }
         return;
     }
     *off += 1u;
     if (bvh_is_leaf(n)) return;
-    reserve(top, tasks, ti + 1, off);
-    reserve(top, tasks, n->left_or_first, off);
+    reserve(top, tasks, ti + 1, off, F);
+    reserve(top, tasks, n->left_or_first, off, F);
 }
 
 static uint32_t place(const nodebuf *top, const task *tasks, uint32_t ti, bvh_node *F, uint32_t *pos)
@@ -623,6 +829,7 @@ static uint32_t place(const nodebuf *top, const task *tasks, uint32_t ti, bvh_no
     const bvh_node *n = &top->nodes[ti];
     if (n->count_axis == TASK_MARK) {
         const task *t = &tasks[n->left_or_first];
+        if (t->mid) return place(&t->out, tasks, 0, F, pos); /* its nodes are laid out like the top's */
         const uint32_t base = *pos, delta = t->off - base;
         for (uint32_t i = 0; i < t->out.num; ++i) {
             bvh_node c = F[t->off + i];
@@ -678,12 +885,6 @@ static void pref_worker(void *ctx, unsigned t)
     }
 }
 
-static int cmp_task_desc(const void *x, const void *y)
-{
-    const task *a = x, *b = y;
-    return (a->count < b->count) - (a->count > b->count);
-}
-
 sidx_status sidx__bvh_build_parallel(sidx_accel *a, const bvh_par_params *p, sidx_error *err)
 {
     const sidx_mesh *m = a->mesh;
@@ -695,77 +896,94 @@ sidx_status sidx__bvh_build_parallel(sidx_accel *a, const bvh_par_params *p, sid
     B.threads = a->opt.threads > MAX_THREADS ? MAX_THREADS : a->opt.threads;
     sidx_status s = SIDX_ERR_NOMEM;
     nodebuf top = {NULL, 0, 0, 0, 0};
-    topctx tc = {NULL, 0, 0, 0};
+    taskset ts;
+    memset(&ts, 0, sizeof ts);
+    int ts_init = 0;
     scratch *S = NULL, *wS = NULL;
     bins3 *bins = NULL, *wbins = NULL;
-    task *sorted = NULL;
     bvh *b = sidx__calloc(a, 1, sizeof *b);
     if (!b) goto fail;
     b->num_prims = n;
-    B.pr = sidx__alloc(a, n, sizeof *B.pr);
+    /* The references live in the vertex copies' array until the copies
+     * are made: it is allocated anyway and is larger (36 bytes a triangle
+     * against 32), and fresh pages cost a fault each — in a virtual
+     * machine a good part of a build's time. */
+    b->tris = sidx__alloc(a, n, sizeof *b->tris);
     b->prim_id = sidx__alloc(a, n, sizeof *b->prim_id);
-    if (!B.pr || !b->prim_id) goto fail;
+    if (!b->tris || !b->prim_id) goto fail;
+    B.pr = (pref *)(void *)b->tris;
     {
         pref_ctx pc = {m, B.pr, n, n >= PAR_PASS_MIN ? B.threads : 1u};
         par_run(pc.nt, pref_worker, &pc);
     }
 
-    /* Top phase. */
+    /* Top phase on this thread, down to the mid tasks. */
+    topctx tc;
+    tc.ts = &ts;
     tc.task_max = n / (B.threads * TASK_SPLIT);
     if (tc.task_max < TASK_MIN) tc.task_max = TASK_MIN;
-    tc.cap_tasks = 2u * (n / tc.task_max + 1u) + 8u;
-    tc.tasks = sidx__calloc(a, tc.cap_tasks, sizeof *tc.tasks);
+    tc.mid_max = n / (B.threads * MID_SPLIT);
+    tc.par_passes = 1;
+    ts.cap = 2u * (n / tc.task_max + 1u) + 8u;
+    ts.tasks = sidx__calloc(a, ts.cap, sizeof *ts.tasks);
     top.nodes = sidx__alloc(a, 2u * (size_t)n - 1u, sizeof *top.nodes);
     S = sidx__alloc(a, 1, sizeof *S);
     bins = sidx__alloc(a, B.threads, sizeof *bins);
-    if (!tc.tasks || !top.nodes || !S || !bins) goto fail;
+    wS = sidx__calloc(a, B.threads, sizeof *wS);
+    wbins = sidx__alloc(a, B.threads, sizeof *wbins);
+    if (!ts.tasks || !top.nodes || !S || !bins || !wS || !wbins) goto fail;
+    if (pthread_mutex_init(&ts.mu, NULL) != 0) goto fail;
+    if (pthread_cond_init(&ts.cv, NULL) != 0) {
+        pthread_mutex_destroy(&ts.mu);
+        goto fail;
+    }
+    ts_init = 1;
     S->bins = bins;
     bins_clear(&bins[0], B.P.bins);
-    build_rec(&B, S, &top, &tc, 0, n, 0);
+    build_rec(&B, S, &top, &tc, 0, n, 0, NULL);
 
-    /* Task phase: largest first, every buffer allocated here. */
-    const unsigned workers = B.threads < tc.num_tasks ? B.threads : (tc.num_tasks ? tc.num_tasks : 1u);
+    /* Regions in the final array for the top's tasks (a mid task's
+     * region holds its own nodes and its tasks' regions); node buffers
+     * for the mid tasks' own nodes after the top's, in the same array
+     * (top nodes + 2·count − 1 per task never exceed its 2n − 1). */
     uint32_t reserved = 0;
-    reserve(&top, tc.tasks, 0, &reserved);
+    reserve(&top, ts.tasks, 0, &reserved, NULL);
     b->nodes_mem = sidx__alloc(a, (size_t)reserved + 2u, sizeof *b->nodes);
     if (!b->nodes_mem) goto fail;
     b->nodes = (bvh_node *)(void *)(((uintptr_t)b->nodes_mem + 63u) & ~(uintptr_t)63u);
-    for (uint32_t i = 0; i < tc.num_tasks; ++i) {
-        tc.tasks[i].out.nodes = b->nodes + tc.tasks[i].off;
-        tc.tasks[i].out.base = tc.tasks[i].off;
+    uint32_t mid_at = top.num;
+    for (uint32_t i = 0; i < ts.num; ++i) {
+        task *t = &ts.tasks[i];
+        if (t->mid) {
+            t->out.nodes = top.nodes + mid_at;
+            t->out.base = 0;
+            mid_at += 2u * t->count - 1u;
+            ts.active_mids++;
+        } else {
+            t->out.nodes = b->nodes + t->off;
+            t->out.base = t->off;
+        }
+        t->state = TASK_READY;
     }
-    wS = sidx__calloc(a, workers, sizeof *wS);
-    wbins = sidx__alloc(a, workers, sizeof *wbins);
-    sorted = sidx__alloc(a, tc.num_tasks ? tc.num_tasks : 1u, sizeof *sorted);
-    if (!wS || !wbins || !sorted) goto fail;
-    for (unsigned t = 0; t < workers; ++t) {
+
+    /* Task phase: mid and plain tasks on every thread, largest first. */
+    for (unsigned t = 0; t < B.threads; ++t) {
         wS[t].bins = &wbins[t];
         bins_clear(&wbins[t], B.P.bins);
     }
-    memcpy(sorted, tc.tasks, (size_t)tc.num_tasks * sizeof *sorted);
-    qsort(sorted, tc.num_tasks, sizeof *sorted, cmp_task_desc);
-    task_job j;
-    j.B = &B;
-    j.tasks = sorted;
-    j.num = tc.num_tasks;
-    j.S = wS;
-    atomic_init(&j.next, 0u);
-    par_run(workers, task_worker, &j);
-    /* Back in top order (stitch looks tasks up by index). */
-    for (uint32_t i = 0; i < tc.num_tasks; ++i) tc.tasks[top.nodes[sorted[i].top_node].left_or_first] = sorted[i];
+    task_job j = {&B, &ts, tc.task_max, wS, b->nodes};
+    par_run(ts.num ? B.threads : 1u, task_worker, &j);
 
     uint32_t total = top.num, leaves = top.leaves, maxd = top.max_depth;
-    for (uint32_t i = 0; i < tc.num_tasks; ++i) {
-        total += tc.tasks[i].out.num - 1u;
-        leaves += tc.tasks[i].out.leaves;
-        if (tc.tasks[i].out.max_depth > maxd) maxd = tc.tasks[i].out.max_depth;
+    for (uint32_t i = 0; i < ts.num; ++i) {
+        total += ts.tasks[i].out.num - 1u;
+        leaves += ts.tasks[i].out.leaves;
+        if (ts.tasks[i].out.max_depth > maxd) maxd = ts.tasks[i].out.max_depth;
     }
-    b->tris = sidx__alloc(a, n, sizeof *b->tris);
-    if (!b->tris) goto fail;
     uint32_t pos = 0;
-    place(&top, tc.tasks, 0, b->nodes, &pos);
+    place(&top, ts.tasks, 0, b->nodes, &pos);
     b->num_nodes = total;
-    for (uint32_t i = 0; i < n; ++i) b->prim_id[i] = B.pr[i].id;
+    for (uint32_t i = 0; i < n; ++i) b->prim_id[i] = B.pr[i].id; /* before the copies overwrite the references */
     b->num_leaves = leaves;
     b->max_depth = maxd;
     {
@@ -791,14 +1009,16 @@ sidx_status sidx__bvh_build_parallel(sidx_accel *a, const bvh_par_params *p, sid
     a->impl = b;
     b = NULL;
 fail:
-    sidx__free(a, tc.tasks);
+    if (ts_init) {
+        pthread_cond_destroy(&ts.cv);
+        pthread_mutex_destroy(&ts.mu);
+    }
+    sidx__free(a, ts.tasks);
     sidx__free(a, top.nodes);
     sidx__free(a, S);
     sidx__free(a, bins);
     sidx__free(a, wS);
     sidx__free(a, wbins);
-    sidx__free(a, sorted);
-    sidx__free(a, B.pr);
     if (b) {
         sidx__free(a, b->nodes_mem);
         sidx__free(a, b->prim_id);

@@ -9,6 +9,11 @@
  *    one-thread build, node for node and primitive for primitive, on
  *    several scenes and option sets, and bvh4/bvh8 built on 2 threads
  *    answer exactly like their one-thread builds;
+ *  - the persistent worker pool: several application threads calling
+ *    sidx_trace_parallel and parallel builds at the same time (one gets
+ *    the pool, the others threads of their own) all get exact answers,
+ *    and a forked child (which inherits none of the pool's threads) can
+ *    still trace in parallel;
  *  - allocation failures during a parallel build leak nothing;
  *  - NULL arguments are rejected. */
 #include <stdarg.h>
@@ -18,8 +23,11 @@
 #include <cmocka.h>
 
 #include <math.h>
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include "sidx/sidx.h"
 #include "sidx/parallel.h"
@@ -200,6 +208,36 @@ static void test_parallel_build_identical(void **state)
     sidx_mesh_free(&one);
 }
 
+/* Signed zeros: -0.0 == +0.0, so which of the two a min or max keeps
+ * depends on the order the boxes are combined in (sidx_v3_min keeps its
+ * second operand on a tie).  The parallel build combines them in chunks
+ * and gathers the children's bounds while partitioning, in a different
+ * order than the one-thread builder's loop; its boxes must still be the
+ * same bits.  Here half of the x and y coordinates are zeros of both signs
+ * (by vertex parity), so most nodes have a zero min or max whose sign a
+ * wrong order would flip — and the comparison is bitwise. */
+static void test_parallel_build_signed_zero(void **state)
+{
+    (void)state;
+    const uint32_t details[] = {20000, 300}; /* with and without the parallel passes of the top phase */
+    for (size_t d = 0; d < 2; ++d) {
+        sidx_mesh m = scene("soup", details[d]);
+        sidx_aabb b = sidx_mesh_bounds(&m);
+        const float mx = 0.5f * (b.min.x + b.max.x), my = 0.5f * (b.min.y + b.max.y);
+        for (uint32_t v = 0; v < m.num_vertices; ++v) {
+            sidx_vec3 *p = &m.positions[v];
+            if (p->x < mx) p->x = (v & 1) ? -0.0f : 0.0f;
+            if (p->y > my) p->y = (v & 2) ? -0.0f : 0.0f;
+        }
+        sidx_build_options o;
+        memset(&o, 0, sizeof o);
+        check_same_tree(&m, &o);
+        o.leaf_size = 1;
+        check_same_tree(&m, &o);
+        sidx_mesh_free(&m);
+    }
+}
+
 static void test_wide_parallel_same_answers(void **state)
 {
     (void)state;
@@ -271,6 +309,119 @@ static void test_parallel_build_alloc_failures(void **state)
     sidx_mesh_free(&m);
 }
 
+/* ---- the worker pool: concurrent callers and fork ---------------------------- */
+
+typedef struct caller {
+    const sidx_accel *a;
+    const sidx_mesh *m;
+    const sidx_ray *rays;
+    const sidx_hit *ref;
+    const bvh *ref_tree;
+    size_t n;
+    int rounds, bad;
+} caller;
+
+static void *caller_main(void *p)
+{
+    caller *c = p;
+    sidx_hit *got = malloc(c->n * sizeof *got);
+    if (!got) {
+        c->bad++;
+        return NULL;
+    }
+    for (int r = 0; r < c->rounds; ++r) {
+        memset(got, 0xAB, c->n * sizeof *got);
+        if (sidx_trace_parallel(c->a, c->rays, c->n, NULL, got, 2) != SIDX_OK ||
+            memcmp(got, c->ref, c->n * sizeof *got) != 0)
+            c->bad++;
+        /* and a parallel build, whose passes also want the pool */
+        sidx_build_options o;
+        memset(&o, 0, sizeof o);
+        o.threads = 2;
+        sidx_accel *b = NULL;
+        if (sidx_accel_build("bvh", c->m, &o, &b, NULL) != SIDX_OK) {
+            c->bad++;
+            continue;
+        }
+        const bvh *t = b->impl;
+        if (t->num_nodes != c->ref_tree->num_nodes ||
+            memcmp(t->nodes, c->ref_tree->nodes, (size_t)t->num_nodes * sizeof *t->nodes) != 0)
+            c->bad++;
+        sidx_accel_destroy(b);
+    }
+    free(got);
+    return NULL;
+}
+
+static void test_pool_concurrent_callers(void **state)
+{
+    (void)state;
+    sidx_mesh m = scene("soup", 20000); /* above the size where build passes go parallel */
+    const size_t n = 3001;
+    sidx_ray *rays = rays_for(&m, n, TK_RAYS_DIFFUSE);
+    sidx_hit *ref = malloc(n * sizeof *ref);
+    assert_non_null(ref);
+    sidx_accel *a = build("bvh", &m, 1);
+    assert_int_equal(sidx_accel_intersect_n(a, rays, n, NULL, ref), SIDX_OK);
+    enum { NCALLERS = 4 };
+    caller c[NCALLERS];
+    pthread_t th[NCALLERS];
+    for (int i = 0; i < NCALLERS; ++i) {
+        c[i] = (caller){a, &m, rays, ref, a->impl, n, tk_fast_tests() ? 3 : 10, 0};
+        assert_int_equal(pthread_create(&th[i], NULL, caller_main, &c[i]), 0);
+    }
+    for (int i = 0; i < NCALLERS; ++i) {
+        pthread_join(th[i], NULL);
+        assert_int_equal(c[i].bad, 0);
+    }
+    sidx_accel_destroy(a);
+    free(ref);
+    free(rays);
+    sidx_mesh_free(&m);
+}
+
+static void test_pool_after_fork(void **state)
+{
+    (void)state;
+    sidx_mesh m = scene("teapot", 0);
+    const size_t n = 2000;
+    sidx_ray *rays = rays_for(&m, n, TK_RAYS_DIFFUSE);
+    sidx_hit *ref = malloc(n * sizeof *ref), *got = malloc(n * sizeof *got);
+    assert_non_null(ref);
+    assert_non_null(got);
+    sidx_accel *a = build("bvh", &m, 1);
+    assert_int_equal(sidx_accel_intersect_n(a, rays, n, NULL, ref), SIDX_OK);
+    /* the parent's pool is running before the fork */
+    assert_int_equal(sidx_trace_parallel(a, rays, n, NULL, got, 2), SIDX_OK);
+    assert_memory_equal(got, ref, n * sizeof *ref);
+    fflush(NULL);
+    const pid_t pid = fork();
+    assert_true(pid >= 0);
+    if (pid == 0) {
+        /* the child: a pool that waited for the parent's workers would hang; the alarm turns that into a failure */
+        alarm(30);
+        int ok = 1;
+        for (int r = 0; r < 3 && ok; ++r) {
+            memset(got, 0xAB, n * sizeof *got);
+            ok = sidx_trace_parallel(a, rays, n, NULL, got, 2) == SIDX_OK && memcmp(got, ref, n * sizeof *got) == 0;
+        }
+        _exit(ok ? 0 : 1);
+    }
+    int status = 0;
+    assert_int_equal(waitpid(pid, &status, 0), pid);
+    assert_true(WIFEXITED(status));
+    assert_int_equal(WEXITSTATUS(status), 0);
+    /* and the parent's pool still works */
+    memset(got, 0xAB, n * sizeof *got);
+    assert_int_equal(sidx_trace_parallel(a, rays, n, NULL, got, 2), SIDX_OK);
+    assert_memory_equal(got, ref, n * sizeof *ref);
+    sidx_accel_destroy(a);
+    free(ref);
+    free(got);
+    free(rays);
+    sidx_mesh_free(&m);
+}
+
 static void test_invalid_arguments(void **state)
 {
     (void)state;
@@ -297,6 +448,8 @@ int main(void)
         cmocka_unit_test(test_trace_matches_serial),       cmocka_unit_test(test_traced_query_serial),
         cmocka_unit_test(test_parallel_build_identical),   cmocka_unit_test(test_wide_parallel_same_answers),
         cmocka_unit_test(test_parallel_build_alloc_failures), cmocka_unit_test(test_invalid_arguments),
+        cmocka_unit_test(test_parallel_build_signed_zero),
+        cmocka_unit_test(test_pool_concurrent_callers),     cmocka_unit_test(test_pool_after_fork),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

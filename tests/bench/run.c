@@ -27,6 +27,7 @@
 #include "bench.h"
 #include "sidx/packet.h"
 #include "sidx/parallel.h"
+#include <pthread.h>
 
 typedef struct run_opts {
     const char *scenes_dir, *accel_list, *kinds_list, *builtin_list, *csv, *plot, *method_scenes;
@@ -140,6 +141,10 @@ typedef struct scene_spec {
     char spec[512];  /* for sidx_scene_open */
     int builtin;
 } scene_spec;
+
+/* issue 8's thread rows (below), called from packet_parallel_rows */
+static void parallel_rows(FILE *f, const run_opts *o, const scene_spec *sc, const sidx_mesh *m, const kind_data *k,
+                          const sidx_accel *a, const sidx_hit *ref, sidx_hit *got, size_t N, double single);
 
 static int cmp_str(const void *a, const void *b) { return strcmp(*(char *const *)a, *(char *const *)b); }
 
@@ -696,6 +701,87 @@ static void packet_parallel_rows(FILE *f, const run_opts *o, const scene_spec *s
         }
     }
 
+    parallel_rows(f, o, sc, m, k, a, ref, got, N, single);
+done:
+    free(ref);
+    free(got);
+    free(tiled);
+    free(eh);
+    sidx_accel_destroy(a);
+}
+
+/* ---- threads (issue 8) ------------------------------------------------------------- */
+
+/* The issue-8 thread figures on the primary rays of one scene:
+ *   build   the "bvh" build on 1 and 2 threads against Embree's on a
+ *           "threads=1" and a "threads=2" device (wall-clock, best of 5);
+ *   trace   sidx_trace_parallel on 1 and 2 threads, and Embree's peer: the
+ *           same rays through rtcIntersect1 from 1 and from 2 application
+ *           threads (contiguous halves) — Embree has no parallel trace call,
+ *           this is how an application uses it.  Efficiency = T1 / (2·T2),
+ *           wall-clock, best of 5 interleaved rounds (1 thread, then 2);
+ *           the CPU efficiency T1 / (CPU time of the 2-thread run) leaves
+ *           out time a thread waited for a core, so it stays meaningful
+ *           on a busy machine;
+ *   twin    the machine's own limit: one thread tracing the rays alone
+ *           against the same thread beside a twin doing the same work on
+ *           the other core.  The two share nothing in software (no
+ *           counter, no pool, separate hit arrays), so whatever slows the
+ *           pair — shared memory bandwidth and caches, or two hardware
+ *           threads of one core (SMT) — caps any 2-thread efficiency: the
+ *           "ceiling" alone / beside is the figure sidx_trace_parallel's
+ *           efficiency should be judged against.  Wall-clock and thread
+ *           CPU time, best of 5. */
+typedef struct pr_thread {
+    const sidx_accel *a;       /* sidx twin, or NULL */
+    bench_embree *e;           /* Embree half, or NULL */
+    const sidx_ray *rays;
+    const tk_rayrec *rec;
+    size_t lo, hi;
+    int passes;
+    sidx_hit *hits;
+    pthread_barrier_t *start;
+    double wall, cpu;
+} pr_thread;
+
+static void *pr_thread_main(void *p)
+{
+    pr_thread *t = p;
+    if (t->start) pthread_barrier_wait(t->start);
+    const double w0 = tk_now_ms(), c0 = tk_thread_cpu_ms();
+    for (int pass = 0; pass < t->passes; ++pass) {
+        if (t->e)
+            bench_embree_trace(t->e, t->rec + t->lo, t->hi - t->lo, 0, 1, t->hits + t->lo);
+        else
+            for (size_t i = t->lo; i < t->hi; ++i) sidx_accel_intersect(t->a, &t->rays[i], NULL, &t->hits[i]);
+    }
+    t->wall = tk_now_ms() - w0;
+    t->cpu = tk_thread_cpu_ms() - c0;
+    return NULL;
+}
+
+/* Run nt (1 or 2) copies of job at once, the first on this thread;
+ * returns 0 if a thread could not be started. */
+static int pr_run(pr_thread *t, int nt)
+{
+    pthread_barrier_t bar;
+    if (pthread_barrier_init(&bar, NULL, (unsigned)nt) != 0) return 0;
+    pthread_t th;
+    for (int i = 0; i < nt; ++i) t[i].start = &bar;
+    int ok = nt < 2 || pthread_create(&th, NULL, pr_thread_main, &t[1]) == 0;
+    if (!ok) {
+        pthread_barrier_destroy(&bar);
+        return 0;
+    }
+    pr_thread_main(&t[0]);
+    if (nt > 1) pthread_join(th, NULL);
+    pthread_barrier_destroy(&bar);
+    return 1;
+}
+
+static void parallel_rows(FILE *f, const run_opts *o, const scene_spec *sc, const sidx_mesh *m, const kind_data *k,
+                          const sidx_accel *a, const sidx_hit *ref, sidx_hit *got, size_t N, double single)
+{
     /* threads: builds */
     uint32_t n1 = 0, n2 = 0;
     const double b1 = pp_wall_build(m, 1, &n1), b2 = pp_wall_build(m, 2, &n2);
@@ -718,16 +804,19 @@ static void packet_parallel_rows(FILE *f, const run_opts *o, const scene_spec *s
                    "at 2 threads %.2f (target <= 1.5)\n",
                 sc->name, eb[0], eb[1], b1 / eb[0], b2 / eb[1]);
     }
-    /* threads: tracing (single rays, batches over threads), repeated to ~100 ms per run */
+    /* threads: tracing (single rays, batches over threads), repeated to ~100 ms per run,
+     * 1 and 2 threads interleaved so that a change in the machine's load hits both */
+    const int reps = single > 0 ? (int)(100.0 / single) + 1 : 1;
     {
-        double t1 = INFINITY, t2 = INFINITY, cpu2 = 0;
-        const int reps = single > 0 ? (int)(100.0 / single) + 1 : 1;
-        for (unsigned th = 1; th <= 2; ++th)
-            for (int rep = 0; rep < 5; ++rep) {
+        double t1 = INFINITY, t2 = INFINITY, c1 = INFINITY, c2 = INFINITY, cpu2 = 0;
+        for (int rep = 0; rep < 5; ++rep)
+            for (unsigned th = 1; th <= 2; ++th) {
                 const double c0 = tk_process_cpu_ms(), t0 = tk_now_ms();
                 for (int r = 0; r < reps; ++r) sidx_trace_parallel(a, k->br.r, N, NULL, got, th);
                 const double t = tk_now_ms() - t0, c = tk_process_cpu_ms() - c0;
                 if (th == 1 && t < t1) t1 = t;
+                if (th == 1 && c < c1) c1 = c;
+                if (th == 2 && c < c2) c2 = c;
                 if (th == 2 && t < t2) {
                     t2 = t;
                     cpu2 = c;
@@ -735,16 +824,70 @@ static void packet_parallel_rows(FILE *f, const run_opts *o, const scene_spec *s
             }
         const size_t bad = pp_mismatches(ref, got, N);
         fprintf(f, "parallel %s trace \"bvh\" primary: 1 thread %.2f ms, 2 threads %.2f ms (CPU/wall %.2f): "
-                   "efficiency %.0f%% (target >= 90%%); wall-clock, best of 5, %d passes%s\n",
-                sc->name, t1, t2, t2 > 0 ? cpu2 / t2 : 0.0, t2 > 0 ? 100.0 * t1 / (2.0 * t2) : 0.0, reps,
-                bad ? "  ** hits differ **" : "");
+                   "efficiency %.0f%% (target >= 90%%), CPU efficiency %.0f%%; wall-clock, best of 5, %d passes%s\n",
+                sc->name, t1, t2, t2 > 0 ? cpu2 / t2 : 0.0, t2 > 0 ? 100.0 * t1 / (2.0 * t2) : 0.0,
+                c2 > 0 ? 100.0 * c1 / c2 : 0.0, reps, bad ? "  ** hits differ **" : "");
     }
-done:
-    free(ref);
-    free(got);
-    free(tiled);
-    free(eh);
-    sidx_accel_destroy(a);
+    /* Embree's peer: rtcIntersect1 from 1 and from 2 application threads */
+    if (o->embree) {
+        bench_embree_cfg cfg;
+        bench_embree_parse("embree", &cfg);
+        bench_embree *e = NULL;
+        double bms;
+        char msg[256];
+        sidx_hit *eh = malloc(N * sizeof *eh);
+        if (eh && bench_embree_build(m, cfg, &e, &bms, msg, sizeof msg)) {
+            double t1 = INFINITY, t2 = INFINITY;
+            int ok = 1;
+            for (int rep = 0; rep < 5 && ok; ++rep)
+                for (int nt = 1; nt <= 2 && ok; ++nt) {
+                    pr_thread t[2];
+                    for (int i = 0; i < nt; ++i)
+                        t[i] = (pr_thread){NULL, e, NULL, k->rec, N * (size_t)i / (size_t)nt,
+                                           N * (size_t)(i + 1) / (size_t)nt, reps, eh, NULL, 0, 0};
+                    const double t0 = tk_now_ms();
+                    ok = pr_run(t, nt);
+                    const double w = tk_now_ms() - t0;
+                    if (nt == 1 && w < t1) t1 = w;
+                    if (nt == 2 && w < t2) t2 = w;
+                }
+            if (ok)
+                fprintf(f, "parallel %s trace embree rtcIntersect1 primary: 1 thread %.2f ms, 2 threads %.2f ms: "
+                           "efficiency %.0f%%; wall-clock, best of 5, %d passes\n",
+                        sc->name, t1, t2, t2 > 0 ? 100.0 * t1 / (2.0 * t2) : 0.0, reps);
+        } else if (eh) {
+            fprintf(stderr, "sidx-bench run: embree on %s: %s\n", sc->name, msg);
+        }
+        bench_embree_free(e);
+        free(eh);
+    }
+    /* the machine's own 2-thread limit: one thread alone, then beside a twin */
+    {
+        sidx_hit *h2 = malloc(N * sizeof *h2);
+        double aw = INFINITY, ac = INFINITY, bw = INFINITY, bc = INFINITY;
+        int ok = h2 != NULL;
+        for (int rep = 0; rep < 5 && ok; ++rep)
+            for (int nt = 1; nt <= 2 && ok; ++nt) {
+                pr_thread t[2];
+                for (int i = 0; i < nt; ++i)
+                    t[i] = (pr_thread){a, NULL, k->br.r, NULL, 0, N, reps, i ? h2 : got, NULL, 0, 0};
+                ok = pr_run(t, nt);
+                if (nt == 1) {
+                    if (t[0].wall < aw) aw = t[0].wall;
+                    if (t[0].cpu < ac) ac = t[0].cpu;
+                } else {
+                    const double w = 0.5 * (t[0].wall + t[1].wall), c = 0.5 * (t[0].cpu + t[1].cpu);
+                    if (w < bw) bw = w;
+                    if (c < bc) bc = c;
+                }
+            }
+        if (ok)
+            fprintf(f, "parallel %s twin: one thread alone %.2f ms (thread CPU %.2f), beside a twin %.2f ms "
+                       "(thread CPU %.2f): the machine's 2-thread ceiling %.0f%% (wall) / %.0f%% (CPU)%s\n",
+                    sc->name, aw, ac, bw, bc, bw > 0 ? 100.0 * aw / bw : 0.0, bc > 0 ? 100.0 * ac / bc : 0.0,
+                    pp_mismatches(ref, h2, N) ? "  ** hits differ **" : "");
+        free(h2);
+    }
 }
 
 /* ---- output ------------------------------------------------------------------ */
@@ -1160,8 +1303,12 @@ static void run_usage(FILE *out)
             "sidx_trace_tiles 4x4/8x8 plain/frustum over bvh, bvh8, bvh4 vs single rays and vs\n"
             "Embree rtcIntersect4/8/16\n"
             "on the same image in 4x4 tiles (thread CPU time); the bvh build on 1 and 2 threads vs\n"
-            "Embree on threads=1/2 devices, sidx_trace_parallel 1 vs 2 threads (wall-clock: quiet\n"
-            "machine only).\n");
+            "Embree on threads=1/2 devices; sidx_trace_parallel 1 vs 2 threads (efficiency\n"
+            "T1/(2 T2), and a CPU efficiency that leaves out waiting for a core) vs Embree's\n"
+            "rtcIntersect1 called from 1 and 2 threads; a \"twin\" row: one thread tracing alone vs\n"
+            "beside a twin doing the same on the other core, the machine's own 2-thread ceiling\n"
+            "(memory bandwidth, SMT) to judge the efficiencies by.  Wall-clock figures mean\n"
+            "something on a quiet machine only.\n");
 }
 
 int bench_cmd_run(int argc, char **argv)

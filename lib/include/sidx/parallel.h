@@ -3,20 +3,27 @@
  *
  * The deck's "Parallelize it! Ray tracing is embarrassingly parallel":
  * rays are independent, a built structure is immutable, so threads only
- * need to agree on who traces which rays.  sidx_trace_parallel hands out
- * batches of SIDX_PARALLEL_BATCH consecutive rays through one atomic
- * counter — a thread that finishes early simply takes the next batch
- * ("work stealing" in its simplest, lock-free form), so an uneven scene
- * (a few rays that cost 100x the others) does not leave a core idle.
- * Batches of consecutive rays keep coherent rays (image rows) on one core,
- * which keeps that core's cache warm.
+ * need to agree on who traces which rays.  sidx_trace_parallel gives each
+ * thread a contiguous share of the rays, traced in batches of
+ * SIDX_PARALLEL_BATCH; a thread that finishes its share early steals
+ * batches from the others' (lock-free, one atomic counter per share), so
+ * an uneven scene (a few rays that cost 100x the others) does not leave a
+ * core idle.  Contiguous shares keep coherent rays (image rows) on one
+ * core, which keeps that core's cache warm.
  *
  * Building in parallel: sidx_build_options.threads > 1 makes the binned
  * SAH builder of "bvh" (and of "bvh4"/"bvh8", which collapse it) bin the
  * large top nodes on all threads and then build the subtrees below them
  * as independent tasks.  The tree is IDENTICAL to the one-thread build
- * (same splits, same node order), only faster.  With a build hook attached
- * the build stays on one thread so events arrive in order.
+ * (same splits, same node order, same box bits), only faster.  With a
+ * build hook attached the build stays on one thread so events arrive in
+ * order.
+ *
+ * Threads: the library starts its worker threads on first use and keeps
+ * them (they sleep between calls; they are joined at exit, and a forked
+ * child starts its own).  Calls from several application threads at once
+ * are fine: one uses the workers, the others get threads of their own for
+ * that call.
  *
  * Hooks: a traced query (q->hook set) runs on the calling thread alone, so
  * the hook sees the rays' events in order and is never called
@@ -33,7 +40,7 @@ extern "C" {
 #endif
 
 /* Rays per batch handed to a thread. */
-#define SIDX_PARALLEL_BATCH 256u
+#define SIDX_PARALLEL_BATCH 32u
 
 /* Hardware threads online (at least 1). */
 unsigned sidx_hardware_threads(void);
