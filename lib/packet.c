@@ -630,7 +630,8 @@ static sidx_status run_packet(const sidx_accel *a, const sidx_ray *rays, uint32_
         if (P.prim[i] != SIDX_NO_HIT) {
             hits[i].t = P.best[i];
             hits[i].prim = P.prim[i];
-            sidx__packet_finish(a, &rays[i], o.flags, &hits[i]);
+            if (o.flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL)) /* a call only when asked */
+                sidx__packet_finish(a, &rays[i], o.flags, &hits[i]);
         }
     }
     return SIDX_OK;

@@ -831,6 +831,6 @@ void sidx__packet_wide(const sidx_accel *a, const sidx_ray *rays, uint32_t n, ui
             if (P.prim[i] == SIDX_NO_HIT) continue;
             h->t = P.best[i];
             h->prim = P.prim[i];
-            if (flags) sidx__packet_finish(a, P.ray[i], flags, h);
+            if (flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL)) sidx__packet_finish(a, P.ray[i], flags, h);
         }
 }
