@@ -82,6 +82,9 @@
  * instructions, 2: 6.56M, 4: 6.48M, 6: 6.44M, 8: 6.43M but 4x4 tiles
  * lose from 8 on; Sponza flat). */
 #define SOLO 6u
+#ifndef PW_PREFETCH
+#define PW_PREFETCH 1
+#endif
 
 _Static_assert(SIDX_PACKET_MAX == 64, "active ray masks are 64-bit");
 
@@ -658,6 +661,23 @@ static SIDX_INLINE void wide_walk_impl(const sidx_accel *a, wpk *P, wcount *C, c
                 }
             }
         children:
+#if PW_PREFETCH
+            /* Several children hit: start fetching them all (a node is 4
+             * cache lines, a block 3), as the single-ray walk does — the
+             * nearest is needed next, the others when popped.  (Thread CPU
+             * time, interleaved runs, 8x8 tiles over bvh8: bunny −5.5%,
+             * Sponza −1..2%; prefetching the lone child too cost Sponza and
+             * 4% more instructions.) */
+            for (unsigned pm = hitm & (hitm - 1) ? hitm : 0; pm; pm &= pm - 1) {
+                const uint32_t c = ch[__builtin_ctz(pm)];
+                const char *p = (c & WIDE_LEAF_BIT) ? (const char *)(wb->blocks + (c & ~WIDE_LEAF_BIT))
+                                                    : (const char *)(nodes + (size_t)c * 8u * W);
+                __builtin_prefetch(p);
+                __builtin_prefetch(p + 64);
+                __builtin_prefetch(p + 128);
+                if (!(c & WIDE_LEAF_BIT) && W == 8) __builtin_prefetch(p + 192);
+            }
+#endif
             if (hitm) {
                 const uint32_t s0 = (uint32_t)__builtin_ctz(hitm);
                 if (!(hitm & (hitm - 1))) { /* one child: descend, no stack */
