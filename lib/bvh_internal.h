@@ -165,9 +165,6 @@ static SIDX_INLINE int bvh_slab(const bvh_ray *br, const bvh_node *n, const floa
     tf1 = (p - br->org[1]) * br->inv[1];
     memcpy(&p, base + br->far_off[2], sizeof p);
     tf2 = (p - br->org[2]) * br->inv[2];
-    tf0 *= tf_scale;
-    tf1 *= tf_scale;
-    tf2 *= tf_scale;
     float t0 = tmin, t1 = tmax;
     t0 = tn0 > t0 ? tn0 : t0;
     t0 = tn1 > t0 ? tn1 : t0;
@@ -175,6 +172,14 @@ static SIDX_INLINE int bvh_slab(const bvh_ray *br, const bvh_node *n, const floa
     t1 = tf0 < t1 ? tf0 : t1;
     t1 = tf1 < t1 ? tf1 : t1;
     t1 = tf2 < t1 ? tf2 : t1;
+    /* Scale after the min: rounding is monotonic, so S·min(a, b) is
+     * exactly min(S·a, S·b) and one multiply does the work of three.  It
+     * also widens tmax — the best hit so far — by the same factor: a
+     * triangle an ulp nearer than the best hit may sit in a box whose
+     * ROUNDED entry lands an ulp beyond it, and comparing the entry with
+     * the unwidened best would drop that box and keep the farther hit.
+     * The triangle test still bounds hits strictly by the best t. */
+    t1 *= tf_scale;
     *t_near = t0;
     *t_far = t1;
     return t0 <= t1;

@@ -164,7 +164,7 @@ static SIDX_INLINE int stack_walk(const sidx_accel *a, const sidx_ray *r, const 
             --sp;
             SIDX_EMIT(traced, q->hook, SIDX_EV_STACK_POP, e_.ray_id = q->ray_id; e_.node = stk[sp];
                       e_.depth = sp + 1; e_.t_near = stk_tn[sp]; e_.t_far = stk_tf[sp]);
-            if (stk_tn[sp] < best) {
+            if (stk_tn[sp] < best * scale) { /* best widened as in bvh_slab */
                 node = stk[sp];
                 tn = stk_tn[sp];
                 if (traced) {
@@ -259,7 +259,7 @@ static SIDX_INLINE int ordered_body(walk *w, uint32_t node, uint32_t depth, floa
     }
     if (h1 && (traced ? ordered_rec1(w, c1, depth + 1, n1, f1) : ordered_rec0(w, c1, depth + 1, n1, f1)))
         return 1;
-    if (h2 && n2 < w->best)
+    if (h2 && n2 < w->best * w->scale) /* best widened as in bvh_slab */
         return traced ? ordered_rec1(w, c2, depth + 1, n2, f2) : ordered_rec0(w, c2, depth + 1, n2, f2);
     return 0;
 }

@@ -307,7 +307,11 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
         return 0;
     }
     WFN(wray_) R;
-    WFN(wray_init_)(&R, r, a->opt.box == SIDX_BOX_ROBUST ? SIDX_ROBUST_TFAR_SCALE : 1.0f);
+    /* Ize's factor also widens the best hit the boxes are clipped to (and
+     * the pop test): a rounded entry an ulp beyond a hit must not drop a
+     * box holding a triangle an ulp nearer (bvh_slab says more). */
+    const float scale = a->opt.box == SIDX_BOX_ROBUST ? SIDX_ROBUST_TFAR_SCALE : 1.0f;
+    WFN(wray_init_)(&R, r, scale);
 
     /* Deferred children and their entry distances; exit distance, depth
      * and event id only for the events (dead in the untraced copies). */
@@ -330,7 +334,7 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
         if (!(cur & WIDE_LEAF_BIT)) {
             const float *n = nodes + (size_t)cur * (8u * WALK_W);
             const uint32_t *ch = wide_child(n, WALK_W);
-            unsigned m = WFN(boxes_)(n, &R, best, tn, tf, traced);
+            unsigned m = WFN(boxes_)(n, &R, best * scale, tn, tf, traced); /* widened: see bvh_slab */
             if (traced) {
                 const uint32_t *ids = wide_id(n, WALK_W);
                 for (uint32_t s = 0; s < WALK_W; ++s) {
@@ -463,7 +467,7 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
             --sp;
             SIDX_EMIT(traced, q->hook, SIDX_EV_STACK_POP, e_.ray_id = q->ray_id; e_.node = stk_id[sp];
                       e_.depth = sp + 1; e_.t_near = stk_tn[sp]; e_.t_far = stk_tf[sp]);
-            if (stk_tn[sp] < best) {
+            if (stk_tn[sp] < best * scale) {
                 cur = stk[sp];
                 if (traced) {
                     cur_tn = stk_tn[sp];

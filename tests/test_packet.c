@@ -325,11 +325,11 @@ static void check_wide_tiles(const char *label, const sidx_accel *a, const sidx_
                     assert_int_equal(st.single_packets, 0);
                     for (size_t i = 0; i < n; ++i) {
                         /* A near tie (two triangles within a few ulps of t)
-                         * may resolve differently: the single-ray walk drops
+                         * may resolve differently: the packet walk may drop
                          * a box whose rounded entry distance lies above its
-                         * best t while a triangle inside lies an ulp below;
-                         * visiting boxes in another order, the packet may
-                         * keep the other one.  Then both must still agree
+                         * best t while a triangle inside lies an ulp below
+                         * (single rays widen best and do not: see
+                         * test_single_rays_keep_nearest).  Then both must still agree
                          * with brute force up to the tie tolerance. */
                         if (!hits_identical(&r[i], &h[i], uv) &&
                             (++near_ties, !tk_hits_agree(&r[i], &h[i]) || !tk_hits_agree(&bf[i], &r[i])))
@@ -478,6 +478,54 @@ static void test_wide_shadow_packets(void **state)
     sidx_mesh_free(&m);
 }
 
+/* Near ties in single-ray walks (Ize 2013 applied to the best hit too): in
+ * the dense soup two triangles can lie an ulp apart in t, and the nearer
+ * one's box can have a ROUNDED entry an ulp beyond the farther hit already
+ * found.  Clipping boxes to the unwidened best dropped that box (16 of
+ * these rays kept the farther triangle); with best widened by 1 + 2γ₃ every
+ * single-ray walk returns exactly brute force's t.  Brute force applies
+ * the same triangle test to every triangle, so its t is the true minimum
+ * of the per-triangle values, and the walks must reproduce it bit for bit
+ * (the prim may differ only between triangles with equal t). */
+static void test_single_rays_keep_nearest(void **state)
+{
+    (void)state;
+    sidx_mesh m;
+    sidx_error err;
+    if (sidx_scene_make("soup", 40000, &m, &err) != SIDX_OK) fail_msg("soup: %s", err.message);
+    const uint32_t W = 160, H = 160;
+    const size_t n = (size_t)W * H;
+    sidx_ray *rays = malloc(n * sizeof *rays);
+    sidx_hit *ref = malloc(n * sizeof *ref);
+    assert_non_null(rays);
+    assert_non_null(ref);
+    primary_rays(&m, W, H, rays);
+    sidx_accel *brute = NULL;
+    assert_int_equal(sidx_accel_build("brute", &m, NULL, &brute, NULL), SIDX_OK);
+    for (size_t i = 0; i < n; ++i) sidx_accel_intersect(brute, &rays[i], NULL, &ref[i]);
+    static const char *const names[] = {"bvh", "bvh4", "bvh8"};
+    for (int k = 0; k < 3; ++k) {
+        sidx_accel *a = NULL;
+        assert_int_equal(sidx_accel_build(names[k], &m, NULL, &a, NULL), SIDX_OK);
+        size_t bad = 0;
+        for (size_t i = 0; i < n; ++i) {
+            sidx_hit h;
+            sidx_accel_intersect(a, &rays[i], NULL, &h);
+            const int same = (h.prim == SIDX_NO_HIT) == (ref[i].prim == SIDX_NO_HIT) &&
+                             (h.prim == SIDX_NO_HIT || memcmp(&h.t, &ref[i].t, sizeof h.t) == 0);
+            if (!same && bad++ < 3)
+                print_message("%s ray %zu: prim %u t %.9g, brute force prim %u t %.9g\n", names[k], i, h.prim,
+                              (double)h.t, ref[i].prim, (double)ref[i].t);
+        }
+        if (bad) fail_msg("%s: %zu of %zu rays differ from brute force's nearest t", names[k], bad, n);
+        sidx_accel_destroy(a);
+    }
+    sidx_accel_destroy(brute);
+    sidx_mesh_free(&m);
+    free(rays);
+    free(ref);
+}
+
 /* A dense mesh from afar (many triangles per pixel, rays part deep in the
  * tree): exact agreement with single rays, and the interval test culls
  * children for whole packets. */
@@ -581,7 +629,7 @@ int main(void)
         cmocka_unit_test(test_frustum_saves_box_tests),    cmocka_unit_test(test_invalid_arguments),
         cmocka_unit_test(test_dense_mesh_switch),          cmocka_unit_test(test_wide_tiles_match_single),
         cmocka_unit_test(test_wide_inside_and_axis_rays),  cmocka_unit_test(test_wide_shadow_packets),
-        cmocka_unit_test(test_wide_dense_mesh),            cmocka_unit_test(test_wide_grazing_packets),
+        cmocka_unit_test(test_wide_dense_mesh), cmocka_unit_test(test_single_rays_keep_nearest),            cmocka_unit_test(test_wide_grazing_packets),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
