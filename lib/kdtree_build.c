@@ -868,6 +868,7 @@ sidx_status sidx__kd_build(sidx_accel *a, sidx_error *err)
     kd->c_tri = b.c_tri;
     kd->empty_bonus = bonus;
     a->impl = kd;
+    a->fills_uv = a->fills_ng = 1; /* from the leaves' triangle copies (kdtree_traverse.c) */
     SIDX_EMIT(1, a->opt.hook, SIDX_EV_BUILD_END, e_.structure = a->name; e_.node = kd->num_nodes;
               e_.count = kd->num_refs; e_.depth = kd->max_depth);
     return SIDX_OK;

@@ -94,6 +94,9 @@ static SIDX_INLINE int kd_walk(const sidx_accel *a, const sidx_ray *r, const sid
     const float inv[3] = {r->inv_dir.x, r->inv_dir.y, r->inv_dir.z};
     const uint32_t sign[3] = {r->sign[0], r->sign[1], r->sign[2]};
     float tmax = any ? r->tmax : hit->t; /* closest hit so far bounds every test */
+    /* u, v, ng of each accepted hit when asked (a->fills_uv/fills_ng): the last one is the answer */
+    float *const hu = !any && (q->flags & SIDX_QUERY_UV) ? &hit->u : NULL, *const hv = hu ? &hit->v : NULL;
+    const int want_ng = !any && (q->flags & SIDX_QUERY_NORMAL);
     int found = 0;
     uint32_t visited = 0;
     (void)visited;
@@ -207,7 +210,7 @@ static SIDX_INLINE int kd_walk(const sidx_accel *a, const sidx_ray *r, const sid
                 *slot = p;
             }
             float t;
-            const int h = sidx__tri_test(method, r, tr->v0, tr->v1, tr->v2, tmax, &t, NULL, NULL);
+            const int h = sidx__tri_test(method, r, tr->v0, tr->v1, tr->v2, tmax, &t, hu, hv);
             SIDX_EMIT(traced, q->hook, SIDX_EV_PRIM_TEST, e_.ray_id = q->ray_id; e_.prim = p; e_.node = node;
                       e_.result = h; e_.t = h ? t : INFINITY);
             if (h) {
@@ -220,6 +223,7 @@ static SIDX_INLINE int kd_walk(const sidx_accel *a, const sidx_ray *r, const sid
                 tmax = t;
                 hit->t = t;
                 hit->prim = p;
+                if (want_ng) hit->ng = sidx__tri_normal(tr->v0, tr->v1, tr->v2);
                 SIDX_EMIT(traced, q->hook, SIDX_EV_HIT_UPDATE, e_.ray_id = q->ray_id; e_.prim = p; e_.t = t;
                           e_.node = node);
             }
