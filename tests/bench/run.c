@@ -1131,9 +1131,9 @@ static void run_usage(FILE *out)
     fprintf(out,
             "Targets (last section): #4 bvh >= 0.5x Embree, #5 kdtree >= 0.8x bvh, #8 bvh8 >= 1.0x\n"
             "Embree, on primary and diffuse rays of each --target-scenes scene: the tracers run in\n"
-            "interleaved rounds on the same warm rays (order reversed every other round; a round with\n"
-            "an involuntary context switch, from getrusage, is run again), and each target prints\n"
-            "the median [min..max] of the per-round speed ratios and PASS/FAIL against the goal.\n"
+            "interleaved rounds on the same warm rays (order reversed every other round; a tracer's\n"
+            "pass with an involuntary context switch, from getrusage, is run again), and each\n"
+            "target prints the median [min..max] of the per-round speed ratios and PASS/FAIL.\n"
             "\"fair\" times what rtcIntersect1 returns: sidx_ray_init per ray and t, prim, u, v, Ng\n"
             "(SIDX_QUERY_UV|SIDX_QUERY_NORMAL); \"prep\" is the table's timing (rays prepared\n"
             "beforehand, no u, v, Ng).  The verdict is on the fair median; a FAIL does not change\n"

@@ -13,10 +13,14 @@
  * interleaved rounds (A, B, A, B, ...; the order reversed every other
  * round so neither always runs on the caches the other left) on the same
  * rays, already warm, and each round gives one ratio: a slow spell hits
- * both sides of the round it falls in.  A round during which the thread
- * was preempted (getrusage's involuntary context switches went up) is run
- * again.  The line reports the median ratio over the rounds with its
- * min..max, so the spread is visible next to the verdict.
+ * both sides of the round it falls in.  A tracer's pass during which the
+ * thread was preempted (getrusage's involuntary context switches went up:
+ * another process then ran on this core and evicted our caches) is run
+ * again, up to TG_MAX_RETRIES times.  Retrying whole rounds instead did
+ * not work on the shared 2-core machine: with 4 tracers a round takes
+ * ~0.3 s and every round was preempted 9 times in a row.  The line reports
+ * the median ratio over the rounds with its min..max, so the spread is
+ * visible next to the verdict.
  *
  * "fair" timing does the work rtcIntersect1 does: the sidx side builds
  * each ray from the record (sidx_ray_init, as the Embree side fills an
@@ -40,9 +44,9 @@
 #define TG_RUSAGE RUSAGE_SELF
 #endif
 
-/* A round preempted this many times in a row is kept anyway (and counted),
+/* A pass preempted this many times in a row is kept anyway (and counted),
  * so a machine that never stays quiet still ends the section. */
-#define TG_MAX_RETRIES 8
+#define TG_MAX_RETRIES 4
 
 enum { TG_EMBREE, TG_BVH, TG_KDTREE, TG_BVH8, TG_TRACERS };
 static const char *const tracer_name[TG_TRACERS] = {"embree", "bvh", "kdtree", "bvh8"};
@@ -125,7 +129,7 @@ typedef struct tg_result {
     const target *t;
     spread fair, prep;
     double a_mrays, b_mrays; /* median fair Mrays/s */
-    int rounds, retries, preempted, pass;
+    int rounds, retries, preempted, pass; /* retries, preempted: passes of one tracer */
 } tg_result;
 
 static int mesh_file(const char *fname)
@@ -189,21 +193,19 @@ static void measure_kind(FILE *f, const bench_targets_opts *o, const char *scene
     }
     int retries = 0, preempted = 0;
     for (int r = 0; r < rounds; ++r) {
-        for (int attempt = 0;; ++attempt) {
-            if (bench_progress_enabled())
-                bench_progress("targets: %s %s round %d/%d%s", scene, tk_ray_kind_name(kind), r + 1, rounds,
-                               attempt ? " (again: preempted)" : "");
-            const long cs0 = involuntary_switches();
-            for (int j = 0; j < nt; ++j) {
-                const int t = order[r % 2 ? nt - 1 - j : j];
+        bench_progress("targets: %s %s round %d/%d", scene, tk_ray_kind_name(kind), r + 1, rounds);
+        for (int j = 0; j < nt; ++j) {
+            const int t = order[r % 2 ? nt - 1 - j : j];
+            for (int attempt = 0;; ++attempt) {
+                const long cs0 = involuntary_switches();
                 trace_once(tr, t, rec, &br, hits, &fair[r * TG_TRACERS + t], &prep[r * TG_TRACERS + t]);
+                if (involuntary_switches() == cs0) break;
+                if (attempt == TG_MAX_RETRIES) {
+                    ++preempted;
+                    break;
+                }
+                ++retries;
             }
-            if (involuntary_switches() == cs0) break;
-            if (attempt == TG_MAX_RETRIES) {
-                ++preempted;
-                break;
-            }
-            ++retries;
         }
     }
     bench_progress_done();
@@ -235,8 +237,8 @@ static void measure_kind(FILE *f, const bench_targets_opts *o, const char *scene
                 res->a_mrays, res->b_mrays, res->pass ? "PASS" : "FAIL");
     }
     if (retries || preempted)
-        fprintf(f, "%-26s %-8s %-8s (%d round%s run again after a context switch; %d kept after %d tries)\n", "",
-                scene, tk_ray_kind_name(kind), retries, retries == 1 ? "" : "s", preempted, TG_MAX_RETRIES + 1);
+        fprintf(f, "%-26s %-8s %-8s (%d of %d passes run again after a context switch; %d kept after %d tries)\n",
+                "", scene, tk_ray_kind_name(kind), retries, rounds * nt, preempted, TG_MAX_RETRIES + 1);
     fflush(f);
 oom:
     if (!rec || !hits || !fair || !prep || !tmp || !br.r) fprintf(stderr, "sidx-bench run: targets: out of memory\n");
@@ -253,7 +255,7 @@ static int write_csv(const char *path, const tg_result *r, size_t n)
     FILE *f = fopen(path, "w");
     if (!f) return 0;
     fprintf(f, "target,a,b,goal,scene,kind,fair_ratio_median,fair_ratio_min,fair_ratio_max,prep_ratio_median,"
-               "prep_ratio_min,prep_ratio_max,a_fair_mrays,b_fair_mrays,rounds,retried_rounds,preempted_rounds,"
+               "prep_ratio_min,prep_ratio_max,a_fair_mrays,b_fair_mrays,rounds,retried_passes,preempted_passes,"
                "pass\n");
     for (size_t i = 0; i < n; ++i)
         fprintf(f, "%d,%s,%s,%.2f,%s,%s,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%d,%d,%d,%d\n", r[i].t->id,
@@ -293,8 +295,8 @@ int bench_targets(FILE *f, const bench_targets_opts *o)
         }
     }
     fprintf(f, "\n== targets: speed of A / speed of B, one thread, thread CPU time; %d interleaved rounds per\n"
-               "   scene and kind on the same %zu warm rays (order reversed every other round; a round with an\n"
-               "   involuntary context switch is run again); median [min..max] of the per-round ratios.\n"
+               "   scene and kind on the same %zu warm rays (order reversed every other round; a tracer's pass\n"
+               "   with an involuntary context switch is run again); median [min..max] of the per-round ratios.\n"
                "   fair: sidx_ray_init per ray and t, prim, u, v, Ng (what rtcIntersect1 returns); prep: rays\n"
                "   prepared beforehand, no u, v, Ng (the table's timing).  Verdict on the fair median.\n",
             o->rounds, o->rays);
