@@ -90,7 +90,9 @@ static double trace_fair(const sidx_accel *a, const tk_rayrec *rec, size_t n, si
     return bench_clock_ms() - t0;
 }
 
-/* One pass of tracer t: fair ms, and for sidx tracers the prep ms too. */
+/* One pass of tracer t: fair ms, and for sidx tracers the prep ms too.
+ * Embree has one timing for both: rtcIntersect1 builds its ray per call,
+ * and the table times it the same way. */
 static void trace_once(const tracers *tr, int t, const tk_rayrec *rec, const bench_rays *br, sidx_hit *hits,
                        double *fair, double *prep)
 {
