@@ -154,7 +154,9 @@ sidx_status sidx_accel_auto(const sidx_mesh *mesh, const sidx_build_options *opt
 static const sidx_query default_query = {0, SIDX_TRAVERSE_DEFAULT, NULL, 0};
 
 /* u, v and the geometric normal of the final hit only: the hot loop never
- * pays for them ("no u/v or normals unless asked"). */
+ * pays for them ("no u/v or normals unless asked").  A structure that
+ * keeps them from its own traversal (a->fills_uv, a->fills_ng) has set
+ * them already; the rest are computed here from the mesh. */
 static void finish_hit(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
 {
     if (hit->prim == SIDX_NO_HIT) {
@@ -163,12 +165,14 @@ static void finish_hit(const sidx_accel *a, const sidx_ray *r, const sidx_query 
     }
     /* Aggregates (instance.c) set the instance and fill u, v, ng in world
      * space themselves: their a->mesh is not where the hit lies. */
-    if (hit->instance != SIDX_NO_HIT) return;
-    if (!(q->flags & (a->fills_uv ? SIDX_QUERY_NORMAL : SIDX_QUERY_UV | SIDX_QUERY_NORMAL))) return;
+    if (hit->instance != SIDX_NO_HIT || !(q->flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL))) return;
+    const uint32_t own = (a->fills_uv ? SIDX_QUERY_UV : 0u) | (a->fills_ng ? SIDX_QUERY_NORMAL : 0u);
+    const uint32_t need = q->flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL) & ~own;
+    if (!need) return;
     const sidx_mesh *m = a->mesh;
     const sidx_vec3 p0 = sidx_mesh_vertex(m, hit->prim, 0), p1 = sidx_mesh_vertex(m, hit->prim, 1),
                     p2 = sidx_mesh_vertex(m, hit->prim, 2);
-    if ((q->flags & SIDX_QUERY_UV) && !a->fills_uv) {
+    if (need & SIDX_QUERY_UV) {
         float t, u = 0.0f, v = 0.0f;
         /* Re-run the same test on the one triangle with a slightly larger
          * bound so it reproduces the hit; identical arithmetic, identical t. */
@@ -177,7 +181,7 @@ static void finish_hit(const sidx_accel *a, const sidx_ray *r, const sidx_query 
             hit->v = v;
         }
     }
-    if (q->flags & SIDX_QUERY_NORMAL) hit->ng = sidx_v3_cross(sidx_v3_sub(p1, p0), sidx_v3_sub(p2, p0));
+    if (need & SIDX_QUERY_NORMAL) hit->ng = sidx__tri_normal(p0, p1, p2);
 }
 
 sidx_status sidx_accel_intersect(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)

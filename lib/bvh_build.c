@@ -515,6 +515,7 @@ done:
     sidx__free(a, pbox);
     sidx__free(a, cent);
     a->impl = b;
+    a->fills_uv = a->fills_ng = 1; /* from the leaves' triangle copies (bvh_traverse.c) */
     SIDX_EMIT(1, B->hook, SIDX_EV_BUILD_END, e_.node = b->num_nodes; e_.count = n; e_.depth = b->max_depth);
     return SIDX_OK;
 

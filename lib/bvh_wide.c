@@ -500,7 +500,7 @@ static sidx_status wide_build(sidx_accel *a, sidx_error *err)
     sidx__free(a, tmp_blocks);
     sidx__bvh_vtable.destroy(&bin);
     a->impl = w;
-    a->fills_uv = 1; /* the walk sets u, v from its leaf blocks (bvh_wide_walk.h) */
+    a->fills_uv = a->fills_ng = 1; /* the walk sets u, v, ng from its leaf blocks (bvh_wide_walk.h) */
     return SIDX_OK;
 
 fail:

@@ -273,21 +273,24 @@ WINL int WFN(leaf_)(const sidx_accel *a, const wide_bvh *w, uint32_t first_block
     }
 }
 
-/* u, v of the final hit, from the leaf block's copy of the triangle (so no
- * index and vertex look-ups in the mesh, which a diffuse ray mostly misses
- * in cache): the same scalar test the core would run (accel.c finish_hit),
- * on the same floats, so the same u, v.  The bound only has to exceed t,
- * which was accepted below the old best, so +inf does. */
-WINL void WFN(uv_)(const sidx_accel *a, const sidx_ray *r, const wide_tri4 *B, unsigned l, sidx_hit *hit)
+/* u, v and ng of the final hit, from the leaf block's copy of the
+ * triangle (so no index and vertex look-ups in the mesh, which a diffuse
+ * ray mostly misses in cache): the same scalar test and normal the core
+ * would compute (accel.c finish_hit), on the same floats, so the same
+ * bits.  The bound only has to exceed t, which was accepted below the old
+ * best, so +inf does. */
+WINL void WFN(uv_)(const sidx_accel *a, const sidx_ray *r, uint32_t flags, const wide_tri4 *B, unsigned l,
+                   sidx_hit *hit)
 {
     const sidx_vec3 p0 = {B->v[0][0][l], B->v[0][1][l], B->v[0][2][l]};
     const sidx_vec3 p1 = {B->v[1][0][l], B->v[1][1][l], B->v[1][2][l]};
     const sidx_vec3 p2 = {B->v[2][0][l], B->v[2][1][l], B->v[2][2][l]};
     float t, u = 0.0f, v = 0.0f;
-    if (sidx__tri_test(a->opt.tri, r, p0, p1, p2, INFINITY, &t, &u, &v)) {
+    if ((flags & SIDX_QUERY_UV) && sidx__tri_test(a->opt.tri, r, p0, p1, p2, INFINITY, &t, &u, &v)) {
         hit->u = u;
         hit->v = v;
     }
+    if (flags & SIDX_QUERY_NORMAL) hit->ng = sidx__tri_normal(p0, p1, p2);
 }
 
 /* ---- the walk ----------------------------------------------------------------- */
@@ -460,7 +463,8 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
                 if (!anyhit && prim != SIDX_NO_HIT) {
                     hit->t = best;
                     hit->prim = prim;
-                    if (q && (q->flags & SIDX_QUERY_UV)) WFN(uv_)(a, r, hit_block, hit_lane, hit);
+                    if (q && (q->flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL)))
+                        WFN(uv_)(a, r, q->flags, hit_block, hit_lane, hit);
                 }
                 return 0;
             }

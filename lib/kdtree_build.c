@@ -764,10 +764,26 @@ static void *shrink(const sidx_accel *a, void *p, size_t count, size_t size, siz
     return q;
 }
 
+/* The nodes in an exact-size copy placed so that node 1 starts a 64-byte
+ * cache line.  Children come in pairs (1, 2), (3, 4), ... (alloc_pair) of
+ * 16 bytes, so then no pair straddles two lines and both children of a
+ * node cost one miss at most; at malloc's 16-byte alignment one pair in
+ * four is split.  Out of memory: the build's array stays as it is. */
+static void align_nodes(const sidx_accel *a, kd_tree *kd)
+{
+    kd_node *mem = sidx__alloc(a, (size_t)kd->num_nodes + 8u, sizeof *mem);
+    if (!mem) return;
+    kd_node *nodes = (kd_node *)(void *)((((uintptr_t)(mem + 1) + 63u) & ~(uintptr_t)63u) - sizeof *mem);
+    memcpy(nodes, kd->nodes, (size_t)kd->num_nodes * sizeof *nodes);
+    sidx__free(a, kd->nodes_mem);
+    kd->nodes_mem = mem;
+    kd->nodes = nodes;
+}
+
 static void kd_free(const sidx_accel *a, kd_tree *kd)
 {
     if (!kd) return;
-    sidx__free(a, kd->nodes);
+    sidx__free(a, kd->nodes_mem);
     sidx__free(a, kd->prims);
     sidx__free(a, kd->tris);
     sidx__free(a, kd);
@@ -834,7 +850,7 @@ sidx_status sidx__kd_build(sidx_accel *a, sidx_error *err)
         }
     }
     sidx__free(a, b.cls);
-    kd->nodes = b.nodes;
+    kd->nodes = kd->nodes_mem = b.nodes;
     kd->prims = b.prims;
     if (s != SIDX_OK) {
         kd_free(a, kd);
@@ -845,7 +861,7 @@ sidx_status sidx__kd_build(sidx_accel *a, sidx_error *err)
     }
     kd->num_nodes = b.num_nodes;
     kd->num_refs = b.num_refs;
-    kd->nodes = shrink(a, kd->nodes, kd->num_nodes, sizeof *kd->nodes, b.nodes_cap);
+    align_nodes(a, kd);
     kd->prims = shrink(a, kd->prims, kd->num_refs, sizeof *kd->prims, b.prims_cap);
     /* swap the per-triangle vertex array used by the build for the
      * per-reference one traversal reads */
@@ -868,6 +884,7 @@ sidx_status sidx__kd_build(sidx_accel *a, sidx_error *err)
     kd->c_tri = b.c_tri;
     kd->empty_bonus = bonus;
     a->impl = kd;
+    a->fills_uv = a->fills_ng = 1; /* from the leaves' triangle copies (kdtree_traverse.c) */
     SIDX_EMIT(1, a->opt.hook, SIDX_EV_BUILD_END, e_.structure = a->name; e_.node = kd->num_nodes;
               e_.count = kd->num_refs; e_.depth = kd->max_depth);
     return SIDX_OK;

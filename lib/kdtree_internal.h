@@ -98,7 +98,8 @@ typedef struct kd_tri {
 } kd_tri;
 
 typedef struct kd_tree {
-    kd_node *nodes;
+    kd_node *nodes;         /* inside nodes_mem, node 1 on a cache-line start (kdtree_build.c) */
+    void *nodes_mem;
     uint32_t num_nodes;
     uint32_t *prims;        /* leaf primitive references (original triangle ids) */
     uint32_t num_refs;

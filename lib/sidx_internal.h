@@ -59,9 +59,12 @@ struct sidx_accel {
     sidx_allocator alloc;      /* resolved allocator (never NULL fns) */
     void *impl;
     /* 1 when vt->intersect also sets hit->u, hit->v (when SIDX_QUERY_UV asks)
-     * from its own copy of the triangle, so the core skips its re-test on
-     * the mesh (bvh_wide.c: saves the cache misses of that look-up). */
-    int fills_uv;
+     * / hit->ng (when SIDX_QUERY_NORMAL asks) itself — u, v kept from its
+     * own triangle test, ng from its own copy of the triangle — so the core
+     * skips its re-test and the index and vertex look-ups in the mesh,
+     * which a diffuse ray mostly misses in cache.  Either way the values
+     * are bit-identical to finish_hit's (accel.c): same test, same floats. */
+    int fills_uv, fills_ng;
 };
 
 /* Registry entries live in accel_registry.def as
@@ -216,6 +219,14 @@ static SIDX_INLINE int sidx__tri_test(sidx_tri_method m, const sidx_ray *r, sidx
     case SIDX_TRI_TWO_STEP: return sidx__tri_two_step(r, a, b, c, tmax, t, u, v);
     default: return sidx__tri_watertight(r, a, b, c, tmax, t, u, v);
     }
+}
+
+/* The geometric normal hit.ng: (p1 − p0) × (p2 − p0), unnormalized.  One
+ * definition, so a structure computing it from its own copy of the
+ * vertices gets the same bits as accel.c's finish_hit from the mesh. */
+static SIDX_INLINE sidx_vec3 sidx__tri_normal(sidx_vec3 p0, sidx_vec3 p1, sidx_vec3 p2)
+{
+    return sidx_v3_cross(sidx_v3_sub(p1, p0), sidx_v3_sub(p2, p0));
 }
 
 /* Triangle `tri` of mesh m, tested with method m (t only). */

@@ -687,6 +687,130 @@ static void test_other_triangle_tests(void **state)
 
 /* ---- the reference itself ------------------------------------------------------------ */
 
+/* u, v and the normal that bvh (and bvh-obb), bvh4, bvh8 and kdtree keep
+ * from their own traversal (from their copies of the triangles) are the
+ * bits the core would compute from the mesh: the same triangle test re-run
+ * on the hit triangle just past t, and (p1 - p0) x (p2 - p0) — and brute
+ * force, which gets them from the core, agrees wherever it hits the same
+ * triangle at the same t.  Every traversal, traced (a hook attached) and
+ * not, UV and NORMAL asked together and alone (what is not asked stays 0),
+ * and every triangle test. */
+static int same_bits(float a, float b) { return memcmp(&a, &b, sizeof a) == 0; }
+
+static int attrs_ok(const sidx_mesh *m, sidx_tri_method tm, const sidx_ray *r, uint32_t flags, const sidx_hit *h,
+                    const char **why)
+{
+    if (h->prim == SIDX_NO_HIT) return 1;
+    const sidx_vec3 p0 = sidx_mesh_vertex(m, h->prim, 0), p1 = sidx_mesh_vertex(m, h->prim, 1),
+                    p2 = sidx_mesh_vertex(m, h->prim, 2);
+    float t = 0.0f, u = 0.0f, v = 0.0f;
+    if (!sidx_intersect_triangle(tm, r, p0, p1, p2, nextafterf(h->t, INFINITY), &t, &u, &v)) {
+        *why = "the hit triangle does not reproduce the hit";
+        return 0;
+    }
+    const sidx_vec3 ng = sidx_v3_cross(sidx_v3_sub(p1, p0), sidx_v3_sub(p2, p0));
+    if (!(flags & SIDX_QUERY_UV)) u = v = 0.0f;
+    const sidx_vec3 want = (flags & SIDX_QUERY_NORMAL) ? ng : sidx_v3(0.0f, 0.0f, 0.0f);
+    if (!same_bits(h->u, u) || !same_bits(h->v, v)) {
+        *why = flags & SIDX_QUERY_UV ? "u, v differ from the mesh's" : "u, v filled although not asked for";
+        return 0;
+    }
+    if (!same_bits(h->ng.x, want.x) || !same_bits(h->ng.y, want.y) || !same_bits(h->ng.z, want.z)) {
+        *why = flags & SIDX_QUERY_NORMAL ? "normal differs from the mesh's" : "normal filled although not asked for";
+        return 0;
+    }
+    return 1;
+}
+
+static void test_uv_normal_match_the_mesh(void **state)
+{
+    (void)state;
+    static const char *const scenes[] = {"teapot", "icosphere", "soup", "cornell"};
+    static const char *const accels[] = {"bvh", "bvh-obb", "bvh4", "bvh8", "kdtree", "kdtree-binned"};
+    static const uint32_t flag_sets[] = {SIDX_QUERY_UV | SIDX_QUERY_NORMAL, SIDX_QUERY_UV, SIDX_QUERY_NORMAL};
+    static const tk_ray_kind kinds[] = {TK_RAYS_PRIMARY, TK_RAYS_DIFFUSE, TK_RAYS_GRAZING};
+    const size_t n = getenv("SIDX_FAST_TESTS") ? 60 : 250;
+    unsigned failures = 0;
+    size_t checked_hits = 0, brute_same = 0;
+    for (size_t si = 0; si < sizeof scenes / sizeof scenes[0]; ++si) {
+        sidx_mesh m = {0};
+        sidx_error err;
+        assert_int_equal(sidx_scene_open(scenes[si], &m, &err), SIDX_OK);
+        tk_rayrec *rec = malloc(n * sizeof *rec);
+        sidx_ray *rr = malloc(n * sizeof *rr);
+        uint8_t *valid = malloc(n);
+        assert_non_null(rec);
+        assert_non_null(rr);
+        assert_non_null(valid);
+        for (int tm = 0; tm < SIDX_TRI_METHOD_COUNT; ++tm) {
+            sidx_build_options bo;
+            memset(&bo, 0, sizeof bo);
+            bo.tri = (sidx_tri_method)tm;
+            sidx_accel *brute = NULL;
+            assert_int_equal(sidx_accel_build("brute", &m, &bo, &brute, &err), SIDX_OK);
+            for (size_t ai = 0; ai < sizeof accels / sizeof accels[0]; ++ai) {
+                if (!sidx_accel_is_registered(accels[ai])) continue;
+                sidx_accel *a = NULL;
+                assert_int_equal(sidx_accel_build(accels[ai], &m, &bo, &a, &err), SIDX_OK);
+                for (size_t ki = 0; ki < sizeof kinds / sizeof kinds[0]; ++ki) {
+                    tk_make_rays(&m, kinds[ki], n, 7 + ki, rec);
+                    for (size_t i = 0; i < n; ++i) valid[i] = tk_ray_from(&rec[i], &rr[i]) == SIDX_OK;
+                    for (size_t i = 0; i < n; ++i) {
+                        if (!valid[i]) continue;
+                        sidx_hit ref;
+                        const sidx_query qb = {SIDX_QUERY_UV | SIDX_QUERY_NORMAL, SIDX_TRAVERSE_DEFAULT, NULL, 0};
+                        sidx_accel_intersect(brute, &rr[i], &qb, &ref);
+                        for (int tr = SIDX_TRAVERSE_DEFAULT; tr < SIDX_TRAVERSE_COUNT; ++tr)
+                            for (int traced = 0; traced < 2; ++traced)
+                                for (size_t fi = 0; fi < sizeof flag_sets / sizeof flag_sets[0]; ++fi) {
+                                    sidx_counters c;
+                                    sidx_counters_init(&c);
+                                    sidx_hook hk = sidx_counters_hook(&c);
+                                    const sidx_query q = {flag_sets[fi], (sidx_traversal)tr, traced ? &hk : NULL,
+                                                          (uint32_t)i};
+                                    sidx_hit h;
+                                    sidx_accel_intersect(a, &rr[i], &q, &h);
+                                    const char *why = NULL;
+                                    if (!attrs_ok(&m, (sidx_tri_method)tm, &rr[i], flag_sets[fi], &h, &why)) {
+                                        if (failures++ < 10)
+                                            print_message("%s %s %s ray %zu (%s, traversal %d, traced %d, "
+                                                          "flags %u): %s\n",
+                                                          scenes[si], accels[ai], sidx_tri_method_name(bo.tri), i,
+                                                          tk_ray_kind_name(kinds[ki]), tr, traced,
+                                                          (unsigned)flag_sets[fi], why);
+                                    }
+                                    if (h.prim == SIDX_NO_HIT || fi != 0) continue;
+                                    ++checked_hits;
+                                    if (h.prim != ref.prim || !same_bits(h.t, ref.t)) continue;
+                                    ++brute_same;
+                                    if (!same_bits(h.u, ref.u) || !same_bits(h.v, ref.v) ||
+                                        !same_bits(h.ng.x, ref.ng.x) || !same_bits(h.ng.y, ref.ng.y) ||
+                                        !same_bits(h.ng.z, ref.ng.z)) {
+                                        if (failures++ < 10)
+                                            print_message("%s %s ray %zu: u, v, normal differ from brute "
+                                                          "force's\n", scenes[si], accels[ai], i);
+                                    }
+                                }
+                    }
+                }
+                sidx_accel_destroy(a);
+            }
+            sidx_accel_destroy(brute);
+        }
+        free(rec);
+        free(rr);
+        free(valid);
+        sidx_mesh_free(&m);
+    }
+    print_message("u, v, normal: %zu hits checked against the mesh, %zu of them against brute force too\n",
+                  checked_hits, brute_same);
+    assert_int_equal(failures, 0);
+    /* the comparison above is not vacuous: most rays hit, and on the same
+     * triangle at the same t as brute force */
+    assert_true(checked_hits > 500);
+    assert_true(brute_same * 10 > checked_hits * 9);
+}
+
 static void test_reference_matches_brute_on_random_rays(void **state)
 {
     (void)state;
@@ -1019,6 +1143,7 @@ int main(void)
         cmocka_unit_test(test_coincident_duplicates),
         cmocka_unit_test(test_flat_scenes),
         cmocka_unit_test(test_other_triangle_tests),
+        cmocka_unit_test(test_uv_normal_match_the_mesh),
         cmocka_unit_test(test_auto_on_every_scene),
     };
     install_limits();

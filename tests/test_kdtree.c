@@ -378,10 +378,11 @@ static void hand_tree(sidx_accel *a, const sidx_mesh *m, const kd_node *nodes, u
                       uint32_t np)
 {
     kd_tree *kd = a->impl;
-    free(kd->nodes);
+    free(kd->nodes_mem); /* kd->nodes lies inside it (cache-line placement) */
     free(kd->prims);
     free(kd->tris);
     kd->nodes = malloc(nn * sizeof *nodes);
+    kd->nodes_mem = kd->nodes;
     kd->prims = malloc(np * sizeof *prims);
     kd->tris = malloc(np * sizeof *kd->tris);
     assert_non_null(kd->nodes);

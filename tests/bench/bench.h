@@ -54,7 +54,7 @@ int bench_embree_build_threads(const sidx_mesh *m, bench_embree_cfg cfg, unsigne
                                double *build_ms, char *msg, size_t msg_size);
 size_t bench_embree_bytes(const bench_embree *e);
 /* rtcIntersect1 / rtcOccluded1, one thread; packet = 1, 4, 8 or 16
- * (rtcIntersectN).  Returns elapsed ms.  u, v are filled. */
+ * (rtcIntersectN).  Returns elapsed ms.  u, v and ng are filled. */
 double bench_embree_trace(bench_embree *e, const tk_rayrec *rays, size_t n, int any_hit, int packet, sidx_hit *hits);
 void bench_embree_free(bench_embree *e);
 const char *bench_embree_version(void);
@@ -74,6 +74,23 @@ int bench_svg_scatter(const char *path, const char *title, const char *xlabel, c
 /* Line plot: one polyline per series (points sorted by x within series). */
 int bench_svg_lines(const char *path, const char *title, const char *xlabel, const char *ylabel,
                     const bench_point *pts, size_t n, const char *const *series_names, int nseries);
+
+/* `sidx-bench run`'s targets section (targets.c): bvh >= 0.5x Embree,
+ * kdtree >= 0.8x bvh, bvh8 >= 1.0x Embree on the listed scenes, primary and
+ * diffuse rays, in interleaved rounds.  Writes CSV-targets.csv when csv is
+ * set.  Returns 0 when the CSV could not be written; a FAIL verdict is
+ * reported, not returned (speed depends on the machine). */
+typedef struct bench_targets_opts {
+    const char *scenes_dir;  /* NAME.obj/.ply, else NAME*.obj/.ply, looked up here; NULL: built-in scenes only */
+    const char *scene_list;  /* comma-separated, e.g. "bunny,sponza" */
+    const char *accel_list;  /* run's --accel (NULL = all): a target needs both its sides */
+    const char *csv;         /* run's --csv, or NULL */
+    int embree;              /* 0: --no-embree, targets against Embree skipped */
+    int rounds;
+    size_t rays;
+    uint64_t seed;
+} bench_targets_opts;
+int bench_targets(FILE *f, const bench_targets_opts *o);
 
 /* Sub-commands. */
 int bench_cmd_trace(int argc, char **argv);

@@ -41,6 +41,9 @@ typedef struct run_opts {
     double timeout_ms;   /* per structure and scene, in a child process; 0 = in process */
     unsigned long mem_limit_mb;
     unsigned ref_threads;
+    /* the targets section (targets.c) */
+    const char *target_scenes;
+    int targets, rounds;
 } run_opts;
 
 typedef struct row {
@@ -1288,9 +1291,15 @@ static void run_usage(FILE *out)
             "                     seconds (default 60; 0 = in this process, no protection)\n"
             "  --mem-limit MB     address-space limit of that child (default 4096)\n"
             "  --brute-max N      brute force only up to N triangles (default 5000)\n"
-            "  --no-embree --no-methods --no-hooks --no-packets   skip those parts (methods: the\n"
-            "                     5 other triangle/box test pairs, on 1/4 of the rays)\n"
-            "  --csv FILE         every row as CSV\n"
+            "  --no-embree --no-methods --no-hooks --no-packets --no-targets   skip those parts\n"
+            "                     (methods: the 5 other triangle/box test pairs, on 1/4 of the rays)\n"
+            "  --target-scenes L  scenes of the targets section (default bunny,sponza): NAME.obj or\n"
+            "                     NAME.ply in --scenes DIR (else the first NAME*.obj/.ply there),\n"
+            "                     else a built-in scene\n"
+            "  --rounds N         interleaved rounds per scene and ray kind in the targets section\n"
+            "                     (default 21)\n"
+            "  --csv FILE         every row as CSV; the targets section goes to FILE-targets.csv\n"
+            "                     (FILE without its .csv)\n"
             "  --plot FILE.svg    Mrays/s against error rate, one point per (structure, tri/box test)\n"
             "Columns: build_ms, Mrays/s (one thread), MB (structure memory), nodes, steps (NODE_ENTER\n"
             "events per ray) and prims (PRIM_TEST events per ray) on up to 1000 rays, then on the\n"
@@ -1309,12 +1318,22 @@ static void run_usage(FILE *out)
             "beside a twin doing the same on the other core, the machine's own 2-thread ceiling\n"
             "(memory bandwidth, SMT) to judge the efficiencies by.  Wall-clock figures mean\n"
             "something on a quiet machine only.\n");
+    fprintf(out,
+            "Targets (last section): #4 bvh >= 0.5x Embree, #5 kdtree >= 0.8x bvh, #8 bvh8 >= 1.0x\n"
+            "Embree, on primary and diffuse rays of each --target-scenes scene: the tracers run in\n"
+            "interleaved rounds on the same warm rays (order reversed every other round; a tracer's\n"
+            "pass with an involuntary context switch, from getrusage, is run again), and each\n"
+            "target prints the median [min..max] of the per-round speed ratios and PASS/FAIL.\n"
+            "\"fair\" times what rtcIntersect1 returns: sidx_ray_init per ray and t, prim, u, v, Ng\n"
+            "(SIDX_QUERY_UV|SIDX_QUERY_NORMAL); \"prep\" is the table's timing (rays prepared\n"
+            "beforehand, no u, v, Ng).  The verdict is on the fair median; a FAIL does not change\n"
+            "the exit status.  A target runs when both sides are in --accel (embree: not --no-embree).\n");
 }
 
 int bench_cmd_run(int argc, char **argv)
 {
     run_opts o = {NULL, NULL, NULL, NULL, NULL, NULL, "cornell,icosphere", 20000, 1, 1.5e8, 100.0, 8000.0, 5000,
-                  1, 1, 1, 1, 60000.0, 4096, 2};
+                  1, 1, 1, 1, 60000.0, 4096, 2, "bunny,sponza", 1, 21};
     for (int i = 1; i < argc; ++i) {
         const char *a = argv[i];
         const char *val = (i + 1 < argc) ? argv[i + 1] : NULL;
@@ -1326,6 +1345,7 @@ int bench_cmd_run(int argc, char **argv)
         if (!strcmp(a, "--no-methods")) { o.methods = 0; continue; }
         if (!strcmp(a, "--no-hooks")) { o.hooks = 0; continue; }
         if (!strcmp(a, "--no-packets")) { o.packets = 0; continue; }
+        if (!strcmp(a, "--no-targets")) { o.targets = 0; continue; }
         if (a[0] != '-' || !val) {
             fprintf(stderr, "sidx-bench run: unexpected '%s'%s\n", a, a[0] == '-' ? " (needs a value)" : "");
             run_usage(stderr);
@@ -1340,6 +1360,12 @@ int bench_cmd_run(int argc, char **argv)
         else if (!strcmp(a, "--csv")) o.csv = val;
         else if (!strcmp(a, "--plot")) o.plot = val;
         else if (!strcmp(a, "--method-scenes")) o.method_scenes = val;
+        else if (!strcmp(a, "--target-scenes")) o.target_scenes = val;
+        else if (!strcmp(a, "--rounds")) {
+            const long v = strtol(val, &end, 10);
+            if (*end || v < 1 || v > 1001) goto bad_value;
+            o.rounds = (int)v;
+        }
         else if (!strcmp(a, "--timeout")) {
             o.timeout_ms = strtod(val, &end) * 1e3;
             if (*end || !(o.timeout_ms >= 0)) goto bad_value;
@@ -1513,9 +1539,15 @@ int bench_cmd_run(int argc, char **argv)
             if (!strcmp(scenes[i].spec, "teapot")) pick = i;
         hook_rows(f, &o, &scenes[pick]);
     }
+    int targets_ok = 1;
+    if (o.targets) {
+        const bench_targets_opts to = {o.scenes_dir, o.target_scenes, o.accel_list, o.csv, o.embree,
+                                       o.rounds, o.rays, o.seed};
+        targets_ok = bench_targets(f, &to);
+    }
     fprintf(f, "\ntotal %.1f s wall-clock, %.1f s CPU in this process (children not counted)\n",
             (tk_now_ms() - t_start) / 1e3, tk_process_cpu_ms() / 1e3);
-    int rc = failures ? BENCH_FAIL : BENCH_OK;
+    int rc = failures || !targets_ok ? BENCH_FAIL : BENCH_OK;
     if (o.csv && !write_csv(o.csv, &rs)) {
         fprintf(stderr, "sidx-bench run: cannot write %s: %s\n", o.csv, strerror(errno));
         rc = BENCH_FAIL;
