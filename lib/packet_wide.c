@@ -97,6 +97,11 @@ typedef struct wpk {
     _Alignas(32) float ix[NLANES], iy[NLANES], iz[NLANES];
     _Alignas(32) float fx[NLANES], fy[NLANES], fz[NLANES]; /* 1/d · Ize factor (far planes) */
     _Alignas(32) float tmin[NLANES], best[NLANES];
+    /* best · Ize factor: what boxes are clipped to.  A rounded entry an ulp
+     * beyond the best hit must not drop a box holding a triangle an ulp
+     * nearer (bvh_slab, bvh_internal.h, says more); hits still need t < best. */
+    _Alignas(32) float bbest[NLANES];
+    float scale;
     uint32_t prim[NLANES];
     const sidx_ray *ray[NLANES];
     uint64_t live;         /* the real rays: bits 0 .. n−1 */
@@ -139,6 +144,7 @@ static SIDX_INLINE void wpk_load(wpk *P, const sidx_ray *rays, uint32_t n, uint3
             P->ix[i] = r->inv_dir.x; P->iy[i] = r->inv_dir.y; P->iz[i] = r->inv_dir.z;
             P->tmin[i] = r->tmin;
             P->best[i] = r->tmax;
+            P->bbest[i] = r->tmax * P->scale;
             P->prim[i] = SIDX_NO_HIT;
         }
     for (; i < P->ngroups * GL; ++i) {
@@ -146,7 +152,7 @@ static SIDX_INLINE void wpk_load(wpk *P, const sidx_ray *rays, uint32_t n, uint3
         P->ox[i] = P->ox[0]; P->oy[i] = P->oy[0]; P->oz[i] = P->oz[0];
         P->ix[i] = P->ix[0]; P->iy[i] = P->iy[0]; P->iz[i] = P->iz[0];
         P->tmin[i] = INFINITY;
-        P->best[i] = -INFINITY;
+        P->best[i] = P->bbest[i] = -INFINITY;
         P->prim[i] = SIDX_NO_HIT;
     }
 }
@@ -219,10 +225,10 @@ static SIDX_INLINE void wpk_bounds(wpk *P, uint64_t live, unsigned c, float scal
             imin[k] = _mm_cvtss_f32(i0); imax[k] = _mm_cvtss_f32(i1);
         }
         /* padding lanes (tmin +inf, best −inf) change neither */
-        __m128 t0 = _mm_load_ps(P->tmin), t1 = _mm_load_ps(P->best);
+        __m128 t0 = _mm_load_ps(P->tmin), t1 = _mm_load_ps(P->bbest);
         for (uint32_t i = 4; i < nl; i += 4) {
             t0 = _mm_min_ps(_mm_load_ps(P->tmin + i), t0);
-            t1 = _mm_max_ps(_mm_load_ps(P->best + i), t1);
+            t1 = _mm_max_ps(_mm_load_ps(P->bbest + i), t1);
         }
         t0 = _mm_min_ps(t0, _mm_shuffle_ps(t0, t0, _MM_SHUFFLE(1, 0, 3, 2)));
         t0 = _mm_min_ps(t0, _mm_shuffle_ps(t0, t0, _MM_SHUFFLE(2, 3, 0, 1)));
@@ -250,7 +256,7 @@ static SIDX_INLINE void wpk_bounds(wpk *P, uint64_t live, unsigned c, float scal
                 imax[k] = v > imax[k] ? v : imax[k];
             }
             tmn = P->tmin[i] < tmn ? P->tmin[i] : tmn;
-            tmx = P->best[i] > tmx ? P->best[i] : tmx;
+            tmx = P->bbest[i] > tmx ? P->bbest[i] : tmx;
         }
     }
     int finite = 1;
@@ -308,7 +314,7 @@ static SIDX_INLINE unsigned ray_slots_scalar(const float *nd, const uint32_t W, 
                 fin[3] = {P->fx[i], P->fy[i], P->fz[i]};
     unsigned m = 0;
     for (uint32_t s = 0; s < W; ++s) {
-        float t0 = P->tmin[i], t1 = P->best[i];
+        float t0 = P->tmin[i], t1 = P->bbest[i];
         for (int k = 0; k < 3; ++k) {
             const float a = (nd[P->no[k] * W + s] - o[k]) * inv[k];
             const float b = (nd[P->fo[k] * W + s] - o[k]) * fin[k];
@@ -329,7 +335,7 @@ static SIDX_INLINE unsigned group_slot_scalar(const float *nd, const uint32_t W,
         const uint32_t i = g * GL + l;
         const float o[3] = {P->ox[i], P->oy[i], P->oz[i]}, inv[3] = {P->ix[i], P->iy[i], P->iz[i]},
                     fin[3] = {P->fx[i], P->fy[i], P->fz[i]};
-        float t0 = P->tmin[i], t1 = P->best[i];
+        float t0 = P->tmin[i], t1 = P->bbest[i];
         for (int k = 0; k < 3; ++k) {
             const float a = (nd[P->no[k] * W + s] - o[k]) * inv[k];
             const float b = (nd[P->fo[k] * W + s] - o[k]) * fin[k];
@@ -357,10 +363,11 @@ static SIDX_INLINE int leaf_ray_scalar(const sidx_accel *a, const wide_tri4 *B, 
             if (sidx__tri_test(a->opt.tri, r, p0, p1, p2, P->best[i], &t, NULL, NULL)) {
                 P->prim[i] = id;
                 if (P->anyhit) {
-                    P->best[i] = -INFINITY; /* misses every box from now on */
+                    P->best[i] = P->bbest[i] = -INFINITY; /* misses every box from now on */
                     return 1;
                 }
                 P->best[i] = t;
+                P->bbest[i] = t * P->scale;
             }
         }
         if (B->prim[0] & WIDE_LAST_BLOCK) return 0;
@@ -419,7 +426,7 @@ AVX unsigned ray_slots_avx(const float *nd, const uint32_t W, const wpk *P, uint
         __m256 t0 = _mm256_max_ps(nx, _mm256_broadcast_ss(P->tmin + i));
         t0 = _mm256_max_ps(ny, t0);
         t0 = _mm256_max_ps(nz, t0);
-        __m256 t1 = _mm256_min_ps(fx, _mm256_broadcast_ss(P->best + i));
+        __m256 t1 = _mm256_min_ps(fx, _mm256_broadcast_ss(P->bbest + i));
         t1 = _mm256_min_ps(fy, t1);
         t1 = _mm256_min_ps(fz, t1);
         if (tn) _mm256_storeu_ps(tn, t0);
@@ -435,7 +442,7 @@ AVX unsigned ray_slots_avx(const float *nd, const uint32_t W, const wpk *P, uint
     __m128 t0 = _mm_max_ps(nx, _mm_broadcast_ss(P->tmin + i));
     t0 = _mm_max_ps(ny, t0);
     t0 = _mm_max_ps(nz, t0);
-    __m128 t1 = _mm_min_ps(fx, _mm_broadcast_ss(P->best + i));
+    __m128 t1 = _mm_min_ps(fx, _mm_broadcast_ss(P->bbest + i));
     t1 = _mm_min_ps(fy, t1);
     t1 = _mm_min_ps(fz, t1);
     if (tn) _mm_storeu_ps(tn, t0);
@@ -455,7 +462,7 @@ AVX unsigned group_slot_avx(const float *nd, const uint32_t W, uint32_t s, const
     __m256 t0 = _mm256_max_ps(nx, _mm256_load_ps(P->tmin + i));
     t0 = _mm256_max_ps(ny, t0);
     t0 = _mm256_max_ps(nz, t0);
-    __m256 t1 = _mm256_min_ps(fx, _mm256_load_ps(P->best + i));
+    __m256 t1 = _mm256_min_ps(fx, _mm256_load_ps(P->bbest + i));
     t1 = _mm256_min_ps(fy, t1);
     t1 = _mm256_min_ps(fz, t1);
     return (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(t0, t1, _CMP_LE_OQ));
@@ -520,10 +527,11 @@ static SIDX_INLINE int leaf_ray_sse(const sidx_accel *a, const wide_tri4 *B, wpk
         if (h > 0) {
             P->prim[i] = B->prim[lane] & WIDE_PRIM_MASK;
             if (P->anyhit) {
-                P->best[i] = -INFINITY;
+                P->best[i] = P->bbest[i] = -INFINITY;
                 return 1;
             }
             P->best[i] = t;
+            P->bbest[i] = t * P->scale;
         } else if (SIDX_UNLIKELY(h < 0)) {
             for (int l = 0; l < 4; ++l) {
                 const uint32_t id = B->prim[l] & WIDE_PRIM_MASK;
@@ -534,10 +542,11 @@ static SIDX_INLINE int leaf_ray_sse(const sidx_accel *a, const wide_tri4 *B, wpk
                 if (sidx__tri_test(a->opt.tri, r, p0, p1, p2, P->best[i], &t, NULL, NULL)) {
                     P->prim[i] = id;
                     if (P->anyhit) {
-                        P->best[i] = -INFINITY;
+                        P->best[i] = P->bbest[i] = -INFINITY;
                         return 1;
                     }
                     P->best[i] = t;
+                    P->bbest[i] = t * P->scale;
                 }
             }
         }
@@ -769,6 +778,7 @@ static SIDX_INLINE void wide_packet_impl(const sidx_accel *a, wpk *P, wcount *C,
                                          const int simd_tri)
 {
     const float scale = a->opt.box == SIDX_BOX_ROBUST ? SIDX_ROBUST_TFAR_SCALE : 1.0f;
+    P->scale = scale;
     wpk_load(P, rays, n, w, stride, anyhit);
     const uint64_t real = n == 64 ? ~0ull : (1ull << n) - 1u;
     if (wpk_uniform(P, avx)) {

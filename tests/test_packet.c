@@ -324,12 +324,10 @@ static void check_wide_tiles(const char *label, const sidx_accel *a, const sidx_
                     assert_int_equal(sidx_trace_tiles(a, rays, W, H, tiles[t], &o, h, &st), SIDX_OK);
                     assert_int_equal(st.single_packets, 0);
                     for (size_t i = 0; i < n; ++i) {
-                        /* A near tie (two triangles within a few ulps of t)
-                         * may resolve differently: the packet walk may drop
-                         * a box whose rounded entry distance lies above its
-                         * best t while a triangle inside lies an ulp below
-                         * (single rays widen best and do not: see
-                         * test_single_rays_keep_nearest).  Then both must still agree
+                        /* Counted, and reported below: a near tie (two
+                         * triangles within a few ulps of t) resolved
+                         * differently would mean one walk dropped the box of
+                         * the nearer one (see test_single_rays_keep_nearest).  Then both must still agree
                          * with brute force up to the tie tolerance. */
                         if (!hits_identical(&r[i], &h[i], uv) &&
                             (++near_ties, !tk_hits_agree(&r[i], &h[i]) || !tk_hits_agree(&bf[i], &r[i])))
@@ -349,9 +347,10 @@ static void check_wide_tiles(const char *label, const sidx_accel *a, const sidx_
                 }
         unsetenv("SIDX_SIMD");
     }
-    /* near ties are rare: not more than one ray in a thousand */
-    if (near_ties * 1000 > compared) fail_msg("%s: %zu of %zu hits differ from single rays", label, near_ties, compared);
-    if (near_ties) print_message("%s: %zu of %zu packet hits resolve a near tie differently\n", label, near_ties, compared);
+    /* Packets and single rays both widen the best t for their box tests
+     * (Ize's factor), so neither drops the nearer triangle of a near tie:
+     * none may differ at all (before the widening, 16 of 25,600 soup hits did). */
+    if (near_ties) fail_msg("%s: %zu of %zu hits differ from single rays", label, near_ties, compared);
     free(h);
     free(r);
     free(bf);

@@ -52,14 +52,11 @@
  *
  * Results are those of single-ray sidx_accel_intersect (same watertight
  * test, same robust box test, every ray keeps its own closest hit, same t
- * bit for bit); only a near tie may resolve differently: two triangles
- * whose t differ by an ulp or so, where the packet walk may drop the
- * nearer one's box (its rounded entry distance lies above the best t
- * found, the triangle inside an ulp below).  The single-ray walks widen
- * the best t by Ize's factor before comparing entries with it, so they
- * return brute force's nearest t exactly; the packet walks compare with
- * the unwidened t (not yet changed), so a packet answer can be the
- * farther triangle of such a tie — within the tie tolerance.  Packets run over "bvh"
+ * bit for bit).  Near ties included: two triangles whose t differ by an
+ * ulp, the nearer one in a box whose ROUNDED entry lies an ulp beyond the
+ * farther hit — packets and single rays alike clip boxes to the best t
+ * widened by Ize's factor, so neither drops that box, and both return
+ * brute force's nearest t.  Packets run over "bvh"
  * (binned SAH; not bvh-obb), "bvh4" and "bvh8"; any other structure is
  * traced one ray at a time through sidx_accel_intersect, so the calls work
  * everywhere.  No hooks: a query with a hook is traced ray by ray too
