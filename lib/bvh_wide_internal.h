@@ -56,6 +56,19 @@ typedef struct wide_tri4 {
 } wide_tri4;
 _Static_assert(sizeof(wide_tri4) == 160, "wide_tri4 is 9 float4 + 4 ids");
 
+/* The scalar reference test on lane l of a block: the same sidx__tri_test
+ * brute force runs, on the block's copy of the vertices (bit-identical t,
+ * u, v).  Used where a SIMD kernel is unavailable or declines (an exact
+ * zero edge function). */
+static SIDX_INLINE int wide_lane_test(const sidx_accel *a, const sidx_ray *r, const wide_tri4 *B, unsigned l,
+                                      float best, float *t, float *u, float *v)
+{
+    const sidx_vec3 p0 = {B->v[0][0][l], B->v[0][1][l], B->v[0][2][l]};
+    const sidx_vec3 p1 = {B->v[1][0][l], B->v[1][1][l], B->v[1][2][l]};
+    const sidx_vec3 p2 = {B->v[2][0][l], B->v[2][1][l], B->v[2][2][l]};
+    return sidx__tri_test(a->opt.tri, r, p0, p1, p2, best, t, u, v);
+}
+
 struct wide_bvh;
 typedef void (*wide_isect_fn)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit);
 typedef int (*wide_occl_fn)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q);

@@ -252,11 +252,8 @@ WINL int WFN(leaf_)(const sidx_accel *a, const wide_bvh *w, uint32_t first_block
             for (int l = 0; l < 4; ++l) {
                 const uint32_t id = B->prim[l] & WIDE_PRIM_MASK;
                 if (id == WIDE_PAD_PRIM) continue;
-                const sidx_vec3 p0 = {B->v[0][0][l], B->v[0][1][l], B->v[0][2][l]};
-                const sidx_vec3 p1 = {B->v[1][0][l], B->v[1][1][l], B->v[1][2][l]};
-                const sidx_vec3 p2 = {B->v[2][0][l], B->v[2][1][l], B->v[2][2][l]};
                 float t;
-                const int h = sidx__tri_test(a->opt.tri, r, p0, p1, p2, *best, &t, NULL, NULL);
+                const int h = wide_lane_test(a, r, B, (unsigned)l, *best, &t, NULL, NULL);
                 SIDX_EMIT(traced, q->hook, SIDX_EV_PRIM_TEST, e_.ray_id = q->ray_id; e_.node = node_id;
                           e_.prim = id; e_.result = h; e_.t = h ? t : INFINITY);
                 if (h) {

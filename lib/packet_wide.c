@@ -356,11 +356,8 @@ static SIDX_INLINE int leaf_ray_scalar(const sidx_accel *a, const wide_tri4 *B, 
         for (int l = 0; l < 4; ++l) {
             const uint32_t id = B->prim[l] & WIDE_PRIM_MASK;
             if (id == WIDE_PAD_PRIM) continue;
-            const sidx_vec3 p0 = {B->v[0][0][l], B->v[0][1][l], B->v[0][2][l]};
-            const sidx_vec3 p1 = {B->v[1][0][l], B->v[1][1][l], B->v[1][2][l]};
-            const sidx_vec3 p2 = {B->v[2][0][l], B->v[2][1][l], B->v[2][2][l]};
             float t;
-            if (sidx__tri_test(a->opt.tri, r, p0, p1, p2, P->best[i], &t, NULL, NULL)) {
+            if (wide_lane_test(a, r, B, (unsigned)l, P->best[i], &t, NULL, NULL)) {
                 P->prim[i] = id;
                 if (P->anyhit) {
                     P->best[i] = P->bbest[i] = -INFINITY; /* misses every box from now on */
@@ -536,10 +533,7 @@ static SIDX_INLINE int leaf_ray_sse(const sidx_accel *a, const wide_tri4 *B, wpk
             for (int l = 0; l < 4; ++l) {
                 const uint32_t id = B->prim[l] & WIDE_PRIM_MASK;
                 if (id == WIDE_PAD_PRIM) continue;
-                const sidx_vec3 p0 = {B->v[0][0][l], B->v[0][1][l], B->v[0][2][l]};
-                const sidx_vec3 p1 = {B->v[1][0][l], B->v[1][1][l], B->v[1][2][l]};
-                const sidx_vec3 p2 = {B->v[2][0][l], B->v[2][1][l], B->v[2][2][l]};
-                if (sidx__tri_test(a->opt.tri, r, p0, p1, p2, P->best[i], &t, NULL, NULL)) {
+                if (wide_lane_test(a, r, B, (unsigned)l, P->best[i], &t, NULL, NULL)) {
                     P->prim[i] = id;
                     if (P->anyhit) {
                         P->best[i] = P->bbest[i] = -INFINITY;
