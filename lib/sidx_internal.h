@@ -124,11 +124,15 @@ static SIDX_INLINE int sidx__hook_wants(const sidx_hook *h, sidx_event_type t)
  * triangles get bit-identical edge functions of opposite sign, so a ray
  * cannot slip between them.  When an edge function is exactly 0 it is
  * recomputed in double, as the paper advises, so the sign is exact. */
-static SIDX_INLINE int sidx__tri_watertight(const sidx_ray *r, sidx_vec3 a, sidx_vec3 b, sidx_vec3 c, float tmax,
-                                            float *t_out, float *u_out, float *v_out)
+/* The same test on vertices read in place (pa, pb, pc point at x, y, z).
+ * The by-value form below copies its arguments to the stack first, since
+ * they are indexed by the ray's kx, ky, kz; a caller whose triangles
+ * already sit in memory (the kd-tree's leaf copies) saves that spill.
+ * Same arithmetic on the same floats, so bit-identical results. */
+static SIDX_INLINE int sidx__tri_watertight_p(const sidx_ray *r, const float *pa, const float *pb, const float *pc,
+                                              float tmax, float *t_out, float *u_out, float *v_out)
 {
     const float *o = &r->org.x;
-    const float *pa = &a.x, *pb = &b.x, *pc = &c.x;
     const int kx = r->kx, ky = r->ky, kz = r->kz;
     const float ax = pa[kx] - o[kx], ay = pa[ky] - o[ky], az = pa[kz] - o[kz];
     const float bx = pb[kx] - o[kx], by = pb[ky] - o[ky], bz = pb[kz] - o[kz];
@@ -155,6 +159,11 @@ static SIDX_INLINE int sidx__tri_watertight(const sidx_ray *r, sidx_vec3 a, sidx
     *t_out = t;
     if (u_out) { const float inv = 1.0f / det; *u_out = V * inv; *v_out = W * inv; }
     return 1;
+}
+static SIDX_INLINE int sidx__tri_watertight(const sidx_ray *r, sidx_vec3 a, sidx_vec3 b, sidx_vec3 c, float tmax,
+                                            float *t_out, float *u_out, float *v_out)
+{
+    return sidx__tri_watertight_p(r, &a.x, &b.x, &c.x, tmax, t_out, u_out, v_out);
 }
 
 /* Möller & Trumbore 1997, as derived on the slides with Cramer's rule:
