@@ -769,6 +769,7 @@ static void kd_free(const sidx_accel *a, kd_tree *kd)
     if (!kd) return;
     sidx__free(a, kd->nodes);
     sidx__free(a, kd->prims);
+    sidx__free(a, kd->refs);
     sidx__free(a, kd->tris);
     sidx__free(a, kd);
 }
@@ -847,19 +848,34 @@ sidx_status sidx__kd_build(sidx_accel *a, sidx_error *err)
     kd->num_refs = b.num_refs;
     kd->nodes = shrink(a, kd->nodes, kd->num_nodes, sizeof *kd->nodes, b.nodes_cap);
     kd->prims = shrink(a, kd->prims, kd->num_refs, sizeof *kd->prims, b.prims_cap);
-    /* swap the per-triangle vertex array used by the build for the
-     * per-reference one traversal reads */
-    kd_tri *rt = sidx__alloc(a, kd->num_refs, sizeof *rt);
-    if (!rt) {
+    /* Reorder the triangle copies by their first reference in the leaf
+     * array (depth-first leaf order), so triangles of neighbouring leaves
+     * sit side by side, and point each reference at its copy. */
+    kd_tri *rt = sidx__alloc(a, n ? n : 1u, sizeof *rt);
+    uint32_t *slot = sidx__alloc(a, n ? n : 1u, sizeof *slot);
+    kd->refs = sidx__alloc(a, kd->num_refs ? kd->num_refs : 1u, sizeof *kd->refs);
+    if (!rt || !slot || !kd->refs) {
+        sidx__free(a, rt);
+        sidx__free(a, slot);
         kd_free(a, kd);
         return sidx__fail(err, SIDX_ERR_NOMEM, "%s: out of memory", a->name);
     }
+    memset(slot, 0xff, (size_t)n * sizeof *slot);
+    uint32_t used = 0;
     for (uint32_t i = 0; i < kd->num_refs; ++i) {
-        rt[i] = kd->tris[kd->prims[i]];
-        rt[i].prim = kd->prims[i];
+        const uint32_t p = kd->prims[i];
+        if (slot[p] == UINT32_MAX) {
+            slot[p] = used;
+            rt[used] = kd->tris[p];
+            rt[used].prim = p;
+            ++used;
+        }
+        kd->refs[i] = slot[p];
     }
+    sidx__free(a, slot);
     sidx__free(a, kd->tris);
     kd->tris = rt;
+    kd->num_tris = used;
     kd->leaves = b.leaves;
     kd->empty_leaves = b.empty_leaves;
     kd->max_depth = b.depth;
@@ -890,8 +906,8 @@ void sidx__kd_stats(const sidx_accel *a, sidx_accel_stats *s)
     s->prim_refs = kd->num_refs;
     const uint32_t full = kd->leaves - kd->empty_leaves;
     s->mean_leaf_prims = full ? (double)kd->num_refs / (double)full : 0.0;
-    s->bytes = sizeof *kd + (size_t)kd->num_nodes * sizeof(kd_node) + (size_t)kd->num_refs * sizeof(uint32_t) +
-               (size_t)kd->num_refs * sizeof(kd_tri);
+    s->bytes = sizeof *kd + (size_t)kd->num_nodes * sizeof(kd_node) + (size_t)kd->num_refs * 2u * sizeof(uint32_t) +
+               (size_t)kd->num_tris * sizeof(kd_tri);
     s->sah_cost = kd->sah_cost;
 }
 

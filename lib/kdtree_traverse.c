@@ -62,7 +62,9 @@
  * Mailboxing (the deck's grid slide: "Per-ray cache of object IDs — data
  * local to a ray (better!)"): a triangle referenced by several leaves is
  * tested once per ray.  The cache is a 16-entry direct-mapped table on the
- * stack, indexed by the low bits of the primitive id; a collision only
+ * stack, keyed by the triangle's index in kd->tris (one per triangle, so
+ * as good as its id, and known before its vertices are read), indexed by
+ * its low bits; a collision only
  * evicts (re-testing is correct, just slower), so no allocation and no
  * per-object state is needed and concurrent queries never share anything. */
 #include "kdtree_internal.h"
@@ -87,6 +89,7 @@ static SIDX_INLINE int kd_walk(const sidx_accel *a, const sidx_ray *r, const sid
     const kd_tree *kd = a->impl;
     const kd_node *nodes = kd->nodes;
     const kd_tri *tris = kd->tris;
+    const uint32_t *refs = kd->refs;
     const sidx_tri_method method = a->opt.tri;
     const int robust = a->opt.box == SIDX_BOX_ROBUST;
     const int mailbox = !a->opt.no_mailbox;
@@ -193,19 +196,20 @@ static SIDX_INLINE int kd_walk(const sidx_accel *a, const sidx_ray *r, const sid
 
         /* leaf: test its triangles */
         const uint32_t cnt = kd_count(nd);
-        const kd_tri *leaf_tris = tris + kd_offset(nd);
+        const uint32_t *leaf_refs = refs + kd_offset(nd);
         for (uint32_t i = 0; i < cnt; ++i) {
-            const kd_tri *tr = &leaf_tris[i];
-            const uint32_t p = tr->prim;
+            const uint32_t k = leaf_refs[i];
             if (mailbox) {
-                uint32_t *slot = &mbox[p & (KD_MAILBOX - 1u)];
-                if (*slot == p) {
-                    SIDX_EMIT(traced, q->hook, SIDX_EV_MAILBOX_HIT, e_.ray_id = q->ray_id; e_.prim = p;
+                uint32_t *slot = &mbox[k & (KD_MAILBOX - 1u)];
+                if (*slot == k) {
+                    SIDX_EMIT(traced, q->hook, SIDX_EV_MAILBOX_HIT, e_.ray_id = q->ray_id; e_.prim = tris[k].prim;
                               e_.node = node);
                     continue;
                 }
-                *slot = p;
+                *slot = k;
             }
+            const kd_tri *tr = &tris[k];
+            const uint32_t p = tr->prim;
             float t;
             /* the default test reads the vertices in place (no copy to
              * the stack): ~5% fewer instructions per ray on the bunny */
