@@ -148,7 +148,11 @@ static SIDX_INLINE int sidx__tri_watertight_p(const sidx_ray *r, const float *pa
         V = (float)((double)Ax * (double)Cy - (double)Ay * (double)Cx);
         W = (float)((double)Bx * (double)Ay - (double)By * (double)Ax);
     }
-    if ((U < 0.0f || V < 0.0f || W < 0.0f) && (U > 0.0f || V > 0.0f || W > 0.0f)) return 0;
+    /* mixed signs: the ray passes outside an edge.  Evaluated without
+     * short-circuits, so it is one branch (taken by most tests, which
+     * miss) rather than up to six data-dependent ones. */
+    const int neg = (U < 0.0f) | (V < 0.0f) | (W < 0.0f), pos = (U > 0.0f) | (V > 0.0f) | (W > 0.0f);
+    if (neg & pos) return 0;
     const float det = U + V + W;
     if (det == 0.0f) return 0; /* degenerate triangle, or ray parallel to its plane */
     const float Az = r->sz * az, Bz = r->sz * bz, Cz = r->sz * cz;
