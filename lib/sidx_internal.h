@@ -252,11 +252,16 @@ static SIDX_INLINE int sidx__box_test(int robust, const sidx_ray *r, const sidx_
                                       float *t_near, float *t_far)
 {
     const float *bmin = &b->min.x, *bmax = &b->max.x, *o = &r->org.x, *inv = &r->inv_dir.x;
+    const float *const corner[2] = {bmin, bmax};
     float t0 = tmin, t1 = tmax;
     for (int i = 0; i < 3; ++i) {
-        float tn = (bmin[i] - o[i]) * inv[i];
-        float tf = (bmax[i] - o[i]) * inv[i];
-        if (r->sign[i]) { float tmp = tn; tn = tf; tf = tmp; }
+        /* near and far plane picked by the direction's sign (Williams et
+         * al. 2005): a pointer choice, not a swap of the two results —
+         * the same values without a branch that random directions make
+         * a coin toss */
+        const float *np = corner[r->sign[i] != 0], *fp = corner[r->sign[i] == 0];
+        const float tn = (np[i] - o[i]) * inv[i];
+        float tf = (fp[i] - o[i]) * inv[i];
         if (robust) tf *= SIDX_ROBUST_TFAR_SCALE;
         if (tn > t0) t0 = tn;
         if (tf < t1) t1 = tf;
