@@ -73,8 +73,10 @@
  *     `goto pop`: gcc turns the pointer choice back into a branch, or
  *     with a mask adds ~6% instructions; no gain;
  *   - widening t_split once (|t_split|·2γ₃) instead of t_near and t_far:
- *     -2% instructions, no measurable time difference, and decisions no
- *     longer bit-identical to the bound above; not worth it;
+ *     -2% instructions but diffuse rays ~4% slower — the widening then
+ *     waits for t_split and lengthens the chain the near/far branch
+ *     resolves on, while t_near/t_far are widened in parallel with the
+ *     node load — and decisions no longer match the bound above;
  *   - prefetching a child leaf's triangles when it is peeked at: no gain;
  *   - building the larger-area child's subtree first so the common
  *     descent reads the adjacent pair: no measurable gain (the pair of a
