@@ -127,11 +127,15 @@ static SIDX_INLINE int sidx__hook_wants(const sidx_hook *h, sidx_event_type t)
  * triangles get bit-identical edge functions of opposite sign, so a ray
  * cannot slip between them.  When an edge function is exactly 0 it is
  * recomputed in double, as the paper advises, so the sign is exact. */
-static SIDX_INLINE int sidx__tri_watertight(const sidx_ray *r, sidx_vec3 a, sidx_vec3 b, sidx_vec3 c, float tmax,
-                                            float *t_out, float *u_out, float *v_out)
+/* The same test on vertices read in place (pa, pb, pc point at x, y, z).
+ * The by-value form below copies its arguments to the stack first, since
+ * they are indexed by the ray's kx, ky, kz; a caller whose triangles
+ * already sit in memory (the kd-tree's leaf copies) saves that spill.
+ * Same arithmetic on the same floats, so bit-identical results. */
+static SIDX_INLINE int sidx__tri_watertight_p(const sidx_ray *r, const float *pa, const float *pb, const float *pc,
+                                              float tmax, float *t_out, float *u_out, float *v_out)
 {
     const float *o = &r->org.x;
-    const float *pa = &a.x, *pb = &b.x, *pc = &c.x;
     const int kx = r->kx, ky = r->ky, kz = r->kz;
     const float ax = pa[kx] - o[kx], ay = pa[ky] - o[ky], az = pa[kz] - o[kz];
     const float bx = pb[kx] - o[kx], by = pb[ky] - o[ky], bz = pb[kz] - o[kz];
@@ -147,7 +151,11 @@ static SIDX_INLINE int sidx__tri_watertight(const sidx_ray *r, sidx_vec3 a, sidx
         V = (float)((double)Ax * (double)Cy - (double)Ay * (double)Cx);
         W = (float)((double)Bx * (double)Ay - (double)By * (double)Ax);
     }
-    if ((U < 0.0f || V < 0.0f || W < 0.0f) && (U > 0.0f || V > 0.0f || W > 0.0f)) return 0;
+    /* mixed signs: the ray passes outside an edge.  Evaluated without
+     * short-circuits, so it is one branch (taken by most tests, which
+     * miss) rather than up to six data-dependent ones. */
+    const int neg = (U < 0.0f) | (V < 0.0f) | (W < 0.0f), pos = (U > 0.0f) | (V > 0.0f) | (W > 0.0f);
+    if (neg & pos) return 0;
     const float det = U + V + W;
     if (det == 0.0f) return 0; /* degenerate triangle, or ray parallel to its plane */
     const float Az = r->sz * az, Bz = r->sz * bz, Cz = r->sz * cz;
@@ -158,6 +166,11 @@ static SIDX_INLINE int sidx__tri_watertight(const sidx_ray *r, sidx_vec3 a, sidx
     *t_out = t;
     if (u_out) { const float inv = 1.0f / det; *u_out = V * inv; *v_out = W * inv; }
     return 1;
+}
+static SIDX_INLINE int sidx__tri_watertight(const sidx_ray *r, sidx_vec3 a, sidx_vec3 b, sidx_vec3 c, float tmax,
+                                            float *t_out, float *u_out, float *v_out)
+{
+    return sidx__tri_watertight_p(r, &a.x, &b.x, &c.x, tmax, t_out, u_out, v_out);
 }
 
 /* Möller & Trumbore 1997, as derived on the slides with Cramer's rule:
@@ -250,11 +263,16 @@ static SIDX_INLINE int sidx__box_test(int robust, const sidx_ray *r, const sidx_
                                       float *t_near, float *t_far)
 {
     const float *bmin = &b->min.x, *bmax = &b->max.x, *o = &r->org.x, *inv = &r->inv_dir.x;
+    const float *const corner[2] = {bmin, bmax};
     float t0 = tmin, t1 = tmax;
     for (int i = 0; i < 3; ++i) {
-        float tn = (bmin[i] - o[i]) * inv[i];
-        float tf = (bmax[i] - o[i]) * inv[i];
-        if (r->sign[i]) { float tmp = tn; tn = tf; tf = tmp; }
+        /* near and far plane picked by the direction's sign (Williams et
+         * al. 2005): a pointer choice, not a swap of the two results —
+         * the same values without a branch that random directions make
+         * a coin toss */
+        const float *np = corner[r->sign[i] != 0], *fp = corner[r->sign[i] == 0];
+        const float tn = (np[i] - o[i]) * inv[i];
+        float tf = (fp[i] - o[i]) * inv[i];
         if (robust) tf *= SIDX_ROBUST_TFAR_SCALE;
         if (tn > t0) t0 = tn;
         if (tf < t1) t1 = tf;

@@ -143,10 +143,14 @@ static void check_structure(const sidx_accel *a, const sidx_mesh *m)
     free(seen);
     assert_int_equal(kd->num_nodes, 2u * leaves - 1u);
     assert_int_equal(refs, kd->num_refs);
+    assert_true(kd->num_tris <= m->num_triangles);
     for (uint32_t i = 0; i < kd->num_refs; ++i) {
         assert_true(kd->prims[i] < m->num_triangles);
-        assert_memory_equal(&kd->tris[i].v0, &m->positions[m->indices[3u * kd->prims[i]]], sizeof(sidx_vec3));
-        assert_int_equal(kd->tris[i].prim, kd->prims[i]);
+        assert_true(kd->refs[i] < kd->num_tris);
+        const kd_tri *t = &kd->tris[kd->refs[i]];
+        assert_memory_equal(&t->v0, &m->positions[m->indices[3u * kd->prims[i]]], sizeof(sidx_vec3));
+        assert_memory_equal(&t->v2, &m->positions[m->indices[3u * kd->prims[i] + 2u]], sizeof(sidx_vec3));
+        assert_int_equal(t->prim, kd->prims[i]);
     }
     sidx_accel_stats s;
     assert_int_equal(sidx_accel_stats_get(a, &s), SIDX_OK);
@@ -380,22 +384,28 @@ static void hand_tree(sidx_accel *a, const sidx_mesh *m, const kd_node *nodes, u
     kd_tree *kd = a->impl;
     free(kd->nodes_mem); /* kd->nodes lies inside it (cache-line placement) */
     free(kd->prims);
+    free(kd->refs);
     free(kd->tris);
+    const uint32_t nt = m->num_triangles;
     kd->nodes = malloc(nn * sizeof *nodes);
     kd->nodes_mem = kd->nodes;
     kd->prims = malloc(np * sizeof *prims);
-    kd->tris = malloc(np * sizeof *kd->tris);
+    kd->refs = malloc(np * sizeof *prims);
+    kd->tris = malloc(nt * sizeof *kd->tris);
     assert_non_null(kd->nodes);
     assert_non_null(kd->prims);
+    assert_non_null(kd->refs);
     assert_non_null(kd->tris);
     memcpy(kd->nodes, nodes, nn * sizeof *nodes);
     memcpy(kd->prims, prims, np * sizeof *prims);
-    for (uint32_t i = 0; i < np; ++i) {
-        kd->tris[i].v0 = sidx_mesh_vertex(m, prims[i], 0);
-        kd->tris[i].v1 = sidx_mesh_vertex(m, prims[i], 1);
-        kd->tris[i].v2 = sidx_mesh_vertex(m, prims[i], 2);
-        kd->tris[i].prim = prims[i];
+    memcpy(kd->refs, prims, np * sizeof *prims); /* triangle copies in mesh order */
+    for (uint32_t i = 0; i < nt; ++i) {
+        kd->tris[i].v0 = sidx_mesh_vertex(m, i, 0);
+        kd->tris[i].v1 = sidx_mesh_vertex(m, i, 1);
+        kd->tris[i].v2 = sidx_mesh_vertex(m, i, 2);
+        kd->tris[i].prim = i;
     }
+    kd->num_tris = nt;
     kd->num_nodes = nn;
     kd->num_refs = np;
 }
