@@ -156,7 +156,7 @@ valgrind: deps
 	@$(MAKE) --no-print-directory build
 	@failed=0; for t in $(TESTS); do \
 	  echo "== valgrind $$t"; \
-	  SIDX_FAST_TESTS=1 valgrind -q --error-exitcode=99 --leak-check=full --show-leak-kinds=definite,indirect,possible \
+	  SIDX_FAST_TESTS=1 valgrind -q --error-exitcode=99 --suppressions=tests/valgrind.supp --leak-check=full --show-leak-kinds=definite,indirect,possible \
 	    --errors-for-leak-kinds=definite,indirect,possible $$t >/dev/null || { echo "!! FAILED: $$t"; failed=1; }; \
 	done; \
 	if [ $$failed -eq 0 ]; then echo "valgrind: every suite ran with zero errors and zero leaks"; fi; exit $$failed
