@@ -118,6 +118,78 @@ extern const wide_kernels sidx__wide_kernels_4_0, sidx__wide_kernels_8_0;
 extern const wide_kernels sidx__wide_kernels_4_1, sidx__wide_kernels_8_2;
 #endif
 
+#if defined(SIDX_WIDE_X86) && defined(__SSE2__)
+#include <immintrin.h>
+/* ---- 4 triangles at once (watertight), one ray --------------------------------
+ * Woop et al. 2013 on a leaf block's four lanes, SSE2 only so it inlines
+ * into the SSE4.1 and AVX2 walks and the packet walk alike (the blend is
+ * done with and/or).  The ray's lane-broadcast constants are set up once
+ * per ray (wide_tri_ray_init).  Returns 1 with the smallest t in
+ * [tmin, best) (lowest lane on ties), 0 for no hit, -1 when some lane's
+ * edge function is exactly 0 and the block must take the scalar path
+ * (wide_lane_test, which redoes those in double). */
+typedef struct wide_tri_ray {
+    __m128 okx, oky, okz, sx, sy, sz, ttmin;
+    uint32_t kx4, ky4, kz4; /* float offsets of the permuted axes inside a block's vertex */
+} wide_tri_ray;
+
+static SIDX_INLINE void wide_tri_ray_init(wide_tri_ray *T, const sidx_ray *r)
+{
+    const float *o = &r->org.x;
+    T->okx = _mm_set1_ps(o[r->kx]); T->oky = _mm_set1_ps(o[r->ky]); T->okz = _mm_set1_ps(o[r->kz]);
+    T->sx = _mm_set1_ps(r->sx); T->sy = _mm_set1_ps(r->sy); T->sz = _mm_set1_ps(r->sz);
+    T->ttmin = _mm_set1_ps(r->tmin);
+    T->kx4 = 4u * r->kx; T->ky4 = 4u * r->ky; T->kz4 = 4u * r->kz;
+}
+
+static SIDX_INLINE int wide_tri4_test(const wide_tri4 *B, const wide_tri_ray *R, float best, float *t_out,
+                                      unsigned *lane_out)
+{
+    const float *v = &B->v[0][0][0]; /* vertex k, axis x, lane l at v[12k + 4x + l] */
+    const __m128 ax = _mm_sub_ps(_mm_load_ps(v + R->kx4), R->okx);
+    const __m128 ay = _mm_sub_ps(_mm_load_ps(v + R->ky4), R->oky);
+    const __m128 az = _mm_sub_ps(_mm_load_ps(v + R->kz4), R->okz);
+    const __m128 bx = _mm_sub_ps(_mm_load_ps(v + 12 + R->kx4), R->okx);
+    const __m128 by = _mm_sub_ps(_mm_load_ps(v + 12 + R->ky4), R->oky);
+    const __m128 bz = _mm_sub_ps(_mm_load_ps(v + 12 + R->kz4), R->okz);
+    const __m128 cx = _mm_sub_ps(_mm_load_ps(v + 24 + R->kx4), R->okx);
+    const __m128 cy = _mm_sub_ps(_mm_load_ps(v + 24 + R->ky4), R->oky);
+    const __m128 cz = _mm_sub_ps(_mm_load_ps(v + 24 + R->kz4), R->okz);
+    const __m128 Ax = _mm_sub_ps(ax, _mm_mul_ps(R->sx, az)), Ay = _mm_sub_ps(ay, _mm_mul_ps(R->sy, az));
+    const __m128 Bx = _mm_sub_ps(bx, _mm_mul_ps(R->sx, bz)), By = _mm_sub_ps(by, _mm_mul_ps(R->sy, bz));
+    const __m128 Cx = _mm_sub_ps(cx, _mm_mul_ps(R->sx, cz)), Cy = _mm_sub_ps(cy, _mm_mul_ps(R->sy, cz));
+    const __m128 U = _mm_sub_ps(_mm_mul_ps(Cx, By), _mm_mul_ps(Cy, Bx));
+    const __m128 V = _mm_sub_ps(_mm_mul_ps(Ax, Cy), _mm_mul_ps(Ay, Cx));
+    const __m128 W = _mm_sub_ps(_mm_mul_ps(Bx, Ay), _mm_mul_ps(By, Ax));
+    const __m128 zero = _mm_setzero_ps();
+    const __m128 anyzero = _mm_or_ps(_mm_or_ps(_mm_cmpeq_ps(U, zero), _mm_cmpeq_ps(V, zero)), _mm_cmpeq_ps(W, zero));
+    if (SIDX_UNLIKELY(_mm_movemask_ps(anyzero))) return -1;
+    /* No edge function is ±0 now, so "some < 0 and some > 0" is "the sign
+     * bits differ": two XORs instead of six compares.  Lanes whose det is
+     * 0 or NaN (padding: NaN vertices) drop out through the ordered
+     * compare; their t below would fail anyway.  Most blocks a ray reaches
+     * are missed on every lane, and they stop here, before T and the
+     * division (Embree's kernels defer the division the same way). */
+    const __m128 mixed = _mm_castsi128_ps(
+        _mm_srai_epi32(_mm_castps_si128(_mm_or_ps(_mm_xor_ps(U, V), _mm_xor_ps(U, W))), 31)); /* sign to all bits */
+    const __m128 det = _mm_add_ps(_mm_add_ps(U, V), W);
+    const __m128 cand = _mm_andnot_ps(mixed, _mm_or_ps(_mm_cmplt_ps(det, zero), _mm_cmpgt_ps(det, zero)));
+    if (!_mm_movemask_ps(cand)) return 0;
+    const __m128 T = _mm_add_ps(_mm_add_ps(_mm_mul_ps(U, _mm_mul_ps(R->sz, az)), _mm_mul_ps(V, _mm_mul_ps(R->sz, bz))),
+                                _mm_mul_ps(W, _mm_mul_ps(R->sz, cz)));
+    const __m128 t = _mm_div_ps(T, det);
+    const __m128 ok = _mm_and_ps(cand, _mm_and_ps(_mm_cmpge_ps(t, R->ttmin), _mm_cmplt_ps(t, _mm_set1_ps(best))));
+    const unsigned m = (unsigned)_mm_movemask_ps(ok);
+    if (!m) return 0;
+    const __m128 tt = _mm_or_ps(_mm_and_ps(ok, t), _mm_andnot_ps(ok, _mm_set1_ps(INFINITY))); /* SSE2 blend */
+    __m128 mn = _mm_min_ps(tt, _mm_shuffle_ps(tt, tt, _MM_SHUFFLE(1, 0, 3, 2)));
+    mn = _mm_min_ps(mn, _mm_shuffle_ps(mn, mn, _MM_SHUFFLE(2, 3, 0, 1)));
+    *lane_out = (unsigned)__builtin_ctz((unsigned)_mm_movemask_ps(_mm_cmpeq_ps(tt, mn)) & m);
+    *t_out = _mm_cvtss_f32(mn);
+    return 1;
+}
+#endif
+
 /* The instruction set bvh4/bvh8 pick on this machine: the best the CPU
  * has, unless the environment variable SIDX_SIMD=scalar (or sse4.1) asks
  * for less — that is how the tests run the portable fallback. */

@@ -67,9 +67,7 @@ typedef struct WFN(wray_) {
     float o[3], inv[3], finv[3], tmin;
 #endif
 #if WALK_ISA >= 1
-    /* watertight triangle test, lane-broadcast */
-    __m128 okx, oky, okz, sx, sy, sz, ttmin;
-    uint32_t kx4, ky4, kz4; /* float offsets of the permuted axes inside a block's vertex */
+    wide_tri_ray tri; /* watertight triangle test, lane-broadcast (bvh_wide_internal.h) */
 #endif
     uint32_t no[3], fo[3];  /* float offsets of the near / far planes of each axis inside a node */
 } WFN(wray_);
@@ -98,10 +96,7 @@ WINL void WFN(wray_init_)(WFN(wray_) * R, const sidx_ray *r, float scale)
     R->tmin = r->tmin;
 #endif
 #if WALK_ISA >= 1
-    R->okx = _mm_set1_ps(o[r->kx]); R->oky = _mm_set1_ps(o[r->ky]); R->okz = _mm_set1_ps(o[r->kz]);
-    R->sx = _mm_set1_ps(r->sx); R->sy = _mm_set1_ps(r->sy); R->sz = _mm_set1_ps(r->sz);
-    R->ttmin = _mm_set1_ps(r->tmin);
-    R->kx4 = 4u * r->kx; R->ky4 = 4u * r->ky; R->kz4 = 4u * r->kz;
+    wide_tri_ray_init(&R->tri, r);
 #endif
 }
 
@@ -165,59 +160,6 @@ WINL unsigned WFN(boxes_)(const float *n, const WFN(wray_) * R, float best, floa
 #endif
 }
 
-/* ---- 4 triangles at once (watertight) -----------------------------------------
- * Returns 1 with the smallest t in [tmin, best) (lowest lane on ties),
- * 0 for no hit, -1 when some lane's edge function is exactly 0 and the
- * block must take the scalar path (which redoes those in double). */
-#if WALK_ISA >= 1
-WINL int WFN(tri4_)(const wide_tri4 *B, const WFN(wray_) * R, float best, float *t_out, unsigned *lane_out)
-{
-    const float *v = &B->v[0][0][0]; /* vertex k, axis x, lane l at v[12k + 4x + l] */
-    const __m128 ax = _mm_sub_ps(_mm_load_ps(v + R->kx4), R->okx);
-    const __m128 ay = _mm_sub_ps(_mm_load_ps(v + R->ky4), R->oky);
-    const __m128 az = _mm_sub_ps(_mm_load_ps(v + R->kz4), R->okz);
-    const __m128 bx = _mm_sub_ps(_mm_load_ps(v + 12 + R->kx4), R->okx);
-    const __m128 by = _mm_sub_ps(_mm_load_ps(v + 12 + R->ky4), R->oky);
-    const __m128 bz = _mm_sub_ps(_mm_load_ps(v + 12 + R->kz4), R->okz);
-    const __m128 cx = _mm_sub_ps(_mm_load_ps(v + 24 + R->kx4), R->okx);
-    const __m128 cy = _mm_sub_ps(_mm_load_ps(v + 24 + R->ky4), R->oky);
-    const __m128 cz = _mm_sub_ps(_mm_load_ps(v + 24 + R->kz4), R->okz);
-    const __m128 Ax = _mm_sub_ps(ax, _mm_mul_ps(R->sx, az)), Ay = _mm_sub_ps(ay, _mm_mul_ps(R->sy, az));
-    const __m128 Bx = _mm_sub_ps(bx, _mm_mul_ps(R->sx, bz)), By = _mm_sub_ps(by, _mm_mul_ps(R->sy, bz));
-    const __m128 Cx = _mm_sub_ps(cx, _mm_mul_ps(R->sx, cz)), Cy = _mm_sub_ps(cy, _mm_mul_ps(R->sy, cz));
-    const __m128 U = _mm_sub_ps(_mm_mul_ps(Cx, By), _mm_mul_ps(Cy, Bx));
-    const __m128 V = _mm_sub_ps(_mm_mul_ps(Ax, Cy), _mm_mul_ps(Ay, Cx));
-    const __m128 W = _mm_sub_ps(_mm_mul_ps(Bx, Ay), _mm_mul_ps(By, Ax));
-    const __m128 zero = _mm_setzero_ps();
-    const __m128 anyzero = _mm_or_ps(_mm_or_ps(_mm_cmpeq_ps(U, zero), _mm_cmpeq_ps(V, zero)), _mm_cmpeq_ps(W, zero));
-    if (SIDX_UNLIKELY(_mm_movemask_ps(anyzero))) return -1;
-    /* No edge function is ±0 now, so "some < 0 and some > 0" is "the sign
-     * bits differ": two XORs instead of six compares.  Lanes whose det is
-     * 0 or NaN (padding: NaN vertices) drop out through the ordered
-     * compare; their t below would fail anyway.  Most blocks a ray reaches
-     * are missed on every lane, and they stop here, before T and the
-     * division (Embree's kernels defer the division the same way). */
-    const __m128 mixed = _mm_castsi128_ps(
-        _mm_srai_epi32(_mm_castps_si128(_mm_or_ps(_mm_xor_ps(U, V), _mm_xor_ps(U, W))), 31)); /* sign to all bits */
-    const __m128 det = _mm_add_ps(_mm_add_ps(U, V), W);
-    const __m128 cand = _mm_andnot_ps(mixed, _mm_or_ps(_mm_cmplt_ps(det, zero), _mm_cmpgt_ps(det, zero)));
-    if (!_mm_movemask_ps(cand)) return 0;
-    const __m128 T = _mm_add_ps(_mm_add_ps(_mm_mul_ps(U, _mm_mul_ps(R->sz, az)), _mm_mul_ps(V, _mm_mul_ps(R->sz, bz))),
-                                _mm_mul_ps(W, _mm_mul_ps(R->sz, cz)));
-    const __m128 t = _mm_div_ps(T, det);
-    const __m128 ok = _mm_and_ps(cand, _mm_and_ps(_mm_cmpge_ps(t, R->ttmin), _mm_cmplt_ps(t, _mm_set1_ps(best))));
-    const unsigned m = (unsigned)_mm_movemask_ps(ok);
-    if (!m) return 0;
-    const __m128 tt = _mm_blendv_ps(_mm_set1_ps(INFINITY), t, ok);
-    __m128 mn = _mm_min_ps(tt, _mm_shuffle_ps(tt, tt, _MM_SHUFFLE(1, 0, 3, 2)));
-    mn = _mm_min_ps(mn, _mm_shuffle_ps(mn, mn, _MM_SHUFFLE(2, 3, 0, 1)));
-    const unsigned lane = (unsigned)__builtin_ctz((unsigned)_mm_movemask_ps(_mm_cmpeq_ps(tt, mn)) & m);
-    *t_out = _mm_cvtss_f32(mn);
-    *lane_out = lane;
-    return 1;
-}
-#endif
-
 /* One leaf: its blocks in order.  Returns 1 when an any-hit query may stop. */
 WINL int WFN(leaf_)(const sidx_accel *a, const wide_bvh *w, uint32_t first_block, const sidx_ray *r,
                     const WFN(wray_) * R, const sidx_query *q, uint32_t node_id, float *best, uint32_t *prim,
@@ -233,7 +175,7 @@ WINL int WFN(leaf_)(const sidx_accel *a, const wide_bvh *w, uint32_t first_block
         if (!traced && simd_tri) {
             float t;
             unsigned lane;
-            const int h = WFN(tri4_)(B, R, *best, &t, &lane);
+            const int h = wide_tri4_test(B, &R->tri, *best, &t, &lane);
             if (h >= 0) {
                 scalar = 0;
                 if (h) {

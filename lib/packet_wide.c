@@ -465,62 +465,17 @@ AVX unsigned group_slot_avx(const float *nd, const uint32_t W, uint32_t s, const
     return (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(t0, t1, _CMP_LE_OQ));
 }
 
-/* The 4-triangle watertight test of bvh_wide_walk.h (tri4_), operation
- * for operation (SSE2 only, the blend done with and/or, so it inlines
- * into the AVX2 walk without a call), for one ray: 1 hit (smallest t, lowest lane on ties),
- * 0 none, −1 an edge function is exactly 0 (the scalar test decides). */
-static SIDX_INLINE int tri4_sse(const wide_tri4 *B, const sidx_ray *r, float best, float *t_out, unsigned *lane_out)
-{
-    const float *o = &r->org.x, *v = &B->v[0][0][0];
-    const uint32_t kx4 = 4u * r->kx, ky4 = 4u * r->ky, kz4 = 4u * r->kz;
-    const __m128 okx = _mm_set1_ps(o[r->kx]), oky = _mm_set1_ps(o[r->ky]), okz = _mm_set1_ps(o[r->kz]);
-    const __m128 sx = _mm_set1_ps(r->sx), sy = _mm_set1_ps(r->sy), sz = _mm_set1_ps(r->sz);
-    const __m128 ax = _mm_sub_ps(_mm_load_ps(v + kx4), okx);
-    const __m128 ay = _mm_sub_ps(_mm_load_ps(v + ky4), oky);
-    const __m128 az = _mm_sub_ps(_mm_load_ps(v + kz4), okz);
-    const __m128 bx = _mm_sub_ps(_mm_load_ps(v + 12 + kx4), okx);
-    const __m128 by = _mm_sub_ps(_mm_load_ps(v + 12 + ky4), oky);
-    const __m128 bz = _mm_sub_ps(_mm_load_ps(v + 12 + kz4), okz);
-    const __m128 cx = _mm_sub_ps(_mm_load_ps(v + 24 + kx4), okx);
-    const __m128 cy = _mm_sub_ps(_mm_load_ps(v + 24 + ky4), oky);
-    const __m128 cz = _mm_sub_ps(_mm_load_ps(v + 24 + kz4), okz);
-    const __m128 Ax = _mm_sub_ps(ax, _mm_mul_ps(sx, az)), Ay = _mm_sub_ps(ay, _mm_mul_ps(sy, az));
-    const __m128 Bx = _mm_sub_ps(bx, _mm_mul_ps(sx, bz)), By = _mm_sub_ps(by, _mm_mul_ps(sy, bz));
-    const __m128 Cx = _mm_sub_ps(cx, _mm_mul_ps(sx, cz)), Cy = _mm_sub_ps(cy, _mm_mul_ps(sy, cz));
-    const __m128 U = _mm_sub_ps(_mm_mul_ps(Cx, By), _mm_mul_ps(Cy, Bx));
-    const __m128 V = _mm_sub_ps(_mm_mul_ps(Ax, Cy), _mm_mul_ps(Ay, Cx));
-    const __m128 Wv = _mm_sub_ps(_mm_mul_ps(Bx, Ay), _mm_mul_ps(By, Ax));
-    const __m128 zero = _mm_setzero_ps();
-    const __m128 anyzero = _mm_or_ps(_mm_or_ps(_mm_cmpeq_ps(U, zero), _mm_cmpeq_ps(V, zero)), _mm_cmpeq_ps(Wv, zero));
-    if (SIDX_UNLIKELY(_mm_movemask_ps(anyzero))) return -1;
-    const __m128 mixed = _mm_castsi128_ps(
-        _mm_srai_epi32(_mm_castps_si128(_mm_or_ps(_mm_xor_ps(U, V), _mm_xor_ps(U, Wv))), 31));
-    const __m128 det = _mm_add_ps(_mm_add_ps(U, V), Wv);
-    const __m128 cand = _mm_andnot_ps(mixed, _mm_or_ps(_mm_cmplt_ps(det, zero), _mm_cmpgt_ps(det, zero)));
-    if (!_mm_movemask_ps(cand)) return 0;
-    const __m128 T = _mm_add_ps(_mm_add_ps(_mm_mul_ps(U, _mm_mul_ps(sz, az)), _mm_mul_ps(V, _mm_mul_ps(sz, bz))),
-                                _mm_mul_ps(Wv, _mm_mul_ps(sz, cz)));
-    const __m128 t = _mm_div_ps(T, det);
-    const __m128 ok = _mm_and_ps(cand, _mm_and_ps(_mm_cmpge_ps(t, _mm_set1_ps(r->tmin)), _mm_cmplt_ps(t, _mm_set1_ps(best))));
-    const unsigned m = (unsigned)_mm_movemask_ps(ok);
-    if (!m) return 0;
-    const __m128 tt = _mm_or_ps(_mm_and_ps(ok, t), _mm_andnot_ps(ok, _mm_set1_ps(INFINITY))); /* SSE2 blend */
-    __m128 mn = _mm_min_ps(tt, _mm_shuffle_ps(tt, tt, _MM_SHUFFLE(1, 0, 3, 2)));
-    mn = _mm_min_ps(mn, _mm_shuffle_ps(mn, mn, _MM_SHUFFLE(2, 3, 0, 1)));
-    *lane_out = (unsigned)__builtin_ctz((unsigned)_mm_movemask_ps(_mm_cmpeq_ps(tt, mn)) & m);
-    *t_out = _mm_cvtss_f32(mn);
-    return 1;
-}
-
 /* Ray i against one leaf, a block per SSE pass; a block with a zero edge
  * function goes through the scalar loop (on that block only). */
 static SIDX_INLINE int leaf_ray_sse(const sidx_accel *a, const wide_tri4 *B, wpk *P, uint32_t i)
 {
     const sidx_ray *r = P->ray[i];
+    wide_tri_ray T; /* the shared kernel of bvh_wide_internal.h, set up once per leaf */
+    wide_tri_ray_init(&T, r);
     for (;; ++B) {
         float t;
         unsigned lane;
-        const int h = tri4_sse(B, r, P->best[i], &t, &lane);
+        const int h = wide_tri4_test(B, &T, P->best[i], &t, &lane);
         if (h > 0) {
             P->prim[i] = B->prim[lane] & WIDE_PRIM_MASK;
             if (P->anyhit) {
