@@ -153,6 +153,24 @@ sidx_status sidx_accel_auto(const sidx_mesh *mesh, const sidx_build_options *opt
 
 static const sidx_query default_query = {0, SIDX_TRAVERSE_DEFAULT, NULL, 0};
 
+/* u, v (re-running the same test on the one triangle with a slightly
+ * larger bound, so it reproduces the hit: identical arithmetic, identical
+ * t) and the geometric normal, from the mesh, for what `need` asks. */
+void sidx__hit_attrs_from_mesh(const sidx_accel *a, const sidx_ray *r, uint32_t need, sidx_hit *hit)
+{
+    const sidx_mesh *m = a->mesh;
+    const sidx_vec3 p0 = sidx_mesh_vertex(m, hit->prim, 0), p1 = sidx_mesh_vertex(m, hit->prim, 1),
+                    p2 = sidx_mesh_vertex(m, hit->prim, 2);
+    if (need & SIDX_QUERY_UV) {
+        float t, u = 0.0f, v = 0.0f;
+        if (sidx__tri_test(a->opt.tri, r, p0, p1, p2, nextafterf(hit->t, INFINITY), &t, &u, &v)) {
+            hit->u = u;
+            hit->v = v;
+        }
+    }
+    if (need & SIDX_QUERY_NORMAL) hit->ng = sidx__tri_normal(p0, p1, p2);
+}
+
 /* u, v and the geometric normal of the final hit only: the hot loop never
  * pays for them ("no u/v or normals unless asked").  A structure that
  * keeps them from its own traversal (a->fills_uv, a->fills_ng) has set
@@ -168,20 +186,7 @@ static void finish_hit(const sidx_accel *a, const sidx_ray *r, const sidx_query 
     if (hit->instance != SIDX_NO_HIT || !(q->flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL))) return;
     const uint32_t own = (a->fills_uv ? SIDX_QUERY_UV : 0u) | (a->fills_ng ? SIDX_QUERY_NORMAL : 0u);
     const uint32_t need = q->flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL) & ~own;
-    if (!need) return;
-    const sidx_mesh *m = a->mesh;
-    const sidx_vec3 p0 = sidx_mesh_vertex(m, hit->prim, 0), p1 = sidx_mesh_vertex(m, hit->prim, 1),
-                    p2 = sidx_mesh_vertex(m, hit->prim, 2);
-    if (need & SIDX_QUERY_UV) {
-        float t, u = 0.0f, v = 0.0f;
-        /* Re-run the same test on the one triangle with a slightly larger
-         * bound so it reproduces the hit; identical arithmetic, identical t. */
-        if (sidx__tri_test(a->opt.tri, r, p0, p1, p2, nextafterf(hit->t, INFINITY), &t, &u, &v)) {
-            hit->u = u;
-            hit->v = v;
-        }
-    }
-    if (need & SIDX_QUERY_NORMAL) hit->ng = sidx__tri_normal(p0, p1, p2);
+    if (need) sidx__hit_attrs_from_mesh(a, r, need, hit);
 }
 
 sidx_status sidx_accel_intersect(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)

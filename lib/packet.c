@@ -559,18 +559,9 @@ void sidx__packet_finish(const sidx_accel *a, const sidx_ray *r, uint32_t flags,
         *h = sidx_hit_none();
         return;
     }
-    if (!(flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL))) return; /* never touch the mesh unless asked */
-    const sidx_mesh *m = a->mesh;
-    const sidx_vec3 p0 = sidx_mesh_vertex(m, h->prim, 0), p1 = sidx_mesh_vertex(m, h->prim, 1),
-                    p2 = sidx_mesh_vertex(m, h->prim, 2);
-    if (flags & SIDX_QUERY_UV) {
-        float t, u = 0.0f, v = 0.0f;
-        if (sidx__tri_test(a->opt.tri, r, p0, p1, p2, nextafterf(h->t, INFINITY), &t, &u, &v)) {
-            h->u = u;
-            h->v = v;
-        }
-    }
-    if (flags & SIDX_QUERY_NORMAL) h->ng = sidx_v3_cross(sidx_v3_sub(p1, p0), sidx_v3_sub(p2, p0));
+    /* never touch the mesh unless asked; the packet walks keep no u, v */
+    const uint32_t need = flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL);
+    if (need) sidx__hit_attrs_from_mesh(a, r, need, h);
 }
 
 /* avx: 1 / 0 as decided by the caller, or −1 to ask have_avx2. */
