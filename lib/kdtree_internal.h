@@ -153,11 +153,34 @@ enum {
  * mostly waits on memory ("Latency can harm you!"), while a leaf's
  * watertight tests read one contiguous run: a step costs about as much as
  * several triangle tests, hence C_trav = 4, C_tri = 1 (the smallest tree
- * among the fastest).  The empty bonus is Wald & Havran's λ = 0.8 (bonus
+ * among the fastest) while leaves were tested one triangle at a time.
+ *
+ * Since leaves are tested four references per SSE pass (blocks, above), a
+ * reference costs about a quarter of a scalar test and larger leaves pay.
+ * Re-measured (bunny, 20k rays per kind, sidx_ray_init + u, v, Ng per
+ * ray, best of 4, 3 rounds interleaved with "bvh" on a loaded machine;
+ * leaf = mean references per non-empty leaf, MB = sidx_accel_stats.bytes):
+ *
+ *   C_trav:C_tri  nodes  refs/tri  leaf  MB    primary    diffuse (Mrays/s)
+ *   4 : 1         155k   2.87      6.0   10.0  7.8-8.5    2.58-2.87
+ *   8 : 1         63k    2.17      11.2  7.1   8.8-9.1    2.70-3.07
+ *   12 : 1        39k    1.92      16.1  6.2   9.1-9.8    3.02-3.25
+ *   16 : 1        28k    1.79      20.7  5.7   9.5-10.0   3.07-3.28
+ *   24 : 1        17k    1.63      30.1  5.1   9.1-9.6    3.16-3.28
+ *   "bvh"                                      9.9-10.0   3.23-3.43
+ *
+ * so C_trav = 16 (Sponza: 1.2x "bvh" primary, 1.5x diffuse at both 4 and
+ * 16).  Fewer, larger leaves also shrink the tree (28k nodes, 222 KB: the
+ * nodes stay in L2).  Also tried at 16 : 1: empty bonus 0.1, 0.35, 0.5
+ * (0.1 the same, the others 5-15% slower), and a per-leaf constant in the
+ * SAH for the expected partial block (n + 3 instead of n references,
+ * since a run of n references starting anywhere in a block spans
+ * (n + 3) / 4 blocks on average): no gain at 8, 12 or 16 : 1.
+ * The empty bonus is Wald & Havran's λ = 0.8 (bonus
  * 0.2, applied to the whole cost); 0.5 spends the depth limit on thin
  * empty slabs.  Leaf size 1 (pbrt) lets the SAH alone decide; the
  * intuitive builders, which have no cost to stop them, stop at 4. */
-#define KD_DEFAULT_C_TRAV 4.0f
+#define KD_DEFAULT_C_TRAV 16.0f
 #define KD_DEFAULT_C_TRI 1.0f
 #define KD_DEFAULT_EMPTY_BONUS 0.2f
 #define KD_DEFAULT_LEAF_SAH 1u

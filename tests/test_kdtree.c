@@ -626,12 +626,14 @@ static void test_stadium_isolates_teapot(void **state)
              * cell holding all of it is no bigger than twice the teapot's
              * own box on every axis and sits at depth <= 8 (measured: 5);
              * below it the tree spends at least 10 more levels on the
-             * teapot's detail, down to leaves of a few triangles. */
+             * teapot's detail, down to small leaves. */
             const sidx_vec3 ce = sidx_aabb_extent(w.lca_cell), te = sidx_aabb_extent(teapot);
             assert_true(ce.x <= 2.0f * te.x && ce.y <= 2.0f * te.y && ce.z <= 2.0f * te.z);
             assert_true(w.lca_depth <= 8);
             assert_true(w.max_teapot_leaf_depth >= w.lca_depth + 10);
-            assert_true(per_leaf[0] < 8.0);
+            /* leaves of about C_trav / C_tri references: past that a
+             * split costs less than testing them (measured: 17 at 16 : 1) */
+            assert_true(per_leaf[0] < 2.0 * KD_DEFAULT_C_TRAV / KD_DEFAULT_C_TRI);
         }
         sidx_accel_destroy(a);
     }
