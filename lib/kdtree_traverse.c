@@ -143,6 +143,7 @@ static SIDX_NOINLINE void kd_hit_attrs(const sidx_accel *a, const sidx_ray *r, c
     }
 }
 
+#if KD_SIMD
 /* A block the SIMD kernel declined (some lane's edge function is exactly
  * 0): the scalar test, which redoes those in double, lane by lane; the
  * smallest t wins, the lowest lane on ties, as in the kernel. */
@@ -162,6 +163,7 @@ static SIDX_NOINLINE int kd_block_scalar(const sidx_accel *a, const sidx_ray *r,
     }
     return found;
 }
+#endif
 
 /* The closest hit, written once when the walk ends. */
 static SIDX_INLINE void kd_finish(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, const wide_tri4 *B,
@@ -181,6 +183,7 @@ static SIDX_INLINE int kd_walk(const sidx_accel *a, const sidx_ray *r, const sid
     const kd_node *nodes = kd->nodes;
     const wide_tri4 *blocks = kd->blocks;
     const sidx_tri_method method = a->opt.tri;
+    (void)method; /* only the SIMD leaf test asks */
     const int robust = a->opt.box == SIDX_BOX_ROBUST;
     const int mailbox = !a->opt.no_mailbox;
     const float org[3] = {r->org.x, r->org.y, r->org.z};
