@@ -183,9 +183,7 @@ static SIDX_INLINE int kd_walk(const sidx_accel *a, const sidx_ray *r, const sid
     const kd_node *nodes = kd->nodes;
     const wide_tri4 *blocks = kd->blocks;
     const sidx_tri_method method = a->opt.tri;
-    (void)method; /* only the SIMD leaf test asks */
     const int robust = a->opt.box == SIDX_BOX_ROBUST;
-    const int mailbox = !a->opt.no_mailbox;
     const float org[3] = {r->org.x, r->org.y, r->org.z};
     const float inv[3] = {r->inv_dir.x, r->inv_dir.y, r->inv_dir.z};
     const uint32_t sign[3] = {r->sign[0], r->sign[1], r->sign[2]};
@@ -210,7 +208,10 @@ static SIDX_INLINE int kd_walk(const sidx_accel *a, const sidx_ray *r, const sid
     const int simd = !traced && method == SIDX_TRI_WATERTIGHT;
     wide_tri_ray R;
     wide_tri_ray_init(&R, r);
+#else
+    const int simd = 0;
 #endif
+    const int mailbox = !a->opt.no_mailbox && !simd; /* the scalar leaf loop's */
     kd_entry stack[KD_MAX_DEPTH + 2];
     unsigned sp = 0;
     uint32_t mbox[KD_MAILBOX];
