@@ -785,9 +785,36 @@ static void kd_free(const sidx_accel *a, kd_tree *kd)
     if (!kd) return;
     sidx__free(a, kd->nodes_mem);
     sidx__free(a, kd->prims);
-    sidx__free(a, kd->refs);
-    sidx__free(a, kd->tris);
+    sidx__free(a, kd->blocks_mem);
     sidx__free(a, kd);
+}
+
+/* One copy of each reference's triangle, four references to a block in
+ * structure-of-arrays form, in reference order (kdtree_internal.h).  The
+ * lanes past the last reference get NaN vertices (no comparison on them
+ * is true, so the SIMD test never reports them) and WIDE_PAD_PRIM. */
+sidx_status sidx__kd_make_blocks(const sidx_accel *a, kd_tree *kd, const sidx_mesh *m)
+{
+    sidx__free(a, kd->blocks_mem);
+    kd->blocks = NULL;
+    kd->blocks_mem = NULL;
+    const uint32_t nb = (kd->num_refs + 3u) / 4u;
+    kd->num_blocks = nb;
+    kd->blocks_mem = sidx__alloc(a, (size_t)(nb ? nb : 1u) * sizeof(wide_tri4) + 64u, 1);
+    if (!kd->blocks_mem) return SIDX_ERR_NOMEM;
+    kd->blocks = (wide_tri4 *)(void *)(((uintptr_t)kd->blocks_mem + 63u) & ~(uintptr_t)63u);
+    for (uint32_t i = 0; i < 4u * nb; ++i) {
+        wide_tri4 *B = &kd->blocks[i / 4u];
+        const uint32_t l = i % 4u;
+        for (int v = 0; v < 3; ++v) {
+            const sidx_vec3 p = i < kd->num_refs ? sidx_mesh_vertex(m, kd->prims[i], v) : sidx_v3(NAN, NAN, NAN);
+            B->v[v][0][l] = p.x;
+            B->v[v][1][l] = p.y;
+            B->v[v][2][l] = p.z;
+        }
+        B->prim[l] = i < kd->num_refs ? kd->prims[i] : WIDE_PAD_PRIM;
+    }
+    return SIDX_OK;
 }
 
 sidx_status sidx__kd_build(sidx_accel *a, sidx_error *err)
@@ -803,12 +830,14 @@ sidx_status sidx__kd_build(sidx_accel *a, sidx_error *err)
 
     kd_tree *kd = sidx__calloc(a, 1, sizeof *kd);
     if (!kd) return sidx__fail(err, SIDX_ERR_NOMEM, "%s: out of memory", a->name);
-    kd->tris = sidx__alloc(a, n, sizeof *kd->tris);
-    if (!kd->tris) { kd_free(a, kd); return sidx__fail(err, SIDX_ERR_NOMEM, "%s: out of memory", a->name); }
+    /* the builder's copy of the triangles (clipping reads them) */
+    kd_tri *tris = sidx__alloc(a, n ? n : 1u, sizeof *tris);
+    if (!tris) { kd_free(a, kd); return sidx__fail(err, SIDX_ERR_NOMEM, "%s: out of memory", a->name); }
     for (uint32_t i = 0; i < n; ++i) {
-        kd->tris[i].v0 = sidx_mesh_vertex(m, i, 0);
-        kd->tris[i].v1 = sidx_mesh_vertex(m, i, 1);
-        kd->tris[i].v2 = sidx_mesh_vertex(m, i, 2);
+        tris[i].v0 = sidx_mesh_vertex(m, i, 0);
+        tris[i].v1 = sidx_mesh_vertex(m, i, 1);
+        tris[i].v2 = sidx_mesh_vertex(m, i, 2);
+        tris[i].prim = i;
     }
     kd->bounds = root;
 
@@ -817,13 +846,11 @@ sidx_status sidx__kd_build(sidx_accel *a, sidx_error *err)
     b.a = a;
     b.hook = a->opt.hook;
     b.name = a->name;
-    b.tris = kd->tris;
+    b.tris = tris;
     b.variant = a->variant;
-    /* Smaller leaves were re-measured once a reference cost 4 bytes
-     * instead of a 40-byte triangle copy (kdtree_internal.h): C_trav:C_tri
-     * 3:1 (4.5 triangles per leaf) and 2:1 (3.3) test fewer triangles but
-     * take more steps, and traced no faster than 4:1 on the bunny
-     * (diffuse rays 2-9% slower), so the default stays. */
+    /* The defaults and their measurements: kdtree_internal.h.  (With
+     * scalar leaf tests, 3:1 and 2:1 were also re-measured and traced no
+     * faster than 4:1 on the bunny; with SIMD leaf blocks 16:1 is best.) */
     b.c_trav = a->opt.c_trav > 0.0f ? a->opt.c_trav : KD_DEFAULT_C_TRAV;
     b.c_tri = a->opt.c_tri > 0.0f ? a->opt.c_tri : KD_DEFAULT_C_TRI;
     const float bonus = a->opt.empty_bonus > 0.0f ? a->opt.empty_bonus : KD_DEFAULT_EMPTY_BONUS;
@@ -856,6 +883,7 @@ sidx_status sidx__kd_build(sidx_accel *a, sidx_error *err)
         }
     }
     sidx__free(a, b.cls);
+    sidx__free(a, tris);
     kd->nodes = kd->nodes_mem = b.nodes;
     kd->prims = b.prims;
     if (s != SIDX_OK) {
@@ -869,34 +897,11 @@ sidx_status sidx__kd_build(sidx_accel *a, sidx_error *err)
     kd->num_refs = b.num_refs;
     align_nodes(a, kd);
     kd->prims = shrink(a, kd->prims, kd->num_refs, sizeof *kd->prims, b.prims_cap);
-    /* Reorder the triangle copies by their first reference in the leaf
-     * array (depth-first leaf order), so triangles of neighbouring leaves
-     * sit side by side, and point each reference at its copy. */
-    kd_tri *rt = sidx__alloc(a, n ? n : 1u, sizeof *rt);
-    uint32_t *slot = sidx__alloc(a, n ? n : 1u, sizeof *slot);
-    kd->refs = sidx__alloc(a, kd->num_refs ? kd->num_refs : 1u, sizeof *kd->refs);
-    if (!rt || !slot || !kd->refs) {
-        sidx__free(a, rt);
-        sidx__free(a, slot);
+    s = sidx__kd_make_blocks(a, kd, m);
+    if (s != SIDX_OK) {
         kd_free(a, kd);
-        return sidx__fail(err, SIDX_ERR_NOMEM, "%s: out of memory", a->name);
+        return sidx__fail(err, s, "%s: out of memory", a->name);
     }
-    memset(slot, 0xff, (size_t)n * sizeof *slot);
-    uint32_t used = 0;
-    for (uint32_t i = 0; i < kd->num_refs; ++i) {
-        const uint32_t p = kd->prims[i];
-        if (slot[p] == UINT32_MAX) {
-            slot[p] = used;
-            rt[used] = kd->tris[p];
-            rt[used].prim = p;
-            ++used;
-        }
-        kd->refs[i] = slot[p];
-    }
-    sidx__free(a, slot);
-    sidx__free(a, kd->tris);
-    kd->tris = rt;
-    kd->num_tris = used;
     kd->leaves = b.leaves;
     kd->empty_leaves = b.empty_leaves;
     kd->max_depth = b.depth;
@@ -928,8 +933,8 @@ void sidx__kd_stats(const sidx_accel *a, sidx_accel_stats *s)
     s->prim_refs = kd->num_refs;
     const uint32_t full = kd->leaves - kd->empty_leaves;
     s->mean_leaf_prims = full ? (double)kd->num_refs / (double)full : 0.0;
-    s->bytes = sizeof *kd + (size_t)kd->num_nodes * sizeof(kd_node) + (size_t)kd->num_refs * 2u * sizeof(uint32_t) +
-               (size_t)kd->num_tris * sizeof(kd_tri);
+    s->bytes = sizeof *kd + (size_t)kd->num_nodes * sizeof(kd_node) + (size_t)kd->num_refs * sizeof(uint32_t) +
+               (size_t)kd->num_blocks * sizeof(wide_tri4);
     s->sah_cost = kd->sah_cost;
 }
 

@@ -20,19 +20,30 @@
  *     ray interval [t_near, t_far];
  *   - nodes are written depth first as the build recurses, sibling pairs
  *     allocated together, so a subtree is one contiguous run of memory;
- *   - triangle vertices are copied into their own array (`tris`), once
- *     per triangle, in the order of each triangle's first leaf reference
- *     (depth-first leaf order), so the deck's "Memory should be separated
- *     by rate of access" holds: traversal steps touch only the 8-byte
- *     nodes, a leaf reads its 4-byte references (`refs`, indices into
- *     `tris`) and then the vertices.  One copy per *reference* instead
- *     (the leaf's vertices in one contiguous run, no index to chase) was
- *     measured first and rejected: with ~2.9 references per triangle on
- *     the bunny it needs 8 MB instead of 2.8 + 0.8 MB, and the copy per
- *     triangle traced ~5% more primary rays/s on the bunny (diffuse rays
- *     and Sponza unchanged; best of 7 interleaved rounds against "bvh").
- *     `prims` keeps the original triangle ids per reference for the
- *     public view (sidx_kdtree_refs); traversal reads `refs`.
+ *   - the leaves' triangles are copied, one copy per *reference*, into
+ *     blocks of four in structure-of-arrays form (`blocks`, the wide BVH's
+ *     wide_tri4, bvh_wide_internal.h): reference i of the leaf array sits
+ *     in block i / 4, lane i % 4.  The leaf's node already holds its
+ *     reference offset, so a leaf reads its blocks directly: no index to
+ *     chase ("Memory should be separated by rate of access": traversal
+ *     steps touch only the 8-byte nodes, leaves only their blocks).  One
+ *     SSE pass then runs the watertight test on four references at once
+ *     (wide_tri4_test, bit-identical to the scalar test).  The blocks are
+ *     cut from the reference array, not per leaf, so a leaf's first and
+ *     last block may hold neighbouring leaves' triangles: the traversal
+ *     tests those lanes too.  That is harmless: a hit on any scene
+ *     triangle is a true hit, so the best so far is still a true hit and
+ *     the early termination argument (every triangle hit before t_far of
+ *     the current cell lies in a cell already visited) is unchanged.
+ *     Memory: 40 bytes per reference (bunny, same tree: 8.0 MB for 199k
+ *     references against 2.8 + 0.8 MB for one copy per triangle plus a
+ *     4-byte index per reference before; with the larger leaves the SIMD
+ *     test affords, 16 : 1 below, 124k references in 5.0 MB); `prims`
+ *     keeps the original triangle ids per reference for the public view
+ *     (sidx_kdtree_refs).
+ *     History: one plain copy per reference, scalar tests, was measured
+ *     first and rejected (~5% fewer primary rays/s on the bunny than one
+ *     copy per triangle); the SIMD test is what pays for the memory.
  *
  * Node ids in BUILD_* and traversal events are indices in `nodes`. */
 #ifndef SIDX_KDTREE_INTERNAL_H
@@ -40,6 +51,7 @@
 
 #include "sidx_internal.h"
 #include "sidx/kdtree.h"
+#include "bvh_wide_internal.h" /* wide_tri4, wide_tri4_test */
 
 /* Low 2 bits of kd_node.bits: the split axis, or 3 for a leaf. */
 #define KD_LEAF_FLAG 3u
@@ -96,7 +108,7 @@ static inline kd_node kd_make_leaf(uint32_t count, uint32_t offset)
     return n;
 }
 
-/* One triangle: its vertices and its original id (what a hit reports). */
+/* One triangle for the builder (clipping): its vertices and its original id. */
 typedef struct kd_tri {
     sidx_vec3 v0, v1, v2;
     uint32_t prim;
@@ -108,9 +120,9 @@ typedef struct kd_tree {
     uint32_t num_nodes;
     uint32_t *prims;        /* leaf primitive references (original triangle ids), for the public view */
     uint32_t num_refs;
-    uint32_t *refs;         /* num_refs entries: refs[i] = index in tris of prims[i] */
-    kd_tri *tris;           /* num_tris entries, one per referenced triangle */
-    uint32_t num_tris;
+    wide_tri4 *blocks;      /* reference i in blocks[i / 4], lane i % 4; 64-byte aligned in blocks_mem */
+    void *blocks_mem;
+    uint32_t num_blocks;    /* (num_refs + 3) / 4; padding lanes have NaN vertices, WIDE_PAD_PRIM */
     sidx_aabb bounds;       /* the root cell: the scene box */
     /* statistics, filled by the build */
     uint32_t leaves, empty_leaves, max_depth;
@@ -143,17 +155,43 @@ enum {
  * mostly waits on memory ("Latency can harm you!"), while a leaf's
  * watertight tests read one contiguous run: a step costs about as much as
  * several triangle tests, hence C_trav = 4, C_tri = 1 (the smallest tree
- * among the fastest).  The empty bonus is Wald & Havran's λ = 0.8 (bonus
+ * among the fastest) while leaves were tested one triangle at a time.
+ *
+ * Since leaves are tested four references per SSE pass (blocks, above), a
+ * reference costs about a quarter of a scalar test and larger leaves pay.
+ * Re-measured (bunny, 20k rays per kind, sidx_ray_init + u, v, Ng per
+ * ray, best of 4, 3 rounds interleaved with "bvh" on a loaded machine;
+ * leaf = mean references per non-empty leaf, MB = sidx_accel_stats.bytes):
+ *
+ *   C_trav:C_tri  nodes  refs/tri  leaf  MB    primary    diffuse (Mrays/s)
+ *   4 : 1         155k   2.87      6.0   10.0  7.8-8.5    2.58-2.87
+ *   8 : 1         63k    2.17      11.2  7.1   8.8-9.1    2.70-3.07
+ *   12 : 1        39k    1.92      16.1  6.2   9.1-9.8    3.02-3.25
+ *   16 : 1        28k    1.79      20.7  5.7   9.5-10.0   3.07-3.28
+ *   24 : 1        17k    1.63      30.1  5.1   9.1-9.6    3.16-3.28
+ *   "bvh"                                      9.9-10.0   3.23-3.43
+ *
+ * so C_trav = 16 (Sponza: 1.2x "bvh" primary, 1.5x diffuse at both 4 and
+ * 16).  Fewer, larger leaves also shrink the tree (28k nodes, 222 KB: the
+ * nodes stay in L2).  Also tried at 16 : 1: empty bonus 0.1, 0.35, 0.5
+ * (0.1 the same, the others 5-15% slower), and a per-leaf constant in the
+ * SAH for the expected partial block (n + 3 instead of n references,
+ * since a run of n references starting anywhere in a block spans
+ * (n + 3) / 4 blocks on average): no gain at 8, 12 or 16 : 1.
+ * The empty bonus is Wald & Havran's λ = 0.8 (bonus
  * 0.2, applied to the whole cost); 0.5 spends the depth limit on thin
  * empty slabs.  Leaf size 1 (pbrt) lets the SAH alone decide; the
  * intuitive builders, which have no cost to stop them, stop at 4. */
-#define KD_DEFAULT_C_TRAV 4.0f
+#define KD_DEFAULT_C_TRAV 16.0f
 #define KD_DEFAULT_C_TRI 1.0f
 #define KD_DEFAULT_EMPTY_BONUS 0.2f
 #define KD_DEFAULT_LEAF_SAH 1u
 #define KD_DEFAULT_LEAF_INTUITIVE 4u
 
 sidx_status sidx__kd_build(sidx_accel *a, sidx_error *err);
+/* (Re)make kd->blocks from kd->prims and the mesh (also used by the tests'
+ * hand-made trees).  SIDX_ERR_NOMEM leaves kd->blocks NULL. */
+sidx_status sidx__kd_make_blocks(const sidx_accel *a, kd_tree *kd, const sidx_mesh *m);
 void sidx__kd_destroy(sidx_accel *a);
 void sidx__kd_stats(const sidx_accel *a, sidx_accel_stats *s);
 
