@@ -49,7 +49,7 @@
 #undef WALK_ISA
 #undef WALK_TARGET
 
-#define WALK_TARGET __attribute__((target("avx2,fma")))
+#define WALK_TARGET __attribute__((target("avx2,fma,popcnt")))
 #define WALK_ISA 2
 #define WALK_W 8
 #include "bvh_wide_walk.h"
@@ -66,7 +66,8 @@ wide_isa sidx__wide_pick_isa(uint32_t width)
     else if (env && !strcmp(env, "sse4.1")) allow = 1;
 #ifdef SIDX_WIDE_X86
     __builtin_cpu_init();
-    if (width == 8 && allow >= 2 && __builtin_cpu_supports("avx2")) return WIDE_ISA_AVX2;
+    if (width == 8 && allow >= 2 && __builtin_cpu_supports("avx2") && __builtin_cpu_supports("popcnt"))
+        return WIDE_ISA_AVX2;
     if (width == 4 && allow >= 1 && __builtin_cpu_supports("sse4.1")) return WIDE_ISA_SSE41;
 #else
     (void)width;

@@ -180,6 +180,34 @@ WINL void WFN(prefetch_)(const wide_bvh *w, const float *nodes, uint32_t c)
     if (WALK_W == 8) __builtin_prefetch(p + 192);
 }
 
+/* Where hit child s goes among the hit children hm: how many of them are
+ * visited before it — nearer, or as near and in a lower slot.  This is
+ * the order the insertion sort below produces (stable, so equal entries
+ * keep slot order), computed for each child independently: two compares
+ * of all W entries against s's, no data-dependent branches.  The
+ * insertion sort's inner loop was the walk's second worst branch site
+ * (callgrind --branch-sim: 67k of 324k mispredicts on 20000 Sponza
+ * diffuse rays).  Entry distances are never NaN (the max with tmin). */
+WINL uint32_t WFN(rank_)(const float *tn, unsigned s, unsigned hm)
+{
+#if WALK_ISA == 2
+    const __m256 T = _mm256_load_ps(tn), d = _mm256_set1_ps(tn[s]);
+    const unsigned lt = (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(T, d, _CMP_LT_OQ));
+    const unsigned eq = (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(T, d, _CMP_EQ_OQ));
+#elif WALK_ISA == 1
+    const __m128 T = _mm_load_ps(tn), d = _mm_set1_ps(tn[s]);
+    const unsigned lt = (unsigned)_mm_movemask_ps(_mm_cmplt_ps(T, d));
+    const unsigned eq = (unsigned)_mm_movemask_ps(_mm_cmpeq_ps(T, d));
+#else
+    unsigned lt = 0, eq = 0;
+    for (unsigned k = 0; k < WALK_W; ++k) {
+        lt |= (unsigned)(tn[k] < tn[s]) << k;
+        eq |= (unsigned)(tn[k] == tn[s]) << k;
+    }
+#endif
+    return (uint32_t)__builtin_popcount(hm & (lt | (eq & ((1u << s) - 1u))));
+}
+
 /* One leaf: its blocks in order.  Returns 1 when an any-hit query may stop. */
 WINL int WFN(leaf_)(const sidx_accel *a, const wide_bvh *w, uint32_t first_block, const sidx_ray *r,
                     const WFN(wray_) * R, const sidx_query *q, uint32_t node_id, float *best, uint32_t *prim,
@@ -336,6 +364,25 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
                     stk_tn[sp] = first0 ? d1 : d0;
                     ++sp;
                     cur = first0 ? ch[s0] : ch[s1];
+                    ++depth;
+                    continue;
+                }
+                if (!traced && !anyhit) {
+                    /* Several, closest hit: each goes straight to its
+                     * place, nearest on top (see rank_). */
+                    const unsigned hm = m | (1u << s0);
+                    const uint32_t top = sp + (uint32_t)__builtin_popcount(hm) - 1u;
+                    unsigned mm = hm;
+                    do {
+                        const unsigned s = (unsigned)__builtin_ctz(mm);
+                        mm &= mm - 1;
+                        const uint32_t at = top - WFN(rank_)(tn, s, hm);
+                        stk[at] = ch[s];
+                        stk_tn[at] = tn[s];
+                        if (WIDE_PREFETCH) WFN(prefetch_)(w, nodes, ch[s]);
+                    } while (mm);
+                    sp = top; /* the nearest is visited now, the rest wait */
+                    cur = stk[top];
                     ++depth;
                     continue;
                 }
