@@ -302,6 +302,7 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
      * box holding a triangle an ulp nearer (bvh_slab says more). */
     const float scale = a->opt.box == SIDX_BOX_ROBUST ? SIDX_ROBUST_TFAR_SCALE : 1.0f;
     WFN(wray_init_)(&R, r, scale);
+    float best_s = best * scale; /* the widened bound boxes are clipped to (see bvh_slab) */
 
     /* Deferred children and their entry distances; exit distance, depth
      * and event id only for the events (dead in the untraced copies). */
@@ -324,7 +325,7 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
         if (!(cur & WIDE_LEAF_BIT)) {
             const float *n = nodes + (size_t)cur * (8u * WALK_W);
             const uint32_t *ch = wide_child(n, WALK_W);
-            unsigned m = WFN(boxes_)(n, &R, best * scale, tn, tf, traced); /* widened: see bvh_slab */
+            unsigned m = WFN(boxes_)(n, &R, best_s, tn, tf, traced);
             if (traced) {
                 const uint32_t *ids = wide_id(n, WALK_W);
                 for (uint32_t s = 0; s < WALK_W; ++s) {
@@ -442,11 +443,14 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
                 ++depth;
                 continue;
             }
-        } else if (WFN(leaf_)(a, w, cur & ~WIDE_LEAF_BIT, r, &R, q, cur_id, &best, &prim, &hit_block, &hit_lane,
-                              anyhit, traced, simd_tri)) {
-            SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = SIDX_TERM_ANY_HIT;
-                      e_.count = visited);
-            return 1;
+        } else {
+            if (WFN(leaf_)(a, w, cur & ~WIDE_LEAF_BIT, r, &R, q, cur_id, &best, &prim, &hit_block, &hit_lane,
+                           anyhit, traced, simd_tri)) {
+                SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = SIDX_TERM_ANY_HIT;
+                          e_.count = visited);
+                return 1;
+            }
+            best_s = best * scale; /* best only changes in a leaf */
         }
         /* Pop the next deferred child that can still hold a closer hit. */
         for (;;) {
@@ -465,7 +469,7 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
             --sp;
             SIDX_EMIT(traced, q->hook, SIDX_EV_STACK_POP, e_.ray_id = q->ray_id; e_.node = stk_id[sp];
                       e_.depth = sp + 1; e_.t_near = stk_tn[sp]; e_.t_far = stk_tf[sp]);
-            if (stk_tn[sp] < best * scale) {
+            if (stk_tn[sp] < best_s) {
                 cur = stk[sp];
                 if (traced) {
                     cur_tn = stk_tn[sp];
