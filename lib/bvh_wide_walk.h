@@ -18,10 +18,11 @@
  *      SECOND operand when either is NaN, so the slab value goes first and
  *      the running interval second — the SIMD twin of `x > y ? x : y`;
  *   2. one hit child: descend, no stack traffic (the common case deep in
- *      the tree); several: sort them by entry distance (insertion sort on
- *      at most 8 (ref, t) pairs — in practice 2 or 3) and descend into the
- *      nearest, deferring the others nearest-on-top, as Wald et al. 2008
- *      and Embree do;
+ *      the tree); two: one compare; more: each goes straight to its stack
+ *      slot by its rank in entry distance (rank_; the traced copy sorts
+ *      by insertion, same order) — then descend into the nearest,
+ *      deferring the others nearest-on-top, as Wald et al. 2008 and
+ *      Embree do; every hit child is prefetched as it is handled;
  *   3. a leaf: its triangle blocks, 4 triangles per SSE pass with the
  *      watertight test (Woop, Benthin, Wald 2013) written lane-parallel;
  *   4. pop the next deferred child whose entry is still before the best hit.
