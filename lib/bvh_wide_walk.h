@@ -181,6 +181,20 @@ WINL void WFN(prefetch_)(const wide_bvh *w, const float *nodes, uint32_t c)
     if (WALK_W == 8) __builtin_prefetch(p + 192);
 }
 
+/* Bits set in a slot mask (< 256).  The AVX2 copy is compiled with
+ * POPCNT; elsewhere __builtin_popcount would be a call into libgcc, so
+ * three steps of adding neighbouring bit fields instead. */
+WINL uint32_t WFN(popc_)(unsigned x)
+{
+#if WALK_ISA == 2
+    return (uint32_t)__builtin_popcount(x);
+#else
+    x = x - ((x >> 1) & 0x55u);
+    x = (x & 0x33u) + ((x >> 2) & 0x33u);
+    return (x + (x >> 4)) & 0x0Fu;
+#endif
+}
+
 /* Where hit child s goes among the hit children hm: how many of them are
  * visited before it — nearer, or as near and in a lower slot.  This is
  * the order the insertion sort below produces (stable, so equal entries
@@ -206,7 +220,7 @@ WINL uint32_t WFN(rank_)(const float *tn, unsigned s, unsigned hm)
         eq |= (unsigned)(tn[k] == tn[s]) << k;
     }
 #endif
-    return (uint32_t)__builtin_popcount(hm & (lt | (eq & ((1u << s) - 1u))));
+    return WFN(popc_)(hm & (lt | (eq & ((1u << s) - 1u))));
 }
 
 /* One leaf: its blocks in order.  Returns 1 when an any-hit query may stop. */
@@ -373,7 +387,7 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
                     /* Several, closest hit: each goes straight to its
                      * place, nearest on top (see rank_). */
                     const unsigned hm = m | (1u << s0);
-                    const uint32_t top = sp + (uint32_t)__builtin_popcount(hm) - 1u;
+                    const uint32_t top = sp + WFN(popc_)(hm) - 1u;
                     unsigned mm = hm;
                     do {
                         const unsigned s = (unsigned)__builtin_ctz(mm);
