@@ -110,7 +110,14 @@ static void set_kernels(wide_bvh *w, sidx_tri_method tri)
  * triangles): both are one SIMD pass and a few cache lines, so 1 : 1,
  * as in Embree's builders.  This replaces a greedy "open the child of
  * largest area" rule: it fills nodes where that pays and keeps subtrees
- * of up to WIDE_MAX_LEAF triangles as multi-block leaves where that pays. */
+ * of up to WIDE_MAX_LEAF triangles as multi-block leaves where that pays.
+ *
+ * Measured (session 5, bvh8 AVX2, 20000 Sponza diffuse rays, callgrind
+ * instructions in the walk): C_NODE 0.7 / 1.5 / 2, WIDE_MAX_LEAF 4 / 12 /
+ * 16, a binary tree built down to 1 triangle per leaf (as Ylitie et al.
+ * do) and 8 to 512 bins all moved the count by under 1 % (bins: ±4 %
+ * either way, no trend) and the timing by less than the noise, so the
+ * constants stay. */
 #define WIDE_MAX_LEAF 8u
 #define WIDE_C_NODE 1.0f
 #define WIDE_C_BLOCK 1.0f
