@@ -165,10 +165,14 @@ WINL unsigned WFN(boxes_)(const float *n, const WFN(wray_) * R, float best, floa
  * The walk is bound by the latency of these loads (perf: most samples sit
  * on the first load of a node or block), so every hit child is fetched
  * as soon as it is known, the nearest for now and the others for when
- * they are popped.  Branch-free (the address is selected, and a prefetch
- * of an address past a leaf's last block is harmless): a loop over the
- * hit mask with a leaf/node branch inside cost ~9 mispredicted branches
- * per Sponza diffuse ray (callgrind --branch-sim), as much as it saved.
+ * they are popped, inside the code that handles it anyway: a separate
+ * loop over the hit mask cost ~9 mispredicted branches per Sponza diffuse
+ * ray (callgrind --branch-sim), as much as it saved.  GCC still compiles
+ * the leaf/node choice below to a branch (~2.4 mispredicts per ray in
+ * the same count); forcing a conditional move (inline asm, both
+ * addresses computed) removed those for 5 % more instructions and
+ * measured no faster (Sponza a little up, bunny a little down), and
+ * prefetching a leaf's 4th line is harmless.
  * A node is 2 (bvh4) or 4 (bvh8) cache lines, a leaf block 2.5. */
 WINL void WFN(prefetch_)(const wide_bvh *w, const float *nodes, uint32_t c)
 {
