@@ -96,9 +96,6 @@ WINL void WFN(wray_init_)(WFN(wray_) * R, const sidx_ray *r, float scale)
     for (int k = 0; k < 3; ++k) { R->o[k] = o[k]; R->inv[k] = inv[k]; R->finv[k] = inv[k] * scale; }
     R->tmin = r->tmin;
 #endif
-#if WALK_ISA >= 1
-    wide_tri_ray_init(&R->tri, r);
-#endif
 }
 
 /* ---- W boxes at once ---------------------------------------------------------
@@ -321,6 +318,8 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
      * box holding a triangle an ulp nearer (bvh_slab says more). */
     const float scale = a->opt.box == SIDX_BOX_ROBUST ? SIDX_ROBUST_TFAR_SCALE : 1.0f;
     WFN(wray_init_)(&R, r, scale);
+    int tri_ready = 0;
+    (void)tri_ready;
     float best_s = best * scale; /* the widened bound boxes are clipped to (see bvh_slab) */
 
     /* Deferred children and their entry distances; exit distance, depth
@@ -463,6 +462,12 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
                 continue;
             }
         } else {
+#if WALK_ISA >= 1
+            if (!tri_ready) { /* the triangle constants, at the first leaf: a ray that reaches none needs none */
+                wide_tri_ray_init(&R.tri, r);
+                tri_ready = 1;
+            }
+#endif
             if (WFN(leaf_)(a, w, cur & ~WIDE_LEAF_BIT, r, &R, q, cur_id, &best, &prim, &hit_block, &hit_lane,
                            anyhit, traced, simd_tri)) {
                 SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = SIDX_TERM_ANY_HIT;
