@@ -49,7 +49,7 @@
 #undef WALK_ISA
 #undef WALK_TARGET
 
-#define WALK_TARGET __attribute__((target("avx2,fma")))
+#define WALK_TARGET __attribute__((target("avx2,fma,popcnt")))
 #define WALK_ISA 2
 #define WALK_W 8
 #include "bvh_wide_walk.h"
@@ -66,7 +66,8 @@ wide_isa sidx__wide_pick_isa(uint32_t width)
     else if (env && !strcmp(env, "sse4.1")) allow = 1;
 #ifdef SIDX_WIDE_X86
     __builtin_cpu_init();
-    if (width == 8 && allow >= 2 && __builtin_cpu_supports("avx2")) return WIDE_ISA_AVX2;
+    if (width == 8 && allow >= 2 && __builtin_cpu_supports("avx2") && __builtin_cpu_supports("popcnt"))
+        return WIDE_ISA_AVX2;
     if (width == 4 && allow >= 1 && __builtin_cpu_supports("sse4.1")) return WIDE_ISA_SSE41;
 #else
     (void)width;
@@ -109,7 +110,14 @@ static void set_kernels(wide_bvh *w, sidx_tri_method tri)
  * triangles): both are one SIMD pass and a few cache lines, so 1 : 1,
  * as in Embree's builders.  This replaces a greedy "open the child of
  * largest area" rule: it fills nodes where that pays and keeps subtrees
- * of up to WIDE_MAX_LEAF triangles as multi-block leaves where that pays. */
+ * of up to WIDE_MAX_LEAF triangles as multi-block leaves where that pays.
+ *
+ * Measured (session 5, bvh8 AVX2, 20000 Sponza diffuse rays, callgrind
+ * instructions in the walk): C_NODE 0.7 / 1.5 / 2, WIDE_MAX_LEAF 4 / 12 /
+ * 16, a binary tree built down to 1 triangle per leaf (as Ylitie et al.
+ * do) and 8 to 512 bins all moved the count by under 1 % (bins: ±4 %
+ * either way, no trend) and the timing by less than the noise, so the
+ * constants stay. */
 #define WIDE_MAX_LEAF 8u
 #define WIDE_C_NODE 1.0f
 #define WIDE_C_BLOCK 1.0f
