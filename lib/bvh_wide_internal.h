@@ -69,6 +69,21 @@ static SIDX_INLINE int wide_lane_test(const sidx_accel *a, const sidx_ray *r, co
     return sidx__tri_test(a->opt.tri, r, p0, p1, p2, best, t, u, v);
 }
 
+/* u, v of a watertight hit on lane l of a block, for the final hit of a
+ * query that asks for them: the float edge functions again
+ * (sidx__tri_watertight_edges: the same floats the test computed), then
+ * sidx__tri_watertight_uv — the test's own last step — without redoing
+ * T, t and the compares.  Returns 0, leaving u, v alone, when an edge
+ * function is exactly 0: the test takes those in double, so only the
+ * full test (wide_lane_test) reproduces that hit. */
+static SIDX_INLINE int wide_lane_uv(const sidx_ray *r, const wide_tri4 *B, unsigned l, float *u, float *v)
+{
+    const sidx__wt_edges e = sidx__tri_watertight_edges(r, &B->v[0][0][l], &B->v[1][0][l], &B->v[2][0][l], 4);
+    if (e.U == 0.0f || e.V == 0.0f || e.W == 0.0f) return 0;
+    sidx__tri_watertight_uv(e.V, e.W, e.U + e.V + e.W, u, v);
+    return 1;
+}
+
 struct wide_bvh;
 typedef void (*wide_isect_fn)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit);
 typedef int (*wide_occl_fn)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q);

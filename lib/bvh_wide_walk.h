@@ -214,20 +214,26 @@ WINL int WFN(leaf_)(const sidx_accel *a, const wide_bvh *w, uint32_t first_block
 
 /* u, v and ng of the final hit, from the leaf block's copy of the
  * triangle (so no index and vertex look-ups in the mesh, which a diffuse
- * ray mostly misses in cache): the same scalar test and normal the core
- * would compute (accel.c finish_hit), on the same floats, so the same
- * bits.  The bound only has to exceed t, which was accepted below the old
- * best, so +inf does. */
+ * ray mostly misses in cache): the same test and normal the core would
+ * compute (accel.c finish_hit), on the same floats, so the same bits.
+ * With the watertight test, u, v come from the lane's edge functions
+ * (wide_lane_uv: no T, no t); otherwise, or when the lane has an
+ * exactly-0 edge function, from the whole test again, whose bound only
+ * has to exceed t, which was accepted below the old best, so +inf does.
+ * Nothing here runs during the walk: a query without u, v pays nothing. */
 WINL void WFN(uv_)(const sidx_accel *a, const sidx_ray *r, uint32_t flags, const wide_tri4 *B, unsigned l,
                    sidx_hit *hit)
 {
     const sidx_vec3 p0 = {B->v[0][0][l], B->v[0][1][l], B->v[0][2][l]};
     const sidx_vec3 p1 = {B->v[1][0][l], B->v[1][1][l], B->v[1][2][l]};
     const sidx_vec3 p2 = {B->v[2][0][l], B->v[2][1][l], B->v[2][2][l]};
-    float t, u = 0.0f, v = 0.0f;
-    if ((flags & SIDX_QUERY_UV) && sidx__tri_test(a->opt.tri, r, p0, p1, p2, INFINITY, &t, &u, &v)) {
-        hit->u = u;
-        hit->v = v;
+    if (flags & SIDX_QUERY_UV) {
+        float t, u = 0.0f, v = 0.0f;
+        if ((a->opt.tri == SIDX_TRI_WATERTIGHT && wide_lane_uv(r, B, l, &u, &v)) ||
+            sidx__tri_test(a->opt.tri, r, p0, p1, p2, INFINITY, &t, &u, &v)) {
+            hit->u = u;
+            hit->v = v;
+        }
     }
     if (flags & SIDX_QUERY_NORMAL) hit->ng = sidx__tri_normal(p0, p1, p2);
 }
