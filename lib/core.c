@@ -59,11 +59,23 @@ sidx_status sidx__fail(sidx_error *err, sidx_status s, const char *fmt, ...)
 
 sidx_status sidx_ray_init(sidx_ray *r, sidx_vec3 org, sidx_vec3 dir, float tmin, float tmax)
 {
+    /* finite: all six components; signs: bit i set where dir[i] is
+     * negative, -0.0 included (the near/far child order, sign[]). */
+#ifdef SIDX_RAY_INIT_SSE2
+    /* lane 3 is a harmless 1: finite, positive, and a quotient that raises no flag */
+    const __m128 o4 = _mm_setr_ps(org.x, org.y, org.z, 1.0f), d4 = _mm_setr_ps(dir.x, dir.y, dir.z, 1.0f);
+    const __m128 fin4 = _mm_add_ps(_mm_sub_ps(o4, o4), _mm_sub_ps(d4, d4));
+    const int finite = _mm_movemask_ps(_mm_cmpeq_ps(fin4, _mm_setzero_ps())) == 0xF;
+    const unsigned signs = (unsigned)_mm_movemask_ps(d4) & 7u;
+#else
     const float fin = ((org.x - org.x) + (org.y - org.y)) + ((org.z - org.z) + (dir.x - dir.x)) +
                       ((dir.y - dir.y) + (dir.z - dir.z));
+    const int finite = fin == 0.0f;
+    const unsigned signs = (signbit(dir.x) ? 1u : 0u) | (signbit(dir.y) ? 2u : 0u) | (signbit(dir.z) ? 4u : 0u);
+#endif
     /* tmin >= 0 excludes a NaN tmin; then tmin <= tmax fails exactly when
      * tmax is NaN or tmin > tmax. */
-    if (!r || !(fin == 0.0f) || !(tmin >= 0.0f && tmin <= tmax)) return SIDX_ERR_INVALID_ARG;
+    if (!r || !finite || !(tmin >= 0.0f && tmin <= tmax)) return SIDX_ERR_INVALID_ARG;
 
     /* Watertight test set-up (Woop et al. 2013, section 3): kz is the axis
      * of largest |d|; swap kx, ky when d[kz] < 0 to keep the winding. */
@@ -74,10 +86,7 @@ sidx_status sidx_ray_init(sidx_ray *r, sidx_vec3 org, sidx_vec3 dir, float tmin,
     if (!(amax > 0.0f)) return SIDX_ERR_INVALID_ARG; /* dir is (±0, ±0, ±0) */
     const int z_wins = az > axy;
     const int kz = 2 * z_wins + y_wins * !z_wins; /* arithmetic, not a branch */
-    /* The sign bits, 1 where a component is negative (-0.0 included): the
-     * near/far child order, and — d[kz] is not ±0 — whether d[kz] < 0. */
-    const unsigned sx_ = signbit(dir.x) ? 1u : 0u, sy_ = signbit(dir.y) ? 1u : 0u, sz_ = signbit(dir.z) ? 1u : 0u;
-    const unsigned kz_neg = ((sx_ | sy_ << 1 | sz_ << 2) >> kz) & 1u;
+    const unsigned kz_neg = (signs >> kz) & 1u; /* d[kz] is not ±0: its sign bit says d[kz] < 0 */
     /* kx = kz + 1 (mod 3), or kz + 2 when d[kz] < 0; ky is the third axis. */
     static const uint8_t mod3[5] = {0, 1, 2, 0, 1};
     const int kx = mod3[kz + 1 + (int)kz_neg], ky = 3 - kz - kx;
@@ -91,7 +100,7 @@ sidx_status sidx_ray_init(sidx_ray *r, sidx_vec3 org, sidx_vec3 dir, float tmin,
      * "leans" to, which keeps near/far child order consistent. */
 #ifdef SIDX_RAY_INIT_SSE2
     float inv[4], shear[4];
-    _mm_storeu_ps(inv, _mm_div_ps(_mm_set1_ps(1.0f), _mm_setr_ps(dir.x, dir.y, dir.z, 1.0f)));
+    _mm_storeu_ps(inv, _mm_div_ps(_mm_set1_ps(1.0f), d4));
     _mm_storeu_ps(shear, _mm_div_ps(_mm_setr_ps(d[kx], d[ky], 1.0f, 1.0f), _mm_set1_ps(d[kz])));
     r->inv_dir = sidx_v3(inv[0], inv[1], inv[2]);
     r->sx = shear[0];
@@ -103,9 +112,9 @@ sidx_status sidx_ray_init(sidx_ray *r, sidx_vec3 org, sidx_vec3 dir, float tmin,
     r->sy = d[ky] / d[kz];
     r->sz = (&r->inv_dir.x)[kz]; /* the same 1/d[kz], already computed: one division fewer per ray */
 #endif
-    r->sign[0] = (uint8_t)sx_;
-    r->sign[1] = (uint8_t)sy_;
-    r->sign[2] = (uint8_t)sz_;
+    r->sign[0] = (uint8_t)(signs & 1u);
+    r->sign[1] = (uint8_t)(signs >> 1 & 1u);
+    r->sign[2] = (uint8_t)(signs >> 2);
     r->kx = (uint8_t)kx;
     r->ky = (uint8_t)ky;
     r->kz = (uint8_t)kz;
