@@ -153,17 +153,16 @@ sidx_status sidx_accel_auto(const sidx_mesh *mesh, const sidx_build_options *opt
 
 static const sidx_query default_query = {0, SIDX_TRAVERSE_DEFAULT, NULL, 0};
 
-/* u, v (re-running the same test on the one triangle with a slightly
- * larger bound, so it reproduces the hit: identical arithmetic, identical
- * t) and the geometric normal, from the mesh, for what `need` asks. */
+/* u, v (sidx__tri_hit_uv: the accepting test's own floats, so its bits)
+ * and the geometric normal, from the mesh, for what `need` asks. */
 void sidx__hit_attrs_from_mesh(const sidx_accel *a, const sidx_ray *r, uint32_t need, sidx_hit *hit)
 {
     const sidx_mesh *m = a->mesh;
     const sidx_vec3 p0 = sidx_mesh_vertex(m, hit->prim, 0), p1 = sidx_mesh_vertex(m, hit->prim, 1),
                     p2 = sidx_mesh_vertex(m, hit->prim, 2);
     if (need & SIDX_QUERY_UV) {
-        float t, u = 0.0f, v = 0.0f;
-        if (sidx__tri_test(a->opt.tri, r, p0, p1, p2, nextafterf(hit->t, INFINITY), &t, &u, &v)) {
+        float u = 0.0f, v = 0.0f;
+        if (sidx__tri_hit_uv(a->opt.tri, r, p0, p1, p2, &u, &v)) {
             hit->u = u;
             hit->v = v;
         }

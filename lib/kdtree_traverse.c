@@ -109,13 +109,14 @@ typedef struct kd_entry {
 } kd_entry;
 
 /* u, v and the normal of a hit just accepted, when the query asks (a->fills_uv,
- * fills_ng): the same test re-run on the leaf's copy of the triangle, which
- * is in cache, instead of the mesh look-ups a diffuse ray mostly misses. */
+ * fills_ng): from the leaf's copy of the triangle, which is in cache,
+ * instead of the mesh look-ups a diffuse ray mostly misses; u, v by
+ * sidx__tri_hit_uv (the accepting test's floats, so its bits). */
 static SIDX_NOINLINE void kd_hit_attrs(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
                                        const kd_tri *tr, sidx_hit *hit)
 {
-    float t, u = 0.0f, v = 0.0f;
-    if ((q->flags & SIDX_QUERY_UV) && sidx__tri_test(a->opt.tri, r, tr->v0, tr->v1, tr->v2, INFINITY, &t, &u, &v)) {
+    float u = 0.0f, v = 0.0f;
+    if ((q->flags & SIDX_QUERY_UV) && sidx__tri_hit_uv(a->opt.tri, r, tr->v0, tr->v1, tr->v2, &u, &v)) {
         hit->u = u;
         hit->v = v;
     }

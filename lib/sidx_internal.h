@@ -266,6 +266,27 @@ static SIDX_INLINE int sidx__tri_test(sidx_tri_method m, const sidx_ray *r, sidx
     }
 }
 
+/* u, v of a hit that sidx__tri_test(m, r, a, b, c, ...) accepted, for a
+ * structure that finishes only the final hit: with the watertight test,
+ * the test's own last step on the float edge functions (the same floats
+ * the accepting test computed; no T, no t); when one of them is exactly 0
+ * (the test redid them in double) or with another test, the whole test
+ * again, whose bound only has to exceed the hit's t, so +inf does.  Same
+ * arithmetic on the same floats: the same bits. */
+static SIDX_INLINE int sidx__tri_hit_uv(sidx_tri_method m, const sidx_ray *r, sidx_vec3 a, sidx_vec3 b, sidx_vec3 c,
+                                       float *u, float *v)
+{
+    if (m == SIDX_TRI_WATERTIGHT) {
+        const sidx__wt_edges e = sidx__tri_watertight_edges(r, &a.x, &b.x, &c.x, 1);
+        if (e.U != 0.0f && e.V != 0.0f && e.W != 0.0f) {
+            sidx__tri_watertight_uv(e.V, e.W, e.U + e.V + e.W, u, v);
+            return 1;
+        }
+    }
+    float t;
+    return sidx__tri_test(m, r, a, b, c, INFINITY, &t, u, v);
+}
+
 /* The geometric normal hit.ng: (p1 − p0) × (p2 − p0), unnormalized.  One
  * definition, so a structure computing it from its own copy of the
  * vertices gets the same bits as accel.c's finish_hit from the mesh. */
