@@ -86,6 +86,7 @@ static void set_kernels(wide_bvh *w, sidx_tri_method tri)
     /* The triangle test is fixed at build: decide here, not per ray. */
     const int simd_tri = tri == SIDX_TRI_WATERTIGHT;
     w->isect = simd_tri ? k->isect_simd : k->isect_other;
+    w->isect_uv = simd_tri ? k->isect_simd_uv : k->isect_other;
     w->occl = simd_tri ? k->occl_simd : k->occl_other;
     w->isect_traced = k->isect_traced;
     w->occl_traced = k->occl_traced;
@@ -549,6 +550,7 @@ static void wide_intersect(const sidx_accel *a, const sidx_ray *r, const sidx_qu
 {
     const wide_bvh *w = a->impl;
     if (SIDX_QUERY_TRACED(q)) w->isect_traced(a, r, q, hit);
+    else if (q && (q->flags & SIDX_QUERY_UV)) w->isect_uv(a, r, q, hit);
     else w->isect(a, r, q, hit);
 }
 

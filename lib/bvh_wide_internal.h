@@ -82,14 +82,30 @@ static SIDX_INLINE int wide_lane_test(const sidx_accel *a, const sidx_ray *r, co
     return sidx__tri_test(a->opt.tri, r, p0, p1, p2, best, t, u, v);
 }
 
+/* u, v of a watertight hit on lane l of a block, for the final hit of a
+ * query that asks for them: the float edge functions again
+ * (sidx__tri_watertight_edges: the same floats the test computed), then
+ * sidx__tri_watertight_uv — the test's own last step — without redoing
+ * T, t and the compares.  Returns 0, leaving u, v alone, when an edge
+ * function is exactly 0: the test takes those in double, so only the
+ * full test (wide_lane_test) reproduces that hit. */
+static SIDX_INLINE int wide_lane_uv(const sidx_ray *r, const wide_tri4 *B, unsigned l, float *u, float *v)
+{
+    const sidx__wt_edges e = sidx__tri_watertight_edges(r, &B->v[0][0][l], &B->v[1][0][l], &B->v[2][0][l], 4);
+    if (e.U == 0.0f || e.V == 0.0f || e.W == 0.0f) return 0;
+    sidx__tri_watertight_uv(e.V, e.W, e.U + e.V + e.W, u, v);
+    return 1;
+}
+
 struct wide_bvh;
 typedef void (*wide_isect_fn)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit);
 typedef int (*wide_occl_fn)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q);
 
 /* The walks of one (width, instruction set): traced, untraced with the
- * SIMD watertight triangle test, untraced with another triangle test. */
+ * SIMD watertight triangle test (and its copy that keeps what u, v need,
+ * for queries asking for them), untraced with another triangle test. */
 typedef struct wide_kernels {
-    wide_isect_fn isect_traced, isect_simd, isect_other;
+    wide_isect_fn isect_traced, isect_simd, isect_simd_uv, isect_other;
     wide_occl_fn occl_traced, occl_simd, occl_other;
 } wide_kernels;
 
@@ -104,7 +120,8 @@ typedef struct wide_bvh {
     uint32_t num_blocks;
     double sah_cost;
     sidx_aabb bounds;      /* scene box (union of the root's slots) */
-    wide_isect_fn isect, isect_traced; /* untraced walk for the structure's triangle test; traced walk */
+    wide_isect_fn isect, isect_uv, isect_traced; /* untraced walk for the structure's triangle test (and for
+                                                    queries with SIDX_QUERY_UV); traced walk */
     wide_occl_fn occl, occl_traced;
 } wide_bvh;
 
@@ -140,7 +157,11 @@ extern const wide_kernels sidx__wide_kernels_4_1, sidx__wide_kernels_8_2;
  * per ray (wide_tri_ray_init).  Returns 1 with the smallest t in
  * [tmin, best) (lowest lane on ties), 0 for no hit, -1 when some lane's
  * edge function is exactly 0 and the block must take the scalar path
- * (wide_lane_test, which redoes those in double). */
+ * (wide_lane_test, which redoes those in double).  When it returns 1 and
+ * vwd_out is not NULL, vwd_out[0..3], [4..7], [8..11] receive the lanes'
+ * V, W and det — the floats the scalar test computes too (no edge
+ * function was 0, so it would not have switched to double) — from which
+ * sidx__tri_watertight_uv forms the hit's u, v bit for bit. */
 typedef struct wide_tri_ray {
     __m128 okx, oky, okz, sx, sy, sz, ttmin;
     uint32_t kx4, ky4, kz4; /* float offsets of the permuted axes inside a block's vertex */
@@ -156,7 +177,7 @@ static SIDX_INLINE void wide_tri_ray_init(wide_tri_ray *T, const sidx_ray *r)
 }
 
 static SIDX_INLINE int wide_tri4_test(const wide_tri4 *B, const wide_tri_ray *R, float best, float *t_out,
-                                      unsigned *lane_out)
+                                      unsigned *lane_out, float *vwd_out)
 {
     const float *v = &B->v[0][0][0]; /* vertex k, axis x, lane l at v[12k + 4x + l] */
     const __m128 ax = _mm_sub_ps(_mm_load_ps(v + R->kx4), R->okx);
@@ -199,6 +220,11 @@ static SIDX_INLINE int wide_tri4_test(const wide_tri4 *B, const wide_tri_ray *R,
     mn = _mm_min_ps(mn, _mm_shuffle_ps(mn, mn, _MM_SHUFFLE(2, 3, 0, 1)));
     *lane_out = (unsigned)__builtin_ctz((unsigned)_mm_movemask_ps(_mm_cmpeq_ps(tt, mn)) & m);
     *t_out = _mm_cvtss_f32(mn);
+    if (vwd_out) {
+        _mm_storeu_ps(vwd_out, V);
+        _mm_storeu_ps(vwd_out + 4, W);
+        _mm_storeu_ps(vwd_out + 8, det);
+    }
     return 1;
 }
 #endif

@@ -227,8 +227,8 @@ WINL uint32_t WFN(rank_)(const float *tn, unsigned s, unsigned hm)
 /* One leaf: its blocks in order.  Returns 1 when an any-hit query may stop. */
 WINL int WFN(leaf_)(const sidx_accel *a, const wide_bvh *w, uint32_t first_block, const sidx_ray *r,
                     const WFN(wray_) * R, const sidx_query *q, uint32_t node_id, float *best, uint32_t *prim,
-                    const wide_tri4 **hit_block, unsigned *hit_lane, const int anyhit, const int traced,
-                    const int simd_tri)
+                    const wide_tri4 **hit_block, unsigned *hit_lane, float *hit_vwd, const int anyhit,
+                    const int traced, const int simd_tri)
 {
     (void)R;
     (void)node_id;
@@ -239,7 +239,7 @@ WINL int WFN(leaf_)(const sidx_accel *a, const wide_bvh *w, uint32_t first_block
         if (!traced && simd_tri) {
             float t;
             unsigned lane;
-            const int h = wide_tri4_test(B, &R->tri, *best, &t, &lane);
+            const int h = wide_tri4_test(B, &R->tri, *best, &t, &lane, hit_vwd);
             if (h >= 0) {
                 scalar = 0;
                 if (h) {
@@ -268,6 +268,7 @@ WINL int WFN(leaf_)(const sidx_accel *a, const wide_bvh *w, uint32_t first_block
                     *best = t;
                     *hit_block = B;
                     *hit_lane = (unsigned)l;
+                    if (hit_vwd) hit_vwd[8 + l] = NAN; /* no kernel values: uv_ computes u, v itself */
                     SIDX_EMIT(traced, q->hook, SIDX_EV_HIT_UPDATE, e_.ray_id = q->ray_id; e_.prim = id; e_.t = t);
                 }
             }
@@ -278,20 +279,34 @@ WINL int WFN(leaf_)(const sidx_accel *a, const wide_bvh *w, uint32_t first_block
 
 /* u, v and ng of the final hit, from the leaf block's copy of the
  * triangle (so no index and vertex look-ups in the mesh, which a diffuse
- * ray mostly misses in cache): the same scalar test and normal the core
- * would compute (accel.c finish_hit), on the same floats, so the same
- * bits.  The bound only has to exceed t, which was accepted below the old
- * best, so +inf does. */
+ * ray mostly misses in cache): the same test and normal the core would
+ * compute (accel.c finish_hit), on the same floats, so the same bits.
+ * In the walk that keeps u, v (keep_uv, for queries asking for them) the
+ * SIMD kernel left the accepted lane's V, W, det in vwd, and u, v are the
+ * scalar test's last step on them (sidx__tri_watertight_uv).  A hit the
+ * scalar test found has det = NaN there (a kernel's det never is); then,
+ * and in the other walks, u, v come from the lane's edge functions
+ * (wide_lane_uv: no T, no t), or, when the lane has an exactly-0 edge
+ * function or the test is not the watertight one, from the whole test
+ * again, whose bound only has to exceed t, which was accepted below the
+ * old best, so +inf does. */
 WINL void WFN(uv_)(const sidx_accel *a, const sidx_ray *r, uint32_t flags, const wide_tri4 *B, unsigned l,
-                   sidx_hit *hit)
+                   const float *vwd, sidx_hit *hit)
 {
     const sidx_vec3 p0 = {B->v[0][0][l], B->v[0][1][l], B->v[0][2][l]};
     const sidx_vec3 p1 = {B->v[1][0][l], B->v[1][1][l], B->v[1][2][l]};
     const sidx_vec3 p2 = {B->v[2][0][l], B->v[2][1][l], B->v[2][2][l]};
-    float t, u = 0.0f, v = 0.0f;
-    if ((flags & SIDX_QUERY_UV) && sidx__tri_test(a->opt.tri, r, p0, p1, p2, INFINITY, &t, &u, &v)) {
-        hit->u = u;
-        hit->v = v;
+    if (flags & SIDX_QUERY_UV) {
+        float t, u = 0.0f, v = 0.0f;
+        if (vwd && !isnan(vwd[8 + l])) {
+            sidx__tri_watertight_uv(vwd[l], vwd[4 + l], vwd[8 + l], &u, &v);
+            hit->u = u;
+            hit->v = v;
+        } else if ((a->opt.tri == SIDX_TRI_WATERTIGHT && wide_lane_uv(r, B, l, &u, &v)) ||
+            sidx__tri_test(a->opt.tri, r, p0, p1, p2, INFINITY, &t, &u, &v)) {
+            hit->u = u;
+            hit->v = v;
+        }
     }
     if (flags & SIDX_QUERY_NORMAL) hit->ng = sidx__tri_normal(p0, p1, p2);
 }
@@ -299,7 +314,7 @@ WINL void WFN(uv_)(const sidx_accel *a, const sidx_ray *r, uint32_t flags, const
 /* ---- the walk ----------------------------------------------------------------- */
 
 WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit, const int anyhit,
-                    const int traced, const int simd_tri)
+                    const int traced, const int simd_tri, const int keep_uv)
 {
     const wide_bvh *w = a->impl;
     const float *nodes = w->nodes;
@@ -307,6 +322,11 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
     uint32_t prim = SIDX_NO_HIT, visited = 0;
     const wide_tri4 *hit_block = NULL;
     unsigned hit_lane = 0;
+    /* keep_uv: V, W, det of hit_block's lanes, which the SIMD kernel
+     * stores when it accepts a hit (uv_ turns them into u, v).  A separate
+     * instantiation, so the walk without u, v is the same code as before. */
+    float vwd_[12];
+    float *const hit_vwd = keep_uv ? vwd_ : NULL;
     if (w->num_inner == 0) {
         SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = SIDX_TERM_MISS_ROOT;
                   e_.count = 0);
@@ -469,7 +489,7 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
             }
 #endif
             if (WFN(leaf_)(a, w, cur & ~WIDE_LEAF_BIT, r, &R, q, cur_id, &best, &prim, &hit_block, &hit_lane,
-                           anyhit, traced, simd_tri)) {
+                           hit_vwd, anyhit, traced, simd_tri)) {
                 SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = SIDX_TERM_ANY_HIT;
                           e_.count = visited);
                 return 1;
@@ -486,7 +506,7 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
                     hit->t = best;
                     hit->prim = prim;
                     if (q && (q->flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL)))
-                        WFN(uv_)(a, r, q->flags, hit_block, hit_lane, hit);
+                        WFN(uv_)(a, r, q->flags, hit_block, hit_lane, hit_vwd, hit);
                 }
                 return 0;
             }
@@ -514,34 +534,44 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
 #define WNOINL static __attribute__((noinline)) WALK_TARGET
 WNOINL void WFN(isect_traced_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
 {
-    WFN(walk_)(a, r, q, hit, 0, 1, 0);
+    WFN(walk_)(a, r, q, hit, 0, 1, 0, 0);
 }
 WNOINL void WFN(isect_simd_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
 {
-    WFN(walk_)(a, r, q, hit, 0, 0, 1);
+    WFN(walk_)(a, r, q, hit, 0, 0, 1, 0);
 }
+#if WALK_ISA >= 1
+WNOINL void WFN(isect_simd_uv_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
+{
+    WFN(walk_)(a, r, q, hit, 0, 0, 1, 1);
+}
+#else
+#define isect_simd_uv_ isect_simd_ /* no SIMD kernel, nothing to keep: the plain walk does */
+#endif
 WNOINL void WFN(isect_other_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
 {
-    WFN(walk_)(a, r, q, hit, 0, 0, 0);
+    WFN(walk_)(a, r, q, hit, 0, 0, 0, 0);
 }
 WNOINL int WFN(occl_traced_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
 {
-    return WFN(walk_)(a, r, q, NULL, 1, 1, 0);
+    return WFN(walk_)(a, r, q, NULL, 1, 1, 0, 0);
 }
 WNOINL int WFN(occl_simd_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
 {
-    return WFN(walk_)(a, r, q, NULL, 1, 0, 1);
+    return WFN(walk_)(a, r, q, NULL, 1, 0, 1, 0);
 }
 WNOINL int WFN(occl_other_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
 {
-    return WFN(walk_)(a, r, q, NULL, 1, 0, 0);
+    return WFN(walk_)(a, r, q, NULL, 1, 0, 0, 0);
 }
 #undef WNOINL
 
 /* bvh_wide.c picks the untraced pair for the structure's triangle test
  * once, at build, and calls the traced one when a query has a hook. */
-const wide_kernels WFN(sidx__wide_kernels_) = {WFN(isect_traced_), WFN(isect_simd_), WFN(isect_other_),
-                                               WFN(occl_traced_),  WFN(occl_simd_),  WFN(occl_other_)};
+const wide_kernels WFN(sidx__wide_kernels_) = {WFN(isect_traced_), WFN(isect_simd_), WFN(isect_simd_uv_),
+                                               WFN(isect_other_),  WFN(occl_traced_), WFN(occl_simd_),
+                                               WFN(occl_other_)};
+#undef isect_simd_uv_
 
 #undef WJOIN_
 #undef WJOIN

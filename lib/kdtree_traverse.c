@@ -124,14 +124,19 @@ typedef struct kd_entry {
 } kd_entry;
 
 /* u, v and the normal of the closest hit, when the query asks (a->fills_uv,
- * fills_ng): the same scalar test re-run on the block's copy of the
- * triangle, which is in cache, instead of the mesh look-ups a diffuse ray
- * mostly misses.  Run once, when the walk returns. */
+ * fills_ng): from the block's copy of the triangle, which is in cache,
+ * instead of the mesh look-ups a diffuse ray mostly misses.  Run once,
+ * when the walk returns.  u, v by wide_lane_uv (the accepting test's
+ * float edge functions and its own last step, so its bits), or the whole
+ * test again when that declines (an edge function exactly 0, or another
+ * triangle test). */
 static SIDX_NOINLINE void kd_hit_attrs(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
                                        const wide_tri4 *B, unsigned lane, sidx_hit *hit)
 {
     float t, u = 0.0f, v = 0.0f;
-    if ((q->flags & SIDX_QUERY_UV) && wide_lane_test(a, r, B, lane, INFINITY, &t, &u, &v)) {
+    if ((q->flags & SIDX_QUERY_UV) &&
+        ((a->opt.tri == SIDX_TRI_WATERTIGHT && wide_lane_uv(r, B, lane, &u, &v)) ||
+         wide_lane_test(a, r, B, lane, INFINITY, &t, &u, &v))) {
         hit->u = u;
         hit->v = v;
     }
@@ -310,7 +315,7 @@ static SIDX_INLINE int kd_walk(const sidx_accel *a, const sidx_ray *r, const sid
             for (; B < E; ++B) {
                 float t;
                 unsigned lane;
-                int h = wide_tri4_test(B, &R, tmax, &t, &lane);
+                int h = wide_tri4_test(B, &R, tmax, &t, &lane, NULL);
                 if (SIDX_UNLIKELY(h < 0)) h = kd_block_scalar(a, r, B, tmax, &t, &lane);
                 if (h) {
                     if (any) return 1;

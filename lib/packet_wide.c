@@ -475,7 +475,7 @@ static SIDX_INLINE int leaf_ray_sse(const sidx_accel *a, const wide_tri4 *B, wpk
     for (;; ++B) {
         float t;
         unsigned lane;
-        const int h = wide_tri4_test(B, &T, P->best[i], &t, &lane);
+        const int h = wide_tri4_test(B, &T, P->best[i], &t, &lane, NULL);
         if (h > 0) {
             P->prim[i] = B->prim[lane] & WIDE_PRIM_MASK;
             if (P->anyhit) {

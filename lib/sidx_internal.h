@@ -126,8 +126,49 @@ static SIDX_INLINE int sidx__hook_wants(const sidx_hook *h, sidx_event_type t)
  * +z, and evaluate the 2D edge functions U, V, W.  Edges shared by two
  * triangles get bit-identical edge functions of opposite sign, so a ray
  * cannot slip between them.  When an edge function is exactly 0 it is
- * recomputed in double, as the paper advises, so the sign is exact. */
-/* The same test on vertices read in place (pa, pb, pc point at x, y, z).
+ * recomputed in double, as the paper advises, so the sign is exact.
+ *
+ * The test is split in three so that every caller computes the same
+ * floats with the same operations: the sheared vertices and the float
+ * edge functions (sidx__tri_watertight_edges), the test itself
+ * (sidx__tri_watertight_p), and u, v of a hit from V, W and det
+ * (sidx__tri_watertight_uv) — which the wide BVH's final hit forms
+ * without redoing the rest (bvh_wide_internal.h, wide_lane_uv). */
+typedef struct sidx__wt_edges {
+    float Ax, Ay, Bx, By, Cx, Cy; /* vertices relative to the origin, sheared */
+    float az, bz, cz;             /* their z relative to the origin (T scales them by 1/d[kz]) */
+    float U, V, W;                /* edge functions, float */
+} sidx__wt_edges;
+
+/* pa, pb, pc point at the x of each vertex, whose y and z follow `stride`
+ * floats apart: 1 for a sidx_vec3, 4 for a lane of a 4-triangle block. */
+static SIDX_INLINE sidx__wt_edges sidx__tri_watertight_edges(const sidx_ray *r, const float *pa, const float *pb,
+                                                             const float *pc, const int stride)
+{
+    const float *o = &r->org.x;
+    const int kx = r->kx, ky = r->ky, kz = r->kz;
+    const float ax = pa[kx * stride] - o[kx], ay = pa[ky * stride] - o[ky], az = pa[kz * stride] - o[kz];
+    const float bx = pb[kx * stride] - o[kx], by = pb[ky * stride] - o[ky], bz = pb[kz * stride] - o[kz];
+    const float cx = pc[kx * stride] - o[kx], cy = pc[ky * stride] - o[ky], cz = pc[kz * stride] - o[kz];
+    sidx__wt_edges e;
+    e.Ax = ax - r->sx * az, e.Ay = ay - r->sy * az;
+    e.Bx = bx - r->sx * bz, e.By = by - r->sy * bz;
+    e.Cx = cx - r->sx * cz, e.Cy = cy - r->sy * cz;
+    e.az = az, e.bz = bz, e.cz = cz;
+    e.U = e.Cx * e.By - e.Cy * e.Bx;
+    e.V = e.Ax * e.Cy - e.Ay * e.Cx;
+    e.W = e.Bx * e.Ay - e.By * e.Ax;
+    return e;
+}
+
+static SIDX_INLINE void sidx__tri_watertight_uv(float V, float W, float det, float *u_out, float *v_out)
+{
+    const float inv = 1.0f / det;
+    *u_out = V * inv;
+    *v_out = W * inv;
+}
+
+/* The test on vertices read in place (pa, pb, pc point at x, y, z).
  * The by-value form below copies its arguments to the stack first, since
  * they are indexed by the ray's kx, ky, kz; a caller whose triangles
  * already sit in memory (the kd-tree's leaf copies) saves that spill.
@@ -135,21 +176,12 @@ static SIDX_INLINE int sidx__hook_wants(const sidx_hook *h, sidx_event_type t)
 static SIDX_INLINE int sidx__tri_watertight_p(const sidx_ray *r, const float *pa, const float *pb, const float *pc,
                                               float tmax, float *t_out, float *u_out, float *v_out)
 {
-    const float *o = &r->org.x;
-    const int kx = r->kx, ky = r->ky, kz = r->kz;
-    const float ax = pa[kx] - o[kx], ay = pa[ky] - o[ky], az = pa[kz] - o[kz];
-    const float bx = pb[kx] - o[kx], by = pb[ky] - o[ky], bz = pb[kz] - o[kz];
-    const float cx = pc[kx] - o[kx], cy = pc[ky] - o[ky], cz = pc[kz] - o[kz];
-    const float Ax = ax - r->sx * az, Ay = ay - r->sy * az;
-    const float Bx = bx - r->sx * bz, By = by - r->sy * bz;
-    const float Cx = cx - r->sx * cz, Cy = cy - r->sy * cz;
-    float U = Cx * By - Cy * Bx;
-    float V = Ax * Cy - Ay * Cx;
-    float W = Bx * Ay - By * Ax;
+    const sidx__wt_edges e = sidx__tri_watertight_edges(r, pa, pb, pc, 1);
+    float U = e.U, V = e.V, W = e.W;
     if (SIDX_UNLIKELY(U == 0.0f || V == 0.0f || W == 0.0f)) {
-        U = (float)((double)Cx * (double)By - (double)Cy * (double)Bx);
-        V = (float)((double)Ax * (double)Cy - (double)Ay * (double)Cx);
-        W = (float)((double)Bx * (double)Ay - (double)By * (double)Ax);
+        U = (float)((double)e.Cx * (double)e.By - (double)e.Cy * (double)e.Bx);
+        V = (float)((double)e.Ax * (double)e.Cy - (double)e.Ay * (double)e.Cx);
+        W = (float)((double)e.Bx * (double)e.Ay - (double)e.By * (double)e.Ax);
     }
     /* mixed signs: the ray passes outside an edge.  Evaluated without
      * short-circuits, so it is one branch (taken by most tests, which
@@ -158,13 +190,13 @@ static SIDX_INLINE int sidx__tri_watertight_p(const sidx_ray *r, const float *pa
     if (neg & pos) return 0;
     const float det = U + V + W;
     if (det == 0.0f) return 0; /* degenerate triangle, or ray parallel to its plane */
-    const float Az = r->sz * az, Bz = r->sz * bz, Cz = r->sz * cz;
+    const float Az = r->sz * e.az, Bz = r->sz * e.bz, Cz = r->sz * e.cz;
     const float T = U * Az + V * Bz + W * Cz;
     /* t = T/det must lie in [tmin, tmax): compare without dividing first. */
     const float t = T / det;
     if (!(t >= r->tmin && t < tmax)) return 0;
     *t_out = t;
-    if (u_out) { const float inv = 1.0f / det; *u_out = V * inv; *v_out = W * inv; }
+    if (u_out) sidx__tri_watertight_uv(V, W, det, u_out, v_out);
     return 1;
 }
 static SIDX_INLINE int sidx__tri_watertight(const sidx_ray *r, sidx_vec3 a, sidx_vec3 b, sidx_vec3 c, float tmax,
@@ -232,6 +264,27 @@ static SIDX_INLINE int sidx__tri_test(sidx_tri_method m, const sidx_ray *r, sidx
     case SIDX_TRI_TWO_STEP: return sidx__tri_two_step(r, a, b, c, tmax, t, u, v);
     default: return sidx__tri_watertight(r, a, b, c, tmax, t, u, v);
     }
+}
+
+/* u, v of a hit that sidx__tri_test(m, r, a, b, c, ...) accepted, for a
+ * structure that finishes only the final hit: with the watertight test,
+ * the test's own last step on the float edge functions (the same floats
+ * the accepting test computed; no T, no t); when one of them is exactly 0
+ * (the test redid them in double) or with another test, the whole test
+ * again, whose bound only has to exceed the hit's t, so +inf does.  Same
+ * arithmetic on the same floats: the same bits. */
+static SIDX_INLINE int sidx__tri_hit_uv(sidx_tri_method m, const sidx_ray *r, sidx_vec3 a, sidx_vec3 b, sidx_vec3 c,
+                                       float *u, float *v)
+{
+    if (m == SIDX_TRI_WATERTIGHT) {
+        const sidx__wt_edges e = sidx__tri_watertight_edges(r, &a.x, &b.x, &c.x, 1);
+        if (e.U != 0.0f && e.V != 0.0f && e.W != 0.0f) {
+            sidx__tri_watertight_uv(e.V, e.W, e.U + e.V + e.W, u, v);
+            return 1;
+        }
+    }
+    float t;
+    return sidx__tri_test(m, r, a, b, c, INFINITY, &t, u, v);
 }
 
 /* The geometric normal hit.ng: (p1 − p0) × (p2 − p0), unnormalized.  One
