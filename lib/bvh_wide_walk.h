@@ -304,9 +304,8 @@ WINL int WFN(leaf_)(const sidx_accel *a, const wide_bvh *w, uint32_t first_block
 WINL void WFN(uv_)(const sidx_accel *a, const sidx_ray *r, uint32_t flags, const wide_tri4 *B, unsigned l,
                    const float *vwd, sidx_hit *hit)
 {
-    const sidx_vec3 p0 = {B->v[0][0][l], B->v[0][1][l], B->v[0][2][l]};
-    const sidx_vec3 p1 = {B->v[1][0][l], B->v[1][1][l], B->v[1][2][l]};
-    const sidx_vec3 p2 = {B->v[2][0][l], B->v[2][1][l], B->v[2][2][l]};
+    /* The corners are read where they are used (the normal last), not
+     * held in registers across the u, v step, which spilled them. */
     if (flags & SIDX_QUERY_UV) {
         float t, u = 0.0f, v = 0.0f;
         if (vwd && !isnan(vwd[8 + l])) {
@@ -314,12 +313,17 @@ WINL void WFN(uv_)(const sidx_accel *a, const sidx_ray *r, uint32_t flags, const
             hit->u = u;
             hit->v = v;
         } else if ((a->opt.tri == SIDX_TRI_WATERTIGHT && wide_lane_uv(r, B, l, &u, &v)) ||
-            sidx__tri_test(a->opt.tri, r, p0, p1, p2, INFINITY, &t, &u, &v)) {
+                   wide_lane_test(a, r, B, l, INFINITY, &t, &u, &v)) {
             hit->u = u;
             hit->v = v;
         }
     }
-    if (flags & SIDX_QUERY_NORMAL) hit->ng = sidx__tri_normal(p0, p1, p2);
+    if (flags & SIDX_QUERY_NORMAL) {
+        const sidx_vec3 p0 = {B->v[0][0][l], B->v[0][1][l], B->v[0][2][l]};
+        const sidx_vec3 p1 = {B->v[1][0][l], B->v[1][1][l], B->v[1][2][l]};
+        const sidx_vec3 p2 = {B->v[2][0][l], B->v[2][1][l], B->v[2][2][l]};
+        hit->ng = sidx__tri_normal(p0, p1, p2);
+    }
 }
 
 /* ---- the walk ----------------------------------------------------------------- */
