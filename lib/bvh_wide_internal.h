@@ -176,19 +176,20 @@ static SIDX_INLINE void wide_tri_ray_init(wide_tri_ray *T, const sidx_ray *r)
     T->kx4 = 4u * r->kx; T->ky4 = 4u * r->ky; T->kz4 = 4u * r->kz;
 }
 
-static SIDX_INLINE int wide_tri4_test(const wide_tri4 *B, const wide_tri_ray *R, float best, float *t_out,
-                                      unsigned *lane_out, float *vwd_out)
+/* The kernel on the ray's permuted axes of a block: px, py, pz point at
+ * vertex 0's kx, ky, kz row (vertex k's at +12k floats). */
+static SIDX_INLINE int wide_tri4_test_axes(const float *px, const float *py, const float *pz, const wide_tri_ray *R,
+                                           float best, float *t_out, unsigned *lane_out, float *vwd_out)
 {
-    const float *v = &B->v[0][0][0]; /* vertex k, axis x, lane l at v[12k + 4x + l] */
-    const __m128 ax = _mm_sub_ps(_mm_load_ps(v + R->kx4), R->okx);
-    const __m128 ay = _mm_sub_ps(_mm_load_ps(v + R->ky4), R->oky);
-    const __m128 az = _mm_sub_ps(_mm_load_ps(v + R->kz4), R->okz);
-    const __m128 bx = _mm_sub_ps(_mm_load_ps(v + 12 + R->kx4), R->okx);
-    const __m128 by = _mm_sub_ps(_mm_load_ps(v + 12 + R->ky4), R->oky);
-    const __m128 bz = _mm_sub_ps(_mm_load_ps(v + 12 + R->kz4), R->okz);
-    const __m128 cx = _mm_sub_ps(_mm_load_ps(v + 24 + R->kx4), R->okx);
-    const __m128 cy = _mm_sub_ps(_mm_load_ps(v + 24 + R->ky4), R->oky);
-    const __m128 cz = _mm_sub_ps(_mm_load_ps(v + 24 + R->kz4), R->okz);
+    const __m128 ax = _mm_sub_ps(_mm_load_ps(px), R->okx);
+    const __m128 ay = _mm_sub_ps(_mm_load_ps(py), R->oky);
+    const __m128 az = _mm_sub_ps(_mm_load_ps(pz), R->okz);
+    const __m128 bx = _mm_sub_ps(_mm_load_ps(px + 12), R->okx);
+    const __m128 by = _mm_sub_ps(_mm_load_ps(py + 12), R->oky);
+    const __m128 bz = _mm_sub_ps(_mm_load_ps(pz + 12), R->okz);
+    const __m128 cx = _mm_sub_ps(_mm_load_ps(px + 24), R->okx);
+    const __m128 cy = _mm_sub_ps(_mm_load_ps(py + 24), R->oky);
+    const __m128 cz = _mm_sub_ps(_mm_load_ps(pz + 24), R->okz);
     const __m128 Ax = _mm_sub_ps(ax, _mm_mul_ps(R->sx, az)), Ay = _mm_sub_ps(ay, _mm_mul_ps(R->sy, az));
     const __m128 Bx = _mm_sub_ps(bx, _mm_mul_ps(R->sx, bz)), By = _mm_sub_ps(by, _mm_mul_ps(R->sy, bz));
     const __m128 Cx = _mm_sub_ps(cx, _mm_mul_ps(R->sx, cz)), Cy = _mm_sub_ps(cy, _mm_mul_ps(R->sy, cz));
@@ -226,6 +227,13 @@ static SIDX_INLINE int wide_tri4_test(const wide_tri4 *B, const wide_tri_ray *R,
         _mm_storeu_ps(vwd_out + 8, det);
     }
     return 1;
+}
+
+static SIDX_INLINE int wide_tri4_test(const wide_tri4 *B, const wide_tri_ray *R, float best, float *t_out,
+                                      unsigned *lane_out, float *vwd_out)
+{
+    const float *v = &B->v[0][0][0]; /* vertex k, axis x, lane l at v[12k + 4x + l] */
+    return wide_tri4_test_axes(v + R->kx4, v + R->ky4, v + R->kz4, R, best, t_out, lane_out, vwd_out);
 }
 #endif
 

@@ -224,7 +224,23 @@ WINL uint32_t WFN(rank_)(const float *tn, unsigned s, unsigned hm)
     return WFN(popc_)(hm & (lt | (eq & ((1u << s) - 1u))));
 }
 
-/* One leaf: its blocks in order.  Returns 1 when an any-hit query may stop. */
+/* One leaf: its blocks in order.  Returns 1 when an any-hit query may stop.
+ *
+ * Register pressure: the AVX2 walk holds the box constants (10 ymm) and
+ * the triangle constants (6 xmm) across the node loop, so GCC stores 7 of
+ * the ymm at every leaf entry and reloads them at the exit (~15
+ * instructions per leaf).  Tried and dropped (session 5, callgrind on
+ * 20000 Sponza diffuse rays with u, v, Ng, 1069 instructions per ray):
+ * an empty asm "+m" on the box constants at the top of the node loop
+ * (memory operands in the slab test, no spills: 1073 from 1086 before
+ * the three-pointer rows below, but ~2 % slower measured: 16 loads per
+ * node instead of 9); the same on the triangle constants at the loop top
+ * (1087) or per block (1098) — GCC then copies them between stack slots;
+ * re-reading az, bz, cz for T instead of holding them (CSE'd away; with
+ * an asm barrier 1076); -fira-region=one / -fira-algorithm=priority /
+ * -fsched-pressure / -fira-loop-pressure / -O3 on bvh_wide.c (1069 to
+ * 1112).  A leaf out of line does not help: every xmm/ymm register is
+ * caller-saved in the SysV ABI. */
 WINL int WFN(leaf_)(const sidx_accel *a, const wide_bvh *w, uint32_t first_block, const sidx_ray *r,
                     const WFN(wray_) * R, const sidx_query *q, uint32_t node_id, float *best, uint32_t *prim,
                     const wide_tri4 **hit_block, unsigned *hit_lane, float *hit_vwd, const int anyhit,
@@ -233,13 +249,19 @@ WINL int WFN(leaf_)(const sidx_accel *a, const wide_bvh *w, uint32_t first_block
     (void)R;
     (void)node_id;
     const wide_tri4 *B = w->blocks + first_block;
+#if WALK_ISA >= 1
+    /* The block's rows on the ray's permuted axes, stepped a block at a
+     * time: three pointers instead of nine hoisted offsets. */
+    const float *px = &B->v[0][0][0] + R->tri.kx4, *py = &B->v[0][0][0] + R->tri.ky4,
+                *pz = &B->v[0][0][0] + R->tri.kz4;
+#endif
     for (;; ++B) {
         int scalar = 1;
 #if WALK_ISA >= 1
         if (!traced && simd_tri) {
             float t;
             unsigned lane;
-            const int h = wide_tri4_test(B, &R->tri, *best, &t, &lane, hit_vwd);
+            const int h = wide_tri4_test_axes(px, py, pz, &R->tri, *best, &t, &lane, hit_vwd);
             if (h >= 0) {
                 scalar = 0;
                 if (h) {
@@ -274,6 +296,11 @@ WINL int WFN(leaf_)(const sidx_accel *a, const wide_bvh *w, uint32_t first_block
             }
         }
         if (B->prim[0] & WIDE_LAST_BLOCK) return 0;
+#if WALK_ISA >= 1
+        px += sizeof(wide_tri4) / sizeof(float);
+        py += sizeof(wide_tri4) / sizeof(float);
+        pz += sizeof(wide_tri4) / sizeof(float);
+#endif
     }
 }
 
@@ -293,9 +320,18 @@ WINL int WFN(leaf_)(const sidx_accel *a, const wide_bvh *w, uint32_t first_block
 WINL void WFN(uv_)(const sidx_accel *a, const sidx_ray *r, uint32_t flags, const wide_tri4 *B, unsigned l,
                    const float *vwd, sidx_hit *hit)
 {
-    const sidx_vec3 p0 = {B->v[0][0][l], B->v[0][1][l], B->v[0][2][l]};
-    const sidx_vec3 p1 = {B->v[1][0][l], B->v[1][1][l], B->v[1][2][l]};
-    const sidx_vec3 p2 = {B->v[2][0][l], B->v[2][1][l], B->v[2][2][l]};
+    /* The corners are read where they are used (the normal last), not
+     * held in registers across the u, v step, which spilled them.  The
+     * walks without vwd keep the old order: there the late reads made GCC
+     * allocate the whole walk differently, 1025 instead of 1011
+     * instructions per Sponza diffuse ray (without u, v, Ng). */
+    const int early = !vwd;
+    sidx_vec3 p0 = {0.0f, 0.0f, 0.0f}, p1 = p0, p2 = p0;
+    if (early) {
+        p0 = (sidx_vec3){B->v[0][0][l], B->v[0][1][l], B->v[0][2][l]};
+        p1 = (sidx_vec3){B->v[1][0][l], B->v[1][1][l], B->v[1][2][l]};
+        p2 = (sidx_vec3){B->v[2][0][l], B->v[2][1][l], B->v[2][2][l]};
+    }
     if (flags & SIDX_QUERY_UV) {
         float t, u = 0.0f, v = 0.0f;
         if (vwd && !isnan(vwd[8 + l])) {
@@ -303,12 +339,19 @@ WINL void WFN(uv_)(const sidx_accel *a, const sidx_ray *r, uint32_t flags, const
             hit->u = u;
             hit->v = v;
         } else if ((a->opt.tri == SIDX_TRI_WATERTIGHT && wide_lane_uv(r, B, l, &u, &v)) ||
-            sidx__tri_test(a->opt.tri, r, p0, p1, p2, INFINITY, &t, &u, &v)) {
+                   wide_lane_test(a, r, B, l, INFINITY, &t, &u, &v)) {
             hit->u = u;
             hit->v = v;
         }
     }
-    if (flags & SIDX_QUERY_NORMAL) hit->ng = sidx__tri_normal(p0, p1, p2);
+    if (flags & SIDX_QUERY_NORMAL) {
+        if (!early) {
+            p0 = (sidx_vec3){B->v[0][0][l], B->v[0][1][l], B->v[0][2][l]};
+            p1 = (sidx_vec3){B->v[1][0][l], B->v[1][1][l], B->v[1][2][l]};
+            p2 = (sidx_vec3){B->v[2][0][l], B->v[2][1][l], B->v[2][2][l]};
+        }
+        hit->ng = sidx__tri_normal(p0, p1, p2);
+    }
 }
 
 /* ---- the walk ----------------------------------------------------------------- */
