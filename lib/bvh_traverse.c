@@ -74,7 +74,16 @@ static SIDX_INLINE void set_hit(const sidx_accel *a, const bvh *b, const sidx_ra
     const bvh_tri *T = &b->tris[tri];
     hit->t = t;
     hit->prim = b->prim_id[tri];
-    if (q->flags & SIDX_QUERY_UV) (void)sidx__tri_hit_uv(a->opt.tri, r, T->v[0], T->v[1], T->v[2], &hit->u, &hit->v);
+    if (q->flags & SIDX_QUERY_UV) {
+        /* sidx__tri_hit_uv's watertight case on the copy read in place
+         * (its by-value vertices go through the stack, being indexed by
+         * kx, ky, kz); anything else goes to it. */
+        const sidx__wt_edges e = sidx__tri_watertight_edges(r, &T->v[0].x, &T->v[1].x, &T->v[2].x, 1);
+        if (a->opt.tri == SIDX_TRI_WATERTIGHT && e.U != 0.0f && e.V != 0.0f && e.W != 0.0f)
+            sidx__tri_watertight_uv(e.V, e.W, e.U + e.V + e.W, &hit->u, &hit->v);
+        else
+            (void)sidx__tri_hit_uv(a->opt.tri, r, T->v[0], T->v[1], T->v[2], &hit->u, &hit->v);
+    }
     if (q->flags & SIDX_QUERY_NORMAL) hit->ng = sidx__tri_normal(T->v[0], T->v[1], T->v[2]);
 }
 
