@@ -58,6 +58,9 @@ typedef struct row {
     size_t rays_timed, rays_req;
     size_t bytes;
     uint32_t nodes;
+    uint32_t depth;      /* deepest leaf (sidx_accel_stats.max_depth); 0 = not reported */
+    double leaf_prims;   /* mean primitives per non-empty leaf; 0 = not reported */
+    double dup;          /* primitive references / triangles (duplication); 0 = not reported */
     double steps, prims; /* per ray; < 0 when not measured */
     tk_errstats err;
 } row;
@@ -339,6 +342,9 @@ static double bench_structure(const char *name, const sidx_mesh *m, const scene_
         r->build_ms = build_ms;
         r->bytes = st.bytes;
         r->nodes = st.nodes;
+        r->depth = st.max_depth;
+        r->leaf_prims = st.mean_leaf_prims;
+        r->dup = m->num_triangles ? (double)st.prim_refs / m->num_triangles : 0.0;
         const size_t n = k->br.n < ray_limit ? k->br.n : ray_limit;
         const double cost = probe_cost(a, k, n);
         int all = 0;
@@ -897,22 +903,26 @@ static void parallel_rows(FILE *f, const run_opts *o, const scene_spec *sc, cons
 
 static void print_header(FILE *f)
 {
-    fprintf(f, "%-10s %-8s %-18s %9s %9s %8s %8s %7s %8s %7s %6s %6s %6s %9s\n", "scene", "kind", "accel",
-            "build_ms", "Mrays/s", "MB", "nodes", "steps", "prims", "checked", "fmiss", "fhit", "wrong",
-            "max_rel_t");
+    fprintf(f, "%-10s %-8s %-18s %9s %9s %8s %8s %5s %5s %5s %7s %8s %7s %6s %6s %6s %9s\n", "scene", "kind",
+            "accel", "build_ms", "Mrays/s", "MB", "nodes", "depth", "leaf", "dup", "steps", "prims", "checked",
+            "fmiss", "fhit", "wrong", "max_rel_t");
 }
 
 static void print_row(FILE *f, const row *r)
 {
-    char steps[16], prims[16];
+    char steps[16], prims[16], depth[16], leaf[16], dup[16];
+    if (r->depth > 0) snprintf(depth, sizeof depth, "%u", r->depth); else snprintf(depth, sizeof depth, "-");
+    if (r->leaf_prims > 0) snprintf(leaf, sizeof leaf, "%.1f", r->leaf_prims); else snprintf(leaf, sizeof leaf, "-");
+    if (r->dup > 0) snprintf(dup, sizeof dup, "%.2f", r->dup); else snprintf(dup, sizeof dup, "-");
     if (r->steps >= 0) snprintf(steps, sizeof steps, "%.1f", r->steps); else snprintf(steps, sizeof steps, "-");
     if (r->prims >= 0) snprintf(prims, sizeof prims, "%.1f", r->prims); else snprintf(prims, sizeof prims, "-");
     char name[64];
     if (r->tri != SIDX_TRI_WATERTIGHT || r->box != SIDX_BOX_ROBUST)
         snprintf(name, sizeof name, "%.39s/%.12s/%.8s", r->accel, sidx_tri_method_name(r->tri), sidx_box_method_name(r->box));
     else copy_str(name, sizeof name, r->accel);
-    fprintf(f, "%-10.10s %-8s %-18s %9.2f %9.3f %8.2f %8u %7s %8s %7llu %6llu %6llu %6llu %9.2e%s\n", r->scene,
-            r->kind, name, r->build_ms, row_mrays(r), (double)r->bytes / 1048576.0, r->nodes, steps, prims,
+    fprintf(f, "%-10.10s %-8s %-18s %9.2f %9.3f %8.2f %8u %5s %5s %5s %7s %8s %7llu %6llu %6llu %6llu %9.2e%s\n",
+            r->scene, r->kind, name, r->build_ms, row_mrays(r), (double)r->bytes / 1048576.0, r->nodes, depth, leaf,
+            dup, steps, prims,
             (unsigned long long)r->err.rays, (unsigned long long)r->err.false_miss,
             (unsigned long long)r->err.false_hit, (unsigned long long)r->err.wrong_prim, r->err.max_rel_t,
             r->rays_timed < r->rays_req ? "  (time budget: partial)" : "");
@@ -923,13 +933,13 @@ static int write_csv(const char *path, const rows *rs)
     FILE *f = fopen(path, "w");
     if (!f) return 0;
     fprintf(f, "scene,tris,kind,accel,tri,box,embree,build_ms,trace_ms,rays_timed,mrays_per_s,bytes,nodes,"
-               "steps_per_ray,prims_per_ray,checked,false_miss,false_hit,wrong_prim,max_rel_t,error_rate\n");
+               "depth,mean_leaf_prims,dup_factor,steps_per_ray,prims_per_ray,checked,false_miss,false_hit,wrong_prim,max_rel_t,error_rate\n");
     for (size_t i = 0; i < rs->n; ++i) {
         const row *r = &rs->v[i];
-        fprintf(f, "%s,%u,%s,%s,%s,%s,%d,%.3f,%.3f,%zu,%.4f,%zu,%u,%.3f,%.3f,%llu,%llu,%llu,%llu,%.3e,%.3e\n",
+        fprintf(f, "%s,%u,%s,%s,%s,%s,%d,%.3f,%.3f,%zu,%.4f,%zu,%u,%u,%.3f,%.4f,%.3f,%.3f,%llu,%llu,%llu,%llu,%.3e,%.3e\n",
                 r->scene, r->tris, r->kind, r->accel, r->embree ? "embree" : sidx_tri_method_name(r->tri),
                 r->embree ? "embree" : sidx_box_method_name(r->box), r->embree, r->build_ms, r->trace_ms,
-                r->rays_timed, row_mrays(r), r->bytes, r->nodes, r->steps, r->prims,
+                r->rays_timed, row_mrays(r), r->bytes, r->nodes, r->depth, r->leaf_prims, r->dup, r->steps, r->prims,
                 (unsigned long long)r->err.rays, (unsigned long long)r->err.false_miss,
                 (unsigned long long)r->err.false_hit, (unsigned long long)r->err.wrong_prim, r->err.max_rel_t,
                 tk_errstats_rate(&r->err));
@@ -1301,7 +1311,9 @@ static void run_usage(FILE *out)
             "  --csv FILE         every row as CSV; the targets section goes to FILE-targets.csv\n"
             "                     (FILE without its .csv)\n"
             "  --plot FILE.svg    Mrays/s against error rate, one point per (structure, tri/box test)\n"
-            "Columns: build_ms, Mrays/s (one thread), MB (structure memory), nodes, steps (NODE_ENTER\n"
+            "Columns: build_ms, Mrays/s (one thread), MB (structure memory), nodes, depth (deepest\n"
+            "leaf), leaf (mean primitives per non-empty leaf or cell), dup (primitive references per\n"
+            "triangle: the duplication factor of spatial subdivisions), steps (NODE_ENTER\n"
             "events per ray) and prims (PRIM_TEST events per ray) on up to 1000 rays, then on the\n"
             "reference subset: checked rays, false misses, false hits, wrong primitive (different\n"
             "prim and |t - t_ref| > 1e-5 max(1,|t_ref|)), max relative t error.\n"
