@@ -69,6 +69,18 @@ typedef struct wide_tri4 {
 } wide_tri4;
 _Static_assert(sizeof(wide_tri4) == 160, "wide_tri4 is 9 float4 + 4 ids");
 
+/* Corner k (0, 1, 2) of lane l of a block. */
+static SIDX_INLINE sidx_vec3 wide_lane_vertex(const wide_tri4 *B, int k, unsigned l)
+{
+    return (sidx_vec3){B->v[k][0][l], B->v[k][1][l], B->v[k][2][l]};
+}
+
+/* The geometric normal of lane l (sidx__tri_normal: the mesh finish's bits). */
+static SIDX_INLINE sidx_vec3 wide_lane_normal(const wide_tri4 *B, unsigned l)
+{
+    return sidx__tri_normal(wide_lane_vertex(B, 0, l), wide_lane_vertex(B, 1, l), wide_lane_vertex(B, 2, l));
+}
+
 /* The scalar reference test on lane l of a block: the same sidx__tri_test
  * brute force runs, on the block's copy of the vertices (bit-identical t,
  * u, v).  Used where a SIMD kernel is unavailable or declines (an exact
@@ -76,10 +88,8 @@ _Static_assert(sizeof(wide_tri4) == 160, "wide_tri4 is 9 float4 + 4 ids");
 static SIDX_INLINE int wide_lane_test(const sidx_accel *a, const sidx_ray *r, const wide_tri4 *B, unsigned l,
                                       float best, float *t, float *u, float *v)
 {
-    const sidx_vec3 p0 = {B->v[0][0][l], B->v[0][1][l], B->v[0][2][l]};
-    const sidx_vec3 p1 = {B->v[1][0][l], B->v[1][1][l], B->v[1][2][l]};
-    const sidx_vec3 p2 = {B->v[2][0][l], B->v[2][1][l], B->v[2][2][l]};
-    return sidx__tri_test(a->opt.tri, r, p0, p1, p2, best, t, u, v);
+    return sidx__tri_test(a->opt.tri, r, wide_lane_vertex(B, 0, l), wide_lane_vertex(B, 1, l),
+                          wide_lane_vertex(B, 2, l), best, t, u, v);
 }
 
 /* u, v of a watertight hit on lane l of a block, for the final hit of a
@@ -95,6 +105,18 @@ static SIDX_INLINE int wide_lane_uv(const sidx_ray *r, const wide_tri4 *B, unsig
     if (e.U == 0.0f || e.V == 0.0f || e.W == 0.0f) return 0;
     sidx__tri_watertight_uv(e.V, e.W, e.U + e.V + e.W, u, v);
     return 1;
+}
+
+/* u, v of the final hit on lane l, whatever the triangle test: the
+ * shortcut above where it applies, else the whole test again (its bound
+ * only has to exceed the hit's t, so +inf does) — the lane form of
+ * sidx__tri_hit_uv.  Returns 0, leaving u, v alone, if the test misses. */
+static SIDX_INLINE int wide_lane_hit_uv(const sidx_accel *a, const sidx_ray *r, const wide_tri4 *B, unsigned l,
+                                        float *u, float *v)
+{
+    float t;
+    return (a->opt.tri == SIDX_TRI_WATERTIGHT && wide_lane_uv(r, B, l, u, v)) ||
+           wide_lane_test(a, r, B, l, INFINITY, &t, u, v);
 }
 
 struct wide_bvh;

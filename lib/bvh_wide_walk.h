@@ -328,30 +328,22 @@ WINL void WFN(uv_)(const sidx_accel *a, const sidx_ray *r, uint32_t flags, const
     const int early = !vwd;
     sidx_vec3 p0 = {0.0f, 0.0f, 0.0f}, p1 = p0, p2 = p0;
     if (early) {
-        p0 = (sidx_vec3){B->v[0][0][l], B->v[0][1][l], B->v[0][2][l]};
-        p1 = (sidx_vec3){B->v[1][0][l], B->v[1][1][l], B->v[1][2][l]};
-        p2 = (sidx_vec3){B->v[2][0][l], B->v[2][1][l], B->v[2][2][l]};
+        p0 = wide_lane_vertex(B, 0, l);
+        p1 = wide_lane_vertex(B, 1, l);
+        p2 = wide_lane_vertex(B, 2, l);
     }
     if (flags & SIDX_QUERY_UV) {
-        float t, u = 0.0f, v = 0.0f;
+        float u = 0.0f, v = 0.0f;
         if (vwd && !isnan(vwd[8 + l])) {
             sidx__tri_watertight_uv(vwd[l], vwd[4 + l], vwd[8 + l], &u, &v);
             hit->u = u;
             hit->v = v;
-        } else if ((a->opt.tri == SIDX_TRI_WATERTIGHT && wide_lane_uv(r, B, l, &u, &v)) ||
-                   wide_lane_test(a, r, B, l, INFINITY, &t, &u, &v)) {
+        } else if (wide_lane_hit_uv(a, r, B, l, &u, &v)) {
             hit->u = u;
             hit->v = v;
         }
     }
-    if (flags & SIDX_QUERY_NORMAL) {
-        if (!early) {
-            p0 = (sidx_vec3){B->v[0][0][l], B->v[0][1][l], B->v[0][2][l]};
-            p1 = (sidx_vec3){B->v[1][0][l], B->v[1][1][l], B->v[1][2][l]};
-            p2 = (sidx_vec3){B->v[2][0][l], B->v[2][1][l], B->v[2][2][l]};
-        }
-        hit->ng = sidx__tri_normal(p0, p1, p2);
-    }
+    if (flags & SIDX_QUERY_NORMAL) hit->ng = early ? sidx__tri_normal(p0, p1, p2) : wide_lane_normal(B, l);
 }
 
 /* ---- the walk ----------------------------------------------------------------- */

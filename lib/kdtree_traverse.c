@@ -126,26 +126,18 @@ typedef struct kd_entry {
 /* u, v and the normal of the closest hit, when the query asks (a->fills_uv,
  * fills_ng): from the block's copy of the triangle, which is in cache,
  * instead of the mesh look-ups a diffuse ray mostly misses.  Run once,
- * when the walk returns.  u, v by wide_lane_uv (the accepting test's
- * float edge functions and its own last step, so its bits), or the whole
- * test again when that declines (an edge function exactly 0, or another
- * triangle test). */
+ * when the walk returns.  u, v by wide_lane_hit_uv (the accepting test's
+ * float edge functions and its own last step, so its bits, or the whole
+ * test again when that does not apply). */
 static SIDX_NOINLINE void kd_hit_attrs(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
                                        const wide_tri4 *B, unsigned lane, sidx_hit *hit)
 {
-    float t, u = 0.0f, v = 0.0f;
-    if ((q->flags & SIDX_QUERY_UV) &&
-        ((a->opt.tri == SIDX_TRI_WATERTIGHT && wide_lane_uv(r, B, lane, &u, &v)) ||
-         wide_lane_test(a, r, B, lane, INFINITY, &t, &u, &v))) {
+    float u = 0.0f, v = 0.0f;
+    if ((q->flags & SIDX_QUERY_UV) && wide_lane_hit_uv(a, r, B, lane, &u, &v)) {
         hit->u = u;
         hit->v = v;
     }
-    if (q->flags & SIDX_QUERY_NORMAL) {
-        const sidx_vec3 p0 = {B->v[0][0][lane], B->v[0][1][lane], B->v[0][2][lane]};
-        const sidx_vec3 p1 = {B->v[1][0][lane], B->v[1][1][lane], B->v[1][2][lane]};
-        const sidx_vec3 p2 = {B->v[2][0][lane], B->v[2][1][lane], B->v[2][2][lane]};
-        hit->ng = sidx__tri_normal(p0, p1, p2);
-    }
+    if (q->flags & SIDX_QUERY_NORMAL) hit->ng = wide_lane_normal(B, lane);
 }
 
 #if KD_SIMD
