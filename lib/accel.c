@@ -153,7 +153,7 @@ sidx_status sidx_accel_auto(const sidx_mesh *mesh, const sidx_build_options *opt
 
 static const sidx_query default_query = {0, SIDX_TRAVERSE_DEFAULT, NULL, 0};
 
-/* u, v (sidx__tri_hit_uv: the accepting test's own floats, so its bits)
+/* u, v (sidx__tri_hit_uv_at: the accepting test's own floats, so its bits)
  * and the geometric normal, from the mesh, for what `need` asks. */
 void sidx__hit_attrs_from_mesh(const sidx_accel *a, const sidx_ray *r, uint32_t need, sidx_hit *hit)
 {
@@ -162,7 +162,7 @@ void sidx__hit_attrs_from_mesh(const sidx_accel *a, const sidx_ray *r, uint32_t 
                     p2 = sidx_mesh_vertex(m, hit->prim, 2);
     if (need & SIDX_QUERY_UV) {
         float u = 0.0f, v = 0.0f;
-        if (sidx__tri_hit_uv(a->opt.tri, r, p0, p1, p2, &u, &v)) {
+        if (sidx__tri_hit_uv_at(a->opt.tri, r, &p0.x, &p1.x, &p2.x, 1, &u, &v)) {
             hit->u = u;
             hit->v = v;
         }

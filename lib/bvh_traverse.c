@@ -65,25 +65,18 @@ static SIDX_INLINE int leaf_test(const sidx_accel *a, const bvh *b, const bvh_no
 
 /* The final closest hit on the leaf copy `tri`, with what the query asked
  * for (a->fills_uv, fills_ng): its original id; u, v by the accepting
- * test's own last step on the same floats (sidx__tri_hit_uv: the same
- * bits as forming them at every accepted hit, which cost the loop ~150
- * instructions per diffuse ray on the bunny); the normal from the copy. */
+ * test's own last step on the same floats, the copy read in place
+ * (sidx__tri_hit_uv_at: the same bits as forming them at every accepted
+ * hit, which cost the loop ~150 instructions per diffuse ray on the
+ * bunny); the normal from the copy. */
 static SIDX_INLINE void set_hit(const sidx_accel *a, const bvh *b, const sidx_ray *r, const sidx_query *q,
                                 float t, uint32_t tri, sidx_hit *hit)
 {
     const bvh_tri *T = &b->tris[tri];
     hit->t = t;
     hit->prim = b->prim_id[tri];
-    if (q->flags & SIDX_QUERY_UV) {
-        /* sidx__tri_hit_uv's watertight case on the copy read in place
-         * (its by-value vertices go through the stack, being indexed by
-         * kx, ky, kz); anything else goes to it. */
-        const sidx__wt_edges e = sidx__tri_watertight_edges(r, &T->v[0].x, &T->v[1].x, &T->v[2].x, 1);
-        if (a->opt.tri == SIDX_TRI_WATERTIGHT && e.U != 0.0f && e.V != 0.0f && e.W != 0.0f)
-            sidx__tri_watertight_uv(e.V, e.W, e.U + e.V + e.W, &hit->u, &hit->v);
-        else
-            (void)sidx__tri_hit_uv(a->opt.tri, r, T->v[0], T->v[1], T->v[2], &hit->u, &hit->v);
-    }
+    if (q->flags & SIDX_QUERY_UV)
+        (void)sidx__tri_hit_uv_at(a->opt.tri, r, &T->v[0].x, &T->v[1].x, &T->v[2].x, 1, &hit->u, &hit->v);
     if (q->flags & SIDX_QUERY_NORMAL) hit->ng = sidx__tri_normal(T->v[0], T->v[1], T->v[2]);
 }
 

@@ -132,8 +132,8 @@ static SIDX_INLINE int sidx__hook_wants(const sidx_hook *h, sidx_event_type t)
  * floats with the same operations: the sheared vertices and the float
  * edge functions (sidx__tri_watertight_edges), the test itself
  * (sidx__tri_watertight_p), and u, v of a hit from V, W and det
- * (sidx__tri_watertight_uv) — which the wide BVH's final hit forms
- * without redoing the rest (bvh_wide_internal.h, wide_lane_uv). */
+ * (sidx__tri_watertight_uv) — which a structure's final hit forms
+ * without redoing the rest (sidx__tri_hit_uv_at, below). */
 typedef struct sidx__wt_edges {
     float Ax, Ay, Bx, By, Cx, Cy; /* vertices relative to the origin, sheared */
     float az, bz, cz;             /* their z relative to the origin (T scales them by 1/d[kz]) */
@@ -266,25 +266,45 @@ static SIDX_INLINE int sidx__tri_test(sidx_tri_method m, const sidx_ray *r, sidx
     }
 }
 
-/* u, v of a hit that sidx__tri_test(m, r, a, b, c, ...) accepted, for a
- * structure that finishes only the final hit: with the watertight test,
- * the test's own last step on the float edge functions (the same floats
- * the accepting test computed; no T, no t); when one of them is exactly 0
- * (the test redid them in double) or with another test, the whole test
- * again, whose bound only has to exceed the hit's t, so +inf does.  Same
- * arithmetic on the same floats: the same bits. */
-static SIDX_INLINE int sidx__tri_hit_uv(sidx_tri_method m, const sidx_ray *r, sidx_vec3 a, sidx_vec3 b, sidx_vec3 c,
-                                       float *u, float *v)
+/* The vertex whose x is at p, with y and z `stride` floats apart (1 for a
+ * sidx_vec3, 4 for a lane of a 4-triangle block): a copy of the same
+ * floats, so a test on it gives the same bits as on the original. */
+static SIDX_INLINE sidx_vec3 sidx__vec3_at(const float *p, const int stride)
+{
+    return (sidx_vec3){p[0], p[stride], p[2 * stride]};
+}
+
+/* u, v of a hit that sidx__tri_test(m, r, p0, p1, p2, ...) accepted, for
+ * a structure that finishes only the final hit — the one definition that
+ * the mesh finish (accel.c), the binary BVH's leaf copies and the wide
+ * BVH's and kd-tree's 4-triangle blocks share.  p0, p1, p2 point at the x
+ * of each vertex, y and z `stride` floats apart (sidx__vec3_at): read in
+ * place, since the edge functions index them by the ray's kx, ky, kz and
+ * vertices passed by value would first be copied to the stack.
+ *
+ * With the watertight test: the float edge functions again
+ * (sidx__tri_watertight_edges: the same floats the accepting test
+ * computed) and the test's own last step on them (sidx__tri_watertight_uv),
+ * skipping T, t and the compares, which the hit already passed.  Same
+ * arithmetic on the same floats, so the bits of forming u, v at every
+ * accepted hit, which the walks no longer pay for.  When an edge function
+ * is exactly 0 the test redid them in double, and with another test there
+ * is no such split: then the whole test again, whose bound only has to
+ * exceed the hit's t, so +inf does.  Returns 0, leaving u, v alone, if
+ * that test misses (a hit it did not accept). */
+static SIDX_INLINE int sidx__tri_hit_uv_at(sidx_tri_method m, const sidx_ray *r, const float *p0, const float *p1,
+                                          const float *p2, const int stride, float *u, float *v)
 {
     if (m == SIDX_TRI_WATERTIGHT) {
-        const sidx__wt_edges e = sidx__tri_watertight_edges(r, &a.x, &b.x, &c.x, 1);
+        const sidx__wt_edges e = sidx__tri_watertight_edges(r, p0, p1, p2, stride);
         if (e.U != 0.0f && e.V != 0.0f && e.W != 0.0f) {
             sidx__tri_watertight_uv(e.V, e.W, e.U + e.V + e.W, u, v);
             return 1;
         }
     }
     float t;
-    return sidx__tri_test(m, r, a, b, c, INFINITY, &t, u, v);
+    return sidx__tri_test(m, r, sidx__vec3_at(p0, stride), sidx__vec3_at(p1, stride), sidx__vec3_at(p2, stride),
+                          INFINITY, &t, u, v);
 }
 
 /* The geometric normal hit.ng: (p1 − p0) × (p2 − p0), unnormalized.  One
