@@ -92,31 +92,14 @@ static SIDX_INLINE int wide_lane_test(const sidx_accel *a, const sidx_ray *r, co
                           wide_lane_vertex(B, 2, l), best, t, u, v);
 }
 
-/* u, v of a watertight hit on lane l of a block, for the final hit of a
- * query that asks for them: the float edge functions again
- * (sidx__tri_watertight_edges: the same floats the test computed), then
- * sidx__tri_watertight_uv — the test's own last step — without redoing
- * T, t and the compares.  Returns 0, leaving u, v alone, when an edge
- * function is exactly 0: the test takes those in double, so only the
- * full test (wide_lane_test) reproduces that hit. */
-static SIDX_INLINE int wide_lane_uv(const sidx_ray *r, const wide_tri4 *B, unsigned l, float *u, float *v)
-{
-    const sidx__wt_edges e = sidx__tri_watertight_edges(r, &B->v[0][0][l], &B->v[1][0][l], &B->v[2][0][l], 4);
-    if (e.U == 0.0f || e.V == 0.0f || e.W == 0.0f) return 0;
-    sidx__tri_watertight_uv(e.V, e.W, e.U + e.V + e.W, u, v);
-    return 1;
-}
-
 /* u, v of the final hit on lane l, whatever the triangle test: the
- * shortcut above where it applies, else the whole test again (its bound
- * only has to exceed the hit's t, so +inf does) — the lane form of
- * sidx__tri_hit_uv.  Returns 0, leaving u, v alone, if the test misses. */
+ * lane's corners at stride 4 given to sidx__tri_hit_uv_at (the watertight
+ * test's own last step on its float edge functions, else the whole test
+ * again).  Returns 0, leaving u, v alone, if the test misses. */
 static SIDX_INLINE int wide_lane_hit_uv(const sidx_accel *a, const sidx_ray *r, const wide_tri4 *B, unsigned l,
                                         float *u, float *v)
 {
-    float t;
-    return (a->opt.tri == SIDX_TRI_WATERTIGHT && wide_lane_uv(r, B, l, u, v)) ||
-           wide_lane_test(a, r, B, l, INFINITY, &t, u, v);
+    return sidx__tri_hit_uv_at(a->opt.tri, r, &B->v[0][0][l], &B->v[1][0][l], &B->v[2][0][l], 4, u, v);
 }
 
 struct wide_bvh;

@@ -313,7 +313,7 @@ WINL int WFN(leaf_)(const sidx_accel *a, const wide_bvh *w, uint32_t first_block
  * scalar test's last step on them (sidx__tri_watertight_uv).  A hit the
  * scalar test found has det = NaN there (a kernel's det never is); then,
  * and in the other walks, u, v come from the lane's edge functions
- * (wide_lane_uv: no T, no t), or, when the lane has an exactly-0 edge
+ * (wide_lane_hit_uv: no T, no t), or, when the lane has an exactly-0 edge
  * function or the test is not the watertight one, from the whole test
  * again, whose bound only has to exceed t, which was accepted below the
  * old best, so +inf does. */
