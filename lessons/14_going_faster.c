@@ -31,7 +31,9 @@
  * triangles hit at the same t).  Times are printed, never checked: on a
  * busy machine a second thread or a SIMD path may gain nothing.
  * SIDX_SIMD=scalar in the environment forces the portable kernels of the
- * wide BVHs and packets, to see what the SIMD instructions bring.
+ * wide BVHs and packets, to see what the SIMD instructions bring;
+ * SIDX_SIMD=avx2 keeps bvh8 off AVX-512 (the same code with 32 registers
+ * instead of 16), to see what the bigger register file brings.
  *
  * Run:   build/lessons/14_going_faster [SCENE]
  *        SIDX_SIMD=scalar build/lessons/14_going_faster
@@ -54,7 +56,7 @@ static void usage(FILE *f)
                "Going faster on one image of camera rays: a binary BVH vs 4- and 8-wide BVHs,\n"
                "4x4 and 8x8 packets vs single rays, frustum culling vs plain packets, and 1 vs 2\n"
                "threads; every method must give the same hits.  SIDX_SIMD=scalar forces the\n"
-               "portable (non-SIMD) kernels.\n"
+               "portable (non-SIMD) kernels, SIDX_SIMD=avx2 keeps bvh8 off AVX-512.\n"
                "\n"
                "  SCENE   built-in scene name or .obj/.ply (default: teapot)\n");
 }

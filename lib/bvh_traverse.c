@@ -110,7 +110,14 @@ static SIDX_INLINE void set_hit(const sidx_accel *a, const bvh *b, const sidx_ra
  *    method switch hoisted out of the leaf loop, a 4-wide leaf test on
  *    copies transposed at the leaf, the leaf out of line, a descent loop
  *    of its own ("while-while"): each makes gcc spill the ray's constants
- *    of the box test (+2% to +21% instructions) and none measured faster.
+ *    of the box test (+2% to +21% instructions) and none measured faster;
+ *  - (session 6) the far planes pre-multiplied by Ize's factor, as the
+ *    wide walk does, so the chain loses its last multiply: +2.3%
+ *    instructions (the widened best is one more value kept across the
+ *    loop), −1.3% mispredicts, +1% time — within the noise; and the
+ *    whole library compiled for this machine (-march=native, AVX-512):
+ *    no change.  The binary walk's time is its mispredicts, not its
+ *    arithmetic.
  */
 
 

@@ -60,8 +60,13 @@
  * and the tree is at most BVH_DEPTH_LIMIT deep: 64 · 7 + 1 < 512. */
 #define WIDE_STACK 512
 
-/* Instruction sets of the kernels (chosen when the structure is built). */
-typedef enum wide_isa { WIDE_ISA_SCALAR = 0, WIDE_ISA_SSE41 = 1, WIDE_ISA_AVX2 = 2 } wide_isa;
+/* Instruction sets of the kernels (chosen when the structure is built).
+ * AVX-512 is the AVX2 code (8 lanes in ymm registers) compiled with
+ * AVX-512F/VL: the same operations in the same order, so the same bits,
+ * but 32 vector registers instead of 16 — the 8-wide walk holds 10 box
+ * constants and 6 triangle constants across its loop, which on AVX2
+ * spill at every leaf (see leaf_ in bvh_wide_walk.h). */
+typedef enum wide_isa { WIDE_ISA_SCALAR = 0, WIDE_ISA_SSE41 = 1, WIDE_ISA_AVX2 = 2, WIDE_ISA_AVX512 = 3 } wide_isa;
 
 typedef struct wide_tri4 {
     float v[3][3][4];  /* [vertex][axis][lane] */
@@ -150,7 +155,7 @@ static inline sidx_aabb wide_slot_box(const float *n, uint32_t W, uint32_t s)
 extern const wide_kernels sidx__wide_kernels_4_0, sidx__wide_kernels_8_0;
 #if defined(__x86_64__) || defined(__i386__)
 #define SIDX_WIDE_X86 1
-extern const wide_kernels sidx__wide_kernels_4_1, sidx__wide_kernels_8_2;
+extern const wide_kernels sidx__wide_kernels_4_1, sidx__wide_kernels_8_2, sidx__wide_kernels_8_3;
 #endif
 
 #if defined(SIDX_WIDE_X86) && defined(__SSE2__)
@@ -243,8 +248,8 @@ static SIDX_INLINE int wide_tri4_test(const wide_tri4 *B, const wide_tri_ray *R,
 #endif
 
 /* The instruction set bvh4/bvh8 pick on this machine: the best the CPU
- * has, unless the environment variable SIDX_SIMD=scalar (or sse4.1) asks
- * for less — that is how the tests run the portable fallback. */
+ * has, unless the environment variable SIDX_SIMD (scalar, sse4.1, avx2)
+ * asks for less — that is how the tests run the other copies. */
 wide_isa sidx__wide_pick_isa(uint32_t width);
 
 /* Is `a` a bvh4 / bvh8 (for packet.c)? */
