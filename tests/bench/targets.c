@@ -11,9 +11,15 @@
  * phase, seconds apart, and on a shared machine a phase can run 20% slow,
  * which swamps a 0.8x target.  Here the compared tracers run in
  * interleaved rounds (A, B, A, B, ...; the order reversed every other
- * round so neither always runs on the caches the other left) on the same
- * rays, already warm, and each round gives one ratio: a slow spell hits
- * both sides of the round it falls in.  A tracer's pass during which the
+ * round) on the same rays, and each round gives one ratio: a slow spell
+ * hits both sides of the round it falls in.  Every timed pass follows an
+ * untimed pass of the same tracer on the same rays, so what is timed is
+ * steady-state throughput, as a renderer tracing millions of rays sees
+ * it, and not the refill of the caches the previous tracer evicted.
+ * Until session 6 the timed pass came straight after another tracer's:
+ * that cold start cost Embree more than sidx (its structures are larger;
+ * bunny diffuse rays 4.9 Mrays/s cold against 6.9 warm) and so flattered
+ * sidx's ratios (#8 bvh8 / Embree on bunny diffuse 0.98 cold, 0.91 warm).  A tracer's pass during which the
  * thread was preempted (getrusage's involuntary context switches went up:
  * another process then ran on this core and evicted our caches) is run
  * again, up to TG_MAX_RETRIES times.  Retrying whole rounds instead did
@@ -90,12 +96,16 @@ static double trace_fair(const sidx_accel *a, const tk_rayrec *rec, size_t n, si
     return bench_clock_ms() - t0;
 }
 
-/* One pass of tracer t: fair ms, and for sidx tracers the prep ms too.
+/* One pass of tracer t, after an untimed one: fair ms, and for sidx
+ * tracers the prep ms too.
  * Embree has one timing for both: rtcIntersect1 builds its ray per call,
  * and the table times it the same way. */
 static void trace_once(const tracers *tr, int t, const tk_rayrec *rec, const bench_rays *br, sidx_hit *hits,
                        double *fair, double *prep)
 {
+    /* untimed: the same tracer's structure into the caches (see the top) */
+    if (t == TG_EMBREE) (void)bench_embree_trace(tr->embree, rec, br->n, 0, 1, hits);
+    else (void)trace_fair(tr->accel[t], rec, br->n, hits);
     if (t == TG_EMBREE) {
         *fair = bench_embree_trace(tr->embree, rec, br->n, 0, 1, hits);
         *prep = *fair;
@@ -297,8 +307,9 @@ int bench_targets(FILE *f, const bench_targets_opts *o)
         }
     }
     fprintf(f, "\n== targets: speed of A / speed of B, one thread, thread CPU time; %d interleaved rounds per\n"
-               "   scene and kind on the same %zu warm rays (order reversed every other round; a tracer's pass\n"
-               "   with an involuntary context switch is run again); median [min..max] of the per-round ratios.\n"
+               "   scene and kind on the same %zu rays, each timed pass after an untimed one of the same tracer\n"
+               "   (steady state; order reversed every other round; a tracer's pass with an involuntary context\n"
+               "   switch is run again); median [min..max] of the per-round ratios.\n"
                "   fair: sidx_ray_init per ray and t, prim, u, v, Ng (what rtcIntersect1 returns); prep: rays\n"
                "   prepared beforehand, no u, v, Ng (the table's timing).  Verdict on the fair median.\n",
             o->rounds, o->rays);
