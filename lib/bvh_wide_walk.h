@@ -74,17 +74,21 @@ typedef struct WFN(wray_) {
 #if WALK_ISA >= 1
     wide_tri_ray tri; /* watertight triangle test, lane-broadcast (bvh_wide_internal.h) */
 #endif
+#if WALK_ISA != 3
     uint32_t no[3], fo[3];  /* float offsets of the near / far planes of each axis inside a node */
+#endif
 } WFN(wray_);
 
 WINL void WFN(wray_init_)(WFN(wray_) * R, const sidx_ray *r, float scale)
 {
     const float *o = &r->org.x, *inv = &r->inv_dir.x;
+#if WALK_ISA != 3 /* the AVX-512 copy picks the planes with its sign masks instead */
     for (int k = 0; k < 3; ++k) {
         /* b[0..2] = lo, b[3..5] = hi: a negative direction enters through hi. */
         R->no[k] = (uint32_t)((r->sign[k] ? 3 + k : k) * WALK_W);
         R->fo[k] = (uint32_t)((r->sign[k] ? k : 3 + k) * WALK_W);
     }
+#endif
 #if WALK_ISA >= 2
     R->ox = _mm256_set1_ps(o[0]); R->oy = _mm256_set1_ps(o[1]); R->oz = _mm256_set1_ps(o[2]);
     R->ix = _mm256_set1_ps(inv[0]); R->iy = _mm256_set1_ps(inv[1]); R->iz = _mm256_set1_ps(inv[2]);
