@@ -198,11 +198,8 @@ static void measure_kind(FILE *f, const bench_targets_opts *o, const char *scene
     int order[TG_TRACERS], nt = 0;
     for (int t = 0; t < TG_TRACERS; ++t)
         if (tr->used[t]) order[nt++] = t;
-    /* warm-up: caches, page faults, Embree's lazy set-up */
-    for (int j = 0; j < nt; ++j) {
-        double a, b;
-        trace_once(tr, order[j], rec, &br, hits, &a, &b);
-    }
+    /* no separate warm-up: trace_once's untimed pass also takes the page
+     * faults and Embree's lazy set-up before the first timed pass */
     int retries = 0, preempted = 0;
     for (int r = 0; r < rounds; ++r) {
         bench_progress("targets: %s %s round %d/%d", scene, tk_ray_kind_name(kind), r + 1, rounds);
