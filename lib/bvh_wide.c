@@ -220,13 +220,8 @@ static uint32_t make_leaf(collapse *C, uint32_t first, uint32_t count)
         wide_tri4 *B = &C->blocks[b0 + k];
         for (uint32_t l = 0; l < 4; ++l) {
             const uint32_t i = 4u * k + l;
-            for (int v = 0; v < 3; ++v) {
-                const sidx_vec3 p = i < count ? C->b->tris[first + i].v[v] : sidx_v3(NAN, NAN, NAN);
-                B->v[v][0][l] = p.x;
-                B->v[v][1][l] = p.y;
-                B->v[v][2][l] = p.z;
-            }
-            B->prim[l] = i < count ? C->b->prim_id[first + i] : WIDE_PAD_PRIM;
+            if (i < count) wide_set_lane(B, l, C->b->tris[first + i].v, C->b->prim_id[first + i]);
+            else wide_set_lane(B, l, NULL, 0);
         }
     }
     C->blocks[b0 + nb - 1].prim[0] |= WIDE_LAST_BLOCK;

@@ -74,6 +74,20 @@ typedef struct wide_tri4 {
 } wide_tri4;
 _Static_assert(sizeof(wide_tri4) == 160, "wide_tri4 is 9 float4 + 4 ids");
 
+/* Lane l of a block: triangle (p0, p1, p2) with original index prim, or
+ * padding (NaN corners, WIDE_PAD_PRIM) when p is NULL.  Every block
+ * layout (bvh, bvh4/bvh8 leaves, kd-tree references) is filled by it. */
+static inline void wide_set_lane(wide_tri4 *B, unsigned l, const sidx_vec3 *p, uint32_t prim)
+{
+    for (int v = 0; v < 3; ++v) {
+        const sidx_vec3 c = p ? p[v] : sidx_v3(NAN, NAN, NAN);
+        B->v[v][0][l] = c.x;
+        B->v[v][1][l] = c.y;
+        B->v[v][2][l] = c.z;
+    }
+    B->prim[l] = p ? prim : WIDE_PAD_PRIM;
+}
+
 /* Corner k (0, 1, 2) of lane l of a block. */
 static SIDX_INLINE sidx_vec3 wide_lane_vertex(const wide_tri4 *B, int k, unsigned l)
 {

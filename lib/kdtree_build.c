@@ -806,13 +806,13 @@ sidx_status sidx__kd_make_blocks(const sidx_accel *a, kd_tree *kd, const sidx_me
     for (uint32_t i = 0; i < 4u * nb; ++i) {
         wide_tri4 *B = &kd->blocks[i / 4u];
         const uint32_t l = i % 4u;
-        for (int v = 0; v < 3; ++v) {
-            const sidx_vec3 p = i < kd->num_refs ? sidx_mesh_vertex(m, kd->prims[i], v) : sidx_v3(NAN, NAN, NAN);
-            B->v[v][0][l] = p.x;
-            B->v[v][1][l] = p.y;
-            B->v[v][2][l] = p.z;
+        if (i < kd->num_refs) {
+            const sidx_vec3 p[3] = {sidx_mesh_vertex(m, kd->prims[i], 0), sidx_mesh_vertex(m, kd->prims[i], 1),
+                                    sidx_mesh_vertex(m, kd->prims[i], 2)};
+            wide_set_lane(B, l, p, kd->prims[i]);
+        } else {
+            wide_set_lane(B, l, NULL, 0);
         }
-        B->prim[l] = i < kd->num_refs ? kd->prims[i] : WIDE_PAD_PRIM;
     }
     return SIDX_OK;
 }
