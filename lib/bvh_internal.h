@@ -104,6 +104,11 @@ typedef struct bvh_par_params {
 } bvh_par_params;
 sidx_status sidx__bvh_build_parallel(sidx_accel *a, const bvh_par_params *p, sidx_error *err);
 
+/* bvh_spatial.c: the binary tree with spatial splits (SBVH) that bvh4 and
+ * bvh8 collapse; prim_id[] and tris[] hold references (a triangle may be
+ * in several leaves).  Reads a->opt like bvh_build.c; sets a->impl. */
+sidx_status sidx__bvh_build_spatial(sidx_accel *a, sidx_error *err);
+
 /* bvh_obb.c: fit one oriented box per node (after nodes/tris are final). */
 sidx_status sidx__bvh_fit_obbs(const sidx_accel *a, bvh *b);
 

@@ -142,8 +142,12 @@ static void test_match_brute(void **state)
         sidx_accel *brute = NULL;
         assert_int_equal(sidx_accel_build("brute", &m, NULL, &brute, NULL), SIDX_OK);
         for (int w = 0; w < NWIDES; ++w)
-            for (int simd = 0; simd < NSIMD; ++simd) {
-                sidx_accel *a = build(wides[w], &m, NULL, simd);
+            for (int simd = 0; simd < NSIMD + 1; ++simd) {
+                /* the last round: the best kernels on the tree without spatial splits */
+                sidx_build_options o;
+                memset(&o, 0, sizeof o);
+                o.no_spatial_splits = simd == NSIMD;
+                sidx_accel *a = build(wides[w], &m, &o, simd == NSIMD ? 1 : simd);
                 uint64_t events = 0;
                 const sidx_hook hook = {count_fn, &events, 0};
                 const sidx_query traced = {0, SIDX_TRAVERSE_DEFAULT, &hook, 0};
@@ -265,7 +269,21 @@ static void test_no_leaks_icosphere(void **state)
 
 static int box_inside(sidx_aabb outer, sidx_aabb inner) { return sidx_aabb_contains(outer, inner); }
 
-static void check_node(const wide_bvh *w, uint32_t i, uint32_t depth, uint8_t *seen, uint32_t *leaves)
+/* One leaf reference: its triangle and the box of the slot holding it. */
+typedef struct leafref {
+    uint32_t prim;
+    sidx_aabb box;
+} leafref;
+
+typedef struct walkstate {
+    int whole;         /* no spatial splits: every triangle in exactly one leaf, inside its box */
+    uint32_t *seen;    /* references per triangle */
+    leafref *refs;     /* every reference (spatial splits) */
+    size_t nrefs, cap;
+    uint32_t leaves;
+} walkstate;
+
+static void check_node(const wide_bvh *w, uint32_t i, uint32_t depth, walkstate *ws)
 {
     const uint32_t W = w->width;
     const float *n = wide_node(w, i);
@@ -282,7 +300,7 @@ static void check_node(const wide_bvh *w, uint32_t i, uint32_t depth, uint8_t *s
         assert_false(gap);
         ++used;
         if (c & WIDE_LEAF_BIT) {
-            ++*leaves;
+            ++ws->leaves;
             assert_true(wide_id(n, W)[s] >= w->num_inner);
             const wide_tri4 *B = w->blocks + (c & ~WIDE_LEAF_BIT);
             for (;; ++B) {
@@ -294,12 +312,25 @@ static void check_node(const wide_bvh *w, uint32_t i, uint32_t depth, uint8_t *s
                         continue;
                     }
                     assert_true(id < w->num_prims);
-                    assert_int_equal(seen[id], 0);
-                    seen[id] = 1;
-                    for (int v = 0; v < 3; ++v) {
-                        const sidx_vec3 p = {B->v[v][0][l], B->v[v][1][l], B->v[v][2][l]};
-                        assert_true(box_inside(sb, (sidx_aabb){p, p}));
+                    if (ws->whole) {
+                        assert_int_equal(ws->seen[id], 0);
+                        for (int v = 0; v < 3; ++v) {
+                            const sidx_vec3 p = {B->v[v][0][l], B->v[v][1][l], B->v[v][2][l]};
+                            if (!box_inside(sb, (sidx_aabb){p, p}))
+                                fail_msg("node %u slot %u: triangle %u corner %d (%g %g %g) outside its leaf box "
+                                         "(%g %g %g)-(%g %g %g)", i, s, id, v, (double)p.x, (double)p.y, (double)p.z,
+                                         (double)sb.min.x, (double)sb.min.y, (double)sb.min.z, (double)sb.max.x,
+                                         (double)sb.max.y, (double)sb.max.z);
+                        }
+                    } else {
+                        if (ws->nrefs == ws->cap) {
+                            ws->cap = ws->cap ? 2 * ws->cap : 1024;
+                            ws->refs = realloc(ws->refs, ws->cap * sizeof *ws->refs);
+                            assert_non_null(ws->refs);
+                        }
+                        ws->refs[ws->nrefs++] = (leafref){id, sb};
                     }
+                    ws->seen[id]++;
                 }
                 if (B->prim[0] & WIDE_LAST_BLOCK) break;
             }
@@ -309,34 +340,90 @@ static void check_node(const wide_bvh *w, uint32_t i, uint32_t depth, uint8_t *s
             const float *cn = wide_node(w, c);
             for (uint32_t k = 0; k < W; ++k)
                 if (wide_child(cn, W)[k] != WIDE_EMPTY) assert_true(box_inside(sb, wide_slot_box(cn, W, k)));
-            check_node(w, c, depth + 1, seen, leaves);
+            check_node(w, c, depth + 1, ws);
         }
     }
     assert_true(used >= 1);
 }
 
+static int by_prim(const void *a, const void *b)
+{
+    const uint32_t x = ((const leafref *)a)->prim, y = ((const leafref *)b)->prim;
+    return (x > y) - (x < y);
+}
+
+/* With spatial splits a triangle's references each bound only a part of
+ * it; together they must cover it, or a ray could pass through the gap.
+ * Points spread over the triangle (corners, edge points, inner points on
+ * a barycentric grid) must each lie in the box of one of its references. */
+static void check_coverage(const sidx_mesh *m, walkstate *ws)
+{
+    qsort(ws->refs, ws->nrefs, sizeof *ws->refs, by_prim);
+    size_t r = 0;
+    for (uint32_t t = 0; t < m->num_triangles; ++t) {
+        const size_t r0 = r;
+        while (r < ws->nrefs && ws->refs[r].prim == t) ++r;
+        assert_true(r > r0);
+        const sidx_vec3 a = sidx_mesh_vertex(m, t, 0), b = sidx_mesh_vertex(m, t, 1), c = sidx_mesh_vertex(m, t, 2);
+        enum { G = 8 };
+        for (int i = 0; i <= G; ++i)
+            for (int j = 0; i + j <= G; ++j) {
+                const float u = (float)i / G, v = (float)j / G;
+                const sidx_vec3 p = sidx_v3_add(a, sidx_v3_add(sidx_v3_scale(sidx_v3_sub(b, a), u),
+                                                               sidx_v3_scale(sidx_v3_sub(c, a), v)));
+                int in = 0;
+                for (size_t k = r0; k < r && !in; ++k) {
+                    /* the point is computed with rounding: allow a relative 2^-20 */
+                    const sidx_aabb bx = ws->refs[k].box;
+                    const float e = 0x1p-20f * (fabsf(p.x) + fabsf(p.y) + fabsf(p.z)) + 1e-30f;
+                    in = p.x >= bx.min.x - e && p.x <= bx.max.x + e && p.y >= bx.min.y - e && p.y <= bx.max.y + e &&
+                         p.z >= bx.min.z - e && p.z <= bx.max.z + e;
+                }
+                if (!in) fail_msg("triangle %u: point (%d, %d)/%d in none of its %zu references", t, i, j, G, r - r0);
+            }
+    }
+}
+
+/* Both binary trees bvh4/bvh8 can collapse: with spatial splits (the
+ * default) and without.  The scenes with long triangles (the stadium's
+ * stands, the random soup) must get some split references, or the
+ * default would silently be the plain tree. */
 static void test_structure(void **state)
 {
     (void)state;
     for (size_t si = 0; si < NSCENES; ++si) {
         sidx_mesh m = scene(scenes[si]);
-        for (int w = 0; w < NWIDES; ++w) {
-            sidx_accel *a = build(wides[w], &m, NULL, 1);
-            const wide_bvh *wb = a->impl;
-            assert_int_equal(wb->width, w ? 8u : 4u);
-            uint8_t *seen = calloc(m.num_triangles, 1);
-            assert_non_null(seen);
-            uint32_t leaves = 0;
-            check_node(wb, 0, 0, seen, &leaves);
-            for (uint32_t t = 0; t < m.num_triangles; ++t) assert_int_equal(seen[t], 1);
-            assert_int_equal(leaves, wb->num_leaves);
-            sidx_accel_stats st;
-            sidx_accel_stats_get(a, &st);
-            assert_int_equal(st.nodes, wb->num_inner + wb->num_leaves);
-            assert_true(st.sah_cost > 0.0);
-            free(seen);
-            sidx_accel_destroy(a);
-        }
+        for (int whole = 0; whole < 2; ++whole)
+            for (int w = 0; w < NWIDES; ++w) {
+                sidx_build_options o;
+                memset(&o, 0, sizeof o);
+                o.no_spatial_splits = whole;
+                sidx_accel *a = build(wides[w], &m, &o, 1);
+                const wide_bvh *wb = a->impl;
+                assert_int_equal(wb->width, w ? 8u : 4u);
+                walkstate ws = {whole, calloc(m.num_triangles, sizeof(uint32_t)), NULL, 0, 0, 0};
+                assert_non_null(ws.seen);
+                check_node(wb, 0, 0, &ws);
+                uint64_t refs = 0;
+                for (uint32_t t = 0; t < m.num_triangles; ++t) {
+                    if (whole) assert_int_equal(ws.seen[t], 1);
+                    else assert_true(ws.seen[t] >= 1);
+                    refs += ws.seen[t];
+                }
+                if (!whole) check_coverage(&m, &ws);
+                assert_int_equal(ws.leaves, wb->num_leaves);
+                sidx_accel_stats st;
+                sidx_accel_stats_get(a, &st);
+                assert_int_equal(st.nodes, wb->num_inner + wb->num_leaves);
+                assert_int_equal(st.prim_refs, refs);
+                if (whole) assert_int_equal(st.prim_refs, m.num_triangles);
+                if (!whole && (strcmp(scenes[si], "soup") == 0 || strcmp(scenes[si], "stadium") == 0))
+                    assert_true(st.prim_refs > m.num_triangles);
+                assert_true(st.sah_cost > 0.0);
+                free(ws.seen);
+                free(ws.refs);
+                sidx_accel_destroy(a);
+            }
         sidx_mesh_free(&m);
     }
 }

@@ -51,6 +51,8 @@ typedef struct sidx_build_options {
     float grid_density;           /* λ of the grid resolution formula; 0 = default */
     float empty_bonus;            /* kd-tree empty-space bonus in [0,1); 0 = default */
     int no_mailbox;               /* 1 = switch mailboxing off (grids, kd-tree) */
+    int no_spatial_splits;        /* 1 = bvh4/bvh8 collapse the plain binned-SAH BVH (every triangle in
+                                     one leaf, faster build) instead of the one with spatial splits */
     uint32_t threads;             /* build threads; 0 = 1 */
 } sidx_build_options;
 
