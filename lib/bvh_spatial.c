@@ -10,12 +10,14 @@
  * part of the triangle on its side, and the siblings no longer overlap.
  * More references, fewer visits.  Per node the SAH picks the cheapest of
  *
- *   - a leaf                                 N · C_tri
- *   - the best binned object split           (bvh_build.c's, on the
+ *   - a leaf                                 ⌈N⌉ · C_tri
+ *   - the best binned object split           C_trav + C_tri (A_L ⌈N_L⌉ + A_R ⌈N_R⌉) / A
+ *                                             (bvh_build.c's binning, on the
  *                                             references' box centroids)
- *   - the best binned spatial split          C_trav + C_tri (A_L N_L + A_R N_R) / A,
- *                                             N_L, N_R counting straddlers on both sides,
+ *   - the best binned spatial split          the same, N_L and N_R counting
+ *                                             straddlers on both sides,
  *
+ * with ⌈N⌉ = N rounded up to whole blocks of four (SB_BLOCK), and
  * trying spatial splits only where the object split's children overlap
  * by more than α of the root's area (the paper's α = 10⁻⁵), and never
  * adding more than SB_BUDGET · n references in all.
@@ -43,6 +45,17 @@
 #define SB_ALPHA 1e-5f       /* try spatial splits when sibling overlap > α · root area (Stich et al.) */
 #define SB_SPATIAL_MIN 8u   /* spatial bins of a node of n references: n / SB_SPATIAL_DIV, */
 #define SB_SPATIAL_DIV 4u   /* clamped to SB_SPATIAL_MIN..SB_BINS (see spatial_bins) */
+/* The wide leaves test triangles in blocks of four, so 1 to 4 triangles
+ * cost one pass: the SAH here counts a side's triangles rounded up to a
+ * whole block (as Embree's builders do with their block size), and the
+ * tree prefers sides the collapse can pack into full blocks.  Measured
+ * against plain counts (session 7, bvh8, interleaved runs): bunny diffuse
+ * +5 %, bunny primary +5 %, Sponza primary +3 %, Sponza diffuse ±0;
+ * 18,060 leaves instead of 22,258 on the bunny (Embree: 17,779), 3.8
+ * instead of 4.6 MB.  A default leaf size of 4 instead of 3 measured the
+ * same. */
+#define SB_BLOCK 4u
+#define SB_ROUND(n) (((n) + SB_BLOCK - 1u) / SB_BLOCK * SB_BLOCK)
 #define SB_BUDGET 1.0        /* spatial splits may add at most this many references per triangle, in all */
 
 typedef struct sref {
@@ -172,7 +185,7 @@ static void sweep(const sbuild *S, const sbin *bins, uint32_t nb, uint32_t n, fl
         nl += bins[p - 1].enter;
         if (nl == 0 || right_n[p] == 0 || nl >= n || right_n[p] >= n) continue;
         if ((uint64_t)nl + right_n[p] - n > S->budget) continue;
-        const float c = sah(S, sidx_aabb_area(acc), nl, right_area[p], right_n[p], inv_area);
+        const float c = sah(S, sidx_aabb_area(acc), SB_ROUND(nl), right_area[p], SB_ROUND(right_n[p]), inv_area);
         if (c < best->cost) {
             best->kind = kind;
             best->axis = k;
@@ -332,7 +345,7 @@ static sidx_status build(sbuild *S, size_t off, uint32_t n, sidx_aabb box, uint3
                             (best.kind == 0 || sidx_aabb_area(box_and(best.left, best.right)) > S->min_overlap);
     if (try_spatial) spatial_split(S, S->pool + off, n, box, inv_area, &best);
 
-    if (best.kind == 0 || (best.cost >= S->c_tri * (float)n && n <= S->max_leaf)) {
+    if (best.kind == 0 || (best.cost >= S->c_tri * (float)SB_ROUND(n) && n <= S->max_leaf)) {
         if (best.kind != 0 || n <= S->max_leaf) return make_leaf(S, idx, off, n);
         /* no plane separates them (all centroids equal) and too many for
          * one leaf: halve in index order, as bvh_build.c does */
