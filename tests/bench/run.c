@@ -1512,7 +1512,7 @@ int bench_cmd_run(int argc, char **argv)
                 fprintf(f, "(%s: %s, other triangle/box tests failed: %s)\n", sc->name, name, why);
         }
         if (o.embree) {
-            static const char *const en[] = {"embree", "embree-robust", "embree-robust-hq"};
+            static const char *const en[] = {"embree", "embree-robust", "embree-hq", "embree-robust-hq"};
             for (size_t e = 0; e < sizeof en / sizeof en[0]; ++e) {
                 bench_embree_cfg cfg;
                 if (o.accel_list && !bench_list_has(o.accel_list, en[e])) continue;
