@@ -231,8 +231,8 @@ static float spatial_plane(float lo, float ext, uint32_t p, uint32_t nb) { retur
  * every bin it spans, and deep in the tree a triangle spans a good part of
  * its node, so the chopping (not the sweep) is the build's cost.  Fewer
  * bins for small nodes.  Measured on the bunny (spatial splits tried at
- * 20 of every 26 nodes): 32 bins everywhere built bvh8 in 520 ms, n / 4
- * in 8..32 in 300 ms, for the same SAH cost within 0.5 %. */
+ * 20 of every 26 nodes): 32 bins everywhere built bvh8 in 173 ms, n / 4
+ * in 8..32 in 119 ms, for the same SAH cost within 0.5 %. */
 static uint32_t spatial_bins(uint32_t n)
 {
     const uint32_t nb = n / SB_SPATIAL_DIV;
@@ -241,7 +241,12 @@ static uint32_t spatial_bins(uint32_t n)
 
 /* Binned spatial split: each reference is chopped into the bins it spans
  * (its parts' boxes grow those bins), and counted as entering its first
- * bin and leaving its last. */
+ * bin and leaving its last.  The chopping here only estimates the SAH of
+ * each plane, so it cuts the reference's box at the bin planes instead of
+ * clipping the triangle (split_ref, which the chosen split then does for
+ * real): the bunny's bvh8 built in 119 instead of 315 ms, Sponza's in 137
+ * instead of 342, for the same SAH cost within 0.2 % and the same speed
+ * (session 7, interleaved runs). */
 static void spatial_split(const sbuild *S, const sref *refs, uint32_t n, sidx_aabb box, float inv_area, ssplit *best)
 {
     for (int k = 0; k < 3; ++k) {
@@ -261,8 +266,10 @@ static void spatial_split(const sbuild *S, const sref *refs, uint32_t n, sidx_aa
             bins[b1].exit++;
             sref cur = refs[i];
             for (uint32_t b = b0; b < b1; ++b) {
-                sidx_aabb L, R;
-                split_ref(S->tris, &cur, k, spatial_plane(lo, ext, b + 1u, nb), &L, &R);
+                sidx_aabb L = cur.box, R = cur.box;
+                const float p = spatial_plane(lo, ext, b + 1u, nb);
+                (&L.max.x)[k] = p;
+                (&R.min.x)[k] = p;
                 if (!sidx_aabb_is_empty(L)) bins[b].box = sidx_aabb_union(bins[b].box, L);
                 if (sidx_aabb_is_empty(R)) break;
                 cur.box = R;

@@ -1,16 +1,21 @@
-/* bvh_wide.c — "bvh4" and "bvh8": the binned-SAH BVH collapsed into 4- and
- * 8-wide nodes, traversed with SSE4.1 / AVX2 / AVX-512 (bvh_wide_walk.h).
+/* bvh_wide.c — "bvh4" and "bvh8": a binned-SAH BVH with spatial splits
+ * collapsed into 4- and 8-wide nodes, traversed with SSE4.1 / AVX2 /
+ * AVX-512 (bvh_wide_walk.h).
  *
  * Build = a binary build, then a collapse.  The binary tree is binned SAH
  * with spatial splits (bvh_spatial.c, Stich et al. 2009: a straddling
  * triangle may be referenced by both sides, so sibling boxes stop
  * overlapping), or with opt.no_spatial_splits the ordinary binned-SAH
  * build (bvh_build.c, Wald 2007).  Measured (session 7, interleaved runs,
- * one thread): Sponza diffuse rays bvh8 +28 %, bvh4 +32-40 %, for 33 %
- * more references and a 5x slower build (333 vs 60 ms); the bunny, whose
- * triangles are small and even, is unchanged (0.7 % more references).
- * The collapse that picks, by dynamic programming on the SAH, which
- * binary nodes become wide nodes, which subtrees become leaves (runs of
+ * one thread): Sponza diffuse rays bvh8 +28 %, bvh4 +32-40 %, for 30 %
+ * more references and a build about twice as long (140 vs 60 ms); the
+ * bunny, whose triangles are small and even, is unchanged (1 % more
+ * references).  8x8 packets over bvh8 lose on Sponza primary rays (38
+ * instead of 43 Mrays/s; single rays gain, 32 instead of 27), still more
+ * than twice Embree's packets.
+ *
+ * The collapse picks, by dynamic programming on the SAH, which binary
+ * nodes become wide nodes, which subtrees become leaves (runs of
  * 4-triangle blocks) and which dissolve into their parent's slots (see
  * "collapse" below; Ylitie et al. 2017).  It replaces the greedy rule of
  * Dammertz et al. 2008 and Embree's BVH4/8 builders (open the child of
