@@ -77,9 +77,10 @@ typedef struct wide_tri4 {
 } wide_tri4;
 _Static_assert(sizeof(wide_tri4) == 160, "wide_tri4 is 9 float4 + 4 ids");
 
-/* Lane l of a block: triangle (p0, p1, p2) with original index prim, or
- * padding (NaN corners, WIDE_PAD_PRIM) when p is NULL.  Every block
- * layout (bvh, bvh4/bvh8 leaves, kd-tree references) is filled by it. */
+/* Lane l of a block: the triangle with corners p[0], p[1], p[2] and
+ * original index prim, or padding (NaN corners, WIDE_PAD_PRIM) when p is
+ * NULL.  Both block layouts (bvh4/bvh8 leaves, kd-tree references) are
+ * filled by it. */
 static inline void wide_set_lane(wide_tri4 *B, unsigned l, const sidx_vec3 *p, uint32_t prim)
 {
     for (int v = 0; v < 3; ++v) {

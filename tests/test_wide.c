@@ -277,6 +277,7 @@ typedef struct leafref {
 
 typedef struct walkstate {
     int whole;         /* no spatial splits: every triangle in exactly one leaf, inside its box */
+    uint32_t ntris;    /* the mesh's triangles */
     uint32_t *seen;    /* references per triangle */
     leafref *refs;     /* every reference (spatial splits) */
     size_t nrefs, cap;
@@ -311,7 +312,7 @@ static void check_node(const wide_bvh *w, uint32_t i, uint32_t depth, walkstate 
                         assert_true(isnan(B->v[0][0][l]));
                         continue;
                     }
-                    assert_true(id < w->num_prims);
+                    assert_true(id < ws->ntris); /* an original triangle index */
                     if (ws->whole) {
                         assert_int_equal(ws->seen[id], 0);
                         for (int v = 0; v < 3; ++v) {
@@ -401,7 +402,7 @@ static void test_structure(void **state)
                 sidx_accel *a = build(wides[w], &m, &o, 1);
                 const wide_bvh *wb = a->impl;
                 assert_int_equal(wb->width, w ? 8u : 4u);
-                walkstate ws = {whole, calloc(m.num_triangles, sizeof(uint32_t)), NULL, 0, 0, 0};
+                walkstate ws = {whole, m.num_triangles, calloc(m.num_triangles, sizeof(uint32_t)), NULL, 0, 0, 0};
                 assert_non_null(ws.seen);
                 check_node(wb, 0, 0, &ws);
                 uint64_t refs = 0;
