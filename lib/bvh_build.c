@@ -422,8 +422,6 @@ static void bvh_free(const sidx_accel *a, bvh *b)
     sidx__free(a, b);
 }
 
-static float opt_or(float v, float def) { return v > 0.0f ? v : def; }
-
 static sidx_status bvh_build(sidx_accel *a, sidx_error *err)
 {
     const sidx_mesh *m = a->mesh;
@@ -434,24 +432,20 @@ static sidx_status bvh_build(sidx_accel *a, sidx_error *err)
     B->a = a;
     B->hook = a->opt.hook;
     B->kind = (a->variant >= 0 && a->variant < BVH_BUILDER_COUNT) ? (bvh_builder)a->variant : BVH_BINNED;
-    B->leaf_size = a->opt.leaf_size ? a->opt.leaf_size : BVH_DEFAULT_LEAF_SIZE;
-    B->max_leaf = B->leaf_size > BVH_MAX_LEAF ? B->leaf_size : BVH_MAX_LEAF;
-    B->max_depth = (a->opt.max_depth && a->opt.max_depth < BVH_DEPTH_LIMIT) ? a->opt.max_depth : BVH_DEPTH_LIMIT;
-    /* Bins: 2 is the fewest that gives a plane; above 1024 binning stops
-     * being cheaper than the sweep it approximates. */
-    B->bins = a->opt.bins ? a->opt.bins : 32u;
-    if (B->bins < 2) B->bins = 2;
-    if (B->bins > 1024) B->bins = 1024;
+    const bvh_par_params pp = bvh_params(a);
+    B->leaf_size = pp.leaf_size;
+    B->max_leaf = pp.max_leaf;
+    B->max_depth = pp.max_depth;
+    B->bins = pp.bins;
     B->every_b = a->opt.every_b ? a->opt.every_b : 32u;
-    B->c_trav = opt_or(a->opt.c_trav, 1.0f);
-    B->c_tri = opt_or(a->opt.c_tri, 1.0f);
+    B->c_trav = pp.c_trav;
+    B->c_tri = pp.c_tri;
 
     if (n > BVH_COUNT_MASK)
         return sidx__fail(err, SIDX_ERR_LIMIT, "%s: %u triangles exceed the BVH's limit of %u", a->name, n,
                           BVH_COUNT_MASK);
     if (a->opt.threads > 1 && B->kind == BVH_BINNED && !(B->hook && B->hook->fn) && n > 0) {
         /* Same tree, built on several threads (parallel.c). */
-        const bvh_par_params pp = {B->leaf_size, B->max_leaf, B->max_depth, B->bins, B->c_trav, B->c_tri};
         return sidx__bvh_build_parallel(a, &pp, err);
     }
     SIDX_EMIT(1, B->hook, SIDX_EV_BUILD_BEGIN, e_.count = n; e_.bounds = sidx_mesh_bounds(m));
@@ -578,7 +572,8 @@ static sidx_status bvh_refit(sidx_accel *a, sidx_error *err)
         n->bmin[0] = bb.min.x; n->bmin[1] = bb.min.y; n->bmin[2] = bb.min.z;
         n->bmax[0] = bb.max.x; n->bmax[1] = bb.max.y; n->bmax[2] = bb.max.z;
     }
-    b->sah_cost = tree_sah(b, opt_or(a->opt.c_trav, 1.0f), opt_or(a->opt.c_tri, 1.0f));
+    const bvh_par_params pp = bvh_params(a);
+    b->sah_cost = tree_sah(b, pp.c_trav, pp.c_tri);
     if (b->obbs) return sidx__bvh_fit_obbs(a, b); /* reuses its array: cannot fail */
     return SIDX_OK;
 }

@@ -104,6 +104,24 @@ typedef struct bvh_par_params {
 } bvh_par_params;
 sidx_status sidx__bvh_build_parallel(sidx_accel *a, const bvh_par_params *p, sidx_error *err);
 
+/* Those parameters from a->opt, defaults filled in and clamped: one
+ * reading for bvh_build.c (and so parallel.c) and bvh_spatial.c. */
+static inline bvh_par_params bvh_params(const sidx_accel *a)
+{
+    bvh_par_params p;
+    p.leaf_size = a->opt.leaf_size ? a->opt.leaf_size : BVH_DEFAULT_LEAF_SIZE;
+    p.max_leaf = p.leaf_size > BVH_MAX_LEAF ? p.leaf_size : BVH_MAX_LEAF;
+    p.max_depth = (a->opt.max_depth && a->opt.max_depth < BVH_DEPTH_LIMIT) ? a->opt.max_depth : BVH_DEPTH_LIMIT;
+    /* Bins: 2 is the fewest that gives a plane; above 1024 binning stops
+     * being cheaper than the sweep it approximates. */
+    p.bins = a->opt.bins ? a->opt.bins : 32u;
+    if (p.bins < 2) p.bins = 2;
+    if (p.bins > 1024) p.bins = 1024;
+    p.c_trav = a->opt.c_trav > 0.0f ? a->opt.c_trav : 1.0f;
+    p.c_tri = a->opt.c_tri > 0.0f ? a->opt.c_tri : 1.0f;
+    return p;
+}
+
 /* bvh_spatial.c: the binary tree with spatial splits (SBVH) that bvh4 and
  * bvh8 collapse; prim_id[] and tris[] hold references (a triangle may be
  * in several leaves).  Reads a->opt like bvh_build.c; sets a->impl. */

@@ -88,13 +88,12 @@ typedef struct ssplit {
     int kind;               /* 0 none, 1 object, 2 spatial */
     int axis;
     uint32_t plane;         /* bin boundary: bins [0, plane) go left */
-    uint32_t bins;          /* spatial: bins on the axis */
+    float lo, scale;        /* object: the centroid binning of the axis (the partition bins again) */
+    float pos;              /* spatial: the plane's position */
     float cost;
     uint32_t nl, nr;        /* spatial: references on each side, straddlers in both */
     sidx_aabb left, right;  /* object: the children's boxes (for the overlap test) */
 } ssplit;
-
-static float get(sidx_vec3 v, int k) { return k == 0 ? v.x : k == 1 ? v.y : v.z; }
 
 static sidx_aabb box_and(sidx_aabb a, sidx_aabb b)
 {
@@ -156,6 +155,9 @@ static uint32_t sbin_of(float x, float lo, float scale, uint32_t nb)
     return b < nb ? b : nb - 1u;
 }
 
+/* The plane between spatial bins p − 1 and p of nb over [lo, lo + ext]. */
+static float spatial_plane(float lo, float ext, uint32_t p, uint32_t nb) { return lo + ext * ((float)p / (float)nb); }
+
 /* The SAH sweep over one axis's nb bins, shared by both kinds of split:
  * a reference counts on the left from the bin it enters, on the right
  * from the bin it leaves (an object bin's references enter and leave in
@@ -164,7 +166,7 @@ static uint32_t sbin_of(float x, float lo, float scale, uint32_t nb)
  * than the node (so the recursion makes progress) and its duplicates fit
  * the budget; the cheapest goes to *best with the children's boxes. */
 static void sweep(const sbuild *S, const sbin *bins, uint32_t nb, uint32_t n, float inv_area, int kind, int k,
-                  ssplit *best)
+                  float lo, float scale, float ext, ssplit *best)
 {
     float right_area[SB_BINS];
     uint32_t right_n[SB_BINS];
@@ -190,7 +192,9 @@ static void sweep(const sbuild *S, const sbin *bins, uint32_t nb, uint32_t n, fl
             best->kind = kind;
             best->axis = k;
             best->plane = p;
-            best->bins = nb;
+            best->lo = lo;
+            best->scale = scale;
+            best->pos = kind == 2 ? spatial_plane(lo, ext, p, nb) : 0.0f;
             best->cost = c;
             best->nl = nl;
             best->nr = right_n[p];
@@ -206,7 +210,7 @@ static void object_split(const sbuild *S, const sref *refs, uint32_t n, float in
     sidx_aabb cb = sidx_aabb_empty();
     for (uint32_t i = 0; i < n; ++i) cb = sidx_aabb_grow(cb, sidx_aabb_centroid(refs[i].box));
     for (int k = 0; k < 3; ++k) {
-        const float lo = get(cb.min, k), ext = get(cb.max, k) - lo;
+        const float lo = sidx_v3_get(cb.min, k), ext = sidx_v3_get(cb.max, k) - lo;
         if (!(ext > 0.0f)) continue;
         const float scale = (float)SB_BINS * (1.0f - 1e-6f) / ext;
         sbin bins[SB_BINS];
@@ -215,17 +219,14 @@ static void object_split(const sbuild *S, const sref *refs, uint32_t n, float in
             bins[b].enter = bins[b].exit = 0;
         }
         for (uint32_t i = 0; i < n; ++i) {
-            sbin *bn = &bins[sbin_of(get(sidx_aabb_centroid(refs[i].box), k), lo, scale, SB_BINS)];
+            sbin *bn = &bins[sbin_of(sidx_v3_get(sidx_aabb_centroid(refs[i].box), k), lo, scale, SB_BINS)];
             bn->box = sidx_aabb_union(bn->box, refs[i].box);
             bn->enter++;
             bn->exit++;
         }
-        sweep(S, bins, SB_BINS, n, inv_area, 1, k, best);
+        sweep(S, bins, SB_BINS, n, inv_area, 1, k, lo, scale, ext, best);
     }
 }
-
-/* The plane between spatial bins p − 1 and p of nb over [lo, lo + ext]. */
-static float spatial_plane(float lo, float ext, uint32_t p, uint32_t nb) { return lo + ext * ((float)p / (float)nb); }
 
 /* Spatial bins for a node of n references: each reference is chopped into
  * every bin it spans, and deep in the tree a triangle spans a good part of
@@ -250,7 +251,7 @@ static uint32_t spatial_bins(uint32_t n)
 static void spatial_split(const sbuild *S, const sref *refs, uint32_t n, sidx_aabb box, float inv_area, ssplit *best)
 {
     for (int k = 0; k < 3; ++k) {
-        const float lo = get(box.min, k), ext = get(box.max, k) - lo;
+        const float lo = sidx_v3_get(box.min, k), ext = sidx_v3_get(box.max, k) - lo;
         if (!(ext > 0.0f)) continue;
         const uint32_t nb = spatial_bins(n);
         const float scale = (float)nb / ext;
@@ -260,8 +261,8 @@ static void spatial_split(const sbuild *S, const sref *refs, uint32_t n, sidx_aa
             bins[b].enter = bins[b].exit = 0;
         }
         for (uint32_t i = 0; i < n; ++i) {
-            const uint32_t b0 = sbin_of(get(refs[i].box.min, k), lo, scale, nb);
-            const uint32_t b1 = sbin_of(get(refs[i].box.max, k), lo, scale, nb);
+            const uint32_t b0 = sbin_of(sidx_v3_get(refs[i].box.min, k), lo, scale, nb);
+            const uint32_t b1 = sbin_of(sidx_v3_get(refs[i].box.max, k), lo, scale, nb);
             bins[b0].enter++;
             bins[b1].exit++;
             sref cur = refs[i];
@@ -276,7 +277,7 @@ static void spatial_split(const sbuild *S, const sref *refs, uint32_t n, sidx_aa
             }
             bins[b1].box = sidx_aabb_union(bins[b1].box, cur.box);
         }
-        sweep(S, bins, nb, n, inv_area, 2, k, best);
+        sweep(S, bins, nb, n, inv_area, 2, k, lo, scale, ext, best);
     }
 }
 
@@ -346,7 +347,7 @@ static sidx_status build(sbuild *S, size_t off, uint32_t n, sidx_aabb box, uint3
 
     const float area = sidx_aabb_area(box);
     const float inv_area = area > 0.0f ? 1.0f / area : 0.0f;
-    ssplit best = {0, 0, 0, 0, INFINITY, 0, 0, sidx_aabb_empty(), sidx_aabb_empty()};
+    ssplit best = {0, 0, 0, 0.0f, 0.0f, 0.0f, INFINITY, 0, 0, sidx_aabb_empty(), sidx_aabb_empty()};
     object_split(S, S->pool + off, n, inv_area, &best);
     const int try_spatial = S->budget > 0 && area > 0.0f &&
                             (best.kind == 0 || sidx_aabb_area(box_and(best.left, best.right)) > S->min_overlap);
@@ -367,22 +368,21 @@ static sidx_status build(sbuild *S, size_t off, uint32_t n, sidx_aabb box, uint3
     sref *L = S->pool + S->top, *R = L + n;
     uint32_t nl = 0, nr = 0;
     if (best.kind == 1) {
-        sidx_aabb cb = sidx_aabb_empty();
-        for (uint32_t i = 0; i < n; ++i) cb = sidx_aabb_grow(cb, sidx_aabb_centroid(refs[i].box));
-        const float lo = get(cb.min, k), scale = (float)SB_BINS * (1.0f - 1e-6f) / (get(cb.max, k) - lo);
         for (uint32_t i = 0; i < n; ++i) {
-            if (sbin_of(get(sidx_aabb_centroid(refs[i].box), k), lo, scale, SB_BINS) < best.plane) L[nl++] = refs[i];
-            else R[nr++] = refs[i];
+            if (sbin_of(sidx_v3_get(sidx_aabb_centroid(refs[i].box), k), best.lo, best.scale, SB_BINS) < best.plane)
+                L[nl++] = refs[i];
+            else
+                R[nr++] = refs[i];
         }
     } else {
         /* The plane exactly as binning placed it; a reference wholly on one
          * side goes there, a straddler is split in two (or goes whole to the
          * one side its clipped part survives on). */
-        const float p = spatial_plane(get(box.min, k), get(box.max, k) - get(box.min, k), best.plane, best.bins);
+        const float p = best.pos;
         for (uint32_t i = 0; i < n; ++i) {
             const sref *r = &refs[i];
-            if (get(r->box.max, k) <= p) { L[nl++] = *r; continue; }
-            if (get(r->box.min, k) >= p) { R[nr++] = *r; continue; }
+            if (sidx_v3_get(r->box.max, k) <= p) { L[nl++] = *r; continue; }
+            if (sidx_v3_get(r->box.min, k) >= p) { R[nr++] = *r; continue; }
             sidx_aabb lb, rb;
             split_ref(S->tris, r, k, p, &lb, &rb);
             const int hl = !sidx_aabb_is_empty(lb), hr = !sidx_aabb_is_empty(rb);
@@ -414,11 +414,12 @@ sidx_status sidx__bvh_build_spatial(sidx_accel *a, sidx_error *err)
     sbuild S;
     memset(&S, 0, sizeof S);
     S.a = a;
-    S.c_trav = a->opt.c_trav > 0.0f ? a->opt.c_trav : 1.0f;
-    S.c_tri = a->opt.c_tri > 0.0f ? a->opt.c_tri : 1.0f;
-    S.leaf_size = a->opt.leaf_size ? a->opt.leaf_size : BVH_DEFAULT_LEAF_SIZE;
-    S.max_leaf = S.leaf_size > BVH_MAX_LEAF ? S.leaf_size : BVH_MAX_LEAF;
-    S.max_depth = (a->opt.max_depth && a->opt.max_depth < BVH_DEPTH_LIMIT) ? a->opt.max_depth : BVH_DEPTH_LIMIT;
+    const bvh_par_params pp = bvh_params(a); /* bvh_build.c's reading of a->opt (its bins aside: SB_BINS) */
+    S.c_trav = pp.c_trav;
+    S.c_tri = pp.c_tri;
+    S.leaf_size = pp.leaf_size;
+    S.max_leaf = pp.max_leaf;
+    S.max_depth = pp.max_depth;
     S.budget = (uint64_t)((double)n * SB_BUDGET);
 
     sidx_status s = SIDX_ERR_NOMEM;
