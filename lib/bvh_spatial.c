@@ -168,27 +168,36 @@ static float spatial_plane(float lo, float ext, uint32_t p, uint32_t nb) { retur
 static void sweep(const sbuild *S, const sbin *bins, uint32_t nb, uint32_t n, float inv_area, int kind, int k,
                   float lo, float scale, float ext, ssplit *best)
 {
+    /* Only the bins that hold something: a plane next to an empty bin
+     * splits the references exactly as the plane before that bin does, at
+     * the same cost, and the first of equal candidates wins, so the sweep
+     * over the used bins alone picks the same plane (small nodes fill few
+     * of the 32 bins, and this sweep ran six times per node). */
+    uint32_t used[SB_BINS], m = 0;
+    for (uint32_t b = 0; b < nb; ++b)
+        if (bins[b].enter | bins[b].exit || !sidx_aabb_is_empty(bins[b].box)) used[m++] = b;
     float right_area[SB_BINS];
     uint32_t right_n[SB_BINS];
     sidx_aabb right_box[SB_BINS];
     sidx_aabb acc = sidx_aabb_empty();
     uint32_t nr = 0;
-    for (uint32_t b = nb; b-- > 1;) {
-        acc = sidx_aabb_union(acc, bins[b].box);
-        nr += bins[b].exit;
-        right_box[b] = acc;
-        right_area[b] = sidx_aabb_area(acc);
-        right_n[b] = nr;
+    for (uint32_t j = m; j-- > 1;) {
+        acc = sidx_aabb_union(acc, bins[used[j]].box);
+        nr += bins[used[j]].exit;
+        right_box[j] = acc;
+        right_area[j] = sidx_aabb_area(acc);
+        right_n[j] = nr;
     }
     acc = sidx_aabb_empty();
     uint32_t nl = 0;
-    for (uint32_t p = 1; p < nb; ++p) {
-        acc = sidx_aabb_union(acc, bins[p - 1].box);
-        nl += bins[p - 1].enter;
-        if (nl == 0 || right_n[p] == 0 || nl >= n || right_n[p] >= n) continue;
-        if ((uint64_t)nl + right_n[p] - n > S->budget) continue;
-        const float c = sah(S, sidx_aabb_area(acc), SB_ROUND(nl), right_area[p], SB_ROUND(right_n[p]), inv_area);
+    for (uint32_t j = 1; j < m; ++j) {
+        acc = sidx_aabb_union(acc, bins[used[j - 1]].box);
+        nl += bins[used[j - 1]].enter;
+        if (nl == 0 || right_n[j] == 0 || nl >= n || right_n[j] >= n) continue;
+        if ((uint64_t)nl + right_n[j] - n > S->budget) continue;
+        const float c = sah(S, sidx_aabb_area(acc), SB_ROUND(nl), right_area[j], SB_ROUND(right_n[j]), inv_area);
         if (c < best->cost) {
+            const uint32_t p = used[j - 1] + 1u; /* the first plane with these two sides */
             best->kind = kind;
             best->axis = k;
             best->plane = p;
@@ -197,9 +206,9 @@ static void sweep(const sbuild *S, const sbin *bins, uint32_t nb, uint32_t n, fl
             best->pos = kind == 2 ? spatial_plane(lo, ext, p, nb) : 0.0f;
             best->cost = c;
             best->nl = nl;
-            best->nr = right_n[p];
+            best->nr = right_n[j];
             best->left = acc;
-            best->right = right_box[p];
+            best->right = right_box[j];
         }
     }
 }
@@ -247,7 +256,21 @@ static uint32_t spatial_bins(uint32_t n)
  * clipping the triangle (split_ref, which the chosen split then does for
  * real): the bunny's bvh8 built in 119 instead of 315 ms, Sponza's in 137
  * instead of 342, for the same SAH cost within 0.2 % and the same speed
- * (session 7, interleaved runs). */
+ * (session 7, interleaved runs).
+ *
+ * A part cut from box B at planes on axis k is B on the two other axes
+ * and a piece of B's range on k.  So a bin keeps two things apart: the
+ * union of the whole boxes B of its parts (`other`, whose k range is
+ * ignored) and the union of its parts' k ranges (`klo`, `khi`); its box
+ * is the first with the second's range on k — the same box as the union
+ * of the parts, without cutting a box and testing two for emptiness per
+ * part, and the planes are computed once per axis, not once per part.
+ * With the sweep over used bins only: bvh8 builds in 85 instead of 100 ms
+ * (bunny) and 96 instead of 123 ms (Sponza), the same trees (session 8).
+ * Tried with it and dropped: the bins in two or four interleaved copies
+ * (merged at the end) so neighbouring references do not wait for each
+ * other's store, and boxes as four-float arrays (GCC -O2 did not
+ * vectorize their min/max): no faster. */
 static void spatial_split(const sbuild *S, const sref *refs, uint32_t n, sidx_aabb box, float inv_area, ssplit *best)
 {
     for (int k = 0; k < 3; ++k) {
@@ -255,27 +278,46 @@ static void spatial_split(const sbuild *S, const sref *refs, uint32_t n, sidx_aa
         if (!(ext > 0.0f)) continue;
         const uint32_t nb = spatial_bins(n);
         const float scale = (float)nb / ext;
+        float plane[SB_BINS + 1], klo[SB_BINS], khi[SB_BINS];
+        sidx_aabb other[SB_BINS];
         sbin bins[SB_BINS];
         for (uint32_t b = 0; b < nb; ++b) {
-            bins[b].box = sidx_aabb_empty();
+            plane[b + 1] = spatial_plane(lo, ext, b + 1u, nb);
+            other[b] = sidx_aabb_empty();
+            klo[b] = INFINITY;
+            khi[b] = -INFINITY;
             bins[b].enter = bins[b].exit = 0;
         }
         for (uint32_t i = 0; i < n; ++i) {
-            const uint32_t b0 = sbin_of(sidx_v3_get(refs[i].box.min, k), lo, scale, nb);
-            const uint32_t b1 = sbin_of(sidx_v3_get(refs[i].box.max, k), lo, scale, nb);
+            const sidx_aabb B = refs[i].box;
+            const float bmin = sidx_v3_get(B.min, k), bmax = sidx_v3_get(B.max, k);
+            const uint32_t b0 = sbin_of(bmin, lo, scale, nb), b1 = sbin_of(bmax, lo, scale, nb);
             bins[b0].enter++;
             bins[b1].exit++;
-            sref cur = refs[i];
-            for (uint32_t b = b0; b < b1; ++b) {
-                sidx_aabb L = cur.box, R = cur.box;
-                const float p = spatial_plane(lo, ext, b + 1u, nb);
-                (&L.max.x)[k] = p;
-                (&R.min.x)[k] = p;
-                if (!sidx_aabb_is_empty(L)) bins[b].box = sidx_aabb_union(bins[b].box, L);
-                if (sidx_aabb_is_empty(R)) break;
-                cur.box = R;
+            /* the part in bin b spans [from, plane[b + 1]] on k; the last
+             * one, or the one after which nothing of B is left, [from, bmax] */
+            float from = bmin;
+            uint32_t b = b0;
+            for (; b < b1; ++b) {
+                const float p = plane[b + 1];
+                if (from <= p) { /* the part is not empty */
+                    other[b] = sidx_aabb_union(other[b], B);
+                    klo[b] = MINF(klo[b], from);
+                    khi[b] = MAXF(khi[b], p);
+                }
+                if (p > bmax) break; /* nothing of B beyond this plane: the rest goes to bin b1 whole */
+                from = p;
             }
-            bins[b1].box = sidx_aabb_union(bins[b1].box, cur.box);
+            other[b1] = sidx_aabb_union(other[b1], B);
+            klo[b1] = MINF(klo[b1], from);
+            khi[b1] = MAXF(khi[b1], bmax);
+        }
+        for (uint32_t b = 0; b < nb; ++b) {
+            bins[b].box = other[b];
+            if (klo[b] <= khi[b]) {
+                (&bins[b].box.min.x)[k] = klo[b];
+                (&bins[b].box.max.x)[k] = khi[b];
+            }
         }
         sweep(S, bins, nb, n, inv_area, 2, k, lo, scale, ext, best);
     }
