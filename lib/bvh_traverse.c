@@ -125,7 +125,17 @@ static SIDX_INLINE void set_hit(const sidx_accel *a, const bvh *b, const sidx_ra
  *    instructions per ray, mispredicts only −1.4 %, 4-10 % slower; Sponza
  *    diffuse −3 % to +10 %.  Leaves hold about 3 triangles, so a leaf
  *    costs 1-2 block passes, while the scalar tests mostly stop at their
- *    first edge sign.
+ *    first edge sign;
+ *  - (session 8) siblings side by side (tinybvh's layout: an inner node
+ *    stores its first child, the second is the next node, each pair in
+ *    one 64-byte line, pairs in depth-first order), so a step loads one
+ *    line for both children's boxes: same hits, but Sponza diffuse 1.7
+ *    instead of 2.1 Mrays/s in three interleaved runs.  Not explained
+ *    (no hardware counters here); in this layout the left child (index
+ *    + 1) shares its parent's line or sits in the adjacent one, so only
+ *    the right child is a line from elsewhere; and the
+ *    slab planes computed as p·(1/d) − o·(1/d) with FMA (-mfma on this
+ *    file): within the noise, and Ize's bound would no longer cover it.
  */
 
 
