@@ -243,7 +243,9 @@ static SIDX_INLINE int octree_walk(const sidx_accel *a, const sidx_ray *r, const
         SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id; e_.node = e.node; e_.depth = e.depth;
                   e_.t_near = e.t0; e_.t_far = e.t1; e_.bounds = e.box);
         if (nd.n != OCT_INNER) {
-            if (sidx__cell_prims(a, r, q, hit, T->refs + nd.a, nd.n, e.node, e.depth, &mb, use_mb, traced, any)) {
+            /* a tree without references has refs NULL: no offset on it (UBSan, fuzz_build) */
+            if (sidx__cell_prims(a, r, q, hit, nd.n ? T->refs + nd.a : NULL, nd.n, e.node, e.depth, &mb, use_mb,
+                                 traced, any)) {
                 SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = SIDX_TERM_ANY_HIT;
                           e_.count = visited);
                 return 1;
