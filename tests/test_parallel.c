@@ -31,7 +31,7 @@
 
 #include "sidx/sidx.h"
 #include "sidx/parallel.h"
-#include "bvh_internal.h"
+#include "bvh_wide_internal.h"
 #include "common/testkit.h"
 
 static sidx_mesh scene(const char *name, uint32_t detail)
@@ -252,6 +252,14 @@ static void test_wide_parallel_same_answers(void **state)
         sidx_accel_stats_get(a2, &s2);
         assert_int_equal(s1.nodes, s2.nodes);
         assert_true(s1.sah_cost == s2.sah_cost);
+        /* the spatial-split build on two threads (its subtrees as tasks,
+         * stitched back): the same tree, node for node and block for block */
+        const wide_bvh *w1 = a1->impl, *w2 = a2->impl;
+        assert_true(s1.prim_refs > m.num_triangles); /* the soup does get split references */
+        assert_int_equal(w1->num_inner, w2->num_inner);
+        assert_int_equal(w1->num_blocks, w2->num_blocks);
+        assert_memory_equal(w1->nodes, w2->nodes, (size_t)w1->num_inner * 8u * w1->width * sizeof(float));
+        assert_memory_equal(w1->blocks, w2->blocks, (size_t)w1->num_blocks * sizeof *w1->blocks);
         for (size_t i = 0; i < n; ++i) {
             sidx_hit h1, h2;
             sidx_accel_intersect(a1, &rays[i], NULL, &h1);

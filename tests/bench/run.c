@@ -538,7 +538,7 @@ static void bench_embree_rows(const char *name, bench_embree_cfg cfg, const sidx
  *            "threads=1" and a "threads=2" device, and sidx_trace_parallel
  *            on 1 and 2 threads: wall-clock, best of 5, so they mean
  *            something only on a quiet machine (efficiency = T1 / (2·T2)). */
-static double pp_wall_build(const sidx_mesh *m, uint32_t threads, uint32_t *nodes)
+static double pp_wall_build(const char *accel, const sidx_mesh *m, uint32_t threads, uint32_t *nodes)
 {
     double best = INFINITY;
     for (int rep = 0; rep < 5; ++rep) {
@@ -547,7 +547,7 @@ static double pp_wall_build(const sidx_mesh *m, uint32_t threads, uint32_t *node
         bo.threads = threads;
         sidx_accel *a = NULL;
         const double t0 = tk_now_ms();
-        const sidx_status s = sidx_accel_build("bvh", m, &bo, &a, NULL);
+        const sidx_status s = sidx_accel_build(accel, m, &bo, &a, NULL);
         const double t = tk_now_ms() - t0;
         if (s != SIDX_OK) return -1;
         sidx_accel_stats st;
@@ -557,6 +557,24 @@ static double pp_wall_build(const sidx_mesh *m, uint32_t threads, uint32_t *node
         if (t < best) best = t;
     }
     return best;
+}
+
+/* Embree's build (cfg: "embree", "embree-hq") on a threads=1 and a
+ * threads=2 device, best of 5 wall-clock ms into ms[0], ms[1] (left as
+ * they are if a build fails). */
+static void pp_embree_build(const char *cfg_name, const sidx_mesh *m, double ms[2])
+{
+    for (unsigned t = 1; t <= 2; ++t)
+        for (int rep = 0; rep < 5; ++rep) {
+            bench_embree_cfg cfg;
+            bench_embree_parse(cfg_name, &cfg);
+            bench_embree *e = NULL;
+            double t_ms;
+            char msg[256];
+            if (!bench_embree_build_threads(m, cfg, t, &e, &t_ms, msg, sizeof msg)) break;
+            bench_embree_free(e);
+            if (t_ms < ms[t - 1]) ms[t - 1] = t_ms;
+        }
 }
 
 static size_t pp_mismatches(const sidx_hit *a, const sidx_hit *b, size_t n)
@@ -793,26 +811,25 @@ static void parallel_rows(FILE *f, const run_opts *o, const scene_spec *sc, cons
 {
     /* threads: builds */
     uint32_t n1 = 0, n2 = 0;
-    const double b1 = pp_wall_build(m, 1, &n1), b2 = pp_wall_build(m, 2, &n2);
+    const double b1 = pp_wall_build("bvh", m, 1, &n1), b2 = pp_wall_build("bvh", m, 2, &n2);
     fprintf(f, "parallel %s build \"bvh\": 1 thread %.2f ms, 2 threads %.2f ms (%.2fx)%s; wall-clock, best of 5\n",
             sc->name, b1, b2, b2 > 0 ? b1 / b2 : 0.0, n1 == n2 ? "" : "  ** node counts differ **");
+    double eb[2] = {INFINITY, INFINITY}, ehq[2] = {INFINITY, INFINITY};
     if (o->embree) {
-        double eb[2] = {INFINITY, INFINITY};
-        for (unsigned t = 1; t <= 2; ++t)
-            for (int rep = 0; rep < 5; ++rep) {
-                bench_embree_cfg cfg;
-                bench_embree_parse("embree", &cfg);
-                bench_embree *e = NULL;
-                double ms;
-                char msg[256];
-                if (!bench_embree_build_threads(m, cfg, t, &e, &ms, msg, sizeof msg)) break;
-                bench_embree_free(e);
-                if (ms < eb[t - 1]) eb[t - 1] = ms;
-            }
+        pp_embree_build("embree", m, eb);
         fprintf(f, "parallel %s build embree: threads=1 %.2f ms, threads=2 %.2f ms; sidx/embree at 1 thread %.2f, "
                    "at 2 threads %.2f (target <= 1.5)\n",
                 sc->name, eb[0], eb[1], b1 / eb[0], b2 / eb[1]);
+        pp_embree_build("embree-hq", m, ehq); /* the spatial-split build, for the bvh8 row below */
     }
+    /* bvh8 builds its binary tree with spatial splits (bvh_spatial.c), its
+     * subtrees on the threads; no target, a figure to set beside Embree HQ */
+    uint32_t w1 = 0, w2 = 0;
+    const double c1 = pp_wall_build("bvh8", m, 1, &w1), c2 = pp_wall_build("bvh8", m, 2, &w2);
+    fprintf(f, "parallel %s build \"bvh8\" (spatial splits): 1 thread %.2f ms, 2 threads %.2f ms (%.2fx)%s", sc->name,
+            c1, c2, c2 > 0 ? c1 / c2 : 0.0, w1 == w2 ? "" : "  ** node counts differ **");
+    if (o->embree) fprintf(f, "; embree-hq threads=1 %.2f ms, threads=2 %.2f ms", ehq[0], ehq[1]);
+    fprintf(f, "; wall-clock, best of 5\n");
     /* threads: tracing (single rays, batches over threads), repeated to ~100 ms per run,
      * 1 and 2 threads interleaved so that a change in the machine's load hits both */
     const int reps = single > 0 ? (int)(100.0 / single) + 1 : 1;
