@@ -445,8 +445,8 @@ static sidx_status wide_build(sidx_accel *a, sidx_error *err)
     const sidx_hook *hook = a->opt.hook;
     SIDX_EMIT(1, hook, SIDX_EV_BUILD_BEGIN, e_.count = m->num_triangles; e_.bounds = sidx_mesh_bounds(m));
 
-    /* The binary tree, silently (its node ids are not ours).  The spatial-
-     * split build is one-threaded; opt.threads applies to the plain one. */
+    /* The binary tree, silently (its node ids are not ours), on
+     * opt.threads threads either way (bvh_spatial.c, parallel.c). */
     sidx_accel bin = *a;
     bin.variant = BVH_BINNED;
     bin.opt.hook = NULL;

@@ -53,7 +53,7 @@ typedef struct sidx_build_options {
     int no_mailbox;               /* 1 = switch mailboxing off (grids, kd-tree) */
     int no_spatial_splits;        /* 1 = bvh4/bvh8 collapse the plain binned-SAH BVH (every triangle in
                                      one leaf, faster build) instead of the one with spatial splits */
-    uint32_t threads;             /* build threads; 0 = 1 */
+    uint32_t threads;             /* build threads (bvh, bvh4, bvh8; the same tree for any count); 0 = 1 */
 } sidx_build_options;
 
 typedef enum sidx_traversal {
