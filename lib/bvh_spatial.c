@@ -465,9 +465,9 @@ static sidx_status build(sbuild *S, size_t off, uint32_t n, sidx_aabb box, uint3
 
 /* With opt.threads > 1 the calling thread builds the top of the tree and
  * stops at every subtree of at most n / (SB_TASKS_PER_THREAD · threads)
- * references: that subtree becomes a task, with a copy of its references
- * and its share of the budget, and a placeholder node.  The threads then
- * build the tasks, largest first (longest processing time first balances
+ * references (SB_TASK_MIN at least): that subtree becomes a task, with a
+ * copy of its references and its share of the budget, and a placeholder
+ * node.  The threads then build the tasks, largest first (longest processing time first balances
  * them), each with builder state of its own, and the calling thread
  * stitches the tasks' nodes and references into the placeholders in
  * pre-order.  Every node sees the same references in the same order and
@@ -476,6 +476,7 @@ static sidx_status build(sbuild *S, size_t off, uint32_t n, sidx_aabb box, uint3
  * stay on one thread: below ~8000 triangles the whole build is. */
 #define SB_PAR_MIN 8192u          /* fewer triangles: one thread (a task is not worth its set-up) */
 #define SB_TASKS_PER_THREAD 4u
+#define SB_TASK_MIN 1024u         /* but no task under this many references (many threads, small scenes) */
 #define SB_TASK_NODE 0x3FFFFFFFu  /* count_axis of a placeholder; left_or_first = its task (never a leaf count:
                                      n is at most BVH_COUNT_MASK / 2) */
 
@@ -690,6 +691,7 @@ sidx_status sidx__bvh_build_spatial(sidx_accel *a, sidx_error *err)
         P.shadow.alloc = (sidx_allocator){locked_alloc_fn, locked_free_fn, &P.lock};
         S.par = &P;
         S.frontier = n / (SB_TASKS_PER_THREAD * threads);
+        if (S.frontier < SB_TASK_MIN) S.frontier = SB_TASK_MIN;
     }
 
     sidx_status s = SIDX_ERR_NOMEM;
