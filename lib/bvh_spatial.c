@@ -467,10 +467,10 @@ static sidx_status build(sbuild *S, size_t off, uint32_t n, sidx_aabb box, uint3
  * stops at every subtree of at most n / (SB_TASKS_PER_THREAD · threads)
  * references (SB_TASK_MIN at least): that subtree becomes a task, with a
  * copy of its references and its share of the budget, and a placeholder
- * node.  The threads then build the tasks, largest first (longest processing time first balances
- * them), each with builder state of its own, and the calling thread
- * stitches the tasks' nodes and references into the placeholders in
- * pre-order.  Every node sees the same references in the same order and
+ * node.  The threads then build the tasks, largest first (longest
+ * processing time first balances them), each with builder state of its
+ * own, and the calling thread stitches the tasks' nodes and references
+ * into the placeholders in pre-order.  Every node sees the same references in the same order and
  * the same budget as in the one-thread build, so the tree is identical
  * (tests/test_parallel.c compares them word for word).  The top levels
  * stay on one thread: below ~8000 triangles the whole build is. */
