@@ -305,6 +305,15 @@ sidx_status tk_ray_from(const tk_rayrec *rec, sidx_ray *r)
                          rec->tmin, rec->tmax);
 }
 
+int tk_dir_nearly_axial(sidx_vec3 d)
+{
+    const float a[3] = {fabsf(d.x), fabsf(d.y), fabsf(d.z)};
+    const float big = fmaxf(a[0], fmaxf(a[1], a[2]));
+    for (int k = 0; k < 3; ++k)
+        if (a[k] != 0.0f && a[k] < big * 0x1p-100f) return 1;
+    return 0;
+}
+
 /* ---- ray sets -------------------------------------------------------------- */
 
 static const char *const kind_names[TK_RAYS_KIND_COUNT] = {"primary", "diffuse", "shadow", "grazing", "axis"};
