@@ -305,13 +305,12 @@ sidx_status tk_ray_from(const tk_rayrec *rec, sidx_ray *r)
                          rec->tmin, rec->tmax);
 }
 
-int tk_dir_nearly_axial(sidx_vec3 d)
+int tk_hit_at_start(const sidx_hit *h, const sidx_ray *r, float scale)
 {
-    const float a[3] = {fabsf(d.x), fabsf(d.y), fabsf(d.z)};
-    const float big = fmaxf(a[0], fmaxf(a[1], a[2]));
-    for (int k = 0; k < 3; ++k)
-        if (a[k] != 0.0f && a[k] < big * 0x1p-100f) return 1;
-    return 0;
+    if (h->prim == SIDX_NO_HIT) return 0;
+    const float dmax = fmaxf(fabsf(r->dir.x), fmaxf(fabsf(r->dir.y), fabsf(r->dir.z)));
+    const float omax = fmaxf(fabsf(r->org.x), fmaxf(fabsf(r->org.y), fabsf(r->org.z)));
+    return h->t * dmax <= 0x1p-20f * (omax + scale);
 }
 
 /* ---- ray sets -------------------------------------------------------------- */

@@ -56,12 +56,13 @@ tk_hitrec tk_hitrec_from(const sidx_hit *h); /* miss -> (+inf, -1, 0, 0) */
 tk_rayrec tk_rayrec_make(sidx_vec3 o, sidx_vec3 d, float tmin, float tmax);
 /* sidx_ray_init on a record; SIDX_ERR_INVALID_ARG for an unusable ray. */
 sidx_status tk_ray_from(const tk_rayrec *rec, sidx_ray *r);
-/* 1 when a direction component is not 0 but below 2^-100 of the largest:
- * the ray is parallel to that axis to within float precision, and the
- * watertight test's products of the component underflow (its t for a ray
- * lying in a triangle's plane is then rounding, not geometry), so the fuzz
- * oracles trace such rays but do not compare them (docs/errors.md). */
-int tk_dir_nearly_axial(sidx_vec3 d);
+/* 1 when h is a hit within float resolution of the ray's origin: at a
+ * distance t · max|d| of at most 2^-20 (max|o| + scale), scale the size of
+ * the scene.  The triangle tests' t is rounding there (an origin on a
+ * surface, to float precision), so a structure may report that hit or
+ * the next one; the fuzz oracles trace such rays but do not compare them
+ * (docs/errors.md). */
+int tk_hit_at_start(const sidx_hit *h, const sidx_ray *r, float scale);
 
 /* ---- ray sets ------------------------------------------------------------- */
 
