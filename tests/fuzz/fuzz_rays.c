@@ -103,6 +103,12 @@ static void fr_check_rays(const uint8_t *data, size_t size)
         for (int k = 0; k < 3; ++k)
             if ((r[i].o[k] != 0.0f && fabsf(r[i].o[k]) < FLT_MIN) || (r[i].d[k] != 0.0f && fabsf(r[i].d[k]) < FLT_MIN))
                 sane = 0;
+        /* nor a direction longer than 2^64: t of the scene's distances then
+         * nears the denormal range (regress/rays/huge-dir.bin: d.z = 6.8e38,
+         * brute force hit the cube at t = 1.2e-38 a ray that leaves it at
+         * once, by 7.6e-35 · t in x; every box test said miss) */
+        for (int k = 0; k < 3; ++k)
+            if (fabsf(r[i].d[k]) > 0x1p64f) sane = 0;
         /* nor a hit within float resolution of the origin, by either
          * (regress/rays/hit-at-start-*.bin: origins in a flat triangle's
          * plane, or 7.6e-38 off it, where brute force hit at t = 4e-8 or
