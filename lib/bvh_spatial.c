@@ -311,9 +311,8 @@ static uint32_t spatial_bins(uint32_t n)
  * (merged at the end) so neighbouring references do not wait for each
  * other's store, and boxes as four-float arrays (GCC -O2 did not
  * vectorize their min/max): no faster. */
-/* One axis's spatial bins while references are chopped into them: the
- * union of the whole boxes of each bin's parts (other), the union of their
- * ranges on the axis (klo, khi), and the counts. */
+
+/* One axis's spatial bins while references are chopped into them. */
 typedef struct sspatial {
     sidx_aabb other[SB_BINS];
     float klo[SB_BINS], khi[SB_BINS];
