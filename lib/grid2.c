@@ -86,6 +86,27 @@ static void grid2_free(const sidx_accel *a, grid2 *G)
     sidx__free(a, G);
 }
 
+/* The box of the grid that refines cell cb: cb grown by 2^-20 of its
+ * coordinates' magnitude and extent on every side.  The parent DDA places
+ * the ray in cb with cb's boundaries as it computes them (min + i·size),
+ * the child DDA computes its own (cb.min + j·size'), and the two roundings
+ * can leave a sliver of cb, an ulp thick, that no child cell covers: a ray
+ * running inside it left the child grid at once and its hit was lost
+ * (fuzz_build: a ray 1.2e-38 off a cell face, regress/build/grid2-
+ * nested-gap.bin).  The grown child covers the whole parent cell; its
+ * cells take the triangles that overlap them, so a few more references
+ * near the faces, and no hit can fall between levels. */
+static sidx_aabb child_box(sidx_aabb cb)
+{
+    float *lo = &cb.min.x, *hi = &cb.max.x;
+    for (int k = 0; k < 3; ++k) {
+        const float pad = (fabsf(lo[k]) + fabsf(hi[k]) + (hi[k] - lo[k])) * 0x1p-20f;
+        lo[k] -= pad;
+        hi[k] += pad;
+    }
+    return cb;
+}
+
 /* Builds the grid over `box` holding ids[0..n) at `level`, refining cell
  * `parent`; its cells and descendants are appended to G.  Returns the
  * status; *out = its index. */
@@ -153,7 +174,7 @@ static sidx_status build_level(sidx_accel *a, grid2 *G, const sidx_aabb *boxes, 
         }
         if (refine) {
             uint32_t child;
-            st = build_level(a, G, boxes, cb, local + off[c], cnt, level + 1, first + c, &child);
+            st = build_level(a, G, boxes, child_box(cb), local + off[c], cnt, level + 1, first + c, &child);
             G->cells[first + c].begin = child;
             G->cells[first + c].n = GRID2_CHILD;
         } else {
