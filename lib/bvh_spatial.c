@@ -640,25 +640,30 @@ static void par_bin(const sbuild *S, const sref *refs, uint32_t n, int kind, con
     P->nb = nb;
     P->plane = plane;
     sidx__pool_run(P->threads, bin_part, P);
-    for (unsigned t = 0; t < P->threads; ++t)
-        for (int k = 0; k < 3; ++k)
-            for (uint32_t b = 0; b < SB_BINS; ++b) {
-                if (kind == 1) {
+    if (kind == 1) {
+        object_clear(obins);
+        for (unsigned t = 0; t < P->threads; ++t)
+            for (int k = 0; k < 3; ++k)
+                for (uint32_t b = 0; b < SB_BINS; ++b) {
                     const sbin *src = &P->tobj[t][k][b];
-                    sbin *dst = &obins[k][b];
-                    dst->box = t ? sidx_aabb_union(dst->box, src->box) : src->box;
-                    dst->enter = (t ? dst->enter : 0u) + src->enter;
-                    dst->exit = (t ? dst->exit : 0u) + src->exit;
-                } else {
-                    const sspatial *src = &P->tspat[t][k];
-                    sspatial *dst = &sbins[k];
-                    dst->other[b] = t ? sidx_aabb_union(dst->other[b], src->other[b]) : src->other[b];
-                    dst->klo[b] = t ? MINF(dst->klo[b], src->klo[b]) : src->klo[b];
-                    dst->khi[b] = t ? MAXF(dst->khi[b], src->khi[b]) : src->khi[b];
-                    dst->enter[b] = (t ? dst->enter[b] : 0u) + src->enter[b];
-                    dst->exit[b] = (t ? dst->exit[b] : 0u) + src->exit[b];
+                    obins[k][b].box = sidx_aabb_union(obins[k][b].box, src->box);
+                    obins[k][b].enter += src->enter;
+                    obins[k][b].exit += src->exit;
                 }
+        return;
+    }
+    for (int k = 0; k < 3; ++k) {
+        spatial_clear(&sbins[k]);
+        for (unsigned t = 0; t < P->threads; ++t)
+            for (uint32_t b = 0; b < SB_BINS; ++b) {
+                const sspatial *src = &P->tspat[t][k];
+                sbins[k].other[b] = sidx_aabb_union(sbins[k].other[b], src->other[b]);
+                sbins[k].klo[b] = MINF(sbins[k].klo[b], src->klo[b]);
+                sbins[k].khi[b] = MAXF(sbins[k].khi[b], src->khi[b]);
+                sbins[k].enter[b] += src->enter[b];
+                sbins[k].exit[b] += src->exit[b];
             }
+    }
 }
 
 /* A placeholder for the subtree of the n references at pool[off], and its
@@ -675,15 +680,15 @@ static sidx_status defer(sbuild *S, size_t off, uint32_t n, sidx_aabb box, uint3
     t->depth = depth;
     t->box = box;
     t->budget = budget;
-    t->B = *S;
+    /* the build's parameters; arrays, counts, par and frontier start empty (memset) */
     t->B.a = &P->shadow;
-    t->B.nodes = NULL;
-    t->B.out = NULL;
-    t->B.pool = NULL;
-    t->B.num_nodes = t->B.cap_nodes = t->B.num_out = t->B.cap_out = t->B.top = t->B.cap_pool = 0;
-    t->B.num_leaves = t->B.max_depth_seen = 0;
-    t->B.par = NULL;
-    t->B.frontier = 0;
+    t->B.tris = S->tris;
+    t->B.c_trav = S->c_trav;
+    t->B.c_tri = S->c_tri;
+    t->B.min_overlap = S->min_overlap;
+    t->B.leaf_size = S->leaf_size;
+    t->B.max_leaf = S->max_leaf;
+    t->B.max_depth = S->max_depth;
     P->count++; /* counted now, so the clean-up frees its arrays even if they cannot all be made */
     /* sized as the entry sizes the whole build's, so they rarely grow */
     if (!pool_reserve(&t->B, 4u * (size_t)n) ||
