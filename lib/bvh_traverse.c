@@ -135,7 +135,18 @@ static SIDX_INLINE void set_hit(const sidx_accel *a, const bvh *b, const sidx_ra
  *    + 1) shares its parent's line or sits in the adjacent one, so only
  *    the right child is a line from elsewhere; and the
  *    slab planes computed as p·(1/d) − o·(1/d) with FMA (-mfma on this
- *    file): within the noise, and Ize's bound would no longer cover it.
+ *    file): within the noise, and Ize's bound would no longer cover it;
+ *  - (session 9) the nearer child picked by the ray's sign on the node's
+ *    split axis (pbrt-v3's order, count_axis already holds the axis), so
+ *    the choice no longer waits for the two box tests: Sponza diffuse
+ *    1.89-2.09 against 2.07-2.16 Mrays/s in three alternating runs — the
+ *    branch resolves sooner but the order is worse;
+ *  - and, to see how much the tree could still give, this walk over the
+ *    binary tree of the spatial-split build (bvh_spatial.c, which the
+ *    issue's "every primitive in exactly one leaf" rules out for "bvh"):
+ *    Sponza diffuse 0.48 of Embree on the targets' fair timing instead of
+ *    0.41 (prepared rays 0.56), the bunny's 0.47 down to 0.41.  Even
+ *    duplicated references leave this walk short of 0.5 there.
  */
 
 
