@@ -195,11 +195,13 @@ typedef struct pb {
 } pb;
 
 static inline float pref_c(const pref *r, int k) { return (r->lo[k] + r->hi[k]) * 0.5f; }
+#if !defined(__SSE2__) /* only the portable paths below read a reference or a bin as a sidx_aabb */
 static inline sidx_aabb pref_box(const pref *r)
 {
     sidx_aabb b = {{r->lo[0], r->lo[1], r->lo[2]}, {r->hi[0], r->hi[1], r->hi[2]}};
     return b;
 }
+#endif
 
 /* One node array under construction, in pre-order. */
 typedef struct nodebuf {
@@ -264,11 +266,13 @@ typedef struct bins3 {
     uint32_t count[3][1024];
 } bins3;
 
+#if !defined(__SSE2__)
 static inline sidx_aabb binbox_get(const binbox *b)
 {
     sidx_aabb r = {{b->lo[0], b->lo[1], b->lo[2]}, {b->hi[0], b->hi[1], b->hi[2]}};
     return r;
 }
+#endif
 static inline void binbox_empty(binbox *b)
 {
     for (int k = 0; k < 4; ++k) {
