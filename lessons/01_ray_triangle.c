@@ -191,7 +191,10 @@ static void fan_leaks(const fan *f, long rays, long leaks[SIDX_TRI_METHOD_COUNT]
         const int e = (int)(frand() * FAN) % FAN;
         const float s = (k % 8 == 0) ? 0.0f : 0.05f + 0.9f * frand(); /* every 8th ray: the shared vertex */
         const sidx_vec3 target = sidx_v3_add(f->c, sidx_v3_scale(sidx_v3_sub(f->rim[e], f->c), s));
-        const sidx_vec3 off = sidx_v3((frand() - 0.5f) * 2.0f, (frand() - 0.5f) * 2.0f, (frand() - 0.5f) * 2.0f);
+        /* one draw per statement (z first, the order gcc happened to take):
+         * C leaves the order of a call's arguments open */
+        const float oz = frand(), oy = frand(), ox = frand();
+        const sidx_vec3 off = sidx_v3((ox - 0.5f) * 2.0f, (oy - 0.5f) * 2.0f, (oz - 0.5f) * 2.0f);
         const sidx_vec3 org = sidx_v3_add(sidx_v3_add(target, sidx_v3_scale(f->normal, 1.5f)), off);
         sidx_ray r;
         if (sidx_ray_init(&r, org, sidx_v3_sub(target, org), 0.0f, INFINITY) != SIDX_OK) continue;

@@ -56,6 +56,16 @@ static float frand(void)
     return (float)(rng >> 8) / 16777216.0f;
 }
 
+/* (a·frand() + b, a·frand() + b, a·frand() + b), one draw per statement:
+ * C leaves the order of a call's arguments open, so sidx_v3(frand(), ...)
+ * gave gcc and clang different boxes.  z is drawn first, the order gcc
+ * took when the figures in the docs were made. */
+static sidx_vec3 frand_vec(float a, float b)
+{
+    const float z = a * frand() + b, y = a * frand() + b, x = a * frand() + b;
+    return sidx_v3(x, y, z);
+}
+
 /* ---- 1. the box test alone ---------------------------------------------------- */
 
 #define NB 200000
@@ -67,11 +77,12 @@ static void box_part(long miss[SIDX_BOX_METHOD_COUNT], double ns[SIDX_BOX_METHOD
     for (long i = 0; i < NB; ++i) {
         /* a box with awkward coordinates, a point on its surface: on a face,
          * an edge or a corner, and a ray towards it from far away */
-        const sidx_vec3 lo = sidx_v3(100.0f * frand() - 50.0f, 100.0f * frand() - 50.0f, 100.0f * frand() - 50.0f);
-        const sidx_vec3 hi = sidx_v3_add(lo, sidx_v3(0.01f + 3.0f * frand(), 0.01f + 3.0f * frand(), 0.01f + 3.0f * frand()));
+        const sidx_vec3 lo = frand_vec(100.0f, -50.0f);
+        const sidx_vec3 hi = sidx_v3_add(lo, frand_vec(3.0f, 0.01f));
         bboxes[i].min = lo;
         bboxes[i].max = hi;
-        float p[3] = {lo.x + frand() * (hi.x - lo.x), lo.y + frand() * (hi.y - lo.y), lo.z + frand() * (hi.z - lo.z)};
+        float p[3];
+        for (int k = 0; k < 3; ++k) p[k] = (&lo.x)[k] + frand() * ((&hi.x)[k] - (&lo.x)[k]);
         const float *l = &lo.x, *h = &hi.x;
         const int kind = (int)(i % 3); /* 0 face, 1 edge, 2 corner: pin 1, 2 or 3 coordinates */
         for (int k = 0; k <= kind; ++k) {
@@ -79,7 +90,7 @@ static void box_part(long miss[SIDX_BOX_METHOD_COUNT], double ns[SIDX_BOX_METHOD
             p[ax] = frand() < 0.5f ? l[ax] : h[ax];
         }
         const sidx_vec3 target = sidx_v3(p[0], p[1], p[2]);
-        const sidx_vec3 org = sidx_v3(200.0f * frand() - 100.0f, 200.0f * frand() - 100.0f, 200.0f * frand() - 100.0f);
+        const sidx_vec3 org = frand_vec(200.0f, -100.0f);
         sidx_ray_init(&brays[i], org, sidx_v3_sub(target, org), 0.0f, INFINITY);
     }
     *example = -1;

@@ -68,9 +68,13 @@ static void make_rays(const sidx_mesh *m, sidx_ray *rays, int n, uint64_t seed)
     const sidx_aabb b = sidx_mesh_bounds(m);
     const sidx_vec3 c = sidx_aabb_centroid(b), e = sidx_aabb_extent(b);
     for (int i = 0; i < n; ++i) {
-        const sidx_vec3 o = sidx_v3(c.x + e.x * 1.4f * (rng_unit() - 0.5f), c.y + e.y * 1.4f * (rng_unit() - 0.5f),
-                                    c.z + e.z * 1.4f * (rng_unit() - 0.5f));
-        sidx_vec3 d = sidx_v3(rng_unit() - 0.5f, rng_unit() - 0.5f, rng_unit() - 0.5f);
+        /* One draw per statement, z first: C leaves the order of a call's
+         * arguments open, and this is the order gcc drew them in. */
+        const float oz = rng_unit(), oy = rng_unit(), ox = rng_unit();
+        const sidx_vec3 o = sidx_v3(c.x + e.x * 1.4f * (ox - 0.5f), c.y + e.y * 1.4f * (oy - 0.5f),
+                                    c.z + e.z * 1.4f * (oz - 0.5f));
+        const float dz = rng_unit(), dy = rng_unit(), dx = rng_unit();
+        sidx_vec3 d = sidx_v3(dx - 0.5f, dy - 0.5f, dz - 0.5f);
         if (i % 2 && m->num_triangles) {
             const uint32_t t = (uint32_t)(rng_unit() * (float)m->num_triangles) % m->num_triangles;
             float u = rng_unit(), v = rng_unit();

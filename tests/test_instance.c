@@ -31,7 +31,8 @@ static void random_xform(tk_rng *g, float L, float m[12])
     const double R[9] = {1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y),
                          2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
                          2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)};
-    const double s[3] = {tk_rng_range(g, 0.5, 1.5), tk_rng_range(g, 0.5, 1.5), tk_rng_range(g, 0.5, 1.5)};
+    double s[3]; /* one draw per statement: an initializer list's order is unspecified too */
+    for (int k = 0; k < 3; ++k) s[k] = tk_rng_range(g, 0.5, 1.5);
     for (int r = 0; r < 3; ++r) {
         for (int c = 0; c < 3; ++c) m[4 * r + c] = (float)(R[3 * r + c] * s[c]); /* R·S */
         m[4 * r + 3] = (float)tk_rng_range(g, -L, L);
@@ -75,8 +76,11 @@ static void make_rays(tk_rng *g, const sidx_aabb world, const sidx_accel *agg, s
     const sidx_vec3 c = sidx_aabb_centroid(world), e = sidx_aabb_extent(world);
     const uint32_t leaves = sidx_aggregate_leaf_count(agg);
     for (size_t i = 0; i < n; ++i) {
-        sidx_vec3 o = sidx_v3_add(c, sidx_v3((float)tk_rng_range(g, -0.8, 0.8) * e.x, (float)tk_rng_range(g, -0.8, 0.8) * e.y,
-                                             (float)tk_rng_range(g, -0.8, 0.8) * e.z));
+        /* one draw per statement, z first: the order gcc evaluated the
+         * arguments in (C leaves it open) */
+        const float rz = (float)tk_rng_range(g, -0.8, 0.8), ry = (float)tk_rng_range(g, -0.8, 0.8),
+                    rx = (float)tk_rng_range(g, -0.8, 0.8);
+        sidx_vec3 o = sidx_v3_add(c, sidx_v3(rx * e.x, ry * e.y, rz * e.z));
         if (i % 4 == 0) o = sidx_v3_add(c, sidx_v3_scale(tk_rng_sphere(g), 1.5f * sidx_v3_length(e))); /* from outside */
         sidx_vec3 d;
         if (i % 2 == 0) {
@@ -387,8 +391,9 @@ static void ten_thousand_bunnies(void **state)
     sidx_ray *rays = malloc(nrays * sizeof *rays);
     assert_non_null(rays);
     for (size_t i = 0; i < nrays; ++i) {
-        sidx_vec3 o = sidx_v3((float)tk_rng_range(&g, world.min.x, world.max.x), (float)tk_rng_range(&g, world.min.y, world.max.y),
-                              (float)tk_rng_range(&g, world.min.z, world.max.z));
+        const float oz = (float)tk_rng_range(&g, world.min.z, world.max.z), /* z first: as above */
+            oy = (float)tk_rng_range(&g, world.min.y, world.max.y), ox = (float)tk_rng_range(&g, world.min.x, world.max.x);
+        sidx_vec3 o = sidx_v3(ox, oy, oz);
         if (i % 4 == 0) o = sidx_v3_scale(tk_rng_sphere(&g), 30.0f * diag);
         sidx_vec3 d = tk_rng_sphere(&g);
         if (i % 2 == 0) {

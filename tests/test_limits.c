@@ -86,7 +86,18 @@ static void nested_scene(sidx_mesh *m)
 /* Rays at the scale of their target (origins a few triangle sizes away,
  * so float resolution is never the issue): along ±z through every cluster
  * centroid and diagonally into the corner, random rays into the cluster at
- * every scale, and rays at random points of the fan. */
+ * every scale, and rays at random points of the fan.
+ *
+ * A random ray at a large scale also passes the cluster's smallest
+ * triangles, from 2^50 times their size or more.  There even the double
+ * reference cannot see them: o − v loses the triangle's extent, the three
+ * edge functions are rounding noise, and when the noise happens to agree
+ * in sign the reference "hits" a triangle the ray misses by 0.2 (seen when
+ * clang, which evaluates a call's arguments left to right, drew these rays
+ * in another order: prim 54, of size 2^-55, "hit" at t 0.63 by a ray from
+ * 0.46 away).  The draws are therefore one per statement, in a fixed
+ * order, so every compiler tests the same rays, none of which falls in
+ * that trap. */
 static size_t nested_rays(const sidx_mesh *m, tk_rayrec *out, size_t max)
 {
     size_t n = 0;
@@ -102,8 +113,12 @@ static size_t nested_rays(const sidx_mesh *m, tk_rayrec *out, size_t max)
     tk_rng_seed(&rng, 11);
     for (int k = 0; k < 200 && n < max; ++k) {
         const float s = ldexpf(1.0f, -1 - (int)tk_rng_below(&rng, NESTED));
-        const sidx_vec3 target = sidx_v3(s * (float)tk_rng_range(&rng, 0.9, 1.6), s * (float)tk_rng_range(&rng, 0.9, 1.6),
-                                         s * (float)tk_rng_range(&rng, 0.9, 1.1));
+        /* one draw per statement, z first: the order gcc evaluated the
+         * arguments in (C leaves it open; clang drew x first and got
+         * other rays) */
+        const float tz = (float)tk_rng_range(&rng, 0.9, 1.1), ty = (float)tk_rng_range(&rng, 0.9, 1.6),
+                    tx = (float)tk_rng_range(&rng, 0.9, 1.6);
+        const sidx_vec3 target = sidx_v3(s * tx, s * ty, s * tz);
         const sidx_vec3 o = sidx_v3_add(target, sidx_v3_scale(tk_rng_sphere(&rng), 3.0f * s));
         out[n++] = tk_rayrec_make(o, sidx_v3_sub(target, o), 0.0f, INFINITY);
     }

@@ -58,8 +58,12 @@ static void every_structure_is_thread_safe(void **state)
     sidx_ray *rays = malloc(sizeof *rays * NRAYS);
     assert_non_null(rays);
     for (int i = 0; i < NRAYS; ++i) {
-        sidx_vec3 o = sidx_v3(c.x + (frand() - 0.5f) * 3 * e.x, c.y + (frand() - 0.5f) * 3 * e.y, c.z + 2 * e.z);
-        sidx_vec3 t = sidx_v3(c.x + (frand() - 0.5f) * e.x, c.y + (frand() - 0.5f) * e.y, c.z);
+        /* one draw per statement, y first: the order gcc evaluated the
+         * arguments in (C leaves it open; clang goes the other way) */
+        const float oy = frand(), ox = frand();
+        sidx_vec3 o = sidx_v3(c.x + (ox - 0.5f) * 3 * e.x, c.y + (oy - 0.5f) * 3 * e.y, c.z + 2 * e.z);
+        const float ty = frand(), tx = frand();
+        sidx_vec3 t = sidx_v3(c.x + (tx - 0.5f) * e.x, c.y + (ty - 0.5f) * e.y, c.z);
         assert_int_equal(sidx_ray_init(&rays[i], o, sidx_v3_sub(t, o), 0.0f, INFINITY), SIDX_OK);
     }
     job *jobs = calloc(NTHREADS + 1, sizeof *jobs);

@@ -127,7 +127,8 @@ static void random_placement(tk_rng *g, sidx_vec3 c, double L, float m[12])
     const double R[9] = {1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y),
                          2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
                          2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)};
-    const double s[3] = {tk_rng_range(g, 0.5, 1.5), tk_rng_range(g, 0.5, 1.5), tk_rng_range(g, 0.5, 1.5)};
+    double s[3]; /* one draw per statement: the order of an initializer list's evaluations is unspecified */
+    for (int k = 0; k < 3; ++k) s[k] = tk_rng_range(g, 0.5, 1.5);
     for (int r = 0; r < 3; ++r) {
         double t = tk_rng_range(g, -L, L);
         for (int k = 0; k < 3; ++k) {

@@ -352,10 +352,18 @@ static sidx_vec3 v3_normalize(sidx_vec3 v)
     return l > 0 ? sidx_v3((float)(v.x / l), (float)(v.y / l), (float)(v.z / l)) : v;
 }
 
+/* Every draw from the generator is a statement of its own: the order in
+ * which a function's arguments are evaluated is unspecified in C (gcc on
+ * x86-64 goes right to left, clang left to right), so two draws in one
+ * argument list gave each compiler different rays.  The draws run in the
+ * order gcc ran them, so the rays every recorded figure was measured on
+ * are unchanged. */
 static sidx_vec3 random_in_box(tk_rng *g, sidx_aabb b)
 {
-    return sidx_v3((float)tk_rng_range(g, b.min.x, b.max.x), (float)tk_rng_range(g, b.min.y, b.max.y),
-                   (float)tk_rng_range(g, b.min.z, b.max.z));
+    const float z = (float)tk_rng_range(g, b.min.z, b.max.z);
+    const float y = (float)tk_rng_range(g, b.min.y, b.max.y);
+    const float x = (float)tk_rng_range(g, b.min.x, b.max.x);
+    return sidx_v3(x, y, z);
 }
 
 /* Cumulative triangle areas, for area-uniform surface points. */
@@ -408,7 +416,8 @@ static sidx_vec3 edge_midpoint(const sidx_mesh *m, uint32_t t, int e)
 
 static tk_rayrec diffuse_ray(tk_rng *g, const scene_frame *f)
 {
-    return tk_rayrec_make(random_in_box(g, f->box), sidx_v3_scale(tk_rng_sphere(g), f->radius), 0.0f, INFINITY);
+    const sidx_vec3 d = sidx_v3_scale(tk_rng_sphere(g), f->radius); /* drawn before the origin: see random_in_box */
+    return tk_rayrec_make(random_in_box(g, f->box), d, 0.0f, INFINITY);
 }
 
 /* A ray from a random origin (half outside the bounding sphere, half in
