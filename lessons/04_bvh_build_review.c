@@ -225,9 +225,25 @@ static int equal_centroids_demo(void)
 
 /* ---- 3. the builders on a scene -------------------------------------------------- */
 
+/* Split positions a build costs, counted from its BUILD_CANDIDATE events:
+ * in all, and at the root (node 0), where the deck's "checking every
+ * partition ... is incredibly expensive" bites. */
+typedef struct {
+    uint64_t all, root;
+} candidate_count;
+
+static void count_candidates(const sidx_event *e, void *user)
+{
+    candidate_count *c = user;
+    if (e->type != SIDX_EV_BUILD_CANDIDATE) return;
+    ++c->all;
+    c->root += e->node == 0;
+}
+
 typedef struct {
     const char *accel, *what;
     double build_ms, sah, tests_per_ray, trace_ms;
+    uint64_t candidates, root_candidates; /* SAH evaluations (BUILD_CANDIDATE events): all, at the root */
     sidx_accel_stats st;
     int same;
 } row;
@@ -245,11 +261,11 @@ int main(int argc, char **argv)
         scene = argv[i];
     }
     row rows[] = {
-        {"bvh-sweep", "SAH at every position (sort + sweep)", 0, 0, 0, 0, {0}, 0},
-        {"bvh-everyb", "SAH at every B-th position (B = 32)", 0, 0, 0, 0, {0}, 0},
-        {"bvh", "SAH over 32 bins (no sort)", 0, 0, 0, 0, {0}, 0},
-        {"bvh-median", "equal counts (no SAH)", 0, 0, 0, 0, {0}, 0},
-        {"bvh-middle", "middle of the extent (no SAH)", 0, 0, 0, 0, {0}, 0},
+        {"bvh-sweep", "SAH at every position (sort + sweep)", 0, 0, 0, 0, 0, 0, {0}, 0},
+        {"bvh-everyb", "SAH at every B-th position (B = 32)", 0, 0, 0, 0, 0, 0, {0}, 0},
+        {"bvh", "SAH over 32 bins (no sort)", 0, 0, 0, 0, 0, 0, {0}, 0},
+        {"bvh-median", "equal counts (no SAH)", 0, 0, 0, 0, 0, 0, {0}, 0},
+        {"bvh-middle", "middle of the extent (no SAH)", 0, 0, 0, 0, 0, 0, {0}, 0},
     };
     const int nrows = (int)(sizeof rows / sizeof rows[0]);
     for (int i = 0; i < nrows; ++i)
@@ -315,6 +331,25 @@ int main(int argc, char **argv)
         if (failed) break;
         rows[i].build_ms = 1e3 * (t1 - t0) / reps;
         sidx_accel_stats_get(a, &rows[i].st);
+        /* the work behind that time, counted: one more build with a
+         * counting hook, which sees every split the builder costed */
+        {
+            candidate_count cc = {0, 0};
+            const sidx_hook bh = {count_candidates, &cc, SIDX_EVMASK(SIDX_EV_BUILD_CANDIDATE)};
+            sidx_build_options bo;
+            memset(&bo, 0, sizeof bo);
+            bo.hook = &bh;
+            sidx_accel *counted = NULL;
+            if (sidx_accel_build(rows[i].accel, &mesh, &bo, &counted, &err) != SIDX_OK) {
+                fprintf(stderr, "04_bvh_build_review: %s\n", err.message);
+                sidx_accel_destroy(a);
+                failed = 1;
+                break;
+            }
+            sidx_accel_destroy(counted);
+            rows[i].candidates = cc.all;
+            rows[i].root_candidates = cc.root;
+        }
         /* what the rays pay */
         sidx_counters cnt;
         sidx_counters_init(&cnt);
@@ -345,10 +380,11 @@ int main(int argc, char **argv)
     sidx_mesh_free(&mesh);
     if (failed) return 1;
 
-    printf("  %-11s %-38s %9s %9s %6s %6s %5s %11s %9s\n", "builder", "how", "build ms", "SAH cost", "nodes",
-           "leaves", "depth", "tests/ray", "trace ms");
+    printf("  %-11s %-38s %9s %7s %8s %9s %6s %6s %5s %11s %9s\n", "builder", "how", "build ms", "root", "costed",
+           "SAH cost", "nodes", "leaves", "depth", "tests/ray", "trace ms");
     for (int i = 0; i < nrows; ++i)
-        printf("  %-11s %-38s %9.3f %9.2f %6u %6u %5u %11.1f %9.2f\n", rows[i].accel, rows[i].what, rows[i].build_ms,
+        printf("  %-11s %-38s %9.3f %7llu %8llu %9.2f %6u %6u %5u %11.1f %9.2f\n", rows[i].accel, rows[i].what,
+               rows[i].build_ms, (unsigned long long)rows[i].root_candidates, (unsigned long long)rows[i].candidates,
                rows[i].st.sah_cost, rows[i].st.nodes, rows[i].st.leaves, rows[i].st.max_depth, rows[i].tests_per_ray,
                rows[i].trace_ms);
     int same = 1;
@@ -357,16 +393,28 @@ int main(int argc, char **argv)
         same &= rows[i].same;
         if (i > 0 && rows[i].st.sah_cost < best_other) best_other = rows[i].st.sah_cost;
     }
-    printf("\n  The full sweep looks at every split and builds the cheapest tree (SAH %.2f); binning\n"
-           "  looks at 31 planes per axis and no sort, builds %.1fx faster, and its tree costs %.1f%% more.\n"
+    printf("\n  root / costed: split positions whose SAH cost the build computed (its BUILD_CANDIDATE\n"
+           "  events) at the root / in all.  The full sweep sorts and costs every position: %llu at\n"
+           "  the root, 3 (n - 1).  Binning costs 31 planes per axis (%llu) after one pass over the\n"
+           "  primitives, and sorts nothing.  Below 32 primitives a node has fewer positions than\n"
+           "  bins, so over the whole build binning costs %llu positions to the sweep's %llu — the\n"
+           "  sorting and the big nodes are what it saves.  It built %.1fx faster here (SAH %.2f for\n"
+           "  the sweep's tree), and its tree costs %.1f%% more.\n"
            "  Median and middle splits build fastest, but ignore the probabilities or the counts: their\n"
            "  trees cost more under the SAH and rays do more tests in them (tests/ray).\n",
-           rows[0].st.sah_cost, rows[0].build_ms / rows[2].build_ms,
+           (unsigned long long)rows[0].root_candidates, (unsigned long long)rows[2].root_candidates,
+           (unsigned long long)rows[2].candidates, (unsigned long long)rows[0].candidates,
+           rows[0].build_ms / rows[2].build_ms, rows[0].st.sah_cost,
            100.0 * (rows[2].st.sah_cost / rows[0].st.sah_cost - 1.0));
     printf("  Every builder returns the same closest hits (t identical to the full sweep's): %s\n", same ? "yes" : "NO");
     printf("CHECK same_hits=%d\n", same);
     printf("CHECK reindexed_contiguous=%d\n", reindexed);
     printf("CHECK sweep_cost_lowest=%d\n", rows[0].st.sah_cost <= best_other * 1.01);
-    printf("CHECK binned_faster_than_sweep=%d\n", rows[2].build_ms < rows[0].build_ms);
+    /* counted work, not time: a build time on a shared or loaded machine
+     * promises nothing (under load at -O0 the binned build once measured
+     * slower than the sweep) */
+    printf("CHECK binned_fewer_root_candidates=%d\n",
+           rows[2].root_candidates > 0 && rows[2].root_candidates <= 3 * 31 &&
+               rows[2].root_candidates < rows[0].root_candidates);
     return 0;
 }

@@ -43,7 +43,7 @@ expect() {
                                sphere_fits_round_object=1" ;;
     03_bvh_partitioning) echo "candidate_costs_reproduced=1 sah_cost_lower=1 sah_tree_cost_lower=1
                                sah_fewer_tests_per_ray=1" ;;
-    04_bvh_build_review) echo "same_hits=1 reindexed_contiguous=1 sweep_cost_lowest=1 binned_faster_than_sweep=1" ;;
+    04_bvh_build_review) echo "same_hits=1 reindexed_contiguous=1 sweep_cost_lowest=1 binned_fewer_root_candidates=1" ;;
     05_bvh_traversal) echo "same_hit=1 ordered_visits_fewer=1 ordered_fewer_on_average=1" ;;
     06_object_vs_space) echo "same_hits=1 bvh_boxes_overlap=1 kd_cells_disjoint=1 kd_stops_at_first_hit=1" ;;
     07_uniform_grid) echo "resolution_formula=1 dda_cells_in_order=1 mailbox_saves_tests=1 middle_lambda_best=1" ;;
