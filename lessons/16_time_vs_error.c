@@ -81,8 +81,10 @@ static void box_part(long miss[SIDX_BOX_METHOD_COUNT], double ns[SIDX_BOX_METHOD
         const sidx_vec3 hi = sidx_v3_add(lo, frand_vec(3.0f, 0.01f));
         bboxes[i].min = lo;
         bboxes[i].max = hi;
-        float p[3];
-        for (int k = 0; k < 3; ++k) p[k] = (&lo.x)[k] + frand() * ((&hi.x)[k] - (&lo.x)[k]);
+        const float px = lo.x + frand() * (hi.x - lo.x); /* x first, as the initializer list ran */
+        const float py = lo.y + frand() * (hi.y - lo.y);
+        const float pz = lo.z + frand() * (hi.z - lo.z);
+        float p[3] = {px, py, pz};
         const float *l = &lo.x, *h = &hi.x;
         const int kind = (int)(i % 3); /* 0 face, 1 edge, 2 corner: pin 1, 2 or 3 coordinates */
         for (int k = 0; k <= kind; ++k) {

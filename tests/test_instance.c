@@ -391,9 +391,7 @@ static void ten_thousand_bunnies(void **state)
     sidx_ray *rays = malloc(nrays * sizeof *rays);
     assert_non_null(rays);
     for (size_t i = 0; i < nrays; ++i) {
-        const float oz = (float)tk_rng_range(&g, world.min.z, world.max.z), /* z first: as above */
-            oy = (float)tk_rng_range(&g, world.min.y, world.max.y), ox = (float)tk_rng_range(&g, world.min.x, world.max.x);
-        sidx_vec3 o = sidx_v3(ox, oy, oz);
+        sidx_vec3 o = tk_rng_in_box(&g, world);
         if (i % 4 == 0) o = sidx_v3_scale(tk_rng_sphere(&g), 30.0f * diag);
         sidx_vec3 d = tk_rng_sphere(&g);
         if (i % 2 == 0) {

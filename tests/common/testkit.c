@@ -358,7 +358,7 @@ static sidx_vec3 v3_normalize(sidx_vec3 v)
  * argument list gave each compiler different rays.  The draws run in the
  * order gcc ran them, so the rays every recorded figure was measured on
  * are unchanged. */
-static sidx_vec3 random_in_box(tk_rng *g, sidx_aabb b)
+sidx_vec3 tk_rng_in_box(tk_rng *g, sidx_aabb b)
 {
     const float z = (float)tk_rng_range(g, b.min.z, b.max.z);
     const float y = (float)tk_rng_range(g, b.min.y, b.max.y);
@@ -416,8 +416,8 @@ static sidx_vec3 edge_midpoint(const sidx_mesh *m, uint32_t t, int e)
 
 static tk_rayrec diffuse_ray(tk_rng *g, const scene_frame *f)
 {
-    const sidx_vec3 d = sidx_v3_scale(tk_rng_sphere(g), f->radius); /* drawn before the origin: see random_in_box */
-    return tk_rayrec_make(random_in_box(g, f->box), d, 0.0f, INFINITY);
+    const sidx_vec3 d = sidx_v3_scale(tk_rng_sphere(g), f->radius); /* drawn before the origin: see tk_rng_in_box */
+    return tk_rayrec_make(tk_rng_in_box(g, f->box), d, 0.0f, INFINITY);
 }
 
 /* A ray from a random origin (half outside the bounding sphere, half in
@@ -426,7 +426,7 @@ static tk_rayrec aimed_ray(tk_rng *g, const scene_frame *f, sidx_vec3 target)
 {
     for (int tries = 0; tries < 8; ++tries) {
         sidx_vec3 o = (tk_rng_next(g) & 1) ? sidx_v3_add(f->c, sidx_v3_scale(tk_rng_sphere(g), 2.0f * f->radius))
-                                           : random_in_box(g, f->box);
+                                           : tk_rng_in_box(g, f->box);
         sidx_vec3 d = sidx_v3_sub(target, o);
         if (!is_zero(d) && sidx_v3_isfinite(d)) return tk_rayrec_make(o, d, 0.0f, INFINITY);
     }
@@ -465,7 +465,7 @@ static tk_rayrec axis_ray(tk_rng *g, const sidx_mesh *m, const scene_frame *f)
     for (int k = 0; k < 3; ++k) d[k] = (tk_rng_next(g) & 1) ? -0.0f : 0.0f;
     d[axis] = neg ? -f->radius : f->radius;
     if ((tk_rng_next(g) & 1) || m->num_triangles == 0) {
-        const sidx_vec3 p = random_in_box(g, f->box);
+        const sidx_vec3 p = tk_rng_in_box(g, f->box);
         o[0] = p.x; o[1] = p.y; o[2] = p.z;
     } else {
         /* Through a vertex or an edge midpoint exactly, from outside the box. */

@@ -30,6 +30,7 @@ double tk_rng_unit(tk_rng *r);                /* [0, 1), 53 bits */
 double tk_rng_range(tk_rng *r, double lo, double hi);
 uint32_t tk_rng_below(tk_rng *r, uint32_t n); /* [0, n), n > 0 */
 sidx_vec3 tk_rng_sphere(tk_rng *r);           /* uniform unit vector */
+sidx_vec3 tk_rng_in_box(tk_rng *r, sidx_aabb b); /* uniform point of b (z drawn first, then y, x) */
 
 /* ---- ray and hit files --------------------------------------------------- */
 
