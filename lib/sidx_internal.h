@@ -50,6 +50,26 @@ typedef struct sidx_accel_vtable {
     sidx_status (*refit)(sidx_accel *a, sidx_error *err);   /* may be NULL */
 } sidx_accel_vtable;
 
+/* The query pointer a vtable entry receives is never NULL:
+ * sidx_accel_intersect and sidx_accel_occluded put a default query (no
+ * flags, default traversal, no hook) in its place, and every internal
+ * caller (instances, packets, threads) passes a real one.  No walk tests
+ * q for NULL; a walk tests q->hook through SIDX_QUERY_TRACED. */
+
+/* One dispatch pattern for every structure: its build picks, once, the
+ * walk functions that fit this tree and its options (mailbox or not, box
+ * kind, instruction set) and stores them in a walk table; the vtable's
+ * intersect and occluded entries then only pick the traced or the plain
+ * copy by the query (sidx__walk_intersect / sidx__walk_occluded below).
+ * A structure with several traversals (the BVH's naive / ordered /
+ * stack) keeps one table per traversal. */
+typedef void (*sidx__intersect_fn)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit);
+typedef int (*sidx__occluded_fn)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q);
+typedef struct sidx__walk_table {
+    sidx__intersect_fn intersect, intersect_traced; /* closest hit: plain copy, traced copy */
+    sidx__occluded_fn occluded, occluded_traced;    /* any hit */
+} sidx__walk_table;
+
 struct sidx_accel {
     const sidx_accel_vtable *vt;
     const char *name;          /* registered name (static) */
@@ -112,12 +132,27 @@ static SIDX_INLINE int sidx__hook_wants(const sidx_hook *h, sidx_event_type t)
     } while (0)
 #endif
 
-/* Is this query traced?  (Always 0 when hooks are compiled out.) */
+/* Is this query traced?  (Always 0 when hooks are compiled out.)  q may
+ * be NULL here, for the public entry points that test before replacing
+ * it; inside a structure it never is. */
 #ifdef SIDX_NO_HOOKS
 #define SIDX_QUERY_TRACED(q) 0
 #else
 #define SIDX_QUERY_TRACED(q) ((q) && (q)->hook && (q)->hook->fn)
 #endif
+
+/* The walk-table dispatch (section 1): the traced copy when the query has
+ * a hook, the plain copy otherwise. */
+static SIDX_INLINE void sidx__walk_intersect(const sidx__walk_table *t, const sidx_accel *a, const sidx_ray *r,
+                                             const sidx_query *q, sidx_hit *hit)
+{
+    (SIDX_QUERY_TRACED(q) ? t->intersect_traced : t->intersect)(a, r, q, hit);
+}
+static SIDX_INLINE int sidx__walk_occluded(const sidx__walk_table *t, const sidx_accel *a, const sidx_ray *r,
+                                           const sidx_query *q)
+{
+    return (SIDX_QUERY_TRACED(q) ? t->occluded_traced : t->occluded)(a, r, q);
+}
 
 /* ---- 3. elementary tests, inline ------------------------------------- */
 
