@@ -41,6 +41,24 @@ static inline sidx_vec3 sidx_v3_max(sidx_vec3 a, sidx_vec3 b)
 }
 /* Component by axis index 0, 1, 2 (x, y, z). */
 static inline float sidx_v3_get(sidx_vec3 a, int axis) { return axis == 0 ? a.x : axis == 1 ? a.y : a.z; }
+/* Set one component by axis index. */
+static inline void sidx_v3_set(sidx_vec3 *a, int axis, float value)
+{
+    if (axis == 0) a->x = value;
+    else if (axis == 1) a->y = value;
+    else a->z = value;
+}
+/* The three components as an array, for loops over the axes (a hot loop
+ * indexes the copy, which the compiler keeps in registers), and back.
+ * Reading a sidx_vec3 as float[3] through &v.x is not valid C (an index
+ * past the member x), so sidx never does. */
+static inline void sidx_v3_to_array(sidx_vec3 a, float out[3])
+{
+    out[0] = a.x;
+    out[1] = a.y;
+    out[2] = a.z;
+}
+static inline sidx_vec3 sidx_v3_from_array(const float in[3]) { return sidx_v3(in[0], in[1], in[2]); }
 static inline int sidx_v3_isfinite(sidx_vec3 a) { return isfinite(a.x) && isfinite(a.y) && isfinite(a.z); }
 
 /* The empty box: min = +inf, max = -inf, so that any union fixes it. */
