@@ -1,0 +1,172 @@
+/* lesson.h — what every lesson does the same way: its command line, its
+ * scene and its CHECK lines, so that a lesson's main reads parse, open,
+ * build, show, check:
+ *
+ *     int main(int argc, char **argv)
+ *     {
+ *         lesson_args args = {.name = "07_uniform_grid", .usage = usage, .scene = "teapot"};
+ *         lesson_parse(&args, argc, argv);
+ *         lesson_need(&args, "grid");
+ *         sidx_mesh mesh = lesson_open_scene(&args);
+ *         ... build, show ...
+ *         lesson_check("mailbox_saves_tests", saved);
+ *     }
+ *
+ * lesson_parse       -h or --help: args.usage(stdout), exit 0.  One SCENE
+ *                    argument (a built-in scene, "teapot" or "name:detail",
+ *                    or an .obj/.ply file) replaces args.scene and sets
+ *                    args.scene_given.  Anything else starting with '-' that
+ *                    is not in args.options, or a second SCENE: one line and
+ *                    the usage on stderr, exit 2.
+ * lesson_need        the structure is not registered in this build: exit 1.
+ * lesson_open_scene  loads args.scene (lesson_open: any other scene); one
+ *                    that cannot be loaded or has no triangles: exit 1.
+ * lesson_fail        "NAME: message" on stderr, exit 1.
+ * lesson_check       prints "CHECK name=value", the lines tests/run_lessons.sh
+ *                    compares with what the lesson must find.
+ *
+ * Options are one table entry each, naming the field the option fills;
+ * the build knobs below fill a sidx_build_options the lesson then builds
+ * with.  Untouched fields stay 0, which is every structure's default, so
+ * a run without options is the run without the table:
+ *
+ *     sidx_build_options knobs = {0};
+ *     const lesson_option options[] = {LESSON_BINS(knobs), LESSON_NO_MAILBOX(knobs), {0}};
+ *     lesson_args args = {.name = ..., .usage = ..., .scene = ..., .options = options};
+ *
+ * The lesson's usage text lists its options: what a knob means depends on
+ * what the lesson builds with it.
+ */
+#ifndef LESSON_H
+#define LESSON_H
+
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include "sidx/sidx.h"
+
+/* One option and the one field it fills: exactly one pointer is set. */
+typedef struct lesson_option {
+    const char *flag;  /* "--bins"; NULL ends the table */
+    uint32_t *count;   /* --flag N: a whole number >= 1 */
+    float *number;     /* --flag X: a finite number >= 0 */
+    int *on;           /* --flag: sets it to 1 */
+    const char **text; /* --flag S: the string itself */
+} lesson_option;
+
+/* The build knobs, each filling one field of the sidx_build_options b. */
+#define LESSON_BINS(b) {"--bins", .count = &(b).bins}
+#define LESSON_LEAF_SIZE(b) {"--leaf-size", .count = &(b).leaf_size}
+#define LESSON_MAX_DEPTH(b) {"--max-depth", .count = &(b).max_depth}
+#define LESSON_C_TRAV(b) {"--c-trav", .number = &(b).c_trav}
+#define LESSON_LAMBDA(b) {"--lambda", .number = &(b).grid_density}
+#define LESSON_EMPTY_BONUS(b) {"--empty-bonus", .number = &(b).empty_bonus}
+#define LESSON_NO_MAILBOX(b) {"--no-mailbox", .on = &(b).no_mailbox}
+
+typedef struct lesson_args {
+    const char *name;             /* the program's name: every message starts with it */
+    void (*usage)(FILE *f);       /* prints the --help text */
+    const char *scene;            /* the default scene (NULL: the lesson makes its own), then the one to use */
+    const char *scene_flag;       /* NULL: SCENE is a plain argument; else the option that takes it */
+    const lesson_option *options; /* NULL, or a table ended by {0} */
+    int scene_given;              /* set by lesson_parse: SCENE was on the command line */
+} lesson_args;
+
+static inline void lesson_fail(const lesson_args *a, const char *message)
+{
+    fprintf(stderr, "%s: %s\n", a->name, message);
+    exit(1);
+}
+
+/* A command line the lesson cannot run: say what, show the usage, exit 2. */
+static inline void lesson__usage_error(const lesson_args *a, const char *what, const char *arg)
+{
+    fprintf(stderr, "%s: %s '%s'\n", a->name, what, arg);
+    a->usage(stderr);
+    exit(2);
+}
+
+/* The value after option argv[*i]; moves *i onto it. */
+static inline const char *lesson__value(const lesson_args *a, int argc, char **argv, int *i)
+{
+    if (*i + 1 >= argc) lesson__usage_error(a, "missing value after", argv[*i]);
+    return argv[++*i];
+}
+
+/* Fills the option's field from value, or exits 2 saying what it wants. */
+static inline void lesson__set(const lesson_args *a, const lesson_option *o, const char *value)
+{
+    char *end = NULL;
+    char what[96];
+    if (o->text) {
+        *o->text = value;
+        return;
+    }
+    if (o->count) {
+        const unsigned long long n = value[0] >= '0' && value[0] <= '9' ? strtoull(value, &end, 10) : 0;
+        if (end && !*end && n >= 1 && n <= UINT32_MAX) {
+            *o->count = (uint32_t)n;
+            return;
+        }
+        snprintf(what, sizeof what, "%s wants a whole number >= 1, not", o->flag);
+    } else {
+        const float x = strtof(value, &end);
+        if (end != value && !*end && isfinite(x) && x >= 0.0f) {
+            *o->number = x;
+            return;
+        }
+        snprintf(what, sizeof what, "%s wants a number >= 0, not", o->flag);
+    }
+    lesson__usage_error(a, what, value);
+}
+
+static inline void lesson_parse(lesson_args *a, int argc, char **argv)
+{
+    for (int i = 1; i < argc; ++i) {
+        const char *arg = argv[i];
+        if (!strcmp(arg, "--help") || !strcmp(arg, "-h")) {
+            a->usage(stdout);
+            exit(0);
+        }
+        if (a->scene_flag ? !strcmp(arg, a->scene_flag) : arg[0] != '-') {
+            if (a->scene_given && !a->scene_flag) lesson__usage_error(a, "unexpected argument", arg);
+            a->scene = a->scene_flag ? lesson__value(a, argc, argv, &i) : arg;
+            a->scene_given = 1;
+            continue;
+        }
+        const lesson_option *o = a->options;
+        while (o && o->flag && strcmp(o->flag, arg)) ++o;
+        if (!o || !o->flag) lesson__usage_error(a, "unexpected argument", arg);
+        if (o->on) *o->on = 1;
+        else lesson__set(a, o, lesson__value(a, argc, argv, &i));
+    }
+}
+
+static inline void lesson_need(const lesson_args *a, const char *accel)
+{
+    if (sidx_accel_is_registered(accel)) return;
+    fprintf(stderr, "%s: structure '%s' is not registered in this build\n", a->name, accel);
+    exit(1);
+}
+
+static inline sidx_mesh lesson_open(const lesson_args *a, const char *spec)
+{
+    sidx_mesh mesh;
+    sidx_error err = {0};
+    memset(&mesh, 0, sizeof mesh);
+    if (sidx_scene_open(spec, &mesh, &err) != SIDX_OK) lesson_fail(a, err.message);
+    if (mesh.num_triangles == 0) {
+        fprintf(stderr, "%s: scene '%s' has no triangles\n", a->name, spec);
+        sidx_mesh_free(&mesh);
+        exit(1);
+    }
+    return mesh;
+}
+
+static inline sidx_mesh lesson_open_scene(const lesson_args *a) { return lesson_open(a, a->scene); }
+
+static inline void lesson_check(const char *name, long value) { printf("CHECK %s=%ld\n", name, value); }
+
+#endif
