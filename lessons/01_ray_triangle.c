@@ -30,8 +30,8 @@
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
-#include <string.h>
 #include "sidx/sidx.h"
+#include "lesson.h"
 
 static const char *const method_label[SIDX_TRI_METHOD_COUNT] = {"watertight", "Moller-Trumbore", "two-step"};
 
@@ -121,8 +121,8 @@ static void worked_watertight(const sidx_ray *r, sidx_vec3 p0, sidx_vec3 p1, sid
     const sidx_vec3 pts[3] = {p0, p1, p2};
     float X[3], Y[3], Z[3];
     for (int i = 0; i < 3; ++i) {
-        const float *p = &pts[i].x, *o = &r->org.x;
-        const float x = p[r->kx] - o[r->kx], y = p[r->ky] - o[r->ky], z = p[r->kz] - o[r->kz];
+        const sidx_vec3 p = sidx_v3_sub(pts[i], r->org);
+        const float x = sidx_v3_get(p, r->kx), y = sidx_v3_get(p, r->ky), z = sidx_v3_get(p, r->kz);
         X[i] = x - r->sx * z;
         Y[i] = y - r->sy * z;
         Z[i] = r->sz * z;
@@ -248,16 +248,8 @@ static int mesh_leaks(const sidx_mesh *mesh, long rays, long leaks[SIDX_TRI_METH
 
 int main(int argc, char **argv)
 {
-    const char *scene = NULL;
-    for (int i = 1; i < argc; ++i) {
-        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) { usage(stdout); return 0; }
-        if (argv[i][0] == '-' || scene) {
-            fprintf(stderr, "01_ray_triangle: unexpected argument '%s'\n", argv[i]);
-            usage(stderr);
-            return 2;
-        }
-        scene = argv[i];
-    }
+    lesson_args args = {.name = "01_ray_triangle", .usage = usage, .scene = "icosphere"};
+    lesson_parse(&args, argc, argv);
 
     sidx_printer printer;
     sidx_printer_init(&printer, stdout);
@@ -355,24 +347,13 @@ int main(int argc, char **argv)
            "  triangle separately, and their rounding does not line up.\n");
 
     /* ---- 4 ---- */
-    sidx_mesh mesh;
-    sidx_error err = {0};
-    const char *spec = scene ? scene : "icosphere";
-    if (sidx_scene_open(spec, &mesh, &err) != SIDX_OK) {
-        fprintf(stderr, "01_ray_triangle: %s\n", err.message);
-        return 1;
-    }
-    if (mesh.num_triangles == 0) {
-        fprintf(stderr, "01_ray_triangle: scene '%s' has no triangles\n", spec);
-        sidx_mesh_free(&mesh);
-        return 1;
-    }
+    sidx_mesh mesh = lesson_open_scene(&args);
     long mrays = 20000000L / (long)mesh.num_triangles;
     if (mrays > 20000) mrays = 20000;
     if (mrays < 200) mrays = 200;
     printf("\n== 4. The same on a closed mesh: '%s' (%u triangles), %ld rays from its box centre\n"
            "   aimed at its vertices and edges (\"brute\" built once per triangle test method)\n",
-           spec, mesh.num_triangles, mrays);
+           args.scene, mesh.num_triangles, mrays);
     long mleaks[SIDX_TRI_METHOD_COUNT];
     if (!mesh_leaks(&mesh, mrays, mleaks)) { sidx_mesh_free(&mesh); return 1; }
     for (int m = 0; m < SIDX_TRI_METHOD_COUNT; ++m)
@@ -382,12 +363,12 @@ int main(int argc, char **argv)
     printf("\n== Key figures\n");
     printf("  fan: watertight leaks %ld, Moller-Trumbore leaks %ld, two-step leaks %ld (of %ld rays)\n", leaks[0],
            leaks[1], leaks[2], fan_rays);
-    printf("CHECK worked_example_agrees=%d\n", agree);
-    printf("CHECK d_zero_all_miss=%d\n", (masks[2] | masks[3] | masks[4]) == 0);
-    printf("CHECK negative_t_rejected=%d\n", masks[5] == 0 && neg_mask == 7 && tmin_refused);
-    printf("CHECK edge_vertex_hit=%d\n", masks[0] == 7 && masks[1] == 7);
-    printf("CHECK watertight_leaks=%ld\n", leaks[0]);
-    printf("CHECK moller_leaks_more=%d\n", leaks[1] > leaks[0]);
-    printf("CHECK mesh_watertight_leaks_le_moller=%d\n", mleaks[0] <= mleaks[1]);
+    lesson_check("worked_example_agrees", agree);
+    lesson_check("d_zero_all_miss", (masks[2] | masks[3] | masks[4]) == 0);
+    lesson_check("negative_t_rejected", masks[5] == 0 && neg_mask == 7 && tmin_refused);
+    lesson_check("edge_vertex_hit", masks[0] == 7 && masks[1] == 7);
+    lesson_check("watertight_leaks", leaks[0]);
+    lesson_check("moller_leaks_more", leaks[1] > leaks[0]);
+    lesson_check("mesh_watertight_leaks_le_moller", mleaks[0] <= mleaks[1]);
     return 0;
 }

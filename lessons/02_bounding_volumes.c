@@ -33,6 +33,7 @@
 #include <string.h>
 #include <time.h>
 #include "sidx/sidx.h"
+#include "lesson.h"
 
 enum { BV_SPHERE, BV_AABB, BV_OBB, BV_KDOP, BV_COUNT };
 static const char *const bv_name[BV_COUNT] = {"sphere", "AABB", "OBB", "14-DOP"};
@@ -149,8 +150,10 @@ static int study(const char *name, const sidx_mesh *mesh, result *res, int trace
     if (rs > R) R = rs;
     for (int k = 0; k < 8; ++k) {
         sidx_vec3 p = v.obb.center;
-        const float *h = &v.obb.half.x;
-        for (int a = 0; a < 3; ++a) p = sidx_v3_add(p, sidx_v3_scale(v.obb.axis[a], (k >> a & 1) ? h[a] : -h[a]));
+        for (int a = 0; a < 3; ++a) {
+            const float h = sidx_v3_get(v.obb.half, a);
+            p = sidx_v3_add(p, sidx_v3_scale(v.obb.axis[a], (k >> a & 1) ? h : -h));
+        }
         const float d = sidx_v3_length(sidx_v3_sub(p, c));
         if (d > R) R = d;
     }
@@ -282,32 +285,12 @@ static int study(const char *name, const sidx_mesh *mesh, result *res, int trace
 
 int main(int argc, char **argv)
 {
-    const char *scene = NULL;
-    for (int i = 1; i < argc; ++i) {
-        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) { usage(stdout); return 0; }
-        if (argv[i][0] == '-' || scene) {
-            fprintf(stderr, "02_bounding_volumes: unexpected argument '%s'\n", argv[i]);
-            usage(stderr);
-            return 2;
-        }
-        scene = argv[i];
-    }
-    const char *spec = scene ? scene : "teapot";
-    sidx_mesh objs[3];
-    const char *names[3] = {spec, "icosphere:2", "rod"};
+    lesson_args args = {.name = "02_bounding_volumes", .usage = usage, .scene = "teapot"};
+    lesson_parse(&args, argc, argv);
+    sidx_mesh objs[3] = {lesson_open_scene(&args), lesson_open(&args, "icosphere:2")};
+    const char *names[3] = {args.scene, "icosphere:2", "rod"};
     sidx_error err = {0};
-    memset(objs, 0, sizeof objs);
-    if (sidx_scene_open(spec, &objs[0], &err) != SIDX_OK || sidx_scene_open("icosphere:2", &objs[1], &err) != SIDX_OK ||
-        make_rod(&objs[2], &err) != SIDX_OK) {
-        fprintf(stderr, "02_bounding_volumes: %s\n", err.message);
-        for (int i = 0; i < 3; ++i) sidx_mesh_free(&objs[i]);
-        return 1;
-    }
-    if (objs[0].num_triangles == 0 || objs[0].num_vertices == 0) {
-        fprintf(stderr, "02_bounding_volumes: scene '%s' is empty\n", spec);
-        for (int i = 0; i < 3; ++i) sidx_mesh_free(&objs[i]);
-        return 1;
-    }
+    if (make_rod(&objs[2], &err) != SIDX_OK) lesson_fail(&args, err.message);
 
     printf("== Bounding volumes: tightness against test cost\n");
     printf("  P predicted = area / area of the outer ball (Cauchy-Crofton: what the SAH assumes);\n"
@@ -340,10 +323,10 @@ int main(int argc, char **argv)
            100 * res[2].frac[BV_OBB], 100 * res[2].frac[BV_AABB]);
     printf("  test cost (ns, '%s'): sphere %.2f  AABB %.2f  OBB %.2f  14-DOP %.2f\n", res[0].name, res[0].ns[0],
            res[0].ns[1], res[0].ns[2], res[0].ns[3]);
-    printf("CHECK conservative=%d\n", conservative);
-    printf("CHECK area_predicts_hit_rate=%d\n", predicts);
-    printf("CHECK kdop_within_aabb=%d\n", kdop_le_aabb);
-    printf("CHECK obb_tighter_on_rod=%d\n", obb_rod);
-    printf("CHECK sphere_fits_round_object=%d\n", sphere_round);
+    lesson_check("conservative", conservative);
+    lesson_check("area_predicts_hit_rate", predicts);
+    lesson_check("kdop_within_aabb", kdop_le_aabb);
+    lesson_check("obb_tighter_on_rod", obb_rod);
+    lesson_check("sphere_fits_round_object", sphere_round);
     return 0;
 }

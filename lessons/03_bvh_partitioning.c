@@ -29,8 +29,8 @@
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
-#include <string.h>
 #include "sidx/sidx.h"
+#include "lesson.h"
 
 static void usage(FILE *f)
 {
@@ -104,38 +104,20 @@ static int explain(const sidx_mesh *m, const sidx_event *ev, sidx_aabb parent, f
 
 int main(int argc, char **argv)
 {
-    const char *scene = NULL;
-    for (int i = 1; i < argc; ++i) {
-        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) { usage(stdout); return 0; }
-        if (argv[i][0] == '-' || scene) {
-            fprintf(stderr, "03_bvh_partitioning: unexpected argument '%s'\n", argv[i]);
-            usage(stderr);
-            return 2;
-        }
-        scene = argv[i];
-    }
+    lesson_args args = {.name = "03_bvh_partitioning", .usage = usage}; /* no default: the eleven triangles */
+    lesson_parse(&args, argc, argv);
     static const char *const needed[] = {"bvh-middle", "bvh-median", "bvh", "bvh-sweep"};
-    for (int i = 0; i < 4; ++i)
-        if (!sidx_accel_is_registered(needed[i])) {
-            fprintf(stderr, "03_bvh_partitioning: structure '%s' is not registered in this build\n", needed[i]);
-            return 1;
-        }
+    for (int i = 0; i < 4; ++i) lesson_need(&args, needed[i]);
 
     sidx_mesh mesh;
     sidx_error err = {0};
-    if ((scene ? sidx_scene_open(scene, &mesh, &err) : make_eleven(&mesh, &err)) != SIDX_OK) {
-        fprintf(stderr, "03_bvh_partitioning: %s\n", err.message);
-        return 1;
-    }
-    if (mesh.num_triangles < 2) {
-        fprintf(stderr, "03_bvh_partitioning: need at least two triangles\n");
-        sidx_mesh_free(&mesh);
-        return 1;
-    }
+    if (args.scene_given) mesh = lesson_open_scene(&args);
+    else if (make_eleven(&mesh, &err) != SIDX_OK) lesson_fail(&args, err.message);
+    if (mesh.num_triangles < 2) lesson_fail(&args, "need at least two triangles");
     const int small = mesh.num_triangles <= 16;
     const sidx_aabb box = sidx_mesh_bounds(&mesh);
 
-    printf("== The primitives (%u triangles%s)\n", mesh.num_triangles, scene ? "" : ", z = 0, seen from +z");
+    printf("== The primitives (%u triangles%s)\n", mesh.num_triangles, args.scene_given ? "" : ", z = 0, seen from +z");
     if (small)
         for (uint32_t i = 0; i < mesh.num_triangles; ++i) {
             const sidx_vec3 c = sidx_aabb_centroid(sidx_mesh_triangle_bounds(&mesh, i));
@@ -230,7 +212,7 @@ int main(int argc, char **argv)
                 f[j] = (float)(seed >> 8) / 16777216.0f;
             }
             sidx_vec3 o, d;
-            if (!scene) {
+            if (!args.scene_given) {
                 o = sidx_v3(box.min.x + f[0] * ext.x, box.min.y + f[1] * ext.y, 5.0f);
                 d = sidx_v3(0.2f * (f[2] - 0.5f), 0.2f * (f[3] - 0.5f), -1.0f);
             } else {
@@ -273,9 +255,9 @@ int main(int argc, char **argv)
            "  the cheapest (%.3f vs %.3f middle, %.3f median).  Rays confirm it: %.2f tests per ray\n"
            "  (boxes + triangles) vs %.2f and %.2f.\n",
            bs[3].root_cost, bs[0].root_cost, bs[1].root_cost, work_sah, work_mid, work_med);
-    printf("CHECK candidate_costs_reproduced=%d\n", explained);
-    printf("CHECK sah_cost_lower=%d\n", sah_root);
-    printf("CHECK sah_tree_cost_lower=%d\n", sah_tree);
-    printf("CHECK sah_fewer_tests_per_ray=%d\n", work_sah <= work_mid && work_sah <= work_med);
+    lesson_check("candidate_costs_reproduced", explained);
+    lesson_check("sah_cost_lower", sah_root);
+    lesson_check("sah_tree_cost_lower", sah_tree);
+    lesson_check("sah_fewer_tests_per_ray", work_sah <= work_mid && work_sah <= work_med);
     return 0;
 }

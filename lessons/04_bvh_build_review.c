@@ -31,6 +31,7 @@
 #include <string.h>
 #include <time.h>
 #include "sidx/sidx.h"
+#include "lesson.h"
 
 static void usage(FILE *f)
 {
@@ -250,16 +251,8 @@ typedef struct {
 
 int main(int argc, char **argv)
 {
-    const char *scene = NULL;
-    for (int i = 1; i < argc; ++i) {
-        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) { usage(stdout); return 0; }
-        if (argv[i][0] == '-' || scene) {
-            fprintf(stderr, "04_bvh_build_review: unexpected argument '%s'\n", argv[i]);
-            usage(stderr);
-            return 2;
-        }
-        scene = argv[i];
-    }
+    lesson_args args = {.name = "04_bvh_build_review", .usage = usage, .scene = "teapot"};
+    lesson_parse(&args, argc, argv);
     row rows[] = {
         {"bvh-sweep", "SAH at every position (sort + sweep)", 0, 0, 0, 0, 0, 0, {0}, 0},
         {"bvh-everyb", "SAH at every B-th position (B = 32)", 0, 0, 0, 0, 0, 0, {0}, 0},
@@ -268,28 +261,14 @@ int main(int argc, char **argv)
         {"bvh-middle", "middle of the extent (no SAH)", 0, 0, 0, 0, 0, 0, {0}, 0},
     };
     const int nrows = (int)(sizeof rows / sizeof rows[0]);
-    for (int i = 0; i < nrows; ++i)
-        if (!sidx_accel_is_registered(rows[i].accel)) {
-            fprintf(stderr, "04_bvh_build_review: structure '%s' is not registered in this build\n", rows[i].accel);
-            return 1;
-        }
+    for (int i = 0; i < nrows; ++i) lesson_need(&args, rows[i].accel);
 
     const int reindexed = reindex_demo();
     if (reindexed < 0) return 1;
     if (!equal_centroids_demo()) return 1;
 
-    const char *spec = scene ? scene : "teapot";
-    sidx_mesh mesh;
+    sidx_mesh mesh = lesson_open_scene(&args);
     sidx_error err = {0};
-    if (sidx_scene_open(spec, &mesh, &err) != SIDX_OK) {
-        fprintf(stderr, "04_bvh_build_review: %s\n", err.message);
-        return 1;
-    }
-    if (mesh.num_triangles == 0) {
-        fprintf(stderr, "04_bvh_build_review: scene '%s' is empty\n", spec);
-        sidx_mesh_free(&mesh);
-        return 1;
-    }
 
     /* rays: from a sphere around the scene towards random points of its box */
     const int nrays = 20000;
@@ -309,7 +288,7 @@ int main(int argc, char **argv)
         sidx_ray_init(&rays[k], o, sidx_v3_sub(t, o), 0.0f, INFINITY);
     }
 
-    printf("\n== 3. The builders on '%s' (%u triangles), %d rays\n", spec, mesh.num_triangles, nrays);
+    printf("\n== 3. The builders on '%s' (%u triangles), %d rays\n", args.scene, mesh.num_triangles, nrays);
     int failed = 0;
     for (int i = 0; i < nrows && !failed; ++i) {
         sidx_accel *a = NULL;
@@ -407,14 +386,13 @@ int main(int argc, char **argv)
            rows[0].build_ms / rows[2].build_ms, rows[0].st.sah_cost,
            100.0 * (rows[2].st.sah_cost / rows[0].st.sah_cost - 1.0));
     printf("  Every builder returns the same closest hits (t identical to the full sweep's): %s\n", same ? "yes" : "NO");
-    printf("CHECK same_hits=%d\n", same);
-    printf("CHECK reindexed_contiguous=%d\n", reindexed);
-    printf("CHECK sweep_cost_lowest=%d\n", rows[0].st.sah_cost <= best_other * 1.01);
+    lesson_check("same_hits", same);
+    lesson_check("reindexed_contiguous", reindexed);
+    lesson_check("sweep_cost_lowest", rows[0].st.sah_cost <= best_other * 1.01);
     /* counted work, not time: a build time on a shared or loaded machine
      * promises nothing (under load at -O0 the binned build once measured
      * slower than the sweep) */
-    printf("CHECK binned_fewer_root_candidates=%d\n",
-           rows[2].root_candidates > 0 && rows[2].root_candidates <= 3 * 31 &&
-               rows[2].root_candidates < rows[0].root_candidates);
+    lesson_check("binned_fewer_root_candidates", rows[2].root_candidates > 0 && rows[2].root_candidates <= 3 * 31 &&
+                                                     rows[2].root_candidates < rows[0].root_candidates);
     return 0;
 }

@@ -74,14 +74,14 @@ typedef struct lesson_args {
     int scene_given;              /* set by lesson_parse: SCENE was on the command line */
 } lesson_args;
 
-static inline void lesson_fail(const lesson_args *a, const char *message)
+static inline _Noreturn void lesson_fail(const lesson_args *a, const char *message)
 {
     fprintf(stderr, "%s: %s\n", a->name, message);
     exit(1);
 }
 
 /* A command line the lesson cannot run: say what, show the usage, exit 2. */
-static inline void lesson__usage_error(const lesson_args *a, const char *what, const char *arg)
+static inline _Noreturn void lesson__usage_error(const lesson_args *a, const char *what, const char *arg)
 {
     fprintf(stderr, "%s: %s '%s'\n", a->name, what, arg);
     a->usage(stderr);
