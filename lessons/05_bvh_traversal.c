@@ -28,6 +28,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include "sidx/sidx.h"
+#include "lesson.h"
 
 static void usage(FILE *f)
 {
@@ -92,20 +93,9 @@ static work count_of(const sidx_recorder *rec)
 
 int main(int argc, char **argv)
 {
-    const char *scene = NULL;
-    for (int i = 1; i < argc; ++i) {
-        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) { usage(stdout); return 0; }
-        if (argv[i][0] == '-' || scene) {
-            fprintf(stderr, "05_bvh_traversal: unexpected argument '%s'\n", argv[i]);
-            usage(stderr);
-            return 2;
-        }
-        scene = argv[i];
-    }
-    if (!sidx_accel_is_registered("bvh")) {
-        fprintf(stderr, "05_bvh_traversal: structure 'bvh' is not registered in this build\n");
-        return 1;
-    }
+    lesson_args args = {.name = "05_bvh_traversal", .usage = usage, .scene = "teapot"};
+    lesson_parse(&args, argc, argv);
+    lesson_need(&args, "bvh");
 
     /* ---- one ray through the tiles ---- */
     sidx_mesh tiles;
@@ -156,14 +146,9 @@ int main(int argc, char **argv)
     sidx_mesh_free(&tiles);
 
     /* ---- averages on a scene ---- */
-    const char *spec = scene ? scene : "teapot";
-    sidx_mesh mesh;
-    if (sidx_scene_open(spec, &mesh, &err) != SIDX_OK) {
+    sidx_mesh mesh = lesson_open_scene(&args);
+    if (sidx_accel_build("bvh", &mesh, NULL, &a, &err) != SIDX_OK) {
         fprintf(stderr, "05_bvh_traversal: %s\n", err.message);
-        return 1;
-    }
-    if (mesh.num_triangles == 0 || sidx_accel_build("bvh", &mesh, NULL, &a, &err) != SIDX_OK) {
-        fprintf(stderr, "05_bvh_traversal: %s\n", mesh.num_triangles ? err.message : "empty scene");
         sidx_mesh_free(&mesh);
         return 1;
     }
@@ -195,7 +180,7 @@ int main(int argc, char **argv)
         }
     }
     sidx_accel_destroy(a);
-    printf("\n== '%s' (%u triangles): %d random rays, per ray on average\n", spec, mesh.num_triangles, nrays);
+    printf("\n== '%s' (%u triangles): %d random rays, per ray on average\n", args.scene, mesh.num_triangles, nrays);
     sidx_mesh_free(&mesh);
     printf("  %-10s %10s %10s %10s %8s\n", "traversal", "visits", "box tests", "tri tests", "pushes");
     double v[3];
@@ -207,8 +192,8 @@ int main(int argc, char **argv)
     }
     printf("  All three find the same closest hits: %s.  Ordered visits %.0f%% of the nodes naive visits.\n",
            same ? "yes" : "NO", 100.0 * v[1] / v[0]);
-    printf("CHECK same_hit=%d\n", same && same_one);
-    printf("CHECK ordered_visits_fewer=%d\n", fewer_one);
-    printf("CHECK ordered_fewer_on_average=%d\n", v[1] < v[0] && v[2] < v[0]);
+    lesson_check("same_hit", same && same_one);
+    lesson_check("ordered_visits_fewer", fewer_one);
+    lesson_check("ordered_fewer_on_average", v[1] < v[0] && v[2] < v[0]);
     return 0;
 }

@@ -34,6 +34,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include "sidx/sidx.h"
+#include "lesson.h"
 
 static void usage(FILE *f)
 {
@@ -138,34 +139,12 @@ static void analyse_ray(const sidx_recorder *rec, walk_stats *w)
 
 int main(int argc, char **argv)
 {
-    const char *scene = NULL;
-    for (int i = 1; i < argc; ++i) {
-        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) { usage(stdout); return 0; }
-        if (argv[i][0] == '-' || scene) {
-            fprintf(stderr, "06_object_vs_space: unexpected argument '%s'\n", argv[i]);
-            usage(stderr);
-            return 2;
-        }
-        scene = argv[i];
-    }
+    lesson_args args = {.name = "06_object_vs_space", .usage = usage, .scene = "soup:600"};
+    lesson_parse(&args, argc, argv);
     static const char *const names[2] = {"bvh", "kdtree"};
-    for (int s = 0; s < 2; ++s)
-        if (!sidx_accel_is_registered(names[s])) {
-            fprintf(stderr, "06_object_vs_space: structure '%s' is not registered in this build\n", names[s]);
-            return 1;
-        }
-    const char *spec = scene ? scene : "soup:600";
-    sidx_mesh mesh;
+    for (int s = 0; s < 2; ++s) lesson_need(&args, names[s]);
+    sidx_mesh mesh = lesson_open_scene(&args);
     sidx_error err = {0};
-    if (sidx_scene_open(spec, &mesh, &err) != SIDX_OK) {
-        fprintf(stderr, "06_object_vs_space: %s\n", err.message);
-        return 1;
-    }
-    if (mesh.num_triangles == 0) {
-        fprintf(stderr, "06_object_vs_space: scene '%s' is empty\n", spec);
-        sidx_mesh_free(&mesh);
-        return 1;
-    }
 
     sidx_accel *acc[2] = {NULL, NULL};
     sidx_accel_stats st[2];
@@ -173,7 +152,7 @@ int main(int argc, char **argv)
     sidx_recorder rec;
     sidx_recorder_init(&rec);
     const sidx_hook rh = sidx_recorder_hook(&rec);
-    printf("== '%s': %u triangles\n", spec, mesh.num_triangles);
+    printf("== '%s': %u triangles\n", args.scene, mesh.num_triangles);
     for (int s = 0; s < 2; ++s) {
         sidx_recorder_clear(&rec);
         sidx_build_options opt = {0};
@@ -278,9 +257,9 @@ int main(int argc, char **argv)
            ws[1].out_of_cell);
     printf("  Same closest hits in both: %s\n", same ? "yes" : "NO");
     const double after_bvh = ws[0].after_hit / (double)ws[0].rays, after_kd = ws[1].after_hit / (double)ws[1].rays;
-    printf("CHECK same_hits=%d\n", same);
-    printf("CHECK bvh_boxes_overlap=%d\n", ts[0].overlapping > 0);
-    printf("CHECK kd_cells_disjoint=%d\n", ts[1].pairs > 0 && ts[1].overlapping == 0 && ts[1].cover_err < 1e-4);
-    printf("CHECK kd_stops_at_first_hit=%d\n", after_kd < after_bvh && ws[1].stopped_in_cell > 0);
+    lesson_check("same_hits", same);
+    lesson_check("bvh_boxes_overlap", ts[0].overlapping > 0);
+    lesson_check("kd_cells_disjoint", ts[1].pairs > 0 && ts[1].overlapping == 0 && ts[1].cover_err < 1e-4);
+    lesson_check("kd_stops_at_first_hit", after_kd < after_bvh && ws[1].stopped_in_cell > 0);
     return 0;
 }

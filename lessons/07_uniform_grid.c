@@ -28,6 +28,7 @@
 #include <string.h>
 #include <time.h>
 #include "sidx/sidx.h"
+#include "lesson.h"
 
 static void usage(FILE *f)
 {
@@ -138,39 +139,19 @@ static void dda_fn(const sidx_event *ev, void *user)
 
 int main(int argc, char **argv)
 {
-    const char *scene = NULL;
-    for (int i = 1; i < argc; ++i) {
-        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) { usage(stdout); return 0; }
-        if (argv[i][0] == '-' || scene) {
-            fprintf(stderr, "07_uniform_grid: unexpected argument '%s'\n", argv[i]);
-            usage(stderr);
-            return 2;
-        }
-        scene = argv[i];
-    }
-    if (!sidx_accel_is_registered("grid") || !sidx_accel_is_registered("grid-nomailbox")) {
-        fprintf(stderr, "07_uniform_grid: structures 'grid' and 'grid-nomailbox' are not registered in this build\n");
-        return 1;
-    }
-    const char *spec = scene ? scene : "teapot";
-    sidx_mesh mesh;
+    lesson_args args = {.name = "07_uniform_grid", .usage = usage, .scene = "teapot"};
+    lesson_parse(&args, argc, argv);
+    lesson_need(&args, "grid");
+    lesson_need(&args, "grid-nomailbox");
+    sidx_mesh mesh = lesson_open_scene(&args);
     sidx_error err = {0};
-    if (sidx_scene_open(spec, &mesh, &err) != SIDX_OK) {
-        fprintf(stderr, "07_uniform_grid: %s\n", err.message);
-        return 1;
-    }
-    if (mesh.num_triangles == 0) {
-        fprintf(stderr, "07_uniform_grid: scene '%s' is empty\n", spec);
-        sidx_mesh_free(&mesh);
-        return 1;
-    }
     make_rays(&mesh);
     const sidx_aabb box = sidx_mesh_bounds(&mesh);
     const sidx_vec3 d = sidx_aabb_extent(box);
     const double n = mesh.num_triangles, V = (double)d.x * d.y * d.z;
 
     /* ---- 1 ---- */
-    printf("== 1. Resolution: R = d * cbrt(lambda * n / V)   on '%s'\n", spec);
+    printf("== 1. Resolution: R = d * cbrt(lambda * n / V)   on '%s'\n", args.scene);
     printf("  n = %u triangles, d = (%g, %g, %g), V = %g\n", mesh.num_triangles, d.x, d.y, d.z, V);
     printf("  %8s %10s   %-22s %-18s %10s\n", "lambda", "cbrt(.)", "formula R (rounded)", "grid chose", "cells");
     static const float lambdas[] = {1.0f / 16, 0.25f, 1.0f, 4.0f, 16.0f, 64.0f, 256.0f};
@@ -182,9 +163,8 @@ int main(int argc, char **argv)
         if (!measure("grid", &mesh, lambdas[i], &ms[i])) { failed = 1; break; }
         const double s = cbrt(lambdas[i] * n / V);
         int r[3];
-        const float *dd = &d.x;
         for (int k = 0; k < 3; ++k) {
-            r[k] = (int)floor(dd[k] * s + 0.5);
+            r[k] = (int)floor(sidx_v3_get(d, k) * s + 0.5);
             if (r[k] < 1) r[k] = 1;
         }
         char f[40], g[40];
@@ -273,10 +253,10 @@ int main(int argc, char **argv)
     printf("  work = cells visited + triangles tested.  Few big cells: every ray tests many triangles.\n"
            "  Many small cells: every ray walks through many empty cells.  The least work here: lambda = %g.\n",
            lambdas[best]);
-    printf("CHECK resolution_formula=%d\n", formula_ok);
-    printf("CHECK dda_cells_in_order=%d\n", dc.ok && dc.n > 1);
-    printf("CHECK mailbox_saves_tests=%d\n", same && mb->tris < nomb->tris);
-    printf("CHECK middle_lambda_best=%d\n", best > 0 && best < nl - 1);
+    lesson_check("resolution_formula", formula_ok);
+    lesson_check("dda_cells_in_order", dc.ok && dc.n > 1);
+    lesson_check("mailbox_saves_tests", same && mb->tris < nomb->tris);
+    lesson_check("middle_lambda_best", best > 0 && best < nl - 1);
     free(ms);
     sidx_mesh_free(&mesh);
     return 0;

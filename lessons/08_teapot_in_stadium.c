@@ -27,9 +27,9 @@
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
-#include <string.h>
 #include <time.h>
 #include "sidx/sidx.h"
+#include "lesson.h"
 
 static void usage(FILE *f)
 {
@@ -63,16 +63,8 @@ typedef struct {
 
 int main(int argc, char **argv)
 {
-    const char *scene = NULL;
-    for (int i = 1; i < argc; ++i) {
-        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) { usage(stdout); return 0; }
-        if (argv[i][0] == '-' || scene) {
-            fprintf(stderr, "08_teapot_in_stadium: unexpected argument '%s'\n", argv[i]);
-            usage(stderr);
-            return 2;
-        }
-        scene = argv[i];
-    }
+    lesson_args args = {.name = "08_teapot_in_stadium", .usage = usage, .scene = "stadium"};
+    lesson_parse(&args, argc, argv);
     static entry es[NS] = {
         {"grid", "uniform grid", 0, 0, 0, 0, 0, {0}, {{0}}, {{0}}},
         {"grid2", "nested (two-level) grid", 0, 0, 0, 0, 0, {0}, {{0}}, {{0}}},
@@ -80,29 +72,16 @@ int main(int argc, char **argv)
         {"kdtree", "kd-tree (SAH)", 0, 0, 0, 0, 0, {0}, {{0}}, {{0}}},
         {"bvh", "BVH (SAH), for reference", 0, 0, 0, 0, 0, {0}, {{0}}, {{0}}},
     };
-    if (!sidx_accel_is_registered("grid")) {
-        fprintf(stderr, "08_teapot_in_stadium: structure 'grid' is not registered in this build\n");
-        return 1;
-    }
-    const char *spec = scene ? scene : "stadium";
-    sidx_mesh mesh;
+    lesson_need(&args, "grid");
+    sidx_mesh mesh = lesson_open_scene(&args);
     sidx_error err = {0};
-    if (sidx_scene_open(spec, &mesh, &err) != SIDX_OK) {
-        fprintf(stderr, "08_teapot_in_stadium: %s\n", err.message);
-        return 1;
-    }
-    if (mesh.num_triangles == 0) {
-        fprintf(stderr, "08_teapot_in_stadium: scene '%s' is empty\n", spec);
-        sidx_mesh_free(&mesh);
-        return 1;
-    }
     const sidx_aabb box = sidx_mesh_bounds(&mesh);
     /* The camera looks at the object nearest the origin: for the stadium,
      * the teapot (about 1 unit, at the origin); for another scene, the
      * middle of its box. */
     sidx_vec3 look = sidx_v3(0.0f, 0.3f, 0.0f);
     float dist = 2.2f, half = 0.75f;
-    if (scene) {
+    if (args.scene_given) {
         look = sidx_aabb_centroid(box);
         const float e = sidx_v3_length(sidx_aabb_extent(box));
         dist = 1.2f * e;
@@ -115,7 +94,7 @@ int main(int argc, char **argv)
     const sidx_vec3 up = sidx_v3_cross(right, fwd);
     const float tan_half = half / dist;
 
-    printf("== '%s': %u triangles, box (%g %g %g) - (%g %g %g)\n", spec, mesh.num_triangles, box.min.x, box.min.y,
+    printf("== '%s': %u triangles, box (%g %g %g) - (%g %g %g)\n", args.scene, mesh.num_triangles, box.min.x, box.min.y,
            box.min.z, box.max.x, box.max.y, box.max.z);
     printf("   camera at (%g, %g, %g) looking at (%g, %g, %g); %d x %d rays\n", eye.x, eye.y, eye.z, look.x, look.y,
            look.z, W, H);
@@ -198,7 +177,7 @@ int main(int argc, char **argv)
     static const char ramp[] = " .:-=+*#%@";
     printf("\n== Triangle tests per pixel: ' ' 0, '.' 1, ':' 2-3, '-' 4-7, '=' 8-15, '+' 16-31, '*' 32-63,\n"
            "   '#' 64-127, '%%' 128-255, '@' 256 or more\n");
-    int order[NS], m = 0;
+    int order[NS] = {0}, m = 0; /* the registered structures, in table order */
     for (int s = 0; s < NS; ++s)
         if (es[s].present) order[m++] = s;
     for (int k = 0; k < m; k += 2) {
@@ -259,9 +238,9 @@ int main(int argc, char **argv)
                "  empty stadium in a step or two and still meets small cells at the teapot.\n",
                es[2].tris, es[0].tris, es[2].visits, es[1].visits, es[2].st.res[0], es[2].st.res[1],
                es[2].st.res[2]);
-    printf("CHECK same_hits=%d\n", same);
-    printf("CHECK uniform_grid_worst=%d\n", worst && n_present > 1);
-    printf("CHECK adaptive_beats_uniform=%d\n", adaptive && n_present > 1);
-    printf("CHECK irregular_adapts=%d\n", irr);
+    lesson_check("same_hits", same);
+    lesson_check("uniform_grid_worst", worst && n_present > 1);
+    lesson_check("adaptive_beats_uniform", adaptive && n_present > 1);
+    lesson_check("irregular_adapts", irr);
     return 0;
 }
