@@ -29,9 +29,9 @@
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
-#include <string.h>
 #include <time.h>
 #include "sidx/sidx.h"
+#include "lesson.h"
 
 static void usage(FILE *f)
 {
@@ -120,39 +120,17 @@ static void plot_curve(const sidx_recorder *rec, uint32_t root, int axis, float 
 
 int main(int argc, char **argv)
 {
-    const char *scene = NULL;
-    for (int i = 1; i < argc; ++i) {
-        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) { usage(stdout); return 0; }
-        if (argv[i][0] == '-' || scene) {
-            fprintf(stderr, "09_kdtree_build: unexpected argument '%s'\n", argv[i]);
-            usage(stderr);
-            return 2;
-        }
-        scene = argv[i];
-    }
+    lesson_args args = {.name = "09_kdtree_build", .usage = usage, .scene = "teapot"};
+    lesson_parse(&args, argc, argv);
     static kd_row rows[4] = {
         {"kdtree-middle", "middle of extent", {0}, 0, 0, 0, 0, 0, {0}, {0}, {0}, {0}},
         {"kdtree-median", "median of geometry", {0}, 0, 0, 0, 0, 0, {0}, {0}, {0}, {0}},
         {"kdtree", "SAH, default C", {0}, 0, 0, 0, 0, 0, {0}, {0}, {0}, {0}},
         {"kdtree", "SAH, C_trav = 1", {0}, 0, 0, 0, 0, 0, {0}, {0}, {0}, {0}},
     };
-    for (int i = 0; i < 3; ++i)
-        if (!sidx_accel_is_registered(rows[i].name)) {
-            fprintf(stderr, "09_kdtree_build: structure '%s' is not registered in this build\n", rows[i].name);
-            return 1;
-        }
-    const char *spec = scene ? scene : "teapot";
-    sidx_mesh mesh;
+    for (int i = 0; i < 3; ++i) lesson_need(&args, rows[i].name);
+    sidx_mesh mesh = lesson_open_scene(&args);
     sidx_error err = {0};
-    if (sidx_scene_open(spec, &mesh, &err) != SIDX_OK) {
-        fprintf(stderr, "09_kdtree_build: %s\n", err.message);
-        return 1;
-    }
-    if (mesh.num_triangles == 0) {
-        fprintf(stderr, "09_kdtree_build: scene '%s' is empty\n", spec);
-        sidx_mesh_free(&mesh);
-        return 1;
-    }
     const sidx_aabb box = sidx_mesh_bounds(&mesh);
     const sidx_vec3 ext = sidx_aabb_extent(box), ctr = sidx_aabb_centroid(box);
     const float R = sidx_v3_length(ext);
@@ -172,7 +150,7 @@ int main(int argc, char **argv)
     sidx_recorder_init(&rec);
     const sidx_hook rh = sidx_recorder_hook(&rec);
     int curve_ok = 0, same = 1;
-    printf("== '%s': %u triangles\n", spec, mesh.num_triangles);
+    printf("== '%s': %u triangles\n", args.scene, mesh.num_triangles);
     for (int b = 0; b < 4; ++b) {
         kd_row *r = &rows[b];
         sidx_recorder_clear(&rec);
@@ -322,9 +300,9 @@ int main(int argc, char **argv)
     const int thin = rows[3].st.mean_leaf_prims < rows[2].st.mean_leaf_prims && rows[3].mean_depth > rows[2].mean_depth &&
                      rows[3].st.mean_leaf_prims < rows[0].st.mean_leaf_prims &&
                      rows[3].st.mean_leaf_prims < rows[1].st.mean_leaf_prims;
-    printf("CHECK same_hits=%d\n", same);
-    printf("CHECK sah_cost_lower=%d\n", cost_lower);
-    printf("CHECK sah_thin_leaves=%d\n", thin);
-    printf("CHECK cost_curve_min_is_split=%d\n", curve_ok);
+    lesson_check("same_hits", same);
+    lesson_check("sah_cost_lower", cost_lower);
+    lesson_check("sah_thin_leaves", thin);
+    lesson_check("cost_curve_min_is_split", curve_ok);
     return 0;
 }

@@ -27,8 +27,8 @@
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
-#include <string.h>
 #include "sidx/sidx.h"
+#include "lesson.h"
 
 static void usage(FILE *f)
 {
@@ -68,32 +68,17 @@ static size_t count_type(const sidx_recorder *rec, sidx_event_type t)
 
 int main(int argc, char **argv)
 {
-    const char *scene = NULL;
-    for (int i = 1; i < argc; ++i) {
-        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) { usage(stdout); return 0; }
-        if (argv[i][0] == '-' || scene) {
-            fprintf(stderr, "10_kdtree_traversal: unexpected argument '%s'\n", argv[i]);
-            usage(stderr);
-            return 2;
-        }
-        scene = argv[i];
-    }
-    if (!sidx_accel_is_registered("kdtree") || !sidx_accel_is_registered("brute")) {
-        fprintf(stderr, "10_kdtree_traversal: structure 'kdtree' is not registered in this build\n");
-        return 1;
-    }
-    const char *spec = scene ? scene : "flat2d";
-    sidx_mesh mesh;
+    lesson_args args = {.name = "10_kdtree_traversal", .usage = usage, .scene = "flat2d"};
+    lesson_parse(&args, argc, argv);
+    lesson_need(&args, "kdtree");
+    lesson_need(&args, "brute");
+    sidx_mesh mesh = lesson_open_scene(&args);
     sidx_error err = {0};
-    if (sidx_scene_open(spec, &mesh, &err) != SIDX_OK) {
-        fprintf(stderr, "10_kdtree_traversal: %s\n", err.message);
-        return 1;
-    }
     sidx_accel *kd = NULL, *ref = NULL;
     sidx_accel_stats st;
-    if (mesh.num_triangles == 0 || sidx_accel_build("kdtree", &mesh, NULL, &kd, &err) != SIDX_OK ||
+    if (sidx_accel_build("kdtree", &mesh, NULL, &kd, &err) != SIDX_OK ||
         sidx_accel_build("brute", &mesh, NULL, &ref, &err) != SIDX_OK) {
-        fprintf(stderr, "10_kdtree_traversal: %s\n", mesh.num_triangles ? err.message : "empty scene");
+        fprintf(stderr, "10_kdtree_traversal: %s\n", err.message);
         sidx_accel_destroy(kd);
         sidx_mesh_free(&mesh);
         return 1;
@@ -101,8 +86,8 @@ int main(int argc, char **argv)
     sidx_accel_stats_get(kd, &st);
     const sidx_aabb box = sidx_mesh_bounds(&mesh);
     const sidx_vec3 ext = sidx_aabb_extent(box), ctr = sidx_aabb_centroid(box);
-    printf("== '%s': %u triangles; kd-tree of %u nodes, %u leaves, depth %u\n", spec, mesh.num_triangles, st.nodes,
-           st.leaves, st.max_depth);
+    printf("== '%s': %u triangles; kd-tree of %u nodes, %u leaves, depth %u\n", args.scene, mesh.num_triangles,
+           st.nodes, st.leaves, st.max_depth);
 
     /* Rays across the box in the plane z = centre (for flat2d: the board),
      * from the left edge to the right: the shortest walk that shows the
@@ -206,9 +191,9 @@ int main(int argc, char **argv)
     printf("  The stack holds only (node, t_near, t_far) of the far children still to visit, nearest on\n"
            "  top.  A hit ends the walk only if it lies inside the current cell (t <= t_far): a\n"
            "  triangle reaching into a later cell may hide a closer one still unvisited.\n");
-    printf("CHECK same_hit=%d\n", h.t == hb.t);
-    printf("CHECK stack_trace_consistent=%d\n", consistent);
-    printf("CHECK cannot_terminate_seen=%d\n", cannot && found);
+    lesson_check("same_hit", h.t == hb.t);
+    lesson_check("stack_trace_consistent", consistent);
+    lesson_check("cannot_terminate_seen", cannot && found);
     sidx_recorder_free(&rec);
     sidx_accel_destroy(kd);
     sidx_accel_destroy(ref);

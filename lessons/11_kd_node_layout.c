@@ -29,6 +29,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include "sidx/sidx.h"
+#include "lesson.h"
 #include "sidx/kdtree.h"
 
 static void usage(FILE *f)
@@ -58,35 +59,19 @@ typedef struct {
 
 int main(int argc, char **argv)
 {
-    const char *scene = NULL;
-    for (int i = 1; i < argc; ++i) {
-        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) { usage(stdout); return 0; }
-        if (argv[i][0] == '-' || scene) {
-            fprintf(stderr, "11_kd_node_layout: unexpected argument '%s'\n", argv[i]);
-            usage(stderr);
-            return 2;
-        }
-        scene = argv[i];
-    }
-    if (!sidx_accel_is_registered("kdtree")) {
-        fprintf(stderr, "11_kd_node_layout: structure 'kdtree' is not registered in this build\n");
-        return 1;
-    }
-    const char *spec = scene ? scene : "teapot";
-    sidx_mesh mesh;
+    lesson_args args = {.name = "11_kd_node_layout", .usage = usage, .scene = "teapot"};
+    lesson_parse(&args, argc, argv);
+    lesson_need(&args, "kdtree");
+    sidx_mesh mesh = lesson_open_scene(&args);
     sidx_error err = {0};
-    if (sidx_scene_open(spec, &mesh, &err) != SIDX_OK) {
-        fprintf(stderr, "11_kd_node_layout: %s\n", err.message);
-        return 1;
-    }
     sidx_recorder rec;
     sidx_recorder_init(&rec);
     const sidx_hook rh = sidx_recorder_hook(&rec);
     sidx_build_options opt = {0};
     opt.hook = &rh;
     sidx_accel *kd = NULL;
-    if (mesh.num_triangles == 0 || sidx_accel_build("kdtree", &mesh, &opt, &kd, &err) != SIDX_OK) {
-        fprintf(stderr, "11_kd_node_layout: %s\n", mesh.num_triangles ? err.message : "empty scene");
+    if (sidx_accel_build("kdtree", &mesh, &opt, &kd, &err) != SIDX_OK) {
+        fprintf(stderr, "11_kd_node_layout: %s\n", err.message);
         sidx_recorder_free(&rec);
         sidx_mesh_free(&mesh);
         return 1;
@@ -141,8 +126,8 @@ int main(int argc, char **argv)
         if (c + 1u >= num_nodes || !ni[c].seen || !ni[c + 1u].seen || ni[c].parent != i || ni[c + 1u].parent != i)
             side_by_side = 0;
     }
-    printf("== '%s': kd-tree of %u nodes (%u inner, %u leaves), %llu triangle references\n", spec, num_nodes, inner,
-           st.leaves, (unsigned long long)st.prim_refs);
+    printf("== '%s': kd-tree of %u nodes (%u inner, %u leaves), %llu triangle references\n", args.scene, num_nodes,
+           inner, st.leaves, (unsigned long long)st.prim_refs);
     printf("\n== The first nodes, as the two 32-bit words stored in the tree (sidx_kdtree_nodes)\n"
            "   inner: word 0 = split position (float);  word 1 = left child << 2 | axis (0 x, 1 y, 2 z)\n"
            "   leaf:  word 0 = triangle count;          word 1 = offset into the reference array << 2 | 3\n\n");
@@ -198,8 +183,8 @@ int main(int argc, char **argv)
     printf("  A node needs no box: the traversal knows its cell as the ray interval [t_near, t_far].\n");
     printf("  Every stored word decodes to the split or leaf the build reported: %s\n", decoded ? "yes" : "NO");
     printf("  Both children of every inner node sit side by side (ids k and k+1): %s\n", side_by_side ? "yes" : "NO");
-    printf("CHECK decoded_matches=%d\n", decoded && num_nodes == st.nodes);
-    printf("CHECK children_side_by_side=%d\n", side_by_side && inner > 0);
+    lesson_check("decoded_matches", decoded && num_nodes == st.nodes);
+    lesson_check("children_side_by_side", side_by_side && inner > 0);
     free(ni);
     sidx_recorder_free(&rec);
     sidx_accel_destroy(kd);

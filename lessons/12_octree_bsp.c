@@ -32,6 +32,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include "sidx/sidx.h"
+#include "lesson.h"
 #include "sidx/bsp.h"
 
 static void usage(FILE *f)
@@ -112,34 +113,12 @@ static int same_hits(const sidx_accel *a, const sidx_accel *ref, const sidx_mesh
 
 int main(int argc, char **argv)
 {
-    const char *scene = NULL;
-    for (int i = 1; i < argc; ++i) {
-        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) { usage(stdout); return 0; }
-        if (argv[i][0] == '-' || scene) {
-            fprintf(stderr, "12_octree_bsp: unexpected argument '%s'\n", argv[i]);
-            usage(stderr);
-            return 2;
-        }
-        scene = argv[i];
-    }
+    lesson_args args = {.name = "12_octree_bsp", .usage = usage, .scene = "teapot"};
+    lesson_parse(&args, argc, argv);
     static const char *const need[] = {"octree", "quadtree", "bsp", "brute"};
-    for (int i = 0; i < 4; ++i)
-        if (!sidx_accel_is_registered(need[i])) {
-            fprintf(stderr, "12_octree_bsp: structure '%s' is not registered in this build\n", need[i]);
-            return 1;
-        }
-    sidx_mesh board, mesh;
+    for (int i = 0; i < 4; ++i) lesson_need(&args, need[i]);
+    sidx_mesh board = lesson_open(&args, "flat2d"), mesh = lesson_open_scene(&args);
     sidx_error err = {0};
-    if (sidx_scene_open("flat2d", &board, &err) != SIDX_OK) {
-        fprintf(stderr, "12_octree_bsp: %s\n", err.message);
-        return 1;
-    }
-    const char *spec = scene ? scene : "teapot";
-    if (sidx_scene_open(spec, &mesh, &err) != SIDX_OK || mesh.num_triangles == 0) {
-        fprintf(stderr, "12_octree_bsp: %s\n", mesh.num_triangles ? err.message : "empty scene");
-        sidx_mesh_free(&board);
-        return 1;
-    }
     int ok = 1, same = 1;
 
     /* ---- 1. quadtree ---- */
@@ -177,7 +156,7 @@ int main(int argc, char **argv)
     sidx_accel_destroy(qt);
 
     /* ---- 2. octree vs grid vs kd-tree ---- */
-    printf("\n== 2. '%s' (%u triangles): octree vs uniform grid vs kd-tree, 2000 random rays\n", spec,
+    printf("\n== 2. '%s' (%u triangles): octree vs uniform grid vs kd-tree, 2000 random rays\n", args.scene,
            mesh.num_triangles);
     static const char *const cmp[3] = {"grid", "octree", "kdtree"};
     printf("  %-8s %8s %8s %7s %12s %12s %12s\n", "", "nodes", "leaves", "depth", "memory KiB", "visits/ray",
@@ -290,7 +269,7 @@ int main(int argc, char **argv)
     sidx_mesh_free(&board);
     sidx_mesh_free(&mesh);
     if (!ok) return 1;
-    printf("CHECK same_hits=%d\n", same);
-    printf("CHECK painter_order_back_to_front=%d\n", painter_ok);
+    lesson_check("same_hits", same);
+    lesson_check("painter_order_back_to_front", painter_ok);
     return 0;
 }
