@@ -29,8 +29,8 @@
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
-#include <string.h>
 #include "sidx/sidx.h"
+#include "lesson.h"
 
 static void usage(FILE *f)
 {
@@ -105,11 +105,16 @@ static sidx_status make_cluster(uint32_t n, sidx_mesh *out, sidx_error *err)
     return st;
 }
 
-/* The first n triangles of a mesh. */
+/* The first n triangles of a mesh (all its vertices, as x, y, z floats). */
 static sidx_status first_n(const sidx_mesh *m, uint32_t n, sidx_mesh *out, sidx_error *err)
 {
     if (n > m->num_triangles) n = m->num_triangles;
-    return sidx_mesh_from_arrays(out, &m->positions[0].x, m->num_vertices, m->indices, n, err);
+    float *xyz = malloc((size_t)m->num_vertices * 3 * sizeof *xyz);
+    if (!xyz) return SIDX_ERR_NOMEM;
+    for (uint32_t v = 0; v < m->num_vertices; ++v) sidx_v3_to_array(m->positions[v], &xyz[3 * v]);
+    const sidx_status st = sidx_mesh_from_arrays(out, xyz, m->num_vertices, m->indices, n, err);
+    free(xyz);
+    return st;
 }
 
 /* Triangle tests per ray for rays from random directions aimed at `target`
@@ -146,29 +151,13 @@ static double tests_per_ray(const char *name, const sidx_mesh *m, sidx_vec3 targ
 
 int main(int argc, char **argv)
 {
-    const char *scene = NULL;
-    for (int i = 1; i < argc; ++i) {
-        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) { usage(stdout); return 0; }
-        if (argv[i][0] == '-' || scene) {
-            fprintf(stderr, "13_worst_case: unexpected argument '%s'\n", argv[i]);
-            usage(stderr);
-            return 2;
-        }
-        scene = argv[i];
-    }
+    lesson_args args = {.name = "13_worst_case", .usage = usage, .scene = "soup:1024"};
+    lesson_parse(&args, argc, argv);
     static const char *const names[4] = {"bvh", "kdtree", "grid", "octree"};
-    for (int s = 0; s < 4; ++s)
-        if (!sidx_accel_is_registered(names[s])) {
-            fprintf(stderr, "13_worst_case: structure '%s' is not registered in this build\n", names[s]);
-            return 1;
-        }
+    for (int s = 0; s < 4; ++s) lesson_need(&args, names[s]);
     const int nstruct = 4;
-    sidx_mesh good_src;
+    sidx_mesh good_src = lesson_open_scene(&args);
     sidx_error err = {0};
-    if (sidx_scene_open(scene ? scene : "soup:1024", &good_src, &err) != SIDX_OK) {
-        fprintf(stderr, "13_worst_case: %s\n", err.message);
-        return 1;
-    }
     static const uint32_t ns[4] = {128, 256, 512, 1024};
     double star[4][4], good[4][4], clus[4][4];
     int ok = 1;
@@ -227,7 +216,7 @@ int main(int argc, char **argv)
     for (int s = 0; s < nstruct; ++s)
         for (int which = 0; which < 3; ++which) {
             const double *v = which == 0 ? star[s] : which == 1 ? clus[s] : good[s];
-            const char *label = which == 0 ? "star" : which == 1 ? "speck" : scene ? "contrast" : "soup";
+            const char *label = which == 0 ? "star" : which == 1 ? "speck" : args.scene_given ? "contrast" : "soup";
             printf("  %-8s %-10s", which ? "" : names[s], label);
             for (int k = 0; k < 4; ++k) printf(" %9.1f", v[k]);
             const double growth = v[0] > 0 ? v[3] / v[0] : 0.0;
@@ -244,6 +233,6 @@ int main(int argc, char **argv)
            "  triangles that span the cell; its node count is capped at 64 n + 1 anyway), and the\n"
            "  speck lies below its depth limit of 16 halvings of a 2000-unit box: O(n) on both.\n"
            "  Each structure has its O(n) scene; on the soup they barely notice n.\n");
-    printf("CHECK worst_cases_linear=%d\n", linear);
+    lesson_check("worst_cases_linear", linear);
     return 0;
 }

@@ -47,6 +47,7 @@
 #include <string.h>
 #include <time.h>
 #include "sidx/sidx.h"
+#include "lesson.h"
 #include "sidx/packet.h"
 #include "sidx/parallel.h"
 
@@ -194,34 +195,12 @@ static void note_hook(const sidx_event *ev, void *user)
 
 int main(int argc, char **argv)
 {
-    const char *scene = NULL;
-    for (int i = 1; i < argc; ++i) {
-        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) { usage(stdout); return 0; }
-        if (argv[i][0] == '-' || scene) {
-            fprintf(stderr, "14_going_faster: unexpected argument '%s'\n", argv[i]);
-            usage(stderr);
-            return 2;
-        }
-        scene = argv[i];
-    }
+    lesson_args args = {.name = "14_going_faster", .usage = usage, .scene = "teapot"};
+    lesson_parse(&args, argc, argv);
     static const char *const names[3] = {"bvh", "bvh4", "bvh8"};
-    for (int s = 0; s < 3; ++s)
-        if (!sidx_accel_is_registered(names[s])) {
-            fprintf(stderr, "14_going_faster: structure '%s' is not registered in this build\n", names[s]);
-            return 1;
-        }
-    const char *spec = scene ? scene : "teapot";
-    sidx_mesh mesh;
+    for (int s = 0; s < 3; ++s) lesson_need(&args, names[s]);
+    sidx_mesh mesh = lesson_open_scene(&args);
     sidx_error err = {0};
-    if (sidx_scene_open(spec, &mesh, &err) != SIDX_OK) {
-        fprintf(stderr, "14_going_faster: %s\n", err.message);
-        return 1;
-    }
-    if (mesh.num_triangles == 0) {
-        fprintf(stderr, "14_going_faster: empty scene\n");
-        sidx_mesh_free(&mesh);
-        return 1;
-    }
     sidx_accel *acc[3] = {NULL, NULL, NULL};
     const char *kernel[3] = {"scalar, one box per test", NULL, NULL};
     for (int s = 0; s < 3; ++s) {
@@ -257,7 +236,7 @@ int main(int argc, char **argv)
     size_t hit_rays = 0;
     for (size_t i = 0; i < NRAYS; ++i) hit_rays += ref[i].prim != SIDX_NO_HIT;
     const char *simd_env = getenv("SIDX_SIMD");
-    printf("== '%s' (%u triangles); %d x %d camera rays (%.0f%% hit); %u hardware threads; SIDX_SIMD=%s\n", spec,
+    printf("== '%s' (%u triangles); %d x %d camera rays (%.0f%% hit); %u hardware threads; SIDX_SIMD=%s\n", args.scene,
            mesh.num_triangles, W, H, 100.0 * (double)hit_rays / NRAYS, sidx_hardware_threads(),
            simd_env ? simd_env : "(unset)");
     printf("   times: best of %d passes over the image; counts: exact (packets) or on every %dth ray (single rays)\n",
@@ -370,9 +349,9 @@ int main(int argc, char **argv)
            all_same ? "yes" : "NO", all_ties);
     for (int s = 0; s < 3; ++s) sidx_accel_destroy(acc[s]);
     sidx_mesh_free(&mesh);
-    printf("CHECK same_hits=%d\n", all_same);
-    printf("CHECK wide_fewer_node_visits=%d\n", wide_fewer);
-    printf("CHECK frustum_box_tests_le_plain=%d\n", frustum_le);
-    printf("CHECK frustum_culls_nodes=%d\n", culls > 0);
+    lesson_check("same_hits", all_same);
+    lesson_check("wide_fewer_node_visits", wide_fewer);
+    lesson_check("frustum_box_tests_le_plain", frustum_le);
+    lesson_check("frustum_culls_nodes", culls > 0);
     return 0;
 }

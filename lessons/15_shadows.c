@@ -32,9 +32,9 @@
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
-#include <string.h>
 #include <time.h>
 #include "sidx/sidx.h"
+#include "lesson.h"
 #include "sidx/lightbuffer.h"
 #include "sidx/rayclass.h"
 
@@ -68,32 +68,12 @@ static unsigned char answer[4][NP];
 
 int main(int argc, char **argv)
 {
-    const char *scene = NULL;
-    for (int i = 1; i < argc; ++i) {
-        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) { usage(stdout); return 0; }
-        if (argv[i][0] == '-' || scene) {
-            fprintf(stderr, "15_shadows: unexpected argument '%s'\n", argv[i]);
-            usage(stderr);
-            return 2;
-        }
-        scene = argv[i];
-    }
-    if (!sidx_accel_is_registered("bvh") || !sidx_accel_is_registered("rayclass")) {
-        fprintf(stderr, "15_shadows: structures 'bvh' and 'rayclass' are not registered in this build\n");
-        return 1;
-    }
-    const char *spec = scene ? scene : "cornell";
-    sidx_mesh mesh;
+    lesson_args args = {.name = "15_shadows", .usage = usage, .scene = "cornell"};
+    lesson_parse(&args, argc, argv);
+    lesson_need(&args, "bvh");
+    lesson_need(&args, "rayclass");
+    sidx_mesh mesh = lesson_open_scene(&args);
     sidx_error err = {0};
-    if (sidx_scene_open(spec, &mesh, &err) != SIDX_OK) {
-        fprintf(stderr, "15_shadows: %s\n", err.message);
-        return 1;
-    }
-    if (mesh.num_triangles == 0) {
-        fprintf(stderr, "15_shadows: scene '%s' is empty\n", spec);
-        sidx_mesh_free(&mesh);
-        return 1;
-    }
     const sidx_aabb box = sidx_mesh_bounds(&mesh);
     const sidx_vec3 ext = sidx_aabb_extent(box), ctr = sidx_aabb_centroid(box);
     const sidx_vec3 light = sidx_v3(ctr.x + 0.03f * ext.x, box.min.y + 0.9f * ext.y, ctr.z + 0.02f * ext.z);
@@ -122,7 +102,7 @@ int main(int argc, char **argv)
         return 1;
     }
     for (int i = 0; i < np; ++i) sidx_lightbuffer_shadow_ray(lb, pts[i], tmin, tmax, &srays[i]);
-    printf("== '%s': %u triangles; point light at (%g, %g, %g); %d shadow rays from its surfaces\n", spec,
+    printf("== '%s': %u triangles; point light at (%g, %g, %g); %d shadow rays from its surfaces\n", args.scene,
            mesh.num_triangles, light.x, light.y, light.z, np);
 
     /* ---- 1. one query, traced ---- */
@@ -253,8 +233,8 @@ int main(int argc, char **argv)
     sidx_accel_destroy(bvh);
     sidx_lightbuffer_destroy(lb);
     sidx_mesh_free(&mesh);
-    printf("CHECK same_answers=%d\n", same && same_rc);
-    printf("CHECK any_hit_cheaper=%d\n", tests[1] + boxes[1] < tests[0] + boxes[0]);
-    printf("CHECK light_buffer_saves=%d\n", cache_hits > 0 && tests[3] < tests[2]);
+    lesson_check("same_answers", same && same_rc);
+    lesson_check("any_hit_cheaper", tests[1] + boxes[1] < tests[0] + boxes[0]);
+    lesson_check("light_buffer_saves", cache_hits > 0 && tests[3] < tests[2]);
     return 0;
 }

@@ -26,9 +26,9 @@
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
-#include <string.h>
 #include <time.h>
 #include "sidx/sidx.h"
+#include "lesson.h"
 
 static void usage(FILE *f)
 {
@@ -84,14 +84,12 @@ static void box_part(long miss[SIDX_BOX_METHOD_COUNT], double ns[SIDX_BOX_METHOD
         const float px = lo.x + frand() * (hi.x - lo.x); /* x first, as the initializer list ran */
         const float py = lo.y + frand() * (hi.y - lo.y);
         const float pz = lo.z + frand() * (hi.z - lo.z);
-        float p[3] = {px, py, pz};
-        const float *l = &lo.x, *h = &hi.x;
+        sidx_vec3 target = sidx_v3(px, py, pz);
         const int kind = (int)(i % 3); /* 0 face, 1 edge, 2 corner: pin 1, 2 or 3 coordinates */
         for (int k = 0; k <= kind; ++k) {
             const int ax = (int)((i / 3 + (long)k) % 3);
-            p[ax] = frand() < 0.5f ? l[ax] : h[ax];
+            sidx_v3_set(&target, ax, frand() < 0.5f ? sidx_v3_get(lo, ax) : sidx_v3_get(hi, ax));
         }
-        const sidx_vec3 target = sidx_v3(p[0], p[1], p[2]);
         const sidx_vec3 org = frand_vec(200.0f, -100.0f);
         sidx_ray_init(&brays[i], org, sidx_v3_sub(target, org), 0.0f, INFINITY);
     }
@@ -127,20 +125,9 @@ static sidx_ray mrays[NR];
 
 int main(int argc, char **argv)
 {
-    const char *scene = NULL;
-    for (int i = 1; i < argc; ++i) {
-        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) { usage(stdout); return 0; }
-        if (argv[i][0] == '-' || scene) {
-            fprintf(stderr, "16_time_vs_error: unexpected argument '%s'\n", argv[i]);
-            usage(stderr);
-            return 2;
-        }
-        scene = argv[i];
-    }
-    if (!sidx_accel_is_registered("bvh")) {
-        fprintf(stderr, "16_time_vs_error: structure 'bvh' is not registered in this build\n");
-        return 1;
-    }
+    lesson_args args = {.name = "16_time_vs_error", .usage = usage, .scene = "icosphere:4"};
+    lesson_parse(&args, argc, argv);
+    lesson_need(&args, "bvh");
 
     printf("== 1. The box test alone: %d rays, each aimed at a point ON its box (face, edge or corner)\n", NB);
     long bmiss[SIDX_BOX_METHOD_COUNT], example;
@@ -167,18 +154,8 @@ int main(int argc, char **argv)
                "  widens t_far by 1 + 2*gamma_3 so rounding can never separate them.\n");
     }
 
-    const char *spec = scene ? scene : "icosphere:4";
-    sidx_mesh mesh;
+    sidx_mesh mesh = lesson_open_scene(&args);
     sidx_error err = {0};
-    if (sidx_scene_open(spec, &mesh, &err) != SIDX_OK) {
-        fprintf(stderr, "16_time_vs_error: %s\n", err.message);
-        return 1;
-    }
-    if (mesh.num_triangles == 0) {
-        fprintf(stderr, "16_time_vs_error: scene '%s' is empty\n", spec);
-        sidx_mesh_free(&mesh);
-        return 1;
-    }
     const sidx_vec3 centre = sidx_aabb_centroid(sidx_mesh_bounds(&mesh));
     for (int k = 0; k < NR; ++k) {
         const uint32_t tri = (uint32_t)(frand() * (float)mesh.num_triangles) % mesh.num_triangles;
@@ -188,7 +165,7 @@ int main(int argc, char **argv)
         const sidx_vec3 target = sidx_v3_add(a, sidx_v3_scale(sidx_v3_sub(b, a), s));
         sidx_ray_init(&mrays[k], centre, sidx_v3_sub(target, centre), 0.0f, INFINITY);
     }
-    printf("\n== 2. A BVH over '%s' (%u triangles); %d rays from its centre at its vertices and edges\n", spec,
+    printf("\n== 2. A BVH over '%s' (%u triangles); %d rays from its centre at its vertices and edges\n", args.scene,
            mesh.num_triangles, NR);
     printf("  %-11s %-7s %8s %12s\n", "triangle", "box", "leaks", "us per ray");
     long leaks[SIDX_TRI_METHOD_COUNT][SIDX_BOX_METHOD_COUNT];
@@ -257,9 +234,9 @@ int main(int argc, char **argv)
     printf("  traversal: watertight + robust leaks %ld, Moller + plain leaks %ld; the accurate pair costs\n"
            "  %+.0f%% time per ray here.\n",
            leaks[0][0], leaks[1][1], cost);
-    printf("CHECK watertight_leaks=%ld\n", leaks[0][0]);
-    printf("CHECK moller_leaks_more=%d\n", leaks[1][0] > leaks[0][0]);
-    printf("CHECK robust_box_misses=%ld\n", bmiss[SIDX_BOX_ROBUST]);
-    printf("CHECK plain_box_misses_more=%d\n", bmiss[SIDX_BOX_PLAIN] > bmiss[SIDX_BOX_ROBUST]);
+    lesson_check("watertight_leaks", leaks[0][0]);
+    lesson_check("moller_leaks_more", leaks[1][0] > leaks[0][0]);
+    lesson_check("robust_box_misses", bmiss[SIDX_BOX_ROBUST]);
+    lesson_check("plain_box_misses_more", bmiss[SIDX_BOX_PLAIN] > bmiss[SIDX_BOX_ROBUST]);
     return 0;
 }
