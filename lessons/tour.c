@@ -15,6 +15,7 @@
 #include <sys/stat.h>
 #include "sidx/sidx.h"
 #include "sidx/viz.h"
+#include "lesson.h"
 
 typedef struct {
     sidx_printer printer;
@@ -64,16 +65,14 @@ static int wanted(const char *list, const char *name)
 
 int main(int argc, char **argv)
 {
-    const char *scene = "teapot", *accels = NULL, *outdir = "build/tour";
-    long limit = 40;
-    for (int i = 1; i < argc; ++i) {
-        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) { usage(stdout); return 0; }
-        else if (!strcmp(argv[i], "--scene") && i + 1 < argc) scene = argv[++i];
-        else if (!strcmp(argv[i], "--accel") && i + 1 < argc) accels = argv[++i];
-        else if (!strcmp(argv[i], "--out") && i + 1 < argc) outdir = argv[++i];
-        else if (!strcmp(argv[i], "--full")) limit = -1;
-        else { fprintf(stderr, "sidx-tour: unknown argument '%s'\n", argv[i]); usage(stderr); return 2; }
-    }
+    const char *accels = NULL, *outdir = "build/tour";
+    int full = 0;
+    const lesson_option options[] = {
+        {"--accel", .text = &accels}, {"--out", .text = &outdir}, {"--full", .on = &full}, {0}};
+    lesson_args args = {.name = "sidx-tour", .usage = usage, .scene = "teapot", .scene_flag = "--scene",
+                        .options = options};
+    lesson_parse(&args, argc, argv);
+    const long limit = full ? -1 : 40;
     if (accels)
         for (const char *p = accels; *p;) {
             char name[64];
@@ -89,16 +88,12 @@ int main(int argc, char **argv)
             if (*p == ',') ++p;
         }
 
-    sidx_mesh mesh;
+    sidx_mesh mesh = lesson_open_scene(&args);
     sidx_error err = {0};
-    if (sidx_scene_open(scene, &mesh, &err) != SIDX_OK) {
-        fprintf(stderr, "sidx-tour: %s\n", err.message);
-        return 1;
-    }
     const sidx_aabb box = sidx_mesh_bounds(&mesh);
     const sidx_vec3 c = sidx_aabb_centroid(box), e = sidx_aabb_extent(box);
     printf("sidx %s — guided tour\n\n", sidx_version());
-    printf("Scene '%s': %u triangles, %u vertices, box (%g %g %g) – (%g %g %g)\n", scene, mesh.num_triangles,
+    printf("Scene '%s': %u triangles, %u vertices, box (%g %g %g) – (%g %g %g)\n", args.scene, mesh.num_triangles,
            mesh.num_vertices, box.min.x, box.min.y, box.min.z, box.max.x, box.max.y, box.max.z);
 
     /* One ray from in front of the scene, slightly off-centre so it passes
