@@ -4,8 +4,10 @@
 #   BUILD=build sh tests/run_lessons.sh        (make test does this; BUILD=build/san under SAN=1)
 #
 # For each program in $BUILD/lessons/: `--help` must exit 0, an unknown
-# option must exit 2, and a run with no arguments must exit 0 and print,
-# among its output, every "CHECK name=value" line listed for it below.
+# option must exit 2, a scene that cannot be loaded must exit 1 with a
+# line on stderr naming the lesson (lessons/lesson.h does all three),
+# and a run with no arguments must exit 0 and print, among its output,
+# every "CHECK name=value" line listed for it below.
 # The lessons compute those values from what they measure (leak counts,
 # cost comparisons, ...), so a check fails when the property stops
 # holding, not when the wording changes.  A lesson whose structures are
@@ -90,6 +92,9 @@ for prog in "$DIR"/*; do
     "$prog" --help >/dev/null 2>&1 || why="$why --help did not exit 0;"
     "$prog" --no-such-option >/dev/null 2>&1
     [ $? -eq 2 ] || why="$why a bad option did not exit 2;"
+    "$prog" /no/such/scene.obj >/dev/null 2>"$out"
+    rc=$?
+    [ $rc -eq 1 ] && grep -q "^$name: " "$out" || why="$why a missing scene file did not exit 1 with a message;"
     start=$(date +%s)
     "$prog" >"$out" 2>&1
     rc=$?
