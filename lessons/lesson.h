@@ -15,9 +15,10 @@
  * lesson_parse       -h or --help: args.usage(stdout), exit 0.  One SCENE
  *                    argument (a built-in scene, "teapot" or "name:detail",
  *                    or an .obj/.ply file) replaces args.scene and sets
- *                    args.scene_given.  Anything else starting with '-' that
- *                    is not in args.options, or a second SCENE: one line and
- *                    the usage on stderr, exit 2.
+ *                    args.scene_given; with args.scene_flag set (the tour's
+ *                    "--scene") SCENE is that option's value instead.  An
+ *                    option not in args.options, a bad option value or a
+ *                    second SCENE: one line and the usage on stderr, exit 2.
  * lesson_need        the structure is not registered in this build: exit 1.
  * lesson_open_scene  loads args.scene (lesson_open: any other scene); one
  *                    that cannot be loaded or has no triangles: exit 1.
