@@ -78,8 +78,9 @@ int bench_svg_lines(const char *path, const char *title, const char *xlabel, con
 /* `sidx-bench run`'s targets section (targets.c): bvh >= 0.5x Embree,
  * kdtree >= 0.8x bvh, bvh8 >= 1.0x Embree on the listed scenes, primary and
  * diffuse rays, in interleaved rounds.  Writes CSV-targets.csv when csv is
- * set.  Returns 0 when the CSV could not be written; a FAIL verdict is
- * reported, not returned (speed depends on the machine). */
+ * set, and the bench:targets block to md when md is set.  Returns 0 when
+ * the CSV could not be written; a FAIL verdict is reported, not returned
+ * (speed depends on the machine). */
 typedef struct bench_targets_opts {
     const char *scenes_dir;  /* NAME.obj/.ply, else NAME*.obj/.ply, looked up here; NULL: built-in scenes only */
     const char *scene_list;  /* comma-separated, e.g. "bunny,sponza" */
@@ -89,6 +90,8 @@ typedef struct bench_targets_opts {
     int rounds;
     size_t rays;
     uint64_t seed;
+    FILE *md;                /* run's --markdown file, or NULL */
+    const char *md_caption;  /* date, machine and command, opening the Markdown block */
 } bench_targets_opts;
 int bench_targets(FILE *f, const bench_targets_opts *o);
 

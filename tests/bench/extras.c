@@ -1,4 +1,4 @@
-/* extras.c — `sidx-bench extras`: the rows issue 7 asks for that `run`
+/* extras.c — `sidx-bench extras`: the rows `run`
  * cannot give, because they are not registered structures over one mesh:
  *
  *  instancing   N placements of one mesh's BVH in an aggregate (the deck's

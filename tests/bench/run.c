@@ -10,7 +10,10 @@
  * per-(structure, triangle test, box test) summary and its SVG plot
  * (Mrays/s against error rate), auto's pick against the best structure
  * per scene, and the hook-overhead rows (this binary with no hook attached
- * against sidx-bench-nohooks, the library built with -DSIDX_NO_HOOKS). */
+ * against sidx-bench-nohooks, the library built with -DSIDX_NO_HOOKS).
+ * --markdown FILE also writes the headline figures as Markdown blocks
+ * between marker comments (<!-- bench:NAME begin --> ... end -->), which
+ * docs/bench_refresh.sh copies into docs/benchmark.md and README.md. */
 #include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
@@ -22,6 +25,7 @@
 #include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "bench.h"
@@ -44,6 +48,8 @@ typedef struct run_opts {
     /* the targets section (targets.c) */
     const char *target_scenes;
     int targets, rounds;
+    /* --markdown: the file, the revision measured, the command to cite */
+    const char *markdown, *revision, *md_command;
 } run_opts;
 
 typedef struct row {
@@ -148,9 +154,35 @@ typedef struct scene_spec {
     int builtin;
 } scene_spec;
 
-/* issue 8's thread rows (below), called from packet_parallel_rows */
+/* What the Markdown blocks need of one scene beyond its table rows: the
+ * packet and thread figures (0 = not measured). */
+typedef struct md_scene {
+    int packets, threads;       /* measured on this scene */
+    uint32_t image_w, image_h;  /* the primary image the packets traced */
+    double tile8[3][2];         /* 8x8 tiles over bvh, bvh4, bvh8: [plain, frustum] Mrays/s */
+    double embree_packet;       /* Embree's fastest rtcIntersectN, Mrays/s */
+    int embree_packet_width;
+    double bvh_build[2], embree_build[2], bvh8_build[2], embree_hq_build[2]; /* ms on 1 and 2 threads */
+    double trace_eff, embree_trace_eff, twin_ceiling;                         /* percent */
+} md_scene;
+
+/* The hook-overhead rows, for the Markdown block. */
+typedef struct md_hook_row {
+    char accel[40];
+    double hooks_mrays, nohooks_mrays;
+} md_hook_row;
+
+typedef struct md_hooks {
+    char scene[64];
+    size_t rays;
+    md_hook_row row[128];
+    size_t n;
+} md_hooks;
+
+/* The thread rows (below), called from packet_parallel_rows */
 static void parallel_rows(FILE *f, const run_opts *o, const scene_spec *sc, const sidx_mesh *m, const kind_data *k,
-                          const sidx_accel *a, const sidx_hit *ref, sidx_hit *got, size_t N, double single);
+                          const sidx_accel *a, const sidx_hit *ref, sidx_hit *got, size_t N, double single,
+                          md_scene *ms);
 
 static int cmp_str(const void *a, const void *b) { return strcmp(*(char *const *)a, *(char *const *)b); }
 
@@ -361,10 +393,10 @@ static double bench_structure(const char *name, const sidx_mesh *m, const scene_
 
 /* ---- isolation: each structure runs in a child process ---------------------- */
 
-/* Structures are written concurrently with this harness, so one may hang,
- * explode in memory or crash on some scene.  Each structure's rows are
- * produced in a forked child (address space capped, wall-clock timeout)
- * and sent back through a pipe; a failure costs that row, not the run. */
+/* A structure under development may hang, explode in memory or crash on
+ * some scene.  Each structure's rows are produced in a forked child
+ * (address space capped, wall-clock timeout) and sent back through a
+ * pipe; a failure costs that row, not the run. */
 typedef struct job {
     const char *name;
     const sidx_mesh *m;
@@ -522,9 +554,9 @@ static void bench_embree_rows(const char *name, bench_embree_cfg cfg, const sidx
     bench_embree_free(e);
 }
 
-/* ---- packets and threads (issue 8) --------------------------------------------- */
+/* ---- packets and threads ------------------------------------------------------- */
 
-/* The issue-8 figures on the primary rays of one scene, beside Embree's:
+/* Packet and thread figures on the primary rays of one scene, beside Embree's:
  *   packets  sidx_trace_tiles (4x4, 8x8, plain and frustum) over "bvh",
  *            "bvh8" and "bvh4", each against single rays through the
  *            same structure, hits checked equal, and Embree's
@@ -588,11 +620,12 @@ static size_t pp_mismatches(const sidx_hit *a, const sidx_hit *b, size_t n)
 /* Packet rows of one structure: sidx_trace_tiles in 4x4 and 8x8 tiles,
  * plain and frustum, hits checked against that structure's single rays
  * (ref, traced in single_ms); the fastest row so far lands in *best
- * (name: "structure tile-mode").  Rows over "bvh" keep their old names
- * (sidx-8x8-plain ...), the others name their structure (sidx-bvh8-8x8-plain). */
+ * (name: "structure tile-mode"), and the 8x8 rows' Mrays/s in tile8[plain,
+ * frustum].  Rows over "bvh" are named sidx-8x8-plain ..., the others name
+ * their structure (sidx-bvh8-8x8-plain). */
 static void pp_packet_rows(FILE *f, const scene_spec *sc, const char *accel, const sidx_accel *a, const kind_data *k,
                            uint32_t W, uint32_t H, const sidx_hit *ref, double single_ms, sidx_hit *got, double *best_mr,
-                           char *best_name, size_t best_size)
+                           char *best_name, size_t best_size, double tile8[2])
 {
     const size_t N = (size_t)W * H;
     const int wide = strcmp(accel, "bvh") != 0;
@@ -614,6 +647,7 @@ static void pp_packet_rows(FILE *f, const scene_spec *sc, const char *accel, con
             }
             const double mr = (double)N / (best * 1e3);
             const size_t bad = pp_mismatches(ref, got, N);
+            if (tile == 8 && !bad) tile8[mode] = mr;
             if (!mode) plain_boxes = ps.box_tests;
             char label[40];
             snprintf(label, sizeof label, "%s%s%ux%u-%s", wide ? accel : "", wide ? "-" : "", tile, tile, pname[mode]);
@@ -639,7 +673,7 @@ static void pp_packet_rows(FILE *f, const scene_spec *sc, const char *accel, con
 }
 
 static void packet_parallel_rows(FILE *f, const run_opts *o, const scene_spec *sc, const sidx_mesh *m,
-                                 const kind_data *k)
+                                 const kind_data *k, md_scene *ms)
 {
     const size_t n = k->br.n;
     size_t w = (size_t)ceil(sqrt((double)n)); /* tk_make_rays' primary image width */
@@ -668,7 +702,11 @@ static void packet_parallel_rows(FILE *f, const run_opts *o, const scene_spec *s
             sc->name, W, H, (double)N / (single * 1e3));
     double best_sidx = 0;
     char best_sidx_name[48] = "";
-    pp_packet_rows(f, sc, "bvh", a, k, W, H, ref, single, got, &best_sidx, best_sidx_name, sizeof best_sidx_name);
+    ms->packets = 1;
+    ms->image_w = W;
+    ms->image_h = H;
+    pp_packet_rows(f, sc, "bvh", a, k, W, H, ref, single, got, &best_sidx, best_sidx_name, sizeof best_sidx_name,
+                   ms->tile8[0]);
     /* the same over the wide BVHs (packet_wide.c), against their own single rays */
     static const char *const wide_names[2] = {"bvh8", "bvh4"};
     for (int wi = 0; wi < 2; ++wi) {
@@ -685,7 +723,7 @@ static void packet_parallel_rows(FILE *f, const run_opts *o, const scene_spec *s
             fprintf(f, "packets %s: \"%s\" single rays %.3f Mrays/s\n", sc->name, wide_names[wi],
                     (double)N / (wsingle * 1e3));
             pp_packet_rows(f, sc, wide_names[wi], wa, k, W, H, wref, wsingle, got, &best_sidx, best_sidx_name,
-                           sizeof best_sidx_name);
+                           sizeof best_sidx_name, ms->tile8[wi ? 1 : 2]);
         }
         sidx_accel_destroy(wa);
         free(wref);
@@ -722,13 +760,15 @@ static void packet_parallel_rows(FILE *f, const run_opts *o, const scene_spec *s
             }
             fprintf(f, "packet ratio %-12s best sidx (%s) / best Embree packet (p%d) = %.2f  (target >= 1.0)\n",
                     sc->name, best_sidx_name, best_p, best_e > 0 ? best_sidx / best_e : 0.0);
+            ms->embree_packet = best_e;
+            ms->embree_packet_width = best_p;
             bench_embree_free(e);
         } else {
             fprintf(stderr, "sidx-bench run: embree on %s: %s\n", sc->name, msg);
         }
     }
 
-    parallel_rows(f, o, sc, m, k, a, ref, got, N, single);
+    parallel_rows(f, o, sc, m, k, a, ref, got, N, single, ms);
 done:
     free(ref);
     free(got);
@@ -737,9 +777,9 @@ done:
     sidx_accel_destroy(a);
 }
 
-/* ---- threads (issue 8) ------------------------------------------------------------- */
+/* ---- threads ---------------------------------------------------------------------- */
 
-/* The issue-8 thread figures on the primary rays of one scene:
+/* The thread figures on the primary rays of one scene:
  *   build   the "bvh" build on 1 and 2 threads against Embree's on a
  *           "threads=1" and a "threads=2" device (wall-clock, best of 5);
  *   trace   sidx_trace_parallel on 1 and 2 threads, and Embree's peer: the
@@ -807,13 +847,17 @@ static int pr_run(pr_thread *t, int nt)
 }
 
 static void parallel_rows(FILE *f, const run_opts *o, const scene_spec *sc, const sidx_mesh *m, const kind_data *k,
-                          const sidx_accel *a, const sidx_hit *ref, sidx_hit *got, size_t N, double single)
+                          const sidx_accel *a, const sidx_hit *ref, sidx_hit *got, size_t N, double single,
+                          md_scene *ms)
 {
+    ms->threads = 1;
     /* threads: builds */
     uint32_t n1 = 0, n2 = 0;
     const double b1 = pp_wall_build("bvh", m, 1, &n1), b2 = pp_wall_build("bvh", m, 2, &n2);
     fprintf(f, "parallel %s build \"bvh\": 1 thread %.2f ms, 2 threads %.2f ms (%.2fx)%s; wall-clock, best of 5\n",
             sc->name, b1, b2, b2 > 0 ? b1 / b2 : 0.0, n1 == n2 ? "" : "  ** node counts differ **");
+    ms->bvh_build[0] = b1 > 0 ? b1 : 0.0;
+    ms->bvh_build[1] = b2 > 0 ? b2 : 0.0;
     double eb[2] = {INFINITY, INFINITY}, ehq[2] = {INFINITY, INFINITY};
     if (o->embree) {
         pp_embree_build("embree", m, eb);
@@ -821,6 +865,10 @@ static void parallel_rows(FILE *f, const run_opts *o, const scene_spec *sc, cons
                    "at 2 threads %.2f (target <= 1.5)\n",
                 sc->name, eb[0], eb[1], b1 / eb[0], b2 / eb[1]);
         pp_embree_build("embree-hq", m, ehq); /* the spatial-split build, for the bvh8 row below */
+        for (int t = 0; t < 2; ++t) {
+            ms->embree_build[t] = isfinite(eb[t]) ? eb[t] : 0.0;
+            ms->embree_hq_build[t] = isfinite(ehq[t]) ? ehq[t] : 0.0;
+        }
     }
     /* bvh8 builds its binary tree with spatial splits (bvh_spatial.c), its
      * subtrees on the threads; no target, a figure to set beside Embree HQ */
@@ -830,6 +878,8 @@ static void parallel_rows(FILE *f, const run_opts *o, const scene_spec *sc, cons
             c1, c2, c2 > 0 ? c1 / c2 : 0.0, w1 == w2 ? "" : "  ** node counts differ **");
     if (o->embree) fprintf(f, "; embree-hq threads=1 %.2f ms, threads=2 %.2f ms", ehq[0], ehq[1]);
     fprintf(f, "; wall-clock, best of 5\n");
+    ms->bvh8_build[0] = c1 > 0 ? c1 : 0.0;
+    ms->bvh8_build[1] = c2 > 0 ? c2 : 0.0;
     /* threads: tracing (single rays, batches over threads), repeated to ~100 ms per run,
      * 1 and 2 threads interleaved so that a change in the machine's load hits both */
     const int reps = single > 0 ? (int)(100.0 / single) + 1 : 1;
@@ -853,6 +903,7 @@ static void parallel_rows(FILE *f, const run_opts *o, const scene_spec *sc, cons
                    "efficiency %.0f%% (target >= 90%%), CPU efficiency %.0f%%; wall-clock, best of 5, %d passes%s\n",
                 sc->name, t1, t2, t2 > 0 ? cpu2 / t2 : 0.0, t2 > 0 ? 100.0 * t1 / (2.0 * t2) : 0.0,
                 c2 > 0 ? 100.0 * c1 / c2 : 0.0, reps, bad ? "  ** hits differ **" : "");
+        if (t2 > 0 && !bad) ms->trace_eff = 100.0 * t1 / (2.0 * t2);
     }
     /* Embree's peer: rtcIntersect1 from 1 and from 2 application threads */
     if (o->embree) {
@@ -877,10 +928,12 @@ static void parallel_rows(FILE *f, const run_opts *o, const scene_spec *sc, cons
                     if (nt == 1 && w < t1) t1 = w;
                     if (nt == 2 && w < t2) t2 = w;
                 }
-            if (ok)
+            if (ok) {
                 fprintf(f, "parallel %s trace embree rtcIntersect1 primary: 1 thread %.2f ms, 2 threads %.2f ms: "
                            "efficiency %.0f%%; wall-clock, best of 5, %d passes\n",
                         sc->name, t1, t2, t2 > 0 ? 100.0 * t1 / (2.0 * t2) : 0.0, reps);
+                if (t2 > 0) ms->embree_trace_eff = 100.0 * t1 / (2.0 * t2);
+            }
         } else if (eh) {
             fprintf(stderr, "sidx-bench run: embree on %s: %s\n", sc->name, msg);
         }
@@ -907,11 +960,13 @@ static void parallel_rows(FILE *f, const run_opts *o, const scene_spec *sc, cons
                     if (c < bc) bc = c;
                 }
             }
-        if (ok)
+        if (ok) {
             fprintf(f, "parallel %s twin: one thread alone %.2f ms (thread CPU %.2f), beside a twin %.2f ms "
                        "(thread CPU %.2f): the machine's 2-thread ceiling %.0f%% (wall) / %.0f%% (CPU)%s\n",
                     sc->name, aw, ac, bw, bc, bw > 0 ? 100.0 * aw / bw : 0.0, bc > 0 ? 100.0 * ac / bc : 0.0,
                     pp_mismatches(ref, h2, N) ? "  ** hits differ **" : "");
+            if (bw > 0) ms->twin_ceiling = 100.0 * aw / bw;
+        }
         free(h2);
     }
 }
@@ -1136,7 +1191,7 @@ static double run_trace(const char *prog, const char *accel, const char *scene, 
     return p ? strtod(p + 11, NULL) : -1;
 }
 
-static void hook_rows(FILE *f, const run_opts *o, const scene_spec *sc)
+static void hook_rows(FILE *f, const run_opts *o, const scene_spec *sc, md_hooks *mh)
 {
     char twin[4096], self[4096];
     fprintf(f, "\n== hook overhead: no hook attached (hooks compiled in) vs hooks compiled out (-DSIDX_NO_HOOKS)\n");
@@ -1167,6 +1222,8 @@ static void hook_rows(FILE *f, const run_opts *o, const scene_spec *sc)
         free(rec);
     }
     fprintf(f, "scene %s, %zu diffuse rays, best of 3 runs each\n", sc->name, n);
+    copy_str(mh->scene, sizeof mh->scene, sc->name);
+    mh->rays = n;
     fprintf(f, "%-18s %12s %12s %9s\n", "accel", "hooks Mrays", "no-hooks", "overhead");
     for (size_t i = 0; i < sidx_accel_registered_count(); ++i) {
         const char *name = sidx_accel_registered_name(i);
@@ -1185,6 +1242,12 @@ static void hook_rows(FILE *f, const run_opts *o, const scene_spec *sc)
         }
         fprintf(f, "%-18s %12.3f %12.3f %8.1f%%\n", name, (double)n / (best[0] * 1e3), (double)n / (best[1] * 1e3),
                 100.0 * (best[0] - best[1]) / best[1]);
+        if (mh->n < sizeof mh->row / sizeof mh->row[0]) {
+            md_hook_row *hr = &mh->row[mh->n++];
+            copy_str(hr->accel, sizeof hr->accel, name);
+            hr->hooks_mrays = (double)n / (best[0] * 1e3);
+            hr->nohooks_mrays = (double)n / (best[1] * 1e3);
+        }
     }
     bench_progress_done();
     unlink(rays);
@@ -1286,6 +1349,406 @@ static void auto_line(FILE *f, const rows *rs, size_t from, const scene_spec *sc
             sc->name, picked, cand[best], ratio, ratio >= 0.9 ? "" : "  ** auto more than 10% slower **");
 }
 
+/* ---- Markdown (--markdown FILE) ---------------------------------------------- */
+
+/* Each block stands alone (the README takes one of them): it opens with
+ * when, where and how it was measured, and sits between
+ * <!-- bench:NAME begin --> and <!-- bench:NAME end -->, the markers
+ * docs/bench_refresh.sh looks for in the documents it refreshes. */
+
+/* "model name" of the first processor in /proc/cpuinfo. */
+static void md_cpu_model(char *buf, size_t size)
+{
+    copy_str(buf, size, "an unknown CPU");
+    FILE *f = fopen("/proc/cpuinfo", "r");
+    if (!f) return;
+    char line[512];
+    while (fgets(line, sizeof line, f)) {
+        if (strncmp(line, "model name", 10) != 0) continue;
+        const char *p = strchr(line, ':');
+        if (!p) continue;
+        for (++p; *p == ' ' || *p == '\t'; ++p) {}
+        char *end = line + strlen(line);
+        while (end > p && (end[-1] == '\n' || end[-1] == ' ')) *--end = '\0';
+        if (*p) copy_str(buf, size, p);
+        break;
+    }
+    fclose(f);
+}
+
+/* The kernels a wide BVH picked on this machine, from the NOTE its build
+ * emits ("wide BVH: AVX-512 kernels (...)" -> "AVX-512 kernels"). */
+typedef struct md_note { char text[64]; } md_note;
+
+static void md_note_hook(const sidx_event *ev, void *user)
+{
+    md_note *n = user;
+    static const char prefix[] = "wide BVH: ";
+    if (ev->type != SIDX_EV_NOTE || !ev->text || strncmp(ev->text, prefix, sizeof prefix - 1) != 0) return;
+    copy_str(n->text, sizeof n->text, ev->text + sizeof prefix - 1);
+    char *paren = strstr(n->text, " (");
+    if (paren) *paren = '\0';
+}
+
+static void md_wide_kernels(const char *accel, char *buf, size_t size)
+{
+    copy_str(buf, size, "");
+    sidx_mesh m = {0};
+    if (!sidx_accel_is_registered(accel) || sidx_scene_open("cornell", &m, NULL) != SIDX_OK) return;
+    md_note note = {""};
+    sidx_build_options bo;
+    memset(&bo, 0, sizeof bo);
+    const sidx_hook hook = {md_note_hook, &note, SIDX_EVMASK(SIDX_EV_NOTE)};
+    bo.hook = &hook;
+    sidx_accel *a = NULL;
+    if (sidx_accel_build(accel, &m, &bo, &a, NULL) == SIDX_OK) copy_str(buf, size, note.text);
+    sidx_accel_destroy(a);
+    sidx_mesh_free(&m);
+}
+
+/* 20000 -> "20,000" */
+static void md_count(size_t n, char *buf, size_t size)
+{
+    char digits[32];
+    snprintf(digits, sizeof digits, "%zu", n);
+    const size_t len = strlen(digits);
+    size_t j = 0;
+    for (size_t i = 0; i < len && j + 2 < size; ++i) {
+        if (i > 0 && (len - i) % 3 == 0) buf[j++] = ',';
+        buf[j++] = digits[i];
+    }
+    buf[j] = '\0';
+}
+
+/* Is this option one that changes no figure (where the output goes, what
+ * the Markdown cites)?  Such options are left out of the command cited. */
+static int md_output_option(const char *a)
+{
+    return !strcmp(a, "--csv") || !strcmp(a, "--plot") || !strcmp(a, "--markdown") || !strcmp(a, "--revision") ||
+           !strcmp(a, "--md-command");
+}
+
+/* "Measured 2026-12-02 at commit abc1234 on <CPU> (2 cores; `bvh8` on
+ * AVX-512 kernels, `bvh4` on SSE4.1 kernels) with `make bench`, Embree
+ * 3.13.5, 20,000 rays per scene and ray kind" */
+static void md_caption(const run_opts *o, int argc, char **argv, char *buf, size_t size)
+{
+    char date[32] = "(no date)", cpu[256], k8[64], k4[64], cmd[1024], rays[32];
+    const time_t now = time(NULL);
+    struct tm tmv;
+    if (localtime_r(&now, &tmv)) strftime(date, sizeof date, "%Y-%m-%d", &tmv);
+    md_cpu_model(cpu, sizeof cpu);
+    md_wide_kernels("bvh8", k8, sizeof k8);
+    md_wide_kernels("bvh4", k4, sizeof k4);
+    if (o->md_command && o->md_command[0]) {
+        copy_str(cmd, sizeof cmd, o->md_command);
+    } else {
+        size_t len = (size_t)snprintf(cmd, sizeof cmd, "sidx-bench run");
+        for (int i = 1; i < argc && len < sizeof cmd; ++i) {
+            if (md_output_option(argv[i])) {
+                ++i;
+                continue;
+            }
+            const int quote = strchr(argv[i], ' ') != NULL;
+            len += (size_t)snprintf(cmd + len, sizeof cmd - len, quote ? " '%s'" : " %s", argv[i]);
+        }
+    }
+    char kernels[200] = "";
+    const char *simd = getenv("SIDX_SIMD");
+    if (k8[0] || k4[0])
+        snprintf(kernels, sizeof kernels, "; %s%s%s%s%s%s%s%s", k8[0] ? "`bvh8` on " : "", k8, k8[0] && k4[0] ? ", " : "",
+                 k4[0] ? "`bvh4` on " : "", k4, simd ? " (SIDX_SIMD=" : "", simd ? simd : "", simd ? ")" : "");
+    md_count(o->rays, rays, sizeof rays);
+    const long cores = sysconf(_SC_NPROCESSORS_ONLN);
+    const int n = snprintf(buf, size, "Measured %s%s%s on %s (%ld core%s%s) with `%s`, Embree %s, %s rays per scene and ray kind",
+                           date, o->revision && o->revision[0] ? " at commit " : "", o->revision ? o->revision : "", cpu,
+                           cores, cores == 1 ? "" : "s", kernels, cmd, bench_embree_version(), rays);
+    if (n >= 0 && (size_t)n >= size && size >= 4) memcpy(buf + size - 4, "...", 4);
+}
+
+/* "bunny.obj" with 69451 triangles -> "bunny 69k"; "sponza_dabrovic.obj" -> "sponza 66k" */
+static void md_scene_label(const char *name, uint32_t tris, char *buf, size_t size)
+{
+    char stem[64];
+    copy_str(stem, sizeof stem, name);
+    stem[strcspn(stem, "._")] = '\0';
+    if (tris >= 1000) snprintf(buf, size, "%.60s %uk", stem, (tris + 500) / 1000);
+    else snprintf(buf, size, "%.60s %u", stem, tris);
+}
+
+/* The scenes of the headline table: each --target-scenes name found among
+ * the run's scenes (a built-in by its name, a file by its name's start, as
+ * the targets section finds them); every scene when none is. */
+static size_t md_headline_scenes(const run_opts *o, const scene_spec *scenes, size_t ns, size_t *out)
+{
+    size_t n = 0;
+    const char *p = o->target_scenes;
+    while (p && *p && n < ns) {
+        const char *e = strchr(p, ',');
+        const size_t len = e ? (size_t)(e - p) : strlen(p);
+        for (size_t i = 0; i < ns; ++i) {
+            const char *nm = scenes[i].name;
+            const int match = scenes[i].builtin ? strlen(nm) == len && !strncmp(nm, p, len)
+                                                : !strncmp(nm, p, len) && strchr("._-", nm[len]) && nm[len];
+            if (!match) continue;
+            size_t j = 0;
+            while (j < n && out[j] != i) ++j;
+            if (j == n) out[n++] = i;
+            break;
+        }
+        p = e ? e + 1 : NULL;
+    }
+    if (n == 0)
+        for (size_t i = 0; i < ns; ++i) out[n++] = i;
+    return n;
+}
+
+static const row *md_find(const rows *rs, const char *scene, const char *kind, const char *accel)
+{
+    for (size_t i = 0; i < rs->n; ++i) {
+        const row *r = &rs->v[i];
+        if (!r->packet && r->tri == SIDX_TRI_WATERTIGHT && r->box == SIDX_BOX_ROBUST && !strcmp(r->scene, scene) &&
+            !strcmp(r->kind, kind) && !strcmp(r->accel, accel))
+            return r;
+    }
+    return NULL;
+}
+
+/* bench:table — bvh, bvh4, bvh8, kdtree, Embree and Embree HQ on the
+ * headline scenes' primary and diffuse rays, the build times, and the
+ * errors of those rows. */
+static void md_write_table(FILE *md, const char *caption, const rows *rs, const scene_spec *scenes, const size_t *hs,
+                           size_t nh)
+{
+    static const char *const accel[] = {"bvh", "bvh4", "bvh8", "kdtree", "embree", "embree-hq"};
+    static const char *const head[] = {"`bvh`", "`bvh4`", "`bvh8`", "`kdtree`", "Embree `rtcIntersect1`", "Embree HQ"};
+    enum { NA = sizeof accel / sizeof accel[0] };
+    static const char *const kinds[] = {"primary", "diffuse"};
+    int have[NA] = {0};
+    for (size_t h = 0; h < nh; ++h)
+        for (size_t k = 0; k < 2; ++k)
+            for (int a = 0; a < NA; ++a) have[a] |= md_find(rs, scenes[hs[h]].name, kinds[k], accel[a]) != NULL;
+    const int ratio = have[2] && have[4];
+    fprintf(md, "<!-- bench:table begin -->\n%s; Mrays/s on one thread (CPU time of the tracing thread), builds in ms "
+                "(CPU time of the process):\n\n| scene, rays |",
+            caption);
+    int ncol = 0;
+    for (int a = 0; a < NA; ++a)
+        if (have[a]) {
+            fprintf(md, " %s |", head[a]);
+            ++ncol;
+        }
+    if (ratio) fprintf(md, " `bvh8` / Embree |");
+    fprintf(md, "\n|---|");
+    for (int c = 0; c < ncol + ratio; ++c) fprintf(md, "---|");
+    fprintf(md, "\n");
+    for (size_t h = 0; h < nh; ++h) {
+        const scene_spec *sc = &scenes[hs[h]];
+        for (size_t k = 0; k < 2; ++k) {
+            const row *r[NA];
+            double best = 0;
+            int any = 0;
+            uint32_t tris = 0;
+            for (int a = 0; a < NA; ++a) {
+                r[a] = have[a] ? md_find(rs, sc->name, kinds[k], accel[a]) : NULL;
+                if (r[a] && row_mrays(r[a]) > best) best = row_mrays(r[a]);
+                if (r[a]) {
+                    any = 1;
+                    tris = r[a]->tris;
+                }
+            }
+            if (!any) continue;
+            char label[80];
+            md_scene_label(sc->name, tris, label, sizeof label);
+            fprintf(md, "| %s, %s |", label, kinds[k]);
+            for (int a = 0; a < NA; ++a) {
+                if (!have[a]) continue;
+                if (!r[a]) fprintf(md, " – |");
+                else if (row_mrays(r[a]) == best) fprintf(md, " **%.1f** |", row_mrays(r[a]));
+                else fprintf(md, " %.1f |", row_mrays(r[a]));
+            }
+            if (ratio) {
+                if (r[2] && r[4] && row_mrays(r[4]) > 0) fprintf(md, " %.2f |", row_mrays(r[2]) / row_mrays(r[4]));
+                else fprintf(md, " – |");
+            }
+            fprintf(md, "\n");
+        }
+    }
+    /* the build row: "bunny / sponza build, ms | 61 / 51 | ..." */
+    fprintf(md, "| ");
+    for (size_t h = 0; h < nh; ++h) {
+        char stem[64];
+        copy_str(stem, sizeof stem, scenes[hs[h]].name);
+        stem[strcspn(stem, "._")] = '\0';
+        fprintf(md, "%s%s", h ? " / " : "", stem);
+    }
+    fprintf(md, " build, ms |");
+    for (int a = 0; a < NA; ++a) {
+        if (!have[a]) continue;
+        fprintf(md, " ");
+        for (size_t h = 0; h < nh; ++h) {
+            const row *r = md_find(rs, scenes[hs[h]].name, "primary", accel[a]);
+            if (!r) r = md_find(rs, scenes[hs[h]].name, "diffuse", accel[a]);
+            if (r) fprintf(md, "%s%.0f", h ? " / " : "", r->build_ms);
+            else fprintf(md, "%s–", h ? " / " : "");
+        }
+        fprintf(md, " |");
+    }
+    if (ratio) fprintf(md, " |");
+    fprintf(md, "\n\n");
+    /* the errors of the rows above */
+    unsigned long long bad = 0;
+    fprintf(md, "Errors against the reference on these rows (rays checked per row:");
+    for (size_t h = 0; h < nh; ++h) {
+        unsigned long long checked = 0;
+        for (size_t k = 0; k < 2; ++k)
+            for (int a = 0; a < NA; ++a) {
+                const row *r = have[a] ? md_find(rs, scenes[hs[h]].name, kinds[k], accel[a]) : NULL;
+                if (!r) continue;
+                if (r->err.rays > checked) checked = r->err.rays;
+                bad += r->err.false_miss + r->err.false_hit + r->err.wrong_prim;
+            }
+        char stem[64];
+        copy_str(stem, sizeof stem, scenes[hs[h]].name);
+        stem[strcspn(stem, "._")] = '\0';
+        fprintf(md, "%s %llu on %s", h ? "," : "", checked, stem);
+    }
+    fprintf(md, "): %s", bad ? "" : "no false miss, no false hit, no wrong primitive.\n");
+    if (bad) {
+        int first = 1;
+        for (size_t h = 0; h < nh; ++h)
+            for (size_t k = 0; k < 2; ++k)
+                for (int a = 0; a < NA; ++a) {
+                    const row *r = have[a] ? md_find(rs, scenes[hs[h]].name, kinds[k], accel[a]) : NULL;
+                    if (!r || r->err.false_miss + r->err.false_hit + r->err.wrong_prim == 0) continue;
+                    fprintf(md, "%s%s on %s %s %llu / %llu / %llu", first ? "" : "; ", accel[a], r->scene, r->kind,
+                            (unsigned long long)r->err.false_miss, (unsigned long long)r->err.false_hit,
+                            (unsigned long long)r->err.wrong_prim);
+                    first = 0;
+                }
+        fprintf(md, " (false misses / false hits / wrong primitives).\n");
+    }
+    fprintf(md, "\n<!-- bench:table end -->\n\n");
+}
+
+/* A cell of Mrays/s or ms; "–" when not measured. */
+static void md_cell(FILE *md, double v, const char *fmt)
+{
+    if (v > 0 && isfinite(v)) {
+        fprintf(md, " ");
+        fprintf(md, fmt, v);
+        fprintf(md, " |");
+    } else {
+        fprintf(md, " – |");
+    }
+}
+
+static void md_pair(FILE *md, const double v[2], const char *fmt)
+{
+    char a[32] = "–", b[32] = "–";
+    if (v[0] > 0 && isfinite(v[0])) snprintf(a, sizeof a, fmt, v[0]);
+    if (v[1] > 0 && isfinite(v[1])) snprintf(b, sizeof b, fmt, v[1]);
+    fprintf(md, " %s / %s |", a, b);
+}
+
+static void md_write_packets(FILE *md, const char *caption, const scene_spec *scenes, const md_scene *all,
+                             const size_t *hs, size_t ns, const rows *rs)
+{
+    size_t first = ns;
+    for (size_t h = 0; h < ns && first == ns; ++h)
+        if (all[hs[h]].packets) first = hs[h];
+    if (first == ns) return;
+    fprintf(md, "<!-- bench:packets begin -->\n%s; `sidx_trace_tiles` on the %u×%u primary image in 8×8 tiles, "
+                "the faster of plain and frustum tiles, against Embree's fastest packet call (`rtcIntersect4/8/16`) "
+                "on the same image in 4×4 tiles; Mrays/s on one thread (CPU time of the thread, best of 3):\n\n"
+                "| scene | `bvh` 8×8 | `bvh4` 8×8 | `bvh8` 8×8 | Embree, best packet | `bvh8` 8×8 / Embree |\n"
+                "|---|---|---|---|---|---|\n",
+            caption, all[first].image_w, all[first].image_h);
+    for (size_t h = 0; h < ns; ++h) {
+        const size_t i = hs[h];
+        const md_scene *ms = &all[i];
+        if (!ms->packets) continue;
+        uint32_t tris = 0;
+        for (size_t r = 0; r < rs->n && !tris; ++r)
+            if (!strcmp(rs->v[r].scene, scenes[i].name)) tris = rs->v[r].tris;
+        char label[80];
+        md_scene_label(scenes[i].name, tris, label, sizeof label);
+        fprintf(md, "| %s |", label);
+        double best8 = 0;
+        for (int s = 0; s < 3; ++s) {
+            const double *t = ms->tile8[s];
+            const int fr = t[1] > t[0];
+            const double v = fr ? t[1] : t[0];
+            if (s == 2) best8 = v;
+            if (v > 0) fprintf(md, " %.1f (%s) |", v, fr ? "frustum" : "plain");
+            else fprintf(md, " – |");
+        }
+        if (ms->embree_packet > 0)
+            fprintf(md, " %.1f (`rtcIntersect%d`) |", ms->embree_packet, ms->embree_packet_width);
+        else
+            fprintf(md, " – |");
+        md_cell(md, best8 > 0 && ms->embree_packet > 0 ? best8 / ms->embree_packet : 0, "%.2f");
+        fprintf(md, "\n");
+    }
+    fprintf(md, "\n<!-- bench:packets end -->\n\n");
+}
+
+static void md_write_threads(FILE *md, const char *caption, const scene_spec *scenes, const md_scene *all,
+                             const size_t *hs, size_t ns, const rows *rs)
+{
+    int any = 0;
+    for (size_t h = 0; h < ns; ++h) any |= all[hs[h]].threads;
+    if (!any) return;
+    fprintf(md, "<!-- bench:threads begin -->\n%s; builds and traces on 1 and 2 threads, wall-clock, best of 5 (the "
+                "figures mean something on a quiet machine only); efficiency = T1 / (2 T2) on the primary rays:\n\n"
+                "| scene | `bvh` build, ms, 1 / 2 threads | Embree build | `bvh` / Embree, 2 threads "
+                "| `bvh8` build (spatial splits) | Embree HQ build | `sidx_trace_parallel`, 2 threads "
+                "| Embree `rtcIntersect1` from 2 threads | the machine's 2-thread ceiling |\n"
+                "|---|---|---|---|---|---|---|---|---|\n",
+            caption);
+    for (size_t h = 0; h < ns; ++h) {
+        const size_t i = hs[h];
+        const md_scene *ms = &all[i];
+        if (!ms->threads) continue;
+        uint32_t tris = 0;
+        for (size_t r = 0; r < rs->n && !tris; ++r)
+            if (!strcmp(rs->v[r].scene, scenes[i].name)) tris = rs->v[r].tris;
+        char label[80];
+        md_scene_label(scenes[i].name, tris, label, sizeof label);
+        fprintf(md, "| %s |", label);
+        md_pair(md, ms->bvh_build, "%.1f");
+        md_pair(md, ms->embree_build, "%.1f");
+        md_cell(md, ms->embree_build[1] > 0 ? ms->bvh_build[1] / ms->embree_build[1] : 0, "%.2f");
+        md_pair(md, ms->bvh8_build, "%.1f");
+        md_pair(md, ms->embree_hq_build, "%.1f");
+        md_cell(md, ms->trace_eff, "%.0f%%");
+        md_cell(md, ms->embree_trace_eff, "%.0f%%");
+        md_cell(md, ms->twin_ceiling, "%.0f%%");
+        fprintf(md, "\n");
+    }
+    fprintf(md, "\n<!-- bench:threads end -->\n\n");
+}
+
+static void md_write_hooks(FILE *md, const char *caption, const md_hooks *mh)
+{
+    if (mh->n == 0) return;
+    char rays[32];
+    md_count(mh->rays, rays, sizeof rays);
+    fprintf(md, "<!-- bench:hooks begin -->\n%s; `sidx-bench` with no hook attached against `sidx-bench-nohooks` "
+                "(the library built with `-DSIDX_NO_HOOKS`), %s, %s diffuse rays, best of 3 runs each (CPU time of "
+                "the tracing thread); the difference is in time, negative when the build with hooks is the faster:"
+                "\n\n| structure | hooks compiled in, Mrays/s | compiled out, Mrays/s | difference |\n|---|---|---|---|\n",
+            caption, mh->scene, rays);
+    for (size_t i = 0; i < mh->n; ++i) {
+        const md_hook_row *r = &mh->row[i];
+        /* time difference: (t_in - t_out) / t_out = out/in - 1 in speeds */
+        const double diff = r->hooks_mrays > 0 ? 100.0 * (r->nohooks_mrays / r->hooks_mrays - 1.0) : 0.0;
+        fprintf(md, "| `%s` | %.2f | %.2f | %s%.1f%% |\n", r->accel, r->hooks_mrays, r->nohooks_mrays,
+                diff < 0 ? "−" : "+", fabs(diff));
+    }
+    fprintf(md, "\n<!-- bench:hooks end -->\n\n");
+}
+
 /* ---- the command ------------------------------------------------------------- */
 
 static void run_usage(FILE *out)
@@ -1327,7 +1790,16 @@ static void run_usage(FILE *out)
             "                     (default 21)\n"
             "  --csv FILE         every row as CSV; the targets section goes to FILE-targets.csv\n"
             "                     (FILE without its .csv)\n"
-            "  --plot FILE.svg    Mrays/s against error rate, one point per (structure, tri/box test)\n"
+            "  --plot FILE.svg    Mrays/s against error rate, one point per (structure, tri/box test)\n");
+    fprintf(out,
+            "  --markdown FILE.md the headline figures as Markdown blocks between marker comments\n"
+            "                     (<!-- bench:NAME begin --> ... end -->: table, packets, threads, hooks,\n"
+            "                     targets), each opened by the date, CPU, cores, the SIMD kernels the\n"
+            "                     wide BVHs picked and the command; docs/bench_refresh.sh copies them\n"
+            "                     into the documents (make bench: docs/benchmark.md, README.md)\n"
+            "  --revision REV     what was measured (e.g. a commit), cited in the Markdown blocks\n"
+            "  --md-command CMD   the command the Markdown blocks cite (default: this command line\n"
+            "                     without its output options)\n"
             "Columns: build_ms, Mrays/s (one thread), MB (structure memory), nodes, depth (deepest\n"
             "leaf), leaf (mean primitives per non-empty leaf or cell), dup (primitive references per\n"
             "triangle: the duplication factor of spatial subdivisions), steps (NODE_ENTER\n"
@@ -1348,8 +1820,8 @@ static void run_usage(FILE *out)
             "(memory bandwidth, SMT) to judge the efficiencies by.  Wall-clock figures mean\n"
             "something on a quiet machine only.\n");
     fprintf(out,
-            "Targets (last section): #4 bvh >= 0.5x Embree, #5 kdtree >= 0.8x bvh, #8 bvh8 >= 1.0x\n"
-            "Embree, on primary and diffuse rays of each --target-scenes scene: the tracers run in\n"
+            "Targets (last section): bvh >= 0.5x Embree, kdtree >= 0.8x bvh, bvh8 >= 1.0x Embree,\n"
+            "on primary and diffuse rays of each --target-scenes scene: the tracers run in\n"
             "interleaved rounds on the same warm rays (order reversed every other round; a tracer's\n"
             "pass with an involuntary context switch, from getrusage, is run again), and each\n"
             "target prints the median [min..max] of the per-round speed ratios and PASS/FAIL.\n"
@@ -1362,7 +1834,7 @@ static void run_usage(FILE *out)
 int bench_cmd_run(int argc, char **argv)
 {
     run_opts o = {NULL, NULL, NULL, NULL, NULL, NULL, "cornell,icosphere", 20000, 1, 1.5e8, 100.0, 8000.0, 5000,
-                  1, 1, 1, 1, 60000.0, 4096, 2, "bunny,sponza", 1, 21};
+                  1, 1, 1, 1, 60000.0, 4096, 2, "bunny,sponza", 1, 21, NULL, NULL, NULL};
     for (int i = 1; i < argc; ++i) {
         const char *a = argv[i];
         const char *val = (i + 1 < argc) ? argv[i + 1] : NULL;
@@ -1390,6 +1862,9 @@ int bench_cmd_run(int argc, char **argv)
         else if (!strcmp(a, "--plot")) o.plot = val;
         else if (!strcmp(a, "--method-scenes")) o.method_scenes = val;
         else if (!strcmp(a, "--target-scenes")) o.target_scenes = val;
+        else if (!strcmp(a, "--markdown")) o.markdown = val;
+        else if (!strcmp(a, "--revision")) o.revision = val;
+        else if (!strcmp(a, "--md-command")) o.md_command = val;
         else if (!strcmp(a, "--rounds")) {
             const long v = strtol(val, &end, 10);
             if (*end || v < 1 || v > 1001) goto bad_value;
@@ -1460,6 +1935,28 @@ int bench_cmd_run(int argc, char **argv)
     scene_spec scenes[64];
     size_t ns = collect_scenes(&o, scenes, 64);
     if (ns == (size_t)-1) return BENCH_USAGE;
+    FILE *md = NULL;
+    char caption[2048] = "";
+    md_scene *mds = calloc(ns ? ns : 1, sizeof *mds);
+    md_hooks *mdh = calloc(1, sizeof *mdh);
+    if (!mds || !mdh) {
+        fprintf(stderr, "sidx-bench run: out of memory\n");
+        free(mds);
+        free(mdh);
+        return BENCH_FAIL;
+    }
+    if (o.markdown) {
+        md = fopen(o.markdown, "w");
+        if (!md) {
+            fprintf(stderr, "sidx-bench run: cannot write %s: %s\n", o.markdown, strerror(errno));
+            free(mds);
+            free(mdh);
+            return BENCH_USAGE;
+        }
+        md_caption(&o, argc, argv, caption, sizeof caption);
+        fprintf(md, "<!-- Written by sidx-bench run --markdown.  docs/bench_refresh.sh copies each block into the\n"
+                    "     documents that have its markers (make bench does: docs/benchmark.md, README.md). -->\n\n");
+    }
 
     rows rs = {NULL, 0, 0};
     FILE *f = stdout;
@@ -1549,7 +2046,7 @@ int bench_cmd_run(int argc, char **argv)
         auto_line(f, &rs, first, sc, &m, kd, nk);
         for (int k = 0; k < nk; ++k) /* packets and threads: primary rays over "bvh" */
             if (o.packets && kinds[k] == TK_RAYS_PRIMARY && bench_list_has(o.accel_list, "bvh"))
-                packet_parallel_rows(f, &o, sc, &m, &kd[k]);
+                packet_parallel_rows(f, &o, sc, &m, &kd[k], &mds[si]);
         fflush(f);
         for (int k = 0; k < nk; ++k) kind_data_free(&kd[k]);
         sidx_mesh_free(&m);
@@ -1566,12 +2063,21 @@ int bench_cmd_run(int argc, char **argv)
         size_t pick = 0;
         for (size_t i = 0; i < ns; ++i)
             if (!strcmp(scenes[i].spec, "teapot")) pick = i;
-        hook_rows(f, &o, &scenes[pick]);
+        hook_rows(f, &o, &scenes[pick], mdh);
+    }
+    if (md) {
+        size_t hs[64];
+        const size_t nh = md_headline_scenes(&o, scenes, ns, hs);
+        md_write_table(md, caption, &rs, scenes, hs, nh);
+        md_write_packets(md, caption, scenes, mds, hs, nh, &rs);
+        md_write_threads(md, caption, scenes, mds, hs, nh, &rs);
+        md_write_hooks(md, caption, mdh);
+        fflush(md);
     }
     int targets_ok = 1;
     if (o.targets) {
         const bench_targets_opts to = {o.scenes_dir, o.target_scenes, o.accel_list, o.csv, o.embree,
-                                       o.rounds, o.rays, o.seed};
+                                       o.rounds, o.rays, o.seed, md, caption};
         targets_ok = bench_targets(f, &to);
     }
     fprintf(f, "\ntotal %.1f s wall-clock, %.1f s CPU in this process (children not counted)\n",
@@ -1585,6 +2091,12 @@ int bench_cmd_run(int argc, char **argv)
         fprintf(stderr, "sidx-bench run: cannot write %s: %s\n", o.plot, strerror(errno));
         rc = BENCH_FAIL;
     }
+    if (md && fclose(md) != 0) {
+        fprintf(stderr, "sidx-bench run: cannot write %s: %s\n", o.markdown, strerror(errno));
+        rc = BENCH_FAIL;
+    }
+    free(mds);
+    free(mdh);
     free(rs.v);
     return rc;
 }

@@ -1,10 +1,10 @@
-/* targets.c — `sidx-bench run`'s targets section: the project's speed
- * targets against Embree 3, measured so that the ratio, not the machine's
- * load, decides PASS or FAIL.
+/* targets.c — `sidx-bench run`'s targets section: sidx's speed targets
+ * against Embree 3, measured so that the ratio, not the machine's load,
+ * decides PASS or FAIL:
  *
- *   #4  bvh    >= 0.5 x Embree rtcIntersect1
- *   #5  kdtree >= 0.8 x bvh
- *   #8  bvh8   >= 1.0 x Embree rtcIntersect1
+ *   bvh    >= 0.5 x Embree rtcIntersect1
+ *   kdtree >= 0.8 x bvh
+ *   bvh8   >= 1.0 x Embree rtcIntersect1
  * on the bunny and Sponza, primary and diffuse rays, one thread.
  *
  * Why a section of its own: the table times every structure in its own
@@ -15,18 +15,16 @@
  * hits both sides of the round it falls in.  Every timed pass follows an
  * untimed pass of the same tracer on the same rays, so what is timed is
  * steady-state throughput, as a renderer tracing millions of rays sees
- * it, and not the refill of the caches the previous tracer evicted.
- * Until session 6 the timed pass came straight after another tracer's:
- * that cold start cost Embree more than sidx (its structures are larger;
- * bunny diffuse rays 4.9 Mrays/s cold against 6.9 warm) and so flattered
- * sidx's ratios (#8 bvh8 / Embree on bunny diffuse 0.98 cold, 0.91 warm).  A tracer's pass during which the
- * thread was preempted (getrusage's involuntary context switches went up:
- * another process then ran on this core and evicted our caches) is run
- * again, up to TG_MAX_RETRIES times.  Retrying whole rounds instead did
- * not work on the shared 2-core machine: with 4 tracers a round takes
- * ~0.3 s and every round was preempted 9 times in a row.  The line reports
- * the median ratio over the rounds with its min..max, so the spread is
- * visible next to the verdict.
+ * it, and not the refill of the caches the previous tracer evicted (that
+ * cold start costs Embree more than sidx: its structures are larger; the
+ * figures are in docs/performance.md, "Benchmark method").  A tracer's
+ * pass during which the thread was preempted (getrusage's involuntary
+ * context switches went up: another process then ran on this core and
+ * evicted our caches) is run again, up to TG_MAX_RETRIES times.  Retrying
+ * whole rounds instead does not work on a shared 2-core machine: with 4
+ * tracers a round takes ~0.3 s and rounds were preempted 9 times in a
+ * row.  The line reports the median ratio over the rounds with its
+ * min..max, so the spread is visible next to the verdict.
  *
  * "fair" timing does the work rtcIntersect1 does: the sidx side builds
  * each ray from the record (sidx_ray_init, as the Embree side fills an
@@ -57,17 +55,28 @@
 enum { TG_EMBREE, TG_BVH, TG_KDTREE, TG_BVH8, TG_TRACERS };
 static const char *const tracer_name[TG_TRACERS] = {"embree", "bvh", "kdtree", "bvh8"};
 
+/* Names as the output prints them: "bvh >= 0.5x Embree". */
+static const char *const tracer_label[TG_TRACERS] = {"Embree", "bvh", "kdtree", "bvh8"};
+
 typedef struct target {
-    int id;     /* the issue number */
     int a, b;   /* speed of a / speed of b */
     double goal;
 } target;
 static const target targets[] = {
-    {4, TG_BVH, TG_EMBREE, 0.5},
-    {5, TG_KDTREE, TG_BVH, 0.8},
-    {8, TG_BVH8, TG_EMBREE, 1.0},
+    {TG_BVH, TG_EMBREE, 0.5},
+    {TG_KDTREE, TG_BVH, 0.8},
+    {TG_BVH8, TG_EMBREE, 1.0},
 };
 #define NTARGETS (sizeof targets / sizeof targets[0])
+
+/* "bvh >= 0.5x Embree" (text and CSV) or "`bvh` ≥ 0.5× Embree" (Markdown). */
+static void target_label(const target *t, int markdown, char *buf, size_t size)
+{
+    const char *q = markdown ? "`" : "";
+    const char *qa = t->a == TG_EMBREE ? "" : q, *qb = t->b == TG_EMBREE ? "" : q;
+    snprintf(buf, size, markdown ? "%s%s%s ≥ %.1f× %s%s%s" : "%s%s%s >= %.1fx %s%s%s", qa,
+             tracer_label[t->a], qa, t->goal, qb, tracer_label[t->b], qb);
+}
 
 /* One scene's tracers. */
 typedef struct tracers {
@@ -249,7 +258,7 @@ static void measure_kind(FILE *f, const bench_targets_opts *o, const char *scene
         res->b_mrays = (double)n / (spread_of(tmp, rounds).med * 1e3);
         res->pass = res->fair.med >= t->goal;
         char label[48];
-        snprintf(label, sizeof label, "#%d %s >= %.1fx %s", t->id, tracer_name[t->a], t->goal, tracer_name[t->b]);
+        target_label(t, 0, label, sizeof label);
         fprintf(f, "%-26s %-8s %-8s %6.2f [%4.2f..%4.2f] %6.2f [%4.2f..%4.2f] %8.2f %8.2f  %s\n", label, scene,
                 res->kind, res->fair.med, res->fair.lo, res->fair.hi, res->prep.med, res->prep.lo, res->prep.hi,
                 res->a_mrays, res->b_mrays, res->pass ? "PASS" : "FAIL");
@@ -275,12 +284,55 @@ static int write_csv(const char *path, const tg_result *r, size_t n)
     fprintf(f, "target,a,b,goal,scene,kind,fair_ratio_median,fair_ratio_min,fair_ratio_max,prep_ratio_median,"
                "prep_ratio_min,prep_ratio_max,a_fair_mrays,b_fair_mrays,rounds,retried_passes,preempted_passes,"
                "pass\n");
-    for (size_t i = 0; i < n; ++i)
-        fprintf(f, "%d,%s,%s,%.2f,%s,%s,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%d,%d,%d,%d\n", r[i].t->id,
+    for (size_t i = 0; i < n; ++i) {
+        char label[48];
+        target_label(r[i].t, 0, label, sizeof label);
+        fprintf(f, "%s,%s,%s,%.2f,%s,%s,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%d,%d,%d,%d\n", label,
                 tracer_name[r[i].t->a], tracer_name[r[i].t->b], r[i].t->goal, r[i].scene, r[i].kind, r[i].fair.med,
                 r[i].fair.lo, r[i].fair.hi, r[i].prep.med, r[i].prep.lo, r[i].prep.hi, r[i].a_mrays, r[i].b_mrays,
                 r[i].rounds, r[i].retries, r[i].preempted, r[i].pass);
+    }
     return fclose(f) == 0;
+}
+
+/* The bench:targets block of `sidx-bench run --markdown`: one row per
+ * target, one column per scene and ray kind, each cell the fair median
+ * [min..max] and the verdict. */
+static void write_markdown(FILE *md, const char *caption, const tg_result *r, size_t n)
+{
+    /* the columns: (scene, kind) in the order they were measured */
+    size_t col[2 * 64];
+    size_t ncol = 0;
+    for (size_t i = 0; i < n && ncol < sizeof col / sizeof col[0]; ++i) {
+        size_t c = 0;
+        while (c < ncol && !(strcmp(r[col[c]].scene, r[i].scene) == 0 && strcmp(r[col[c]].kind, r[i].kind) == 0)) ++c;
+        if (c == ncol) col[ncol++] = i;
+    }
+    fprintf(md, "<!-- bench:targets begin -->\n%s; median of %d interleaved rounds, fair timing, [min..max] over "
+                "the rounds:\n\n| target |",
+            caption ? caption : "", r[0].rounds);
+    for (size_t c = 0; c < ncol; ++c) fprintf(md, " %s %s |", r[col[c]].scene, r[col[c]].kind);
+    fprintf(md, "\n|---|");
+    for (size_t c = 0; c < ncol; ++c) fprintf(md, "---|");
+    fprintf(md, "\n");
+    for (size_t ti = 0; ti < NTARGETS; ++ti) {
+        int any = 0;
+        for (size_t i = 0; i < n; ++i) any |= r[i].t == &targets[ti];
+        if (!any) continue;
+        char label[64];
+        target_label(&targets[ti], 1, label, sizeof label);
+        fprintf(md, "| %s |", label);
+        for (size_t c = 0; c < ncol; ++c) {
+            const tg_result *x = NULL;
+            for (size_t i = 0; i < n && !x; ++i)
+                if (r[i].t == &targets[ti] && !strcmp(r[i].scene, r[col[c]].scene) && !strcmp(r[i].kind, r[col[c]].kind))
+                    x = &r[i];
+            if (x) fprintf(md, " %.2f [%.2f..%.2f] %s |", x->fair.med, x->fair.lo, x->fair.hi, x->pass ? "pass" : "**fail**");
+            else fprintf(md, " – |");
+        }
+        fprintf(md, "\n");
+    }
+    fprintf(md, "\n<!-- bench:targets end -->\n\n");
 }
 
 /* "dir/table.csv" -> "dir/table-targets.csv" (".csv" added when missing). */
@@ -385,10 +437,12 @@ int bench_targets(FILE *f, const bench_targets_opts *o)
                 if (res[i].fair.med < worst) worst = res[i].fair.med;
             }
         if (n == 0) continue;
-        fprintf(f, "target #%d %s >= %.1fx %s: %s (%d/%d scene x ray kind, lowest median %.2f)\n", targets[ti].id,
-                tracer_name[targets[ti].a], targets[ti].goal, tracer_name[targets[ti].b],
+        char label[48];
+        target_label(&targets[ti], 0, label, sizeof label);
+        fprintf(f, "target %s: %s (%d/%d scene x ray kind, lowest median %.2f)\n", label,
                 pass == n ? "PASS" : "FAIL", pass, n, worst);
     }
+    if (o->md && nres) write_markdown(o->md, o->md_caption, res, nres);
     int rc = 1;
     if (o->csv && nres) {
         char path[1024];
