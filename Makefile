@@ -5,7 +5,8 @@
 #   make test       install missing Debian packages, build, run every cmocka suite
 #   make test SAN=1 the same under AddressSanitizer + UndefinedBehaviorSanitizer (build/san)
 #   make valgrind   the suites under valgrind memcheck
-#   make bench      the benchmark table (build/bench/)
+#   make bench      the benchmark table (build/bench/); refreshes the figures in
+#                   docs/benchmark.md and README.md (docs/bench_refresh.sh)
 #   make apidocs    the API reference from the headers (Doxygen, build/apidocs/html)
 #   make install PREFIX=/usr/local
 #
@@ -165,8 +166,11 @@ bench: deps
 	@$(MAKE) --no-print-directory build
 	@mkdir -p $(BUILD)/bench
 	$(BUILD)/bin/sidx-bench run --csv $(BUILD)/bench/table.csv --plot $(BUILD)/bench/error_vs_speed.svg \
+	  --markdown $(BUILD)/bench/table.md --md-command "make bench" --revision "$$(git describe --always --dirty 2>/dev/null)" \
 	  $(if $(wildcard ../shared/scenes),--scenes ../shared/scenes) | tee $(BUILD)/bench/table.txt
 	$(BUILD)/bin/sidx-bench extras $(if $(wildcard ../shared/scenes),--scenes ../shared/scenes) | tee $(BUILD)/bench/extras.txt
+	@if [ -d ../shared/scenes ]; then sh docs/bench_refresh.sh $(BUILD)/bench/table.md docs/benchmark.md README.md; \
+	else echo "bench: no ../shared/scenes (bunny, Sponza): docs/benchmark.md and README.md keep their figures"; fi
 
 # Fuzzing with libFuzzer (clang): every tests/fuzz/fuzz_*.c target runs for
 # FUZZ_SECONDS, starting from the checked-in seeds in tests/fuzz/corpus/<name>
