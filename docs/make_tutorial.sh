@@ -1,7 +1,7 @@
 #!/bin/sh
 # make_tutorial.sh — rerun the lessons and refresh the output excerpts of
-# docs/tutorial.md, so that every number in the tutorial comes from the
-# lessons as they are now, not from a run pasted in long ago.
+# docs/tutorial.md, so that every number in the tutorial comes from a run
+# of the lessons as they are.
 #
 #   sh docs/make_tutorial.sh [BUILD] [TUTORIAL]   (default build, docs/tutorial.md;
 #                                                  `make docs` runs it)
