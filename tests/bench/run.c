@@ -221,7 +221,7 @@ static size_t collect_scenes(const run_opts *o, scene_spec *out, size_t max)
             fprintf(stderr, "sidx-bench run: --scenes %s: %s\n", o->scenes_dir, strerror(errno));
             return (size_t)-1;
         }
-        char *names[256];
+        char *names[256] = {NULL};
         size_t nn = 0;
         struct dirent *de;
         while ((de = readdir(d)) && nn < 256) {

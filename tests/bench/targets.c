@@ -213,7 +213,7 @@ static void measure_kind(FILE *f, const bench_targets_opts *o, const char *scene
     if (!rec || !hits || !fair || !prep || !tmp) goto oom;
     tk_make_rays(m, kind, n, o->seed, rec);
     if (!bench_rays_prepare(rec, n, &br)) goto oom;
-    int order[TG_TRACERS], nt = 0;
+    int order[TG_TRACERS] = {0}, nt = 0;
     for (int t = 0; t < TG_TRACERS; ++t)
         if (tr->used[t]) order[nt++] = t;
     /* no separate warm-up: trace_once's untimed pass also takes the page
