@@ -1,10 +1,13 @@
 # sidx — build, test, demo, bench.
 #
-#   make            library (build/lib), programs (build/bin), lessons (build/lessons)
-#   make demo       install missing Debian packages, build, run the guided tour
-#   make test       install missing Debian packages, build, run every cmocka suite
+#   make            build the library (build/lib), programs (build/bin), lessons
+#                   (build/lessons) and tests; installs nothing
+#   make deps       install the missing Debian packages (as root; else prints the command)
+#   make demo       deps, build, run the guided tour
+#   make test       deps, build, run every cmocka suite and the lessons' checks
 #   make test SAN=1 the same under AddressSanitizer + UndefinedBehaviorSanitizer (build/san)
 #   make valgrind   the suites under valgrind memcheck
+#   make cppcheck   static analysis of every C file (cppcheck, warning + portability)
 #   make bench      the benchmark table (build/bench/); refreshes the figures in
 #                   docs/benchmark.md and README.md (docs/bench_refresh.sh)
 #   make apidocs    the API reference from the headers (Doxygen, build/apidocs/html)
@@ -13,8 +16,20 @@
 # Everything is found by wildcard: a new lib/*.c joins the library, a new
 # tests/test_*.c becomes a suite, a new lessons/*.c a lesson, a new
 # viz/sidx_*.c a program.
+#
+# What the build needs: the library, the lessons and the core tests need a
+# C11 compiler and cmocka, nothing else.  The optional parts are found with
+# pkg-config (Embree, which ships no .pc file on Debian, by its header) and
+# skipped, with one line saying so, when missing:
+#   Graphviz (libgraphviz-dev)          sidx-dot and the tree drawings
+#   SDL2 + SDL2_image (libsdl2-dev ...) sidx-view and its screenshot tests
+#   Embree 3 (libembree-dev)            sidx-bench, the peer of the benchmark
+# HAVE_GRAPHVIZ=0, HAVE_SDL=0, HAVE_EMBREE=0 (or MINIMAL=1 for all three)
+# build without one even where it is installed.
 
 DEBS := pkg-config libcmocka-dev libgraphviz-dev libsdl2-dev libsdl2-image-dev libembree-dev gnuplot-nox valgrind
+# More packages for one call, e.g. `make deps EXTRA_DEBS="clang cppcheck"` (.ci/run).
+EXTRA_DEBS ?=
 
 PREFIX ?= /usr/local
 OPT ?= -O2
@@ -30,9 +45,31 @@ BUILD := $(BUILDDIR)
 SANFLAGS :=
 endif
 
-PKGS := libcgraph libgvc sdl2 SDL2_image
-PKG_CFLAGS = $(shell pkg-config --cflags $(PKGS) 2>/dev/null)
-PKG_LIBS = $(shell pkg-config --libs $(PKGS) 2>/dev/null)
+# ---- optional parts ---------------------------------------------------------
+ifeq ($(MINIMAL),1)
+HAVE_GRAPHVIZ ?= 0
+HAVE_SDL ?= 0
+HAVE_EMBREE ?= 0
+endif
+pc_exists = $(if $(shell pkg-config --exists $(1) 2>/dev/null && echo y),1,0)
+ifndef HAVE_GRAPHVIZ
+HAVE_GRAPHVIZ := $(call pc_exists,libcgraph libgvc)
+endif
+ifndef HAVE_SDL
+HAVE_SDL := $(call pc_exists,sdl2 SDL2_image)
+endif
+ifndef HAVE_EMBREE
+HAVE_EMBREE := $(if $(shell printf '\043include <embree3/rtcore.h>\n' | $(CC) -E -x c - >/dev/null 2>&1 && echo y),1,0)
+endif
+HAVE_CMOCKA := $(call pc_exists,cmocka)
+
+PKGS := $(if $(filter 1,$(HAVE_GRAPHVIZ)),libcgraph libgvc) $(if $(filter 1,$(HAVE_SDL)),sdl2 SDL2_image)
+PKG_CFLAGS := $(if $(strip $(PKGS)),$(shell pkg-config --cflags $(PKGS) 2>/dev/null))
+PKG_LIBS := $(if $(strip $(PKGS)),$(shell pkg-config --libs $(PKGS) 2>/dev/null))
+CMOCKA_CFLAGS := $(if $(filter 1,$(HAVE_CMOCKA)),$(shell pkg-config --cflags cmocka 2>/dev/null))
+CMOCKA_LIBS := $(if $(filter 1,$(HAVE_CMOCKA)),$(shell pkg-config --libs cmocka 2>/dev/null),-lcmocka)
+# The programs and tests that use an optional part ask these (#if SIDX_HAVE_SDL).
+FEATURES := -DSIDX_HAVE_GRAPHVIZ=$(HAVE_GRAPHVIZ) -DSIDX_HAVE_SDL=$(HAVE_SDL) -DSIDX_HAVE_EMBREE=$(HAVE_EMBREE)
 
 WARN := -Wall -Wextra -Wpedantic -Werror
 # -ffp-contract=off: the watertight test is watertight because neighbouring
@@ -40,22 +77,27 @@ WARN := -Wall -Wextra -Wpedantic -Werror
 # a*b - c*d into an FMA in one code path (clang does in the AVX2 kernels)
 # breaks that.  gcc's ISO mode already defaults to off; clang's does not.
 FPFLAGS := -ffp-contract=off
-CFLAGS := -std=c11 $(OPT) -g $(WARN) $(FPFLAGS) -fPIC -D_DEFAULT_SOURCE -Ilib/include -Ilib $(SANFLAGS) $(EXTRA_CFLAGS)
+CFLAGS := -std=c11 $(OPT) -g $(WARN) $(FPFLAGS) -fPIC -D_DEFAULT_SOURCE -Ilib/include -Ilib $(FEATURES) $(SANFLAGS) $(EXTRA_CFLAGS)
 LDFLAGS := $(SANFLAGS) -pthread
 LDLIBS := -lm
 
 LIB_SRC := $(wildcard lib/*.c)
 LIB_OBJ := $(LIB_SRC:%.c=$(BUILD)/obj/%.o)
-VIZ_PROG_SRC := $(wildcard viz/sidx_*.c)
-VIZ_LIB_SRC := $(filter-out $(VIZ_PROG_SRC),$(wildcard viz/*.c))
+# The viewer's pieces need SDL2; sidx-dot needs Graphviz (viz/dot.c itself
+# builds either way: without Graphviz sidx_dot_write answers
+# SIDX_ERR_UNSUPPORTED); sidx-bench needs Embree; the suites need cmocka.
+VIZ_SDL_SRC := viz/font.c viz/sidx_view.c $(wildcard viz/view_*.c)
+VIZ_PROG_SRC := $(filter-out $(if $(filter 1,$(HAVE_SDL)),,viz/sidx_view.c) \
+                  $(if $(filter 1,$(HAVE_GRAPHVIZ)),,viz/sidx_dot.c),$(wildcard viz/sidx_*.c))
+VIZ_LIB_SRC := $(filter-out $(wildcard viz/sidx_*.c) $(if $(filter 1,$(HAVE_SDL)),,$(VIZ_SDL_SRC)),$(wildcard viz/*.c))
 VIZ_OBJ := $(VIZ_LIB_SRC:%.c=$(BUILD)/obj/%.o)
-TEST_SRC := $(wildcard tests/test_*.c)
+TEST_SRC := $(if $(filter 1,$(HAVE_CMOCKA)),$(wildcard tests/test_*.c))
 TEST_COMMON_SRC := $(wildcard tests/common/*.c)
 TEST_COMMON_OBJ := $(TEST_COMMON_SRC:%.c=$(BUILD)/obj/%.o)
 TESTS := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
 LESSON_SRC := $(filter-out lessons/tour.c,$(wildcard lessons/*.c))
 LESSONS := $(LESSON_SRC:lessons/%.c=$(BUILD)/lessons/%)
-BENCH_SRC := $(wildcard tests/bench/*.c)
+BENCH_SRC := $(if $(filter 1,$(HAVE_EMBREE)),$(wildcard tests/bench/*.c))
 BENCH_OBJ := $(BENCH_SRC:%.c=$(BUILD)/obj/%.o)
 VIZ_PROGS := $(VIZ_PROG_SRC:viz/sidx_%.c=$(BUILD)/bin/sidx-%)
 
@@ -69,16 +111,22 @@ PROGS := $(VIZ_PROGS) $(if $(wildcard lessons/tour.c),$(BUILD)/bin/sidx-tour) \
 NOHOOKS_OBJ := $(LIB_SRC:%.c=$(BUILD)/nohooks/obj/%.o)
 ALL_LIBS = $(VIZA) $(LIBA) $(PKG_LIBS) $(LDLIBS)
 
-.PHONY: all deps build demo test test-run valgrind bench install clean docs apidocs fuzz
+.PHONY: all deps build optional-parts demo test test-run valgrind bench install clean docs apidocs fuzz cppcheck
 
-all: deps
-	@$(MAKE) --no-print-directory build
+all: build
 
-build: $(LIBA) $(LIBSO) $(VIZA) $(PROGS) $(LESSONS) $(TESTS)
+build: optional-parts $(LIBA) $(LIBSO) $(VIZA) $(PROGS) $(LESSONS) $(TESTS)
+
+# One line per optional part that is missing, before anything is compiled.
+optional-parts:
+	@$(if $(filter 1,$(HAVE_GRAPHVIZ)),,echo "build: without Graphviz (libgraphviz-dev): no sidx-dot, no tree drawings";) \
+	 $(if $(filter 1,$(HAVE_SDL)),,echo "build: without SDL2 (libsdl2-dev libsdl2-image-dev): no sidx-view, viewer tests skipped";) \
+	 $(if $(filter 1,$(HAVE_EMBREE)),,echo "build: without Embree (libembree-dev): no sidx-bench";) \
+	 $(if $(filter 1,$(HAVE_CMOCKA)),,echo "build: without cmocka (libcmocka-dev): the test suites are not built";) true
 
 # Installs what is missing (as root), else prints the exact command and stops.
 deps:
-	@missing=""; for p in $(DEBS); do dpkg -s $$p >/dev/null 2>&1 || missing="$$missing $$p"; done; \
+	@missing=""; for p in $(DEBS) $(EXTRA_DEBS); do dpkg -s $$p >/dev/null 2>&1 || missing="$$missing $$p"; done; \
 	if [ -n "$$missing" ]; then \
 	  if [ "$$(id -u)" = 0 ]; then \
 	    echo "deps: installing$$missing"; \
@@ -91,7 +139,7 @@ deps:
 
 $(BUILD)/obj/%.o: %.c
 	@mkdir -p $(dir $@)
-	$(CC) $(CFLAGS) $(PKG_CFLAGS) -MMD -MP -c $< -o $@
+	$(CC) $(CFLAGS) $(PKG_CFLAGS) $(CMOCKA_CFLAGS) -MMD -MP -c $< -o $@
 
 $(LIBA): $(LIB_OBJ)
 	@mkdir -p $(dir $@)
@@ -131,7 +179,7 @@ $(BUILD)/lessons/%: $(BUILD)/obj/lessons/%.o $(VIZA) $(LIBA)
 
 $(BUILD)/tests/%: $(BUILD)/obj/tests/%.o $(TEST_COMMON_OBJ) $(VIZA) $(LIBA)
 	@mkdir -p $(dir $@)
-	$(CC) $(LDFLAGS) -o $@ $< $(TEST_COMMON_OBJ) $(ALL_LIBS) -lcmocka
+	$(CC) $(LDFLAGS) -o $@ $< $(TEST_COMMON_OBJ) $(ALL_LIBS) $(CMOCKA_LIBS)
 
 demo: deps
 	@$(MAKE) --no-print-directory build
@@ -171,6 +219,15 @@ bench: deps
 	$(BUILD)/bin/sidx-bench extras $(if $(wildcard ../shared/scenes),--scenes ../shared/scenes) | tee $(BUILD)/bench/extras.txt
 	@if [ -d ../shared/scenes ]; then sh docs/bench_refresh.sh $(BUILD)/bench/table.md docs/benchmark.md README.md; \
 	else echo "bench: no ../shared/scenes (bunny, Sponza): docs/benchmark.md and README.md keep their figures"; fi
+
+# Static analysis: every C file of the tree, in the configuration the build
+# uses on Debian (all optional parts present).  Exit 1 on any finding.
+CPPCHECK_FLAGS := --enable=warning,portability --std=c11 --error-exitcode=1 --inline-suppr --quiet \
+                  -DSIDX_HAVE_GRAPHVIZ=1 -DSIDX_HAVE_SDL=1 -DSIDX_HAVE_EMBREE=1 -Ilib/include -Ilib -Itests
+cppcheck:
+	@command -v cppcheck >/dev/null 2>&1 || { echo "cppcheck: not installed (apt-get install cppcheck)"; exit 1; }
+	cppcheck $(CPPCHECK_FLAGS) lib viz lessons tests
+	@echo "cppcheck: no findings"
 
 # Fuzzing with libFuzzer (clang): every tests/fuzz/fuzz_*.c target runs for
 # FUZZ_SECONDS, starting from the checked-in seeds in tests/fuzz/corpus/<name>
@@ -233,7 +290,7 @@ apidocs:
 	doxygen docs/Doxyfile
 	@echo "apidocs: build/apidocs/html/index.html"
 
-install: all
+install: build
 	install -d $(DESTDIR)$(PREFIX)/include/sidx $(DESTDIR)$(PREFIX)/lib/pkgconfig $(DESTDIR)$(PREFIX)/bin
 	install -m 644 lib/include/sidx/*.h $(DESTDIR)$(PREFIX)/include/sidx/
 	install -m 644 $(LIBA) $(VIZA) $(DESTDIR)$(PREFIX)/lib/
@@ -242,6 +299,6 @@ install: all
 	sed -e 's|@PREFIX@|$(PREFIX)|g' sidx.pc.in > $(DESTDIR)$(PREFIX)/lib/pkgconfig/sidx.pc
 
 clean:
-	rm -rf build
+	rm -rf $(BUILDDIR)
 
--include $(shell find build -name '*.d' 2>/dev/null)
+-include $(shell find $(BUILDDIR) -name '*.d' 2>/dev/null)

@@ -13,8 +13,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#if SIDX_HAVE_GRAPHVIZ
 #include <graphviz/cgraph.h>
 #include <graphviz/gvc.h>
+#endif
 #include "sidx/sinks.h"
 #include "sidx/viz.h"
 
@@ -32,6 +34,8 @@ static sidx_status fail(sidx_error *err, sidx_status s, const char *fmt, ...)
     }
     return s;
 }
+
+#if SIDX_HAVE_GRAPHVIZ
 
 /* Appends to a fixed buffer, truncating safely. */
 typedef struct strbuf { char s[512]; size_t n; } strbuf;
@@ -238,6 +242,8 @@ out:
     return rc;
 }
 
+#endif /* SIDX_HAVE_GRAPHVIZ */
+
 /* Output format from the extension (or opt->format).  "dot" = text. */
 static const char *format_of(const char *path, const char *forced)
 {
@@ -271,6 +277,12 @@ sidx_status sidx_dot_write_events(const sidx_event *build, size_t nbuild, const 
     const char *fmt = format_of(path, o.format);
     if (!fmt)
         return fail(err, SIDX_ERR_INVALID_ARG, "%s: unknown output format (use .dot, .gv, .svg, .png or .pdf)", path);
+#if !SIDX_HAVE_GRAPHVIZ
+    (void)trav;
+    (void)ntrav;
+    return fail(err, SIDX_ERR_UNSUPPORTED, "%s: sidx was built without Graphviz (install libgraphviz-dev, rebuild)",
+                path);
+#else
     const int text = !strcmp(fmt, "dot") || !strcmp(fmt, "gv");
 
     sidx_viz_tree t;
@@ -345,6 +357,7 @@ sidx_status sidx_dot_write_events(const sidx_event *build, size_t nbuild, const 
     if (rc != 0) return fail(err, SIDX_ERR_IO, "%s: graphviz could not write %s output", path, fmt);
     if (close_rc != 0) return fail(err, SIDX_ERR_IO, "%s: write failed", path);
     return SIDX_OK;
+#endif /* SIDX_HAVE_GRAPHVIZ */
 }
 
 sidx_status sidx_dot_write(const sidx_mesh *mesh, const char *accel_name, const sidx_dot_options *opt,

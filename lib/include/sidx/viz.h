@@ -115,7 +115,9 @@ typedef struct sidx_dot_options {
  * from the events, optionally traces the ray, and writes the graph to path
  * ("-" = stdout for the text formats).  opt may be NULL.  Errors:
  * SIDX_ERR_INVALID_ARG (NULL args, bad ray, unknown extension), the build's
- * errors, SIDX_ERR_UNSUPPORTED ("brute does not emit a tree"), SIDX_ERR_IO. */
+ * errors, SIDX_ERR_UNSUPPORTED ("brute does not emit a tree", or a
+ * libsidxviz built without Graphviz: HAVE_GRAPHVIZ=0 or libgraphviz-dev
+ * missing), SIDX_ERR_IO. */
 sidx_status sidx_dot_write(const sidx_mesh *mesh, const char *accel_name, const sidx_dot_options *opt,
                            const char *path, sidx_error *err);
 /* The same from already recorded events: build (BUILD_*) events and,
