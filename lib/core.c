@@ -110,7 +110,7 @@ sidx_status sidx_ray_init(sidx_ray *r, sidx_vec3 org, sidx_vec3 dir, float tmin,
     r->inv_dir = sidx_v3(1.0f / dir.x, 1.0f / dir.y, 1.0f / dir.z);
     r->sx = d[kx] / d[kz];
     r->sy = d[ky] / d[kz];
-    r->sz = (&r->inv_dir.x)[kz]; /* the same 1/d[kz], already computed: one division fewer per ray */
+    r->sz = (sidx_v3_array(&r->inv_dir))[kz]; /* the same 1/d[kz], already computed: one division fewer per ray */
 #endif
     r->sign[0] = (uint8_t)(signs & 1u);
     r->sign[1] = (uint8_t)(signs >> 1 & 1u);

@@ -124,7 +124,7 @@ int sidx_intersect_obb(const sidx_ray *r, const sidx_obb *b, float tmin, float t
 {
     if (!r || !b) return 0;
     float t0 = tmin, t1 = tmax;
-    const float *h = &b->half.x;
+    const float *h = sidx_v3_array(&b->half);
     for (int i = 0; i < 3; ++i) {
         const float c = sidx_v3_dot(b->axis[i], b->center);
         if (!clip_slab(r, b->axis[i], c - h[i], c + h[i], &t0, &t1)) return 0;
@@ -268,7 +268,7 @@ sidx_status sidx_obb_fit(const sidx_vec3 *p, uint32_t n, sidx_obb *out)
             if (d > hi[k]) hi[k] = d;
         }
     sidx_vec3 c = sidx_v3(0, 0, 0);
-    float *h = &o.half.x;
+    float *h = sidx_v3_array_rw(&o.half);
     for (int k = 0; k < 3; ++k) {
         /* pad by a few ulps of the magnitude so rounding keeps points inside */
         const float pad = 4.0f * FLT_EPSILON * (fabsf(lo[k]) > fabsf(hi[k]) ? fabsf(lo[k]) : fabsf(hi[k]));

@@ -318,7 +318,7 @@ static SIDX_INLINE int rc_query(const sidx_accel *a, const sidx_ray *r, const si
     p[0] = fminf(fmaxf(o.x, t->box.min.x), t->box.max.x);
     p[1] = fminf(fmaxf(o.y, t->box.min.y), t->box.max.y);
     p[2] = fminf(fmaxf(o.z, t->box.min.z), t->box.max.z);
-    const float *d = &r->dir.x;
+    const float *d = sidx_v3_array(&r->dir);
     int k = 0;
     if (fabsf(d[1]) > fabsf(d[k])) k = 1;
     if (fabsf(d[2]) > fabsf(d[k])) k = 2;

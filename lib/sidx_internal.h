@@ -180,7 +180,7 @@ typedef struct sidx__wt_edges {
 static SIDX_INLINE sidx__wt_edges sidx__tri_watertight_edges(const sidx_ray *r, const float *pa, const float *pb,
                                                              const float *pc, const int stride)
 {
-    const float *o = &r->org.x;
+    const float *o = sidx_v3_array(&r->org);
     const int kx = r->kx, ky = r->ky, kz = r->kz;
     const float ax = pa[kx * stride] - o[kx], ay = pa[ky * stride] - o[ky], az = pa[kz * stride] - o[kz];
     const float bx = pb[kx * stride] - o[kx], by = pb[ky * stride] - o[ky], bz = pb[kz * stride] - o[kz];
@@ -237,7 +237,7 @@ static SIDX_INLINE int sidx__tri_watertight_p(const sidx_ray *r, const float *pa
 static SIDX_INLINE int sidx__tri_watertight(const sidx_ray *r, sidx_vec3 a, sidx_vec3 b, sidx_vec3 c, float tmax,
                                             float *t_out, float *u_out, float *v_out)
 {
-    return sidx__tri_watertight_p(r, &a.x, &b.x, &c.x, tmax, t_out, u_out, v_out);
+    return sidx__tri_watertight_p(r, sidx_v3_array(&a), sidx_v3_array(&b), sidx_v3_array(&c), tmax, t_out, u_out, v_out);
 }
 
 /* Möller & Trumbore 1997, as derived on the slides with Cramer's rule:
@@ -375,7 +375,7 @@ static SIDX_INLINE int sidx__mesh_tri_test(const sidx_mesh *mesh, sidx_tri_metho
 static SIDX_INLINE int sidx__box_test(int robust, const sidx_ray *r, const sidx_aabb *b, float tmin, float tmax,
                                       float *t_near, float *t_far)
 {
-    const float *bmin = &b->min.x, *bmax = &b->max.x, *o = &r->org.x, *inv = &r->inv_dir.x;
+    const float *bmin = sidx_v3_array(&b->min), *bmax = sidx_v3_array(&b->max), *o = sidx_v3_array(&r->org), *inv = sidx_v3_array(&r->inv_dir);
     const float *const corner[2] = {bmin, bmax};
     float t0 = tmin, t1 = tmax;
     for (int i = 0; i < 3; ++i) {

@@ -563,7 +563,7 @@ void tk_ref_intersect(const sidx_mesh *m, const tk_rayrec *ray, sidx_hit *out)
     if (!(tmin <= best)) return;
     for (uint32_t i = 0; i < m->num_triangles; ++i) {
         const uint32_t *ix = m->indices + 3u * i;
-        const float *pa = &m->positions[ix[0]].x, *pb = &m->positions[ix[1]].x, *pc = &m->positions[ix[2]].x;
+        const float *pa = sidx_v3_array(&m->positions[ix[0]]), *pb = sidx_v3_array(&m->positions[ix[1]]), *pc = sidx_v3_array(&m->positions[ix[2]]);
         const double az = pa[kz] - o[kz], bz = pb[kz] - o[kz], cz = pc[kz] - o[kz];
         const double Ax = (pa[kx] - o[kx]) - sx * az, Ay = (pa[ky] - o[ky]) - sy * az;
         const double Bx = (pb[kx] - o[kx]) - sx * bz, By = (pb[ky] - o[ky]) - sy * bz;
@@ -676,7 +676,7 @@ sidx_status tk_mesh_duplicate_tris(const sidx_mesh *m, sidx_mesh *out)
     if (!idx) return SIDX_ERR_NOMEM;
     memcpy(idx, m->indices, 3 * nt * sizeof *idx);
     memcpy(idx + 3 * nt, m->indices, 3 * nt * sizeof *idx);
-    sidx_status s = mesh_with_positions(m->num_vertices ? &m->positions[0].x : NULL, m->num_vertices, idx, (uint32_t)(2 * nt), out);
+    sidx_status s = mesh_with_positions(m->num_vertices ? sidx_v3_array(&m->positions[0]) : NULL, m->num_vertices, idx, (uint32_t)(2 * nt), out);
     free(idx);
     return s;
 }

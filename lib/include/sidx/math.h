@@ -48,10 +48,8 @@ static inline void sidx_v3_set(sidx_vec3 *a, int axis, float value)
     else if (axis == 1) a->y = value;
     else a->z = value;
 }
-/* The three components as an array, for loops over the axes (a hot loop
- * indexes the copy, which the compiler keeps in registers), and back.
- * Reading a sidx_vec3 as float[3] through &v.x is not valid C (an index
- * past the member x), so sidx never does. */
+/* The three components copied to an array, for loops over the axes (a hot
+ * loop indexes the copy, which the compiler keeps in registers), and back. */
 static inline void sidx_v3_to_array(sidx_vec3 a, float out[3])
 {
     out[0] = a.x;
@@ -59,6 +57,20 @@ static inline void sidx_v3_to_array(sidx_vec3 a, float out[3])
     out[2] = a.z;
 }
 static inline sidx_vec3 sidx_v3_from_array(const float in[3]) { return sidx_v3(in[0], in[1], in[2]); }
+/* The components in place as float[3], for code that picks an axis by a
+ * number it computed (a split axis; the watertight test's kx, ky, kz) and
+ * cannot afford a copy or a three-way choice in its inner loop:
+ * sidx_v3_array(&v)[axis] to read, sidx_v3_array_rw(&v)[axis] to write.
+ * A pointer to a struct is a pointer to its first member, and a sidx_vec3
+ * is three floats with no padding (checked below), so this is the memory
+ * of v.x, v.y, v.z in order.  Use it instead of &v.x, which names one
+ * float, not three. */
+static inline const float *sidx_v3_array(const sidx_vec3 *v) { return (const float *)(const void *)v; }
+static inline float *sidx_v3_array_rw(sidx_vec3 *v) { return (float *)(void *)v; }
+#ifndef __cplusplus
+_Static_assert(sizeof(sidx_vec3) == 3 * sizeof(float), "sidx_vec3 must be three packed floats");
+#endif
+
 static inline int sidx_v3_isfinite(sidx_vec3 a) { return isfinite(a.x) && isfinite(a.y) && isfinite(a.z); }
 
 /* The empty box: min = +inf, max = -inf, so that any union fixes it. */
