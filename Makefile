@@ -245,3 +245,11 @@ clean:
 	rm -rf build
 
 -include $(shell find build -name '*.d' 2>/dev/null)
+
+# Exercises (docs/exercises.md).  sidx-check links a student's file with
+# the exercise's checker driver and the runner, compiled here, against
+# this build's library (and its sanitizer flags, under SAN=1).
+EX_CHECK_SRC := $(wildcard lessons/exercises/check/*.c)
+EX_CHECK_OBJ := $(EX_CHECK_SRC:%.c=$(BUILD)/obj/%.o)
+$(BUILD)/obj/viz/sidx_check.o: CFLAGS += -DSIDX_CHECK_SRCDIR='"$(CURDIR)"' -DSIDX_CHECK_SANFLAGS='"$(SANFLAGS)"'
+$(BUILD)/bin/sidx-check: $(EX_CHECK_OBJ)
