@@ -4,10 +4,11 @@
  *  - its reference solution (lessons/exercises/solutions/NAME.c) passes:
  *    exit 0;
  *  - the unmodified stub fails cleanly: exit 1 and a divergence report;
- *  - every planted mistake tests/exercises/NAME--*.c is caught as its
- *    header says: the exit status on its "EXPECT-EXIT:" line and every
- *    "EXPECT:" line's text in the report (the case, the step, the hint);
- *    crashing and endlessly looping variants exit 2 naming the case.
+ *  - every planted mistake of tests/exercises/mistakes.txt (a solution
+ *    with one line changed, written to a temporary file) is caught as its
+ *    record says: its exit status and every "expect" text in the report
+ *    (the case, the step, the hint); crashing and endlessly looping
+ *    variants exit 2 naming the case.
  * sidx-check compiles each file, so this suite runs the compiler: it is
  * found through the build directory's bin/sidx-check (the sibling of this
  * binary's tests/), and it compiles with that build's sanitizer flags.
@@ -57,8 +58,9 @@ static int check(const char *name, const char *file, char **out)
         n += k;
         if (cap - n < 2) {
             cap *= 2;
-            buf = realloc(buf, cap);
-            assert_non_null(buf);
+            char *nb = realloc(buf, cap);
+            assert_non_null(nb);
+            buf = nb;
         }
     }
     buf[n] = '\0';
@@ -125,51 +127,123 @@ static void stubs_fail_cleanly(void **state)
     }
 }
 
-/* Every tests/exercises/NAME--what.c is caught as its header says. */
+/* One planted mistake of tests/exercises/mistakes.txt. */
+typedef struct mistake {
+    char name[64], slug[64], old[512], new_[512];
+    int exit_;
+    char expect[8][256];
+    int nexp;
+} mistake;
+
+static char *slurp(const char *path)
+{
+    FILE *f = fopen(path, "r");
+    if (!f) return NULL;
+    fseek(f, 0, SEEK_END);
+    const long n = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    char *s = malloc((size_t)n + 1);
+    if (s && fread(s, 1, (size_t)n, f) != (size_t)n) {
+        free(s);
+        s = NULL;
+    }
+    if (s) s[n] = '\0';
+    fclose(f);
+    return s;
+}
+
+/* Writes the solution of m->name with m->old replaced by m->new_ to
+ * dir/NAME--SLUG.c (path in out); 0 on success. */
+static int plant(const mistake *m, const char *dir, char *out, size_t size)
+{
+    char sol[PATH_MAX];
+    snprintf(sol, sizeof sol, "lessons/exercises/solutions/%s.c", m->name);
+    char *src = slurp(sol);
+    if (!src) return -1;
+    char *at = strstr(src, m->old);
+    if (!at) {
+        print_message("%s--%s: the line to replace is not in %s: %s\n", m->name, m->slug, sol, m->old);
+        free(src);
+        return -1;
+    }
+    snprintf(out, size, "%s/%s--%s.c", dir, m->name, m->slug);
+    FILE *f = fopen(out, "w");
+    if (!f) {
+        free(src);
+        return -1;
+    }
+    fprintf(f, "%.*s%s%s", (int)(at - src), src, m->new_, at + strlen(m->old));
+    free(src);
+    return fclose(f);
+}
+
+/* Reads the records of tests/exercises/mistakes.txt; returns their count,
+ * -1 when the file is absent (a handout tree). */
+static int read_mistakes(mistake *ms, int max)
+{
+    FILE *f = fopen("tests/exercises/mistakes.txt", "r");
+    if (!f) return -1;
+    char line[1024];
+    int n = -1;
+    while (fgets(line, sizeof line, f)) {
+        line[strcspn(line, "\n")] = '\0';
+        if (line[0] == '#' || line[0] == '\0') continue;
+        char key[16];
+        int off = 0;
+        if (sscanf(line, "%15s %n", key, &off) != 1) continue;
+        const char *val = line + off;
+        if (!strcmp(key, "mistake")) {
+            if (n + 1 >= max) break;
+            mistake *m = &ms[++n];
+            memset(m, 0, sizeof *m);
+            if (sscanf(val, "%63s %63s", m->name, m->slug) != 2) n = max;
+        } else if (n < 0 || n >= max) {
+            continue;
+        } else if (!strcmp(key, "old")) {
+            snprintf(ms[n].old, sizeof ms[n].old, "%s", val);
+        } else if (!strcmp(key, "new")) {
+            snprintf(ms[n].new_, sizeof ms[n].new_, "%s", val);
+        } else if (!strcmp(key, "exit")) {
+            ms[n].exit_ = atoi(val);
+        } else if (!strcmp(key, "expect") && ms[n].nexp < 8) {
+            snprintf(ms[n].expect[ms[n].nexp++], 256, "%s", val);
+        }
+    }
+    fclose(f);
+    return n >= max ? -2 : n + 1;
+}
+
+/* Every planted mistake is caught as its record says. */
 static void planted_mistakes_caught(void **state)
 {
     (void)state;
-    DIR *d = opendir("tests/exercises");
-    if (!d) {
-        print_message("skipped: no tests/exercises/ (a handout tree)\n");
+    static mistake ms[64];
+    const int n = read_mistakes(ms, 64);
+    if (n == -1 || access("lessons/exercises/solutions", R_OK) != 0) {
+        print_message("skipped: no tests/exercises/ or no solutions (a handout tree)\n");
         return;
     }
-    struct dirent *e;
-    int files = 0;
-    while ((e = readdir(d))) {
-        const char *dash = strstr(e->d_name, "--");
-        const size_t len = strlen(e->d_name);
-        if (!dash || len < 3 || strcmp(e->d_name + len - 2, ".c")) continue;
-        char name[64], file[PATH_MAX];
-        snprintf(name, sizeof name, "%.*s", (int)(dash - e->d_name), e->d_name);
-        snprintf(file, sizeof file, "tests/exercises/%s", e->d_name);
-        FILE *f = fopen(file, "r");
-        assert_non_null(f);
-        char line[512], expects[16][256];
-        int nexp = 0, want_rc = -1;
-        while (fgets(line, sizeof line, f)) {
-            line[strcspn(line, "\n")] = '\0';
-            const char *p;
-            if ((p = strstr(line, "EXPECT-EXIT: "))) want_rc = atoi(p + 13);
-            else if ((p = strstr(line, "EXPECT: ")) && nexp < 16) snprintf(expects[nexp++], 256, "%s", p + 8);
-        }
-        fclose(f);
-        assert_true(want_rc == 1 || want_rc == 2);
-        char *out;
-        const int rc = check(name, file, &out);
-        int ok = rc == want_rc;
-        for (int k = 0; k < nexp; ++k)
-            if (!strstr(out, expects[k])) {
-                print_message("%s: the report lacks \"%s\"\n", file, expects[k]);
+    assert_true(n >= 8);
+    char dir[] = "/tmp/sidx-test-ex-XXXXXX";
+    assert_non_null(mkdtemp(dir));
+    for (int i = 0; i < n; ++i) {
+        const mistake *m = &ms[i];
+        char file[PATH_MAX], *out;
+        assert_true(m->exit_ == 1 || m->exit_ == 2);
+        assert_int_equal(plant(m, dir, file, sizeof file), 0);
+        const int rc = check(m->name, file, &out);
+        int ok = rc == m->exit_;
+        for (int k = 0; k < m->nexp; ++k)
+            if (!strstr(out, m->expect[k])) {
+                print_message("%s--%s: the report lacks \"%s\"\n", m->name, m->slug, m->expect[k]);
                 ok = 0;
             }
-        if (!ok) print_message("%s: exit %d (want %d)\n%s", file, rc, want_rc, out);
+        if (!ok) print_message("%s--%s: exit %d (want %d)\n%s", m->name, m->slug, rc, m->exit_, out);
         assert_true(ok);
         free(out);
-        ++files;
+        unlink(file);
     }
-    closedir(d);
-    assert_true(files >= 8);
+    assert_int_equal(rmdir(dir), 0);
 }
 
 static void usage_and_errors(void **state)
@@ -199,13 +273,18 @@ static void traces_and_diff(void **state)
     char *slash = strrchr(step, '/');
     assert_non_null(slash);
     snprintf(slash + 1, sizeof step - (size_t)(slash + 1 - step), "sidx-step");
-    if (access("tests/exercises/05_bvh_traversal--far-wrong-t.c", R_OK) != 0) {
-        print_message("skipped: no tests/exercises/ (a handout tree)\n");
+    static mistake ms[64];
+    const int n = read_mistakes(ms, 64);
+    int k = 0;
+    while (k < n && strcmp(ms[k].slug, "far-wrong-t") != 0) ++k;
+    char file[PATH_MAX];
+    if (k >= n || access("lessons/exercises/solutions", R_OK) != 0) {
+        print_message("skipped: no planted mistakes or no solutions (a handout tree)\n");
         rmdir(dir);
         return;
     }
-    snprintf(cmd, sizeof cmd, "'%s' 05_bvh_traversal tests/exercises/05_bvh_traversal--far-wrong-t.c --trace %s >/dev/null",
-             checker, dir);
+    assert_int_equal(plant(&ms[k], dir, file, sizeof file), 0);
+    snprintf(cmd, sizeof cmd, "'%s' 05_bvh_traversal %s --trace %s >/dev/null", checker, file, dir);
     int st = system(cmd);
     assert_int_equal(WEXITSTATUS(st), 1);
     snprintf(cmd, sizeof cmd, "'%s' --diff %s/reference.jsonl %s/yours.jsonl >/dev/null", step, dir, dir);
