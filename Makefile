@@ -301,4 +301,26 @@ install: build
 clean:
 	rm -rf $(BUILDDIR)
 
+# Exercises (docs/exercises.md).  sidx-check links a student's file with
+# the exercise's checker driver and the runner, compiled here, against
+# this build's library (and its sanitizer flags, under SAN=1).
+EX_CHECK_SRC := $(wildcard lessons/exercises/check/*.c)
+EX_CHECK_OBJ := $(EX_CHECK_SRC:%.c=$(BUILD)/obj/%.o)
+$(BUILD)/obj/viz/sidx_check.o: CFLAGS += -DSIDX_CHECK_SRCDIR='"$(CURDIR)"' -DSIDX_CHECK_SANFLAGS='"$(SANFLAGS)"'
+$(BUILD)/bin/sidx-check: $(EX_CHECK_OBJ)
+
+# make exercise EX=NAME: check lessons/exercises/NAME.c, the stub a student
+# edits in place.  make exercises-handout: the repository without the
+# reference solutions and the planted mistakes (which are solutions too).
+.PHONY: exercise exercises-handout
+exercise: build
+	@if [ -z "$(EX)" ]; then echo "usage: make exercise EX=NAME   (NAME from: $(BUILD)/bin/sidx-check --list)"; exit 2; fi
+	$(BUILD)/bin/sidx-check $(EX) lessons/exercises/$(EX).c
+
+exercises-handout:
+	@mkdir -p $(BUILDDIR)
+	git ls-files | grep -v -e '^lessons/exercises/solutions/' -e '^tests/exercises/' \
+	  | tar -czf $(BUILDDIR)/sidx-exercises.tar.gz --transform 's,^,sidx-exercises/,' -T -
+	@echo "exercises-handout: $(BUILDDIR)/sidx-exercises.tar.gz (no lessons/exercises/solutions/, no tests/exercises/)"
+
 -include $(shell find $(BUILDDIR) -name '*.d' 2>/dev/null)

@@ -1,0 +1,48 @@
+/* check.h — what an exercise's checker driver tells the runner.
+ *
+ * sidx-check links three things: the student's file, one driver
+ * (lessons/exercises/check/NAME.c, which defines ex_driver_this) and the
+ * runner (runner.c: main, the per-case child process, the comparison and
+ * the report).  A driver describes a fixed battery of cases; for each it
+ * emits the reference trace (the library's own walk, or the library's
+ * elementary test) and runs the student's function, which emits the
+ * student's trace through sidx/exercise.h.  The runner compares the two
+ * event by event. */
+#ifndef SIDX_EX_CHECK_H
+#define SIDX_EX_CHECK_H
+
+#include <stddef.h>
+#include "sidx/sidx.h"
+#include "sidx/exercise.h"
+
+typedef struct ex_case_info {
+    char name[160];      /* what the case is about: "ray parallel to the plane (N·d = 0)" */
+    char what[512];      /* the input: the ray, the node, ... */
+    const char *hint;    /* the case's hint in the slide's words, or NULL */
+} ex_case_info;
+
+typedef struct ex_driver {
+    const char *name;    /* the exercise file name without .c */
+    const char *title;   /* one line */
+    const char *slide;   /* deck and slide title the exercise follows */
+    int (*setup)(void);  /* builds the scenes; 0 on success */
+    size_t (*num_cases)(void);
+    void (*describe)(size_t i, ex_case_info *out);
+    void (*reference)(size_t i, const sidx_hook *h);
+    void (*student)(size_t i, const sidx_hook *h);
+    /* A hint for the first divergence (ref or stu may be NULL when that
+     * trace ended); NULL = the case's hint. */
+    const char *(*hint)(size_t i, const sidx_event *ref, const sidx_event *stu);
+    void (*teardown)(void);
+} ex_driver;
+
+extern const ex_driver ex_driver_this;
+
+/* "o=(x, y, z) d=(x, y, z) t in [tmin, tmax)" */
+void ex_format_ray(char *buf, size_t size, const sidx_ray *r);
+/* A ray from components, checked (aborts the driver on an invalid ray). */
+sidx_ray ex_ray(float ox, float oy, float oz, float dx, float dy, float dz, float tmin, float tmax);
+/* A small deterministic generator for the random part of a battery. */
+float ex_rand(uint32_t *state);
+
+#endif

@@ -1,0 +1,155 @@
+/* exercise.c — sidx/exercise.h: the calls through which an exercise
+ * reports its steps, each emitting the event a structure emits for the
+ * same step (field for field as in docs/events.md). */
+#include "sidx_internal.h"
+#include "sidx/exercise.h"
+
+static int ex_wants(const sidx_ex *ex, sidx_event_type type)
+{
+    return ex && sidx__hook_wants(ex->hook, type);
+}
+
+static sidx_event ex_event(const sidx_ex *ex, sidx_event_type type)
+{
+    sidx_event e = sidx_event_blank(type);
+    e.structure = ex->structure ? ex->structure : "exercise";
+    e.ray_id = ex->ray_id;
+    return e;
+}
+
+void sidx_ex_box_test(const sidx_ex *ex, uint32_t node, const sidx_aabb *box, int result, float t_near, float t_far)
+{
+    if (!ex_wants(ex, SIDX_EV_BOX_TEST)) return;
+    sidx_event e = ex_event(ex, SIDX_EV_BOX_TEST);
+    e.node = node;
+    if (box) e.bounds = *box;
+    e.result = result ? 1 : 0;
+    e.t_near = result ? t_near : NAN;
+    e.t_far = result ? t_far : NAN;
+    ex->hook->fn(&e, ex->hook->user);
+}
+
+void sidx_ex_node_enter(const sidx_ex *ex, uint32_t node, uint32_t depth, float t_near, float t_far)
+{
+    if (!ex_wants(ex, SIDX_EV_NODE_ENTER)) return;
+    sidx_event e = ex_event(ex, SIDX_EV_NODE_ENTER);
+    e.node = node;
+    e.depth = depth;
+    e.t_near = t_near;
+    e.t_far = t_far;
+    ex->hook->fn(&e, ex->hook->user);
+}
+
+void sidx_ex_cell_enter(const sidx_ex *ex, uint32_t cell_id, int x, int y, int z, float t_near, float t_far)
+{
+    if (!ex_wants(ex, SIDX_EV_NODE_ENTER)) return;
+    sidx_event e = ex_event(ex, SIDX_EV_NODE_ENTER);
+    e.node = cell_id;
+    e.depth = 0;
+    e.cell[0] = x;
+    e.cell[1] = y;
+    e.cell[2] = z;
+    e.t_near = t_near;
+    e.t_far = t_far;
+    ex->hook->fn(&e, ex->hook->user);
+}
+
+static void ex_stack(const sidx_ex *ex, sidx_event_type type, uint32_t node, uint32_t size, float tn, float tf)
+{
+    if (!ex_wants(ex, type)) return;
+    sidx_event e = ex_event(ex, type);
+    e.node = node;
+    e.depth = size;
+    e.t_near = tn;
+    e.t_far = tf;
+    ex->hook->fn(&e, ex->hook->user);
+}
+
+void sidx_ex_push(const sidx_ex *ex, uint32_t node, uint32_t stack_size, float t_near, float t_far)
+{
+    ex_stack(ex, SIDX_EV_STACK_PUSH, node, stack_size, t_near, t_far);
+}
+
+void sidx_ex_pop(const sidx_ex *ex, uint32_t node, uint32_t stack_size, float t_near, float t_far)
+{
+    ex_stack(ex, SIDX_EV_STACK_POP, node, stack_size, t_near, t_far);
+}
+
+void sidx_ex_prim_test(const sidx_ex *ex, uint32_t prim, int result, float t)
+{
+    if (!ex_wants(ex, SIDX_EV_PRIM_TEST)) return;
+    sidx_event e = ex_event(ex, SIDX_EV_PRIM_TEST);
+    e.prim = prim;
+    e.result = result ? 1 : 0;
+    e.t = result ? t : INFINITY;
+    ex->hook->fn(&e, ex->hook->user);
+}
+
+void sidx_ex_hit_update(const sidx_ex *ex, uint32_t prim, float t)
+{
+    if (!ex_wants(ex, SIDX_EV_HIT_UPDATE)) return;
+    sidx_event e = ex_event(ex, SIDX_EV_HIT_UPDATE);
+    e.prim = prim;
+    e.t = t;
+    ex->hook->fn(&e, ex->hook->user);
+}
+
+void sidx_ex_mailbox_hit(const sidx_ex *ex, uint32_t prim)
+{
+    if (!ex_wants(ex, SIDX_EV_MAILBOX_HIT)) return;
+    sidx_event e = ex_event(ex, SIDX_EV_MAILBOX_HIT);
+    e.prim = prim;
+    ex->hook->fn(&e, ex->hook->user);
+}
+
+static void ex_plane(const sidx_ex *ex, sidx_event_type type, uint32_t node, int axis, float pos, float cost,
+                     uint32_t nl, uint32_t nr)
+{
+    if (!ex_wants(ex, type)) return;
+    sidx_event e = ex_event(ex, type);
+    e.node = node;
+    e.axis = axis;
+    e.pos = pos;
+    e.cost = cost;
+    e.count = nl;
+    e.aux = nr;
+    ex->hook->fn(&e, ex->hook->user);
+}
+
+void sidx_ex_candidate(const sidx_ex *ex, uint32_t node, int axis, float pos, float cost, uint32_t n_left,
+                       uint32_t n_right)
+{
+    ex_plane(ex, SIDX_EV_BUILD_CANDIDATE, node, axis, pos, cost, n_left, n_right);
+}
+
+void sidx_ex_split(const sidx_ex *ex, uint32_t node, int axis, float pos, float cost, uint32_t n_left,
+                   uint32_t n_right)
+{
+    ex_plane(ex, SIDX_EV_BUILD_SPLIT, node, axis, pos, cost, n_left, n_right);
+}
+
+int sidx_ex_test_box(const sidx_ex *ex, uint32_t node, const sidx_aabb *box, float tmin, float tmax, float *t_near,
+                     float *t_far)
+{
+    if (!ex || !ex->ray || !box) return 0;
+    float tn = NAN, tf = NAN;
+    const int hit = sidx__box_test(ex->box == SIDX_BOX_ROBUST, ex->ray, box, tmin, tmax, &tn, &tf);
+    if (hit) {
+        if (t_near) *t_near = tn;
+        if (t_far) *t_far = tf;
+    }
+    sidx_ex_box_test(ex, node, box, hit, tn, tf);
+    return hit;
+}
+
+int sidx_ex_test_triangle(const sidx_ex *ex, uint32_t prim, float tmax, float *t)
+{
+    if (!ex || !ex->ray || !ex->mesh || prim >= ex->mesh->num_triangles) return 0;
+    float tt = INFINITY;
+    const int hit = sidx__tri_test(ex->tri, ex->ray, sidx_mesh_vertex(ex->mesh, prim, 0),
+                                   sidx_mesh_vertex(ex->mesh, prim, 1), sidx_mesh_vertex(ex->mesh, prim, 2), tmax,
+                                   &tt, NULL, NULL);
+    if (hit && t) *t = tt;
+    sidx_ex_prim_test(ex, prim, hit, tt);
+    return hit;
+}

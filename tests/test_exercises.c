@@ -1,0 +1,317 @@
+/* test_exercises.c — lessons/exercises and sidx-check, end to end.
+ *
+ * For every exercise (lessons/exercises/NAME.c):
+ *  - its reference solution (lessons/exercises/solutions/NAME.c) passes:
+ *    exit 0;
+ *  - the unmodified stub fails cleanly: exit 1 and a divergence report;
+ *  - every planted mistake of tests/exercises/mistakes.txt (a solution
+ *    with one line changed, written to a temporary file) is caught as its
+ *    record says: its exit status and every "expect" text in the report
+ *    (the case, the step, the hint); crashing and endlessly looping
+ *    variants exit 2 naming the case.
+ * sidx-check compiles each file, so this suite runs the compiler: it is
+ * found through the build directory's bin/sidx-check (the sibling of this
+ * binary's tests/), and it compiles with that build's sanitizer flags.
+ * In a handout tree without solutions/ the solution checks are skipped.
+ * Run from the repository root. */
+#include <dirent.h>
+#include <limits.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/wait.h>
+#include <unistd.h>
+#include <cmocka.h>
+
+static char checker[PATH_MAX + 32];
+
+static int find_checker(void)
+{
+    char exe[PATH_MAX];
+    ssize_t n = readlink("/proc/self/exe", exe, sizeof exe - 1);
+    if (n <= 0) return -1;
+    exe[n] = '\0';
+    for (int k = 0; k < 2; ++k) {
+        char *s = strrchr(exe, '/');
+        if (!s) return -1;
+        *s = '\0';
+    }
+    snprintf(checker, sizeof checker, "%s/bin/sidx-check", exe);
+    return access(checker, X_OK);
+}
+
+/* Runs sidx-check NAME FILE; returns its exit status and its output (malloc'd). */
+static int check(const char *name, const char *file, char **out)
+{
+    char cmd[3 * PATH_MAX];
+    snprintf(cmd, sizeof cmd, "'%s' '%s' '%s' 2>&1", checker, name, file);
+    FILE *p = popen(cmd, "r");
+    assert_non_null(p);
+    size_t cap = 4096, n = 0;
+    char *buf = malloc(cap);
+    assert_non_null(buf);
+    size_t k;
+    while ((k = fread(buf + n, 1, cap - n - 1, p)) > 0) {
+        n += k;
+        if (cap - n < 2) {
+            cap *= 2;
+            char *nb = realloc(buf, cap);
+            assert_non_null(nb);
+            buf = nb;
+        }
+    }
+    buf[n] = '\0';
+    const int st = pclose(p);
+    *out = buf;
+    return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+}
+
+/* The exercise names: lessons/exercises/[0-9]*.c without .c, sorted. */
+static int names(char list[][64], int max)
+{
+    DIR *d = opendir("lessons/exercises");
+    assert_non_null(d);
+    int n = 0;
+    struct dirent *e;
+    while ((e = readdir(d)) && n < max) {
+        const size_t len = strlen(e->d_name);
+        if (e->d_name[0] < '0' || e->d_name[0] > '9' || len < 3 || len >= 64 || strcmp(e->d_name + len - 2, ".c"))
+            continue;
+        memcpy(list[n], e->d_name, len - 2);
+        list[n][len - 2] = '\0';
+        ++n;
+    }
+    closedir(d);
+    qsort(list, (size_t)n, sizeof list[0], (int (*)(const void *, const void *))strcmp);
+    return n;
+}
+
+static void solutions_pass(void **state)
+{
+    (void)state;
+    char list[32][64];
+    const int n = names(list, 32);
+    assert_true(n >= 4);
+    if (access("lessons/exercises/solutions", R_OK) != 0) {
+        print_message("skipped: no lessons/exercises/solutions/ (a handout tree)\n");
+        return;
+    }
+    for (int i = 0; i < n; ++i) {
+        char file[PATH_MAX], *out;
+        snprintf(file, sizeof file, "lessons/exercises/solutions/%s.c", list[i]);
+        const int rc = check(list[i], file, &out);
+        if (rc != 0) print_message("%s: exit %d\n%s", file, rc, out);
+        assert_int_equal(rc, 0);
+        assert_non_null(strstr(out, "pass"));
+        free(out);
+    }
+}
+
+static void stubs_fail_cleanly(void **state)
+{
+    (void)state;
+    char list[32][64];
+    const int n = names(list, 32);
+    for (int i = 0; i < n; ++i) {
+        char file[PATH_MAX], *out;
+        snprintf(file, sizeof file, "lessons/exercises/%s.c", list[i]);
+        const int rc = check(list[i], file, &out);
+        if (rc != 1) print_message("%s: exit %d\n%s", file, rc, out);
+        assert_int_equal(rc, 1);
+        assert_non_null(strstr(out, "leaves the reference at step"));
+        assert_non_null(strstr(out, "FAIL (exit 1)"));
+        free(out);
+    }
+}
+
+/* One planted mistake of tests/exercises/mistakes.txt. */
+typedef struct mistake {
+    char name[64], slug[64], old[512], new_[512];
+    int exit_;
+    char expect[8][256];
+    int nexp;
+} mistake;
+
+static char *slurp(const char *path)
+{
+    FILE *f = fopen(path, "r");
+    if (!f) return NULL;
+    fseek(f, 0, SEEK_END);
+    const long n = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    char *s = malloc((size_t)n + 1);
+    if (s && fread(s, 1, (size_t)n, f) != (size_t)n) {
+        free(s);
+        s = NULL;
+    }
+    if (s) s[n] = '\0';
+    fclose(f);
+    return s;
+}
+
+/* Writes the solution of m->name with m->old replaced by m->new_ to
+ * dir/NAME--SLUG.c (path in out); 0 on success. */
+static int plant(const mistake *m, const char *dir, char *out, size_t size)
+{
+    char sol[PATH_MAX];
+    snprintf(sol, sizeof sol, "lessons/exercises/solutions/%s.c", m->name);
+    char *src = slurp(sol);
+    if (!src) return -1;
+    char *at = strstr(src, m->old);
+    if (!at) {
+        print_message("%s--%s: the line to replace is not in %s: %s\n", m->name, m->slug, sol, m->old);
+        free(src);
+        return -1;
+    }
+    snprintf(out, size, "%s/%s--%s.c", dir, m->name, m->slug);
+    FILE *f = fopen(out, "w");
+    if (!f) {
+        free(src);
+        return -1;
+    }
+    fprintf(f, "%.*s%s%s", (int)(at - src), src, m->new_, at + strlen(m->old));
+    free(src);
+    return fclose(f);
+}
+
+/* Reads the records of tests/exercises/mistakes.txt; returns their count,
+ * -1 when the file is absent (a handout tree). */
+static int read_mistakes(mistake *ms, int max)
+{
+    FILE *f = fopen("tests/exercises/mistakes.txt", "r");
+    if (!f) return -1;
+    char line[1024];
+    int n = -1;
+    while (fgets(line, sizeof line, f)) {
+        line[strcspn(line, "\n")] = '\0';
+        if (line[0] == '#' || line[0] == '\0') continue;
+        char key[16];
+        int off = 0;
+        if (sscanf(line, "%15s %n", key, &off) != 1) continue;
+        const char *val = line + off;
+        if (!strcmp(key, "mistake")) {
+            if (n + 1 >= max) break;
+            mistake *m = &ms[++n];
+            memset(m, 0, sizeof *m);
+            if (sscanf(val, "%63s %63s", m->name, m->slug) != 2) n = max;
+        } else if (n < 0 || n >= max) {
+            continue;
+        } else if (!strcmp(key, "old")) {
+            snprintf(ms[n].old, sizeof ms[n].old, "%s", val);
+        } else if (!strcmp(key, "new")) {
+            snprintf(ms[n].new_, sizeof ms[n].new_, "%s", val);
+        } else if (!strcmp(key, "exit")) {
+            ms[n].exit_ = atoi(val);
+        } else if (!strcmp(key, "expect") && ms[n].nexp < 8) {
+            snprintf(ms[n].expect[ms[n].nexp++], 256, "%s", val);
+        }
+    }
+    fclose(f);
+    return n >= max ? -2 : n + 1;
+}
+
+/* Every planted mistake is caught as its record says. */
+static void planted_mistakes_caught(void **state)
+{
+    (void)state;
+    static mistake ms[64];
+    const int n = read_mistakes(ms, 64);
+    if (n == -1 || access("lessons/exercises/solutions", R_OK) != 0) {
+        print_message("skipped: no tests/exercises/ or no solutions (a handout tree)\n");
+        return;
+    }
+    assert_true(n >= 8);
+    char dir[] = "/tmp/sidx-test-ex-XXXXXX";
+    assert_non_null(mkdtemp(dir));
+    for (int i = 0; i < n; ++i) {
+        const mistake *m = &ms[i];
+        char file[PATH_MAX], *out;
+        assert_true(m->exit_ == 1 || m->exit_ == 2);
+        assert_int_equal(plant(m, dir, file, sizeof file), 0);
+        const int rc = check(m->name, file, &out);
+        int ok = rc == m->exit_;
+        for (int k = 0; k < m->nexp; ++k)
+            if (!strstr(out, m->expect[k])) {
+                print_message("%s--%s: the report lacks \"%s\"\n", m->name, m->slug, m->expect[k]);
+                ok = 0;
+            }
+        if (!ok) print_message("%s--%s: exit %d (want %d)\n%s", m->name, m->slug, rc, m->exit_, out);
+        assert_true(ok);
+        free(out);
+        unlink(file);
+    }
+    assert_int_equal(rmdir(dir), 0);
+}
+
+static void usage_and_errors(void **state)
+{
+    (void)state;
+    char *out;
+    assert_int_equal(check("no_such_exercise", "lessons/exercises/03_ray_box.c", &out), 2);
+    assert_non_null(strstr(out, "no exercise named"));
+    free(out);
+    assert_int_equal(check("03_ray_box", "/nonexistent.c", &out), 2);
+    free(out);
+    /* a file that does not build: the stub of another exercise lacks ray_box */
+    assert_int_equal(check("03_ray_box", "lessons/exercises/02_moller_trumbore.c", &out), 2);
+    assert_non_null(strstr(out, "BUILD FAILED"));
+    free(out);
+}
+
+/* sidx-check --trace writes both traces; sidx-step --diff finds the same
+ * first divergence (exit 1) and agrees with itself (exit 0). */
+static void traces_and_diff(void **state)
+{
+    (void)state;
+    char dir[] = "/tmp/sidx-test-ex-XXXXXX";
+    assert_non_null(mkdtemp(dir));
+    char cmd[4 * PATH_MAX], step[PATH_MAX + 32];
+    snprintf(step, sizeof step, "%s", checker);
+    char *slash = strrchr(step, '/');
+    assert_non_null(slash);
+    snprintf(slash + 1, sizeof step - (size_t)(slash + 1 - step), "sidx-step");
+    static mistake ms[64];
+    const int n = read_mistakes(ms, 64);
+    int k = 0;
+    while (k < n && strcmp(ms[k].slug, "far-wrong-t") != 0) ++k;
+    char file[PATH_MAX];
+    if (k >= n || access("lessons/exercises/solutions", R_OK) != 0) {
+        print_message("skipped: no planted mistakes or no solutions (a handout tree)\n");
+        rmdir(dir);
+        return;
+    }
+    assert_int_equal(plant(&ms[k], dir, file, sizeof file), 0);
+    snprintf(cmd, sizeof cmd, "'%s' 05_bvh_traversal %s --trace %s >/dev/null", checker, file, dir);
+    int st = system(cmd);
+    assert_int_equal(WEXITSTATUS(st), 1);
+    snprintf(cmd, sizeof cmd, "'%s' --diff %s/reference.jsonl %s/yours.jsonl >/dev/null", step, dir, dir);
+    st = system(cmd);
+    assert_int_equal(WEXITSTATUS(st), 1);
+    snprintf(cmd, sizeof cmd, "'%s' --diff %s/reference.jsonl %s/reference.jsonl >/dev/null", step, dir, dir);
+    st = system(cmd);
+    assert_int_equal(WEXITSTATUS(st), 0);
+    snprintf(cmd, sizeof cmd, "'%s' --diff %s/reference.jsonl >/dev/null 2>&1", step, dir);
+    st = system(cmd);
+    assert_int_equal(WEXITSTATUS(st), 2);
+    snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
+    assert_int_equal(system(cmd), 0);
+}
+
+int main(void)
+{
+    if (find_checker() != 0) {
+        printf("test_exercises: skipped: no sidx-check beside this suite (build it with make build)\n");
+        return 0;
+    }
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(solutions_pass),
+        cmocka_unit_test(stubs_fail_cleanly),
+        cmocka_unit_test(planted_mistakes_caught),
+        cmocka_unit_test(usage_and_errors),
+        cmocka_unit_test(traces_and_diff),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
