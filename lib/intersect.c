@@ -170,12 +170,12 @@ sidx_status sidx_sphere_fit(const sidx_vec3 *p, uint32_t n, sidx_sphere *out)
 {
     if (!p || !n || !out) return SIDX_ERR_INVALID_ARG;
     uint32_t ia = 0, ib = 0;
-    float best = -1.0f;
+    float best = 0.0f;
     for (uint32_t i = 0; i < n; ++i) {
         sidx_vec3 d = sidx_v3_sub(p[i], p[0]);
         if (sidx_v3_dot(d, d) > best) { best = sidx_v3_dot(d, d); ia = i; }
     }
-    best = -1.0f;
+    best = 0.0f;
     for (uint32_t i = 0; i < n; ++i) {
         sidx_vec3 d = sidx_v3_sub(p[i], p[ia]);
         if (sidx_v3_dot(d, d) > best) { best = sidx_v3_dot(d, d); ib = i; }

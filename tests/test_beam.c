@@ -97,13 +97,15 @@ static void check_conservative(const scene *s, const sidx_cone *c, const sidx_be
 {
     tk_rng g;
     tk_rng_seed(&g, 31);
+    assert_true(c != NULL || b != NULL); /* one of the two is traced */
+    const sidx_vec3 apex = c ? c->apex : b ? b->apex : sidx_v3(0, 0, 0);
     uint8_t *seen = calloc(s->m.num_triangles, 1);
     assert_non_null(seen);
     uint32_t distinct = 0;
     for (int i = 0; i < nrays; ++i) {
         const sidx_vec3 d = c ? dir_in_cone(&g, c) : dir_in_beam(&g, b);
         sidx_ray ray;
-        assert_int_equal(sidx_ray_init(&ray, c ? c->apex : b->apex, d, 0, INFINITY), SIDX_OK);
+        assert_int_equal(sidx_ray_init(&ray, apex, d, 0, INFINITY), SIDX_OK);
         sidx_hit h;
         sidx_accel_intersect(s->brute, &ray, NULL, &h);
         if (h.prim == SIDX_NO_HIT) continue;

@@ -1021,8 +1021,9 @@ static char *run_capture(const char *cmd)
         n += k;
         if (cap - n < 2) {
             cap *= 2;
-            buf = realloc(buf, cap);
-            assert_non_null(buf);
+            char *grown = realloc(buf, cap);
+            assert_non_null(grown);
+            buf = grown;
         }
     }
     buf[n] = '\0';

@@ -90,7 +90,7 @@ size_t bench_trace(const sidx_accel *a, const bench_rays *br, size_t begin, size
     if (threads > 256) threads = 256;
     const size_t n = end - begin;
     if ((size_t)threads > n) threads = n ? (unsigned)n : 1;
-    trace_job jobs[256];
+    trace_job jobs[256] = {0};
     pthread_t tid[256];
     int started[256];
     /* one thread: its CPU time (bench_cpu_time); several: wall-clock */

@@ -601,7 +601,7 @@ void tk_ref_intersect_all(const sidx_mesh *m, const tk_rayrec *rays, size_t n, s
 {
     if (threads < 1) threads = 1;
     if (threads > 64) threads = 64;
-    ref_job jobs[64];
+    ref_job jobs[64] = {0};
     pthread_t tid[64];
     int started[64] = {0};
     for (unsigned t = 0; t < threads; ++t) {

@@ -64,9 +64,10 @@ static inline sidx_vec3 sidx_v3_from_array(const float in[3]) { return sidx_v3(i
  * A pointer to a struct is a pointer to its first member, and a sidx_vec3
  * is three floats with no padding (checked below), so this is the memory
  * of v.x, v.y, v.z in order.  Use it instead of &v.x, which names one
- * float, not three. */
-static inline const float *sidx_v3_array(const sidx_vec3 *v) { return (const float *)(const void *)v; }
-static inline float *sidx_v3_array_rw(sidx_vec3 *v) { return (float *)(void *)v; }
+ * float, not three.  (Macros, not functions: the compiler's inlining
+ * budget for the hot loops that use them stays what it was.) */
+#define sidx_v3_array(v) ((const float *)(const void *)(v))
+#define sidx_v3_array_rw(v) ((float *)(void *)(v))
 #ifndef __cplusplus
 _Static_assert(sizeof(sidx_vec3) == 3 * sizeof(float), "sidx_vec3 must be three packed floats");
 #endif
