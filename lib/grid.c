@@ -256,8 +256,11 @@ typedef struct grid {
     uint32_t *refs;     /* original triangle indices */
     uint32_t n_refs;
     uint32_t empty;     /* cells without triangles */
-    int mailbox;
+    sidx__walk_table walks; /* with or without the mailbox (build) */
 } grid;
+
+/* Its walk tables, without and with the mailbox (defined after the walk). */
+static const sidx__walk_table grid_walks[2];
 
 static void grid_free(const sidx_accel *a, grid *G)
 {
@@ -275,7 +278,7 @@ static sidx_status grid_build(sidx_accel *a, sidx_error *err)
     grid *G = sidx__calloc(a, 1, sizeof *G);
     sidx_aabb *boxes = NULL;
     if (!G) return sidx__fail(err, SIDX_ERR_NOMEM, "grid: out of memory");
-    G->mailbox = !(a->variant & GRID_VARIANT_NOMAILBOX) && !a->opt.no_mailbox;
+    G->walks = grid_walks[!(a->variant & GRID_VARIANT_NOMAILBOX) && !a->opt.no_mailbox];
     if (m->num_triangles && sidx__prim_boxes(a, &boxes, NULL) != SIDX_OK) goto nomem;
 
     const sidx_aabb scene = sidx_mesh_bounds(m);
@@ -393,25 +396,18 @@ static SIDX_INLINE int grid_walk(const sidx_accel *a, const sidx_ray *r, const s
     return 0;
 }
 
+SIDX__GRID_WALK_TABLES(grid_walk, grid_walks);
+
 static void grid_intersect(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
 {
     const grid *G = a->impl;
-    if (SIDX_QUERY_TRACED(q)) {
-        if (G->mailbox) grid_walk(a, r, q, hit, 1, 0, 1);
-        else grid_walk(a, r, q, hit, 1, 0, 0);
-    } else {
-        if (G->mailbox) grid_walk(a, r, q, hit, 0, 0, 1);
-        else grid_walk(a, r, q, hit, 0, 0, 0);
-    }
+    sidx__walk_intersect(&G->walks, a, r, q, hit);
 }
 
 static int grid_occluded(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
 {
     const grid *G = a->impl;
-    sidx_hit h = sidx_hit_none();
-    h.t = r->tmax;
-    if (SIDX_QUERY_TRACED(q)) return G->mailbox ? grid_walk(a, r, q, &h, 1, 1, 1) : grid_walk(a, r, q, &h, 1, 1, 0);
-    return G->mailbox ? grid_walk(a, r, q, &h, 0, 1, 1) : grid_walk(a, r, q, &h, 0, 1, 0);
+    return sidx__walk_occluded(&G->walks, a, r, q);
 }
 
 static void grid_stats(const sidx_accel *a, sidx_accel_stats *s)

@@ -97,8 +97,11 @@ typedef struct igrid {
     icell *cells;
     uint32_t *refs;
     uint32_t n_nodes, n_cells, n_refs, empty, base_cells, depth_seen;
-    int mailbox;
+    sidx__walk_table walks;  /* with or without the mailbox (build) */
 } igrid;
+
+/* Its walk tables, without and with the mailbox (defined after the walk). */
+static const sidx__walk_table igrid_walks[2];
 
 /* Build-only state. */
 typedef struct ibuild {
@@ -384,7 +387,7 @@ static sidx_status igrid_build(sidx_accel *a, sidx_error *err)
     sidx_status st = SIDX_ERR_NOMEM;
     if (!G) return sidx__fail(err, SIDX_ERR_NOMEM, "grid-irregular: out of memory");
     B.G = G;
-    G->mailbox = !a->opt.no_mailbox;
+    G->walks = igrid_walks[!a->opt.no_mailbox];
     if (m->num_triangles && sidx__prim_boxes(a, &boxes, NULL) != SIDX_OK) goto fail;
     B.tri_boxes = boxes;
     B.leaf_max = a->opt.leaf_size ? a->opt.leaf_size : IRR_DEFAULT_LEAF;
@@ -627,26 +630,18 @@ static SIDX_INLINE int igrid_walk(const sidx_accel *a, const sidx_ray *r, const 
     return 0;
 }
 
+SIDX__GRID_WALK_TABLES(igrid_walk, igrid_walks);
+
 static void igrid_intersect(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
 {
     const igrid *G = a->impl;
-    if (SIDX_QUERY_TRACED(q)) {
-        if (G->mailbox) igrid_walk(a, r, q, hit, 1, 0, 1);
-        else igrid_walk(a, r, q, hit, 1, 0, 0);
-    } else {
-        if (G->mailbox) igrid_walk(a, r, q, hit, 0, 0, 1);
-        else igrid_walk(a, r, q, hit, 0, 0, 0);
-    }
+    sidx__walk_intersect(&G->walks, a, r, q, hit);
 }
 
 static int igrid_occluded(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
 {
     const igrid *G = a->impl;
-    sidx_hit h = sidx_hit_none();
-    h.t = r->tmax;
-    if (SIDX_QUERY_TRACED(q))
-        return G->mailbox ? igrid_walk(a, r, q, &h, 1, 1, 1) : igrid_walk(a, r, q, &h, 1, 1, 0);
-    return G->mailbox ? igrid_walk(a, r, q, &h, 0, 1, 1) : igrid_walk(a, r, q, &h, 0, 1, 0);
+    return sidx__walk_occluded(&G->walks, a, r, q);
 }
 
 static void igrid_stats(const sidx_accel *a, sidx_accel_stats *s)
