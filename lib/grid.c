@@ -16,12 +16,10 @@
 #define GRID_VARIANT_NOMAILBOX 1
 #define GRID_VARIANT_BOXONLY 2
 
-/* λ, cells per triangle.  Measured on bunny (69k tris; primary and
- * diffuse rays, λ = 2, 4, 8, 16, 32): 4 was fastest for primary rays and
- * tied with 2 for diffuse ones; above 8 the walk through empty cells costs
- * more than the tests it saves (at 32: 32 cells and 2.3 tests per primary
- * ray, against 16 cells and 6 tests at 4).  For comparison pbrt-v1's
- * 3·∛n voxels along the longest axis is λ ≈ 27 for a cube. */
+/* λ, cells per triangle: denser grids test fewer triangles per ray but
+ * walk more empty cells, and above λ ≈ 8 the cells cost more than the
+ * tests they save; 4 was the fastest on the bunny (figures:
+ * docs/performance.md, Grids). */
 #define GRID_DEFAULT_DENSITY 4.0f
 
 /* ---- shared geometry (grid_internal.h §1) ------------------------------- */

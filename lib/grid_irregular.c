@@ -63,9 +63,8 @@
  * The paper's top level is sparse; a denser top keeps the look-up short
  * (fewer octant levels).  A part is cut while more than leaf_size (opt,
  * default IRR_DEFAULT_LEAF) of its triangles are smaller than IRR_SPAN
- * times the part.  Measured on bunny / Sponza / stadium (diffuse rays):
- * λ 0.5 → 2 trades Sponza's tests per ray (8.6 → 5.9) against build time;
- * leaf 2 → 4 saves a third of the build and memory for ~15% more tests. */
+ * times the part.  Both trade tests per ray against build time and
+ * memory (figures: docs/performance.md, Grids). */
 #define IRR_TOP_DENSITY 1.0f
 #define IRR_DEFAULT_LEAF 4u
 #define IRR_MAX_DEPTH 16u
