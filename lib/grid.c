@@ -367,8 +367,8 @@ static SIDX_INLINE int grid_walk(const sidx_accel *a, const sidx_ray *r, const s
         SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id; e_.node = cell; e_.depth = 0;
                   e_.t_near = t_in; e_.t_far = t_out; e_.cell[0] = d.c[0]; e_.cell[1] = d.c[1];
                   e_.cell[2] = d.c[2]);
-        const uint32_t b = off[cell];
-        if (sidx__cell_prims(a, r, q, hit, refs + b, off[cell + 1] - b, cell, 0, &mb, use_mb, traced, any)) {
+        const uint32_t first = off[cell];
+        if (sidx__cell_prims(a, r, q, hit, refs + first, off[cell + 1] - first, cell, 0, &mb, use_mb, traced, any)) {
             SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = SIDX_TERM_ANY_HIT;
                       e_.count = visited);
             return 1;
