@@ -98,7 +98,7 @@ typedef struct bvh {
     bvh_obb *obbs;          /* bvh-obb only: one per node; NULL otherwise */
     double sah_cost;
     float obb_pad;          /* absolute padding of the oriented slabs (bvh-obb) */
-    sidx__walk_table walks[BVH_WALK_COUNT]; /* the copies for this tree's box kind (sidx__bvh_pick_walks) */
+    const sidx__walk_table *walks; /* [BVH_WALK_COUNT]: the copies for its box kind (sidx__bvh_pick_walks) */
 } bvh;
 
 /* bvh_traverse.c: the vtable's entries, and the choice of walks the

@@ -433,7 +433,7 @@ static const sidx__walk_table obb_walks[BVH_WALK_COUNT] = {
                               obb_stack_occluded_traced},
 };
 
-void sidx__bvh_pick_walks(bvh *b) { memcpy(b->walks, b->obbs ? obb_walks : aabb_walks, sizeof b->walks); }
+void sidx__bvh_pick_walks(bvh *b) { b->walks = b->obbs ? obb_walks : aabb_walks; }
 
 /* The table for this query's traversal (anything but naive and ordered
  * is the stack walk) and, for the stack walk, for whether it asks for u,

@@ -254,7 +254,7 @@ typedef struct grid {
     uint32_t *refs;     /* original triangle indices */
     uint32_t n_refs;
     uint32_t empty;     /* cells without triangles */
-    sidx__walk_table walks; /* with or without the mailbox (build) */
+    const sidx__walk_table *walks; /* with or without the mailbox (build) */
 } grid;
 
 /* Its walk tables, without and with the mailbox (defined after the walk). */
@@ -276,7 +276,7 @@ static sidx_status grid_build(sidx_accel *a, sidx_error *err)
     grid *G = sidx__calloc(a, 1, sizeof *G);
     sidx_aabb *boxes = NULL;
     if (!G) return sidx__fail(err, SIDX_ERR_NOMEM, "grid: out of memory");
-    G->walks = grid_walks[!(a->variant & GRID_VARIANT_NOMAILBOX) && !a->opt.no_mailbox];
+    G->walks = &grid_walks[!(a->variant & GRID_VARIANT_NOMAILBOX) && !a->opt.no_mailbox];
     if (m->num_triangles && sidx__prim_boxes(a, &boxes, NULL) != SIDX_OK) goto nomem;
 
     const sidx_aabb scene = sidx_mesh_bounds(m);
@@ -399,13 +399,13 @@ SIDX__GRID_WALK_TABLES(grid_walk, grid_walks);
 static void grid_intersect(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
 {
     const grid *G = a->impl;
-    sidx__walk_intersect(&G->walks, a, r, q, hit);
+    sidx__walk_intersect(G->walks, a, r, q, hit);
 }
 
 static int grid_occluded(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
 {
     const grid *G = a->impl;
-    return sidx__walk_occluded(&G->walks, a, r, q);
+    return sidx__walk_occluded(G->walks, a, r, q);
 }
 
 static void grid_stats(const sidx_accel *a, sidx_accel_stats *s)

@@ -74,7 +74,7 @@ typedef struct grid2 {
     size_t cap_grids, cap_cells, cap_refs;
     uint32_t empty, max_level, max_depth;
     float lambda, lambda_top;
-    sidx__walk_table walks; /* with or without the mailbox (build) */
+    const sidx__walk_table *walks; /* with or without the mailbox (build) */
 } grid2;
 
 /* Its walk tables, without and with the mailbox (defined after the walk). */
@@ -210,7 +210,7 @@ static sidx_status grid2_build(sidx_accel *a, sidx_error *err)
     grid2 *G = sidx__calloc(a, 1, sizeof *G);
     sidx_aabb *boxes = NULL;
     if (!G) return sidx__fail(err, SIDX_ERR_NOMEM, "grid2: out of memory");
-    G->walks = grid2_walks[!a->opt.no_mailbox];
+    G->walks = &grid2_walks[!a->opt.no_mailbox];
     G->lambda = a->opt.grid_density > 0.0f ? a->opt.grid_density : GRID2_LEAF_DENSITY;
     G->lambda_top = GRID2_TOP_DENSITY * G->lambda / GRID2_LEAF_DENSITY;
     G->max_depth = a->opt.max_depth ? a->opt.max_depth : GRID2_DEFAULT_DEPTH;
@@ -344,13 +344,13 @@ SIDX__GRID_WALK_TABLES(grid2_walk, grid2_walks);
 static void grid2_intersect(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
 {
     const grid2 *G = a->impl;
-    sidx__walk_intersect(&G->walks, a, r, q, hit);
+    sidx__walk_intersect(G->walks, a, r, q, hit);
 }
 
 static int grid2_occluded(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
 {
     const grid2 *G = a->impl;
-    return sidx__walk_occluded(&G->walks, a, r, q);
+    return sidx__walk_occluded(G->walks, a, r, q);
 }
 
 static void grid2_stats(const sidx_accel *a, sidx_accel_stats *s)

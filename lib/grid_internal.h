@@ -240,8 +240,8 @@ static SIDX_INLINE int sidx__clip(const sidx_accel *a, const sidx_ray *r, const 
  * the first hit), with or without the mailbox — and
  * SIDX__GRID_WALK_TABLES(WALK, TABLES) makes its eight copies and
  * `TABLES[2]`, the walk tables without (0) and with (1) the mailbox.  The
- * build stores TABLES[mailbox]; a query then only picks the traced or the
- * plain copy.  An any-hit copy starts from a blank hit bounded by tmax.
+ * build stores a pointer to TABLES[mailbox]; a query then only picks the
+ * traced or the plain copy.  An any-hit copy starts from a blank hit bounded by tmax.
  * Like every walk, none tests q for NULL. */
 #define SIDX__GRID_WALK_INTERSECT(name_, walk_, traced_, use_mb_)                                              \
     static void name_(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)             \

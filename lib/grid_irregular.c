@@ -96,7 +96,7 @@ typedef struct igrid {
     icell *cells;
     uint32_t *refs;
     uint32_t n_nodes, n_cells, n_refs, empty, base_cells, depth_seen;
-    sidx__walk_table walks;  /* with or without the mailbox (build) */
+    const sidx__walk_table *walks; /* with or without the mailbox (build) */
 } igrid;
 
 /* Its walk tables, without and with the mailbox (defined after the walk). */
@@ -386,7 +386,7 @@ static sidx_status igrid_build(sidx_accel *a, sidx_error *err)
     sidx_status st = SIDX_ERR_NOMEM;
     if (!G) return sidx__fail(err, SIDX_ERR_NOMEM, "grid-irregular: out of memory");
     B.G = G;
-    G->walks = igrid_walks[!a->opt.no_mailbox];
+    G->walks = &igrid_walks[!a->opt.no_mailbox];
     if (m->num_triangles && sidx__prim_boxes(a, &boxes, NULL) != SIDX_OK) goto fail;
     B.tri_boxes = boxes;
     B.leaf_max = a->opt.leaf_size ? a->opt.leaf_size : IRR_DEFAULT_LEAF;
@@ -636,13 +636,13 @@ SIDX__GRID_WALK_TABLES(igrid_walk, igrid_walks);
 static void igrid_intersect(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
 {
     const igrid *G = a->impl;
-    sidx__walk_intersect(&G->walks, a, r, q, hit);
+    sidx__walk_intersect(G->walks, a, r, q, hit);
 }
 
 static int igrid_occluded(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
 {
     const igrid *G = a->impl;
-    return sidx__walk_occluded(&G->walks, a, r, q);
+    return sidx__walk_occluded(G->walks, a, r, q);
 }
 
 static void igrid_stats(const sidx_accel *a, sidx_accel_stats *s)

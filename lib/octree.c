@@ -56,7 +56,7 @@ typedef struct octree {
     uint32_t leaf_max, depth_max;
     uint64_t node_budget;             /* OCT_NODES_PER_TRI·n + 1 */
     int nsplit;                       /* axes cut: 3 (octree) or 2 (quadtree) */
-    sidx__walk_table walks;           /* with or without the mailbox (build) */
+    const sidx__walk_table *walks;    /* with or without the mailbox (build) */
     const sidx_aabb *tri_boxes;       /* build only */
 } octree;
 
@@ -174,7 +174,7 @@ static sidx_status octree_build(sidx_accel *a, sidx_error *err)
     sidx_aabb *boxes = NULL;
     if (!T) return sidx__fail(err, SIDX_ERR_NOMEM, "octree: out of memory");
     T->nsplit = a->variant == 1 ? 2 : 3;
-    T->walks = octree_walks[!a->opt.no_mailbox];
+    T->walks = &octree_walks[!a->opt.no_mailbox];
     T->leaf_max = a->opt.leaf_size ? a->opt.leaf_size : OCT_DEFAULT_LEAF;
     T->depth_max = a->opt.max_depth ? a->opt.max_depth : OCT_DEFAULT_DEPTH;
     if (T->depth_max > OCT_MAX_DEPTH) T->depth_max = OCT_MAX_DEPTH;
@@ -316,13 +316,13 @@ SIDX__GRID_WALK_TABLES(octree_walk, octree_walks);
 static void octree_intersect(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
 {
     const octree *T = a->impl;
-    sidx__walk_intersect(&T->walks, a, r, q, hit);
+    sidx__walk_intersect(T->walks, a, r, q, hit);
 }
 
 static int octree_occluded(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
 {
     const octree *T = a->impl;
-    return sidx__walk_occluded(&T->walks, a, r, q);
+    return sidx__walk_occluded(T->walks, a, r, q);
 }
 
 static void octree_stats(const sidx_accel *a, sidx_accel_stats *s)
