@@ -422,7 +422,7 @@ static void bvh_free(const sidx_accel *a, bvh *b)
     sidx__free(a, b);
 }
 
-static sidx_status bvh_build(sidx_accel *a, sidx_error *err)
+static sidx_status build_tree(sidx_accel *a, sidx_error *err)
 {
     const sidx_mesh *m = a->mesh;
     const uint32_t n = m->num_triangles;
@@ -576,6 +576,14 @@ static sidx_status bvh_refit(sidx_accel *a, sidx_error *err)
     b->sah_cost = tree_sah(b, pp.c_trav, pp.c_tri);
     if (b->obbs) return sidx__bvh_fit_obbs(a, b); /* reuses its array: cannot fail */
     return SIDX_OK;
+}
+
+/* The tree (on one thread or several), then the walks that fit it. */
+static sidx_status bvh_build(sidx_accel *a, sidx_error *err)
+{
+    const sidx_status s = build_tree(a, err);
+    if (s == SIDX_OK) sidx__bvh_pick_walks(a->impl);
+    return s;
 }
 
 const sidx_accel_vtable sidx__bvh_vtable = {bvh_build, sidx__bvh_intersect, sidx__bvh_occluded,

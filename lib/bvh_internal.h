@@ -76,6 +76,16 @@ typedef enum bvh_builder {
     BVH_BUILDER_COUNT
 } bvh_builder;
 
+/* The walk tables (sidx_internal.h §1): one per traversal, and for the
+ * stack walk a second one for queries asking for u, v or the normal. */
+typedef enum bvh_walk_kind {
+    BVH_WALK_NAIVE,
+    BVH_WALK_ORDERED,
+    BVH_WALK_STACK,
+    BVH_WALK_STACK_ATTRS,
+    BVH_WALK_COUNT
+} bvh_walk_kind;
+
 typedef struct bvh {
     bvh_node *nodes;        /* 64-byte aligned inside nodes_mem */
     void *nodes_mem;
@@ -88,9 +98,12 @@ typedef struct bvh {
     bvh_obb *obbs;          /* bvh-obb only: one per node; NULL otherwise */
     double sah_cost;
     float obb_pad;          /* absolute padding of the oriented slabs (bvh-obb) */
+    const sidx__walk_table *walks; /* [BVH_WALK_COUNT]: the copies for its box kind (sidx__bvh_pick_walks) */
 } bvh;
 
-/* bvh_traverse.c */
+/* bvh_traverse.c: the vtable's entries, and the choice of walks the
+ * build makes once its tree (and whether it has oriented boxes) is final. */
+void sidx__bvh_pick_walks(bvh *b);
 void sidx__bvh_intersect(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit);
 int sidx__bvh_occluded(const sidx_accel *a, const sidx_ray *r, const sidx_query *q);
 

@@ -1,4 +1,5 @@
-/* bvh_traverse.c — walking the BVH, three ways (q->traversal):
+/* bvh_traverse.c — walking the BVH, three ways (q->traversal), in the
+ * order the deck teaches them:
  *
  *   naive    the deck's first "BVH Traversal": test the node's box, give
  *            up if it is missed or lies behind the best hit so far, else
@@ -20,8 +21,11 @@
  * Each is written once with a `const int traced` parameter and
  * instantiated twice (docs/adding-a-structure.md §3): in the traced = 0
  * copies every SIDX_EMIT is dead code.  The stack walk is additionally
- * instantiated per box kind (AABB / oriented) and per query kind (closest
- * / any hit) so the fast path has no per-node branch on either. */
+ * instantiated per box kind (AABB / oriented), per query kind (closest /
+ * any hit) and for queries asking for u, v or the normal, so the fast path
+ * has no per-node branch on any of them.  The build picks the copies that
+ * fit its tree once, one walk table per traversal (sidx__bvh_pick_walks,
+ * end of file); a query only picks the table. */
 #include "bvh_internal.h"
 
 #define SIDX_STRUCTURE_NAME (a->name)
@@ -37,7 +41,7 @@ static SIDX_INLINE int node_box(const bvh *b, const bvh_ray *br, const sidx_ray 
  * The same sidx__tri_test on the same vertices as brute force, so a hit
  * has bit-identical t.  Every accepted hit writes *id: the original id,
  * or with by_copy (queries asking for u, v or the normal) the copy's
- * index, from which set_attrs finishes the final hit once — the loop
+ * index, from which set_hit finishes the final hit once — the loop
  * keeps one index and no u, v (the tests run without u_out).  Returns 1
  * when an any-hit query may stop. */
 static SIDX_INLINE int leaf_test(const sidx_accel *a, const bvh *b, const bvh_node *n, const sidx_ray *r,
@@ -67,8 +71,8 @@ static SIDX_INLINE int leaf_test(const sidx_accel *a, const bvh *b, const bvh_no
  * for (a->fills_uv, fills_ng): its original id; u, v by the accepting
  * test's own last step on the same floats, the copy read in place
  * (sidx__tri_hit_uv_at: the same bits as forming them at every accepted
- * hit, which cost the loop ~150 instructions per diffuse ray on the
- * bunny); the normal from the copy. */
+ * hit, once per ray instead; figures in docs/performance.md, Binary BVH);
+ * the normal from the copy. */
 static SIDX_INLINE void set_hit(const sidx_accel *a, const bvh *b, const sidx_ray *r, const sidx_query *q,
                                 float t, uint32_t tri, sidx_hit *hit)
 {
@@ -85,72 +89,158 @@ static SIDX_INLINE void set_hit(const sidx_accel *a, const bvh *b, const sidx_ra
               e_.bounds = bvh_node_box(&b->nodes[(node_)]); e_.result = (res_);                            \
               e_.t_near = (res_) ? (tn_) : NAN; e_.t_far = (res_) ? (tf_) : NAN)
 
-/* ---- stack (the fast path) -------------------------------------------- */
 
-/* What bounds this loop (session 5, Sponza diffuse rays, 20k rays; gcc
- * 12 -O2; callgrind for instructions, interleaved runs of the fair driver
- * for time): about 3,100 instructions, 28 node steps and 12.5 L1 misses
- * per ray, and a near/both/none decision per inner node that a diffuse
- * ray makes at random.  The walk runs at the speed of its mispredicts:
- * each waits for the chain load -> (plane − o)·(1/d) -> min/max -> compare
- * of the boxes just loaded.  Measured and rejected, so nobody redoes them:
- *  - both boxes in one SSE2 pass (xor/and blend of the near planes, one
- *    shared horizontal min/max, one compare for both hit bits): −4%
- *    instructions and a third fewer mispredicts in callgrind's model, yet
- *    25% slower: the blend and the lane reductions add ~15 cycles to the
- *    chain every mispredict waits for;
- *  - branch-free choice of the next node (cmov, sp += both; SSE or scalar):
- *    the next node's address then waits for that same chain at every
- *    step instead of only at mispredicts: 0 to −25%;
- *  - one copy of the walk per direction octant (plane offsets as
- *    constants, six general registers freed): −2% instructions, −6% time
- *    on diffuse rays (the copies split the branch predictor's history);
- *  - prefetching the children's right children, carrying the right
- *    child's index in a register, a tree-shaped min/max, the triangles'
- *    method switch hoisted out of the leaf loop, a 4-wide leaf test on
- *    copies transposed at the leaf, the leaf out of line, a descent loop
- *    of its own ("while-while"): each makes gcc spill the ray's constants
- *    of the box test (+2% to +21% instructions) and none measured faster;
- *  - (session 6) the far planes pre-multiplied by Ize's factor, as the
- *    wide walk does, so the chain loses its last multiply: +2.3%
- *    instructions (the widened best is one more value kept across the
- *    loop), −1.3% mispredicts, +1% time — within the noise; and the
- *    whole library compiled for this machine (-march=native, AVX-512):
- *    no change.  The binary walk's time is its mispredicts, not its
- *    arithmetic;
- *  - (session 7) the leaves' triangles also stored as SSE blocks of four
- *    made at build (tris[i] in block i / 4, a leaf testing the blocks its
- *    range touches, as the kd-tree does) and tested by the wide BVHs'
- *    watertight kernel: bunny diffuse with u, v, Ng 1808 instead of 1661
- *    instructions per ray, mispredicts only −1.4 %, 4-10 % slower; Sponza
- *    diffuse −3 % to +10 %.  Leaves hold about 3 triangles, so a leaf
- *    costs 1-2 block passes, while the scalar tests mostly stop at their
- *    first edge sign;
- *  - (session 8) siblings side by side (tinybvh's layout: an inner node
- *    stores its first child, the second is the next node, each pair in
- *    one 64-byte line, pairs in depth-first order), so a step loads one
- *    line for both children's boxes: same hits, but Sponza diffuse 1.7
- *    instead of 2.1 Mrays/s in three interleaved runs.  Not explained
- *    (no hardware counters here); in this layout the left child (index
- *    + 1) shares its parent's line or sits in the adjacent one, so only
- *    the right child is a line from elsewhere; and the
- *    slab planes computed as p·(1/d) − o·(1/d) with FMA (-mfma on this
- *    file): within the noise, and Ize's bound would no longer cover it;
- *  - (session 9) the nearer child picked by the ray's sign on the node's
- *    split axis (pbrt-v3's order, count_axis already holds the axis), so
- *    the choice no longer waits for the two box tests: Sponza diffuse
- *    1.89-2.09 against 2.07-2.16 Mrays/s in three alternating runs — the
- *    branch resolves sooner but the order is worse;
- *  - and, to see how much the tree could still give, this walk over the
- *    binary tree of the spatial-split build (bvh_spatial.c, which the
- *    issue's "every primitive in exactly one leaf" rules out for "bvh"):
- *    Sponza diffuse 0.48 of Embree on the targets' fair timing instead of
- *    0.41 (prepared rays 0.56), the bunny's 0.47 down to 0.41.  Even
- *    duplicated references leave this walk short of 0.5 there.
- */
+/* ---- naive and ordered: the deck's recursive hit() ------------------------ */
 
+/* What both recursions carry down: the ray, its slab set-up and the best
+ * hit so far. */
+typedef struct walk {
+    const sidx_accel *a;
+    const bvh *b;
+    const sidx_ray *r;
+    const sidx_query *q;
+    bvh_ray br;
+    float scale, best;
+    uint32_t tri, visited; /* the best hit so far: its leaf copy's index */
+    int anyhit, obb;
+} walk;
 
-/* attrs: the query asks for u, v and/or the normal (closest hit only).  A
+static SIDX_INLINE int walk_box(walk *w, uint32_t i, float *tn, float *tf)
+{
+    return w->obb ? node_box(w->b, &w->br, w->r, i, w->scale, w->r->tmin, w->best, tn, tf, 1)
+                  : node_box(w->b, &w->br, w->r, i, w->scale, w->r->tmin, w->best, tn, tf, 0);
+}
+
+static SIDX_INLINE int walk_leaf(walk *w, const bvh_node *n, const int traced)
+{
+    return w->anyhit ? leaf_test(w->a, w->b, n, w->r, w->q, &w->best, &w->tri, 1, 1, traced)
+                     : leaf_test(w->a, w->b, n, w->r, w->q, &w->best, &w->tri, 1, 0, traced);
+}
+
+/* naive_rec0 / naive_rec1: the plain and the traced copy of naive_body
+ * (and the same for ordered). */
+static int naive_rec0(walk *w, uint32_t node, uint32_t depth);
+static int naive_rec1(walk *w, uint32_t node, uint32_t depth);
+static int ordered_rec0(walk *w, uint32_t node, uint32_t depth, float tn, float tf);
+static int ordered_rec1(walk *w, uint32_t node, uint32_t depth, float tn, float tf);
+
+/* The deck's hit(ray, node, best): "test if ray hits node's bbox ... if
+ * (hit.prim == NULL || hit.t > best.t) return" — the box is clipped to
+ * [tmin, best], so a box behind the best hit is a miss — then leaves test
+ * their primitives and inner nodes "traverse BOTH children". */
+static SIDX_INLINE int naive_body(walk *w, uint32_t node, uint32_t depth, const int traced)
+{
+    const sidx_accel *a = w->a;
+    const bvh *b = w->b;
+    const sidx_query *q = w->q;
+    float tn, tf;
+    const int h = walk_box(w, node, &tn, &tf);
+    EMIT_BOX(node, h, tn, tf);
+    if (!h) return 0;
+    ++w->visited;
+    SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id; e_.node = node; e_.depth = depth;
+              e_.t_near = tn; e_.t_far = tf);
+    const bvh_node *n = &b->nodes[node];
+    if (bvh_is_leaf(n)) return walk_leaf(w, n, traced);
+    const uint32_t right = n->left_or_first;
+    if (traced ? naive_rec1(w, node + 1, depth + 1) : naive_rec0(w, node + 1, depth + 1)) return 1;
+    return traced ? naive_rec1(w, right, depth + 1) : naive_rec0(w, right, depth + 1);
+}
+static int naive_rec0(walk *w, uint32_t node, uint32_t depth) { return naive_body(w, node, depth, 0); }
+static int naive_rec1(walk *w, uint32_t node, uint32_t depth) { return naive_body(w, node, depth, 1); }
+
+/* The deck's better hit(): the node's own box was tested by its parent
+ * (or by the caller for the root), so test both children, visit the one
+ * with the smaller entry t first, the other only if it can still win. */
+static SIDX_INLINE int ordered_body(walk *w, uint32_t node, uint32_t depth, float tn, float tf, const int traced)
+{
+    const sidx_accel *a = w->a;
+    const bvh *b = w->b;
+    const sidx_query *q = w->q;
+    ++w->visited;
+    SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id; e_.node = node; e_.depth = depth;
+              e_.t_near = tn; e_.t_far = tf);
+    const bvh_node *n = &b->nodes[node];
+    if (bvh_is_leaf(n)) return walk_leaf(w, n, traced);
+    /* left and right child until sorted: then the nearer and the farther */
+    uint32_t near = node + 1, far = n->left_or_first;
+    float near_tn, near_tf, far_tn, far_tf;
+    int near_hit = walk_box(w, near, &near_tn, &near_tf);
+    int far_hit = walk_box(w, far, &far_tn, &far_tf);
+    EMIT_BOX(near, near_hit, near_tn, near_tf);
+    EMIT_BOX(far, far_hit, far_tn, far_tf);
+    if (far_hit && (!near_hit || far_tn < near_tn)) { /* the right child is the nearer one */
+        uint32_t tc = near; near = far; far = tc;
+        int th = near_hit; near_hit = far_hit; far_hit = th;
+        float t = near_tn; near_tn = far_tn; far_tn = t;
+        t = near_tf; near_tf = far_tf; far_tf = t;
+    }
+    if (near_hit && (traced ? ordered_rec1(w, near, depth + 1, near_tn, near_tf)
+                            : ordered_rec0(w, near, depth + 1, near_tn, near_tf)))
+        return 1;
+    if (far_hit && far_tn < w->best * w->scale) /* best widened as in bvh_slab */
+        return traced ? ordered_rec1(w, far, depth + 1, far_tn, far_tf)
+                      : ordered_rec0(w, far, depth + 1, far_tn, far_tf);
+    return 0;
+}
+static int ordered_rec0(walk *w, uint32_t node, uint32_t depth, float tn, float tf)
+{
+    return ordered_body(w, node, depth, tn, tf, 0);
+}
+static int ordered_rec1(walk *w, uint32_t node, uint32_t depth, float tn, float tf)
+{
+    return ordered_body(w, node, depth, tn, tf, 1);
+}
+
+/* Either recursion from the root, and the final hit. */
+static SIDX_INLINE int recursive_walk(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit,
+                                      const int anyhit, const int ordered, const int traced)
+{
+    const bvh *b = a->impl;
+    walk w;
+    w.a = a;
+    w.b = b;
+    w.r = r;
+    w.q = q;
+    bvh_ray_setup(&w.br, r);
+    w.scale = a->opt.box == SIDX_BOX_ROBUST ? SIDX_ROBUST_TFAR_SCALE : 1.0f;
+    w.best = anyhit ? r->tmax : hit->t;
+    w.tri = SIDX_NO_HIT;
+    w.visited = 0;
+    w.anyhit = anyhit;
+    w.obb = b->obbs != NULL;
+    int found = 0, missed_root = b->num_nodes == 0;
+    if (!missed_root) {
+        if (ordered) {
+            float tn, tf;
+            const int h = walk_box(&w, 0, &tn, &tf);
+            EMIT_BOX(0u, h, tn, tf);
+            if (h) found = traced ? ordered_rec1(&w, 0, 0, tn, tf) : ordered_rec0(&w, 0, 0, tn, tf);
+            else missed_root = 1;
+        } else {
+            found = traced ? naive_rec1(&w, 0, 0) : naive_rec0(&w, 0, 0);
+            missed_root = w.visited == 0;
+        }
+    }
+    SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id;
+              e_.reason = found ? SIDX_TERM_ANY_HIT : missed_root ? SIDX_TERM_MISS_ROOT : SIDX_TERM_STACK_EMPTY;
+              e_.t = anyhit ? INFINITY : w.best; e_.count = w.visited);
+    if (!anyhit && w.tri != SIDX_NO_HIT) set_hit(a, b, r, q, w.best, w.tri, hit);
+    return found;
+}
+
+/* ---- stack: the ordered descent without recursion (the fast path) -------- */
+
+/* The walk runs at the speed of its branch mispredicts, not of its
+ * arithmetic: a diffuse ray makes each inner node's near / both / none
+ * choice at random, and every mispredict waits for the chain load ->
+ * (plane − o)·(1/d) -> min/max -> compare of the boxes just loaded.  So the
+ * loop stays this plain scalar one; two-box SIMD tests, branch-free
+ * choices, per-octant copies, prefetches, SIMD leaves and other node
+ * layouts were measured and none was faster.  Rejected alternatives:
+ * docs/performance.md, Binary BVH.
+ *
+ * attrs: the query asks for u, v and/or the normal (closest hit only).  A
  * copy of its own, so the walk for plain queries carries no u, v and no
  * triangle index ("no u/v or normals unless asked"). */
 static SIDX_INLINE int stack_walk(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit,
@@ -195,43 +285,44 @@ static SIDX_INLINE int stack_walk(const sidx_accel *a, const sidx_ray *r, const 
                 return 1;
             }
         } else {
-            const uint32_t l = node + 1, rc = n->left_or_first;
+            /* Both children's boxes: hit (hl, hr), entry and exit t. */
+            const uint32_t left = node + 1, right = n->left_or_first;
             float ln, lf, rn, rf;
-            const int hl = node_box(b, &br, r, l, scale, tmin, best, &ln, &lf, obb);
-            const int hr = node_box(b, &br, r, rc, scale, tmin, best, &rn, &rf, obb);
-            EMIT_BOX(l, hl, ln, lf);
-            EMIT_BOX(rc, hr, rn, rf);
+            const int hl = node_box(b, &br, r, left, scale, tmin, best, &ln, &lf, obb);
+            const int hr = node_box(b, &br, r, right, scale, tmin, best, &rn, &rf, obb);
+            EMIT_BOX(left, hl, ln, lf);
+            EMIT_BOX(right, hr, rn, rf);
             if (hl && hr) {
                 /* Both: nearer entry first (ties: left), the other waits.
                  * (A branch-free version of this choice measured no
                  * faster with gcc -O2; this one reads like the slide.) */
-                uint32_t near = l, far = rc;
-                float fn = rn, ff = rf;
+                uint32_t near = left, far = right;
+                float far_tn = rn, far_tf = rf;
                 tn = ln;
                 tf = lf;
                 if (rn < ln) {
-                    near = rc;
-                    far = l;
-                    fn = ln;
-                    ff = lf;
+                    near = right;
+                    far = left;
+                    far_tn = ln;
+                    far_tf = lf;
                     tn = rn;
                     tf = rf;
                 }
                 stk[sp] = far;
-                stk_tn[sp] = fn;
+                stk_tn[sp] = far_tn;
                 if (traced) {
                     stk_depth[sp] = depth + 1;
-                    stk_tf[sp] = ff;
+                    stk_tf[sp] = far_tf;
                 }
                 ++sp;
                 SIDX_EMIT(traced, q->hook, SIDX_EV_STACK_PUSH, e_.ray_id = q->ray_id; e_.node = far; e_.depth = sp;
-                          e_.t_near = fn; e_.t_far = ff);
+                          e_.t_near = far_tn; e_.t_far = far_tf);
                 node = near;
                 ++depth;
                 continue;
             }
             if (hl | hr) {
-                node = hl ? l : rc;
+                node = hl ? left : right;
                 tn = hl ? ln : rn;
                 tf = hl ? lf : rf;
                 ++depth;
@@ -269,215 +360,98 @@ static SIDX_INLINE int stack_walk(const sidx_accel *a, const sidx_ray *r, const 
     }
 }
 
-/* ---- recursive: naive and ordered --------------------------------------- */
+/* ---- walk tables and entry points (sidx_internal.h §1) --------------------- */
 
-typedef struct walk {
-    const sidx_accel *a;
-    const bvh *b;
-    const sidx_ray *r;
-    const sidx_query *q;
-    bvh_ray br;
-    float scale, best;
-    uint32_t tri, visited; /* the best hit so far: its leaf copy's index */
-    int anyhit, obb;
-} walk;
-
-static int naive_rec0(walk *w, uint32_t node, uint32_t depth);
-static int naive_rec1(walk *w, uint32_t node, uint32_t depth);
-static int ordered_rec0(walk *w, uint32_t node, uint32_t depth, float tn, float tf);
-static int ordered_rec1(walk *w, uint32_t node, uint32_t depth, float tn, float tf);
-
-static SIDX_INLINE int walk_box(walk *w, uint32_t i, float *tn, float *tf)
-{
-    return w->obb ? node_box(w->b, &w->br, w->r, i, w->scale, w->r->tmin, w->best, tn, tf, 1)
-                  : node_box(w->b, &w->br, w->r, i, w->scale, w->r->tmin, w->best, tn, tf, 0);
-}
-
-static SIDX_INLINE int walk_leaf(walk *w, const bvh_node *n, const int traced)
-{
-    return w->anyhit ? leaf_test(w->a, w->b, n, w->r, w->q, &w->best, &w->tri, 1, 1, traced)
-                     : leaf_test(w->a, w->b, n, w->r, w->q, &w->best, &w->tri, 1, 0, traced);
-}
-
-/* The deck's hit(ray, node, best): "test if ray hits node's bbox ... if
- * (hit.prim == NULL || hit.t > best.t) return" — the box is clipped to
- * [tmin, best], so a box behind the best hit is a miss — then leaves test
- * their primitives and inner nodes "traverse BOTH children". */
-static SIDX_INLINE int naive_body(walk *w, uint32_t node, uint32_t depth, const int traced)
-{
-    const sidx_accel *a = w->a;
-    const bvh *b = w->b;
-    const sidx_query *q = w->q;
-    float tn, tf;
-    const int h = walk_box(w, node, &tn, &tf);
-    EMIT_BOX(node, h, tn, tf);
-    if (!h) return 0;
-    ++w->visited;
-    SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id; e_.node = node; e_.depth = depth;
-              e_.t_near = tn; e_.t_far = tf);
-    const bvh_node *n = &b->nodes[node];
-    if (bvh_is_leaf(n)) return walk_leaf(w, n, traced);
-    const uint32_t right = n->left_or_first;
-    if (traced ? naive_rec1(w, node + 1, depth + 1) : naive_rec0(w, node + 1, depth + 1)) return 1;
-    return traced ? naive_rec1(w, right, depth + 1) : naive_rec0(w, right, depth + 1);
-}
-static int naive_rec0(walk *w, uint32_t node, uint32_t depth) { return naive_body(w, node, depth, 0); }
-static int naive_rec1(walk *w, uint32_t node, uint32_t depth) { return naive_body(w, node, depth, 1); }
-
-/* The deck's better hit(): the node's own box was tested by its parent
- * (or by the caller for the root), so test both children, visit the one
- * with the smaller entry t first, the other only if it can still win. */
-static SIDX_INLINE int ordered_body(walk *w, uint32_t node, uint32_t depth, float tn, float tf, const int traced)
-{
-    const sidx_accel *a = w->a;
-    const bvh *b = w->b;
-    const sidx_query *q = w->q;
-    ++w->visited;
-    SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id; e_.node = node; e_.depth = depth;
-              e_.t_near = tn; e_.t_far = tf);
-    const bvh_node *n = &b->nodes[node];
-    if (bvh_is_leaf(n)) return walk_leaf(w, n, traced);
-    uint32_t c1 = node + 1, c2 = n->left_or_first;
-    float n1, f1, n2, f2;
-    int h1 = walk_box(w, c1, &n1, &f1);
-    int h2 = walk_box(w, c2, &n2, &f2);
-    EMIT_BOX(c1, h1, n1, f1);
-    EMIT_BOX(c2, h2, n2, f2);
-    if (h2 && (!h1 || n2 < n1)) { /* the right child is the nearer one */
-        uint32_t tc = c1; c1 = c2; c2 = tc;
-        int th = h1; h1 = h2; h2 = th;
-        float t = n1; n1 = n2; n2 = t;
-        t = f1; f1 = f2; f2 = t;
+/* Every copy a table names is a function of its own, so that each walk's
+ * registers are allocated for it alone (the plain stack walk beside the
+ * others costs it instructions: docs/performance.md, Binary BVH). */
+#define RECURSIVE_INTERSECT(name_, ordered_, traced_)                                                          \
+    static void name_(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)             \
+    {                                                                                                           \
+        (void)recursive_walk(a, r, q, hit, 0, ordered_, traced_);                                               \
     }
-    if (h1 && (traced ? ordered_rec1(w, c1, depth + 1, n1, f1) : ordered_rec0(w, c1, depth + 1, n1, f1)))
-        return 1;
-    if (h2 && n2 < w->best * w->scale) /* best widened as in bvh_slab */
-        return traced ? ordered_rec1(w, c2, depth + 1, n2, f2) : ordered_rec0(w, c2, depth + 1, n2, f2);
-    return 0;
-}
-static int ordered_rec0(walk *w, uint32_t node, uint32_t depth, float tn, float tf)
-{
-    return ordered_body(w, node, depth, tn, tf, 0);
-}
-static int ordered_rec1(walk *w, uint32_t node, uint32_t depth, float tn, float tf)
-{
-    return ordered_body(w, node, depth, tn, tf, 1);
-}
+#define RECURSIVE_OCCLUDED(name_, ordered_, traced_)                                                           \
+    static int name_(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)                              \
+    {                                                                                                           \
+        return recursive_walk(a, r, q, NULL, 1, ordered_, traced_);                                             \
+    }
+#define STACK_INTERSECT(name_, traced_, obb_, attrs_)                                                          \
+    static void name_(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)             \
+    {                                                                                                           \
+        (void)stack_walk(a, r, q, hit, traced_, 0, obb_, attrs_);                                               \
+    }
+#define STACK_OCCLUDED(name_, traced_, obb_)                                                                   \
+    static int name_(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)                              \
+    {                                                                                                           \
+        return stack_walk(a, r, q, NULL, traced_, 1, obb_, 0);                                                  \
+    }
 
-static SIDX_INLINE int recursive_walk(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit,
-                                      const int anyhit, const int ordered, const int traced)
+/* The recursive walks test the box kind per node (w.obb): teaching paths,
+ * one copy serves both kinds. */
+RECURSIVE_INTERSECT(naive_intersect, 0, 0)
+RECURSIVE_INTERSECT(naive_intersect_traced, 0, 1)
+RECURSIVE_OCCLUDED(naive_occluded, 0, 0)
+RECURSIVE_OCCLUDED(naive_occluded_traced, 0, 1)
+RECURSIVE_INTERSECT(ordered_intersect, 1, 0)
+RECURSIVE_INTERSECT(ordered_intersect_traced, 1, 1)
+RECURSIVE_OCCLUDED(ordered_occluded, 1, 0)
+RECURSIVE_OCCLUDED(ordered_occluded_traced, 1, 1)
+
+STACK_INTERSECT(stack_intersect, 0, 0, 0) /* the hot path: plain closest hit on AABBs */
+STACK_INTERSECT(stack_intersect_traced, 1, 0, 0)
+STACK_INTERSECT(stack_intersect_attrs, 0, 0, 1)
+STACK_INTERSECT(stack_intersect_attrs_traced, 1, 0, 1)
+STACK_OCCLUDED(stack_occluded, 0, 0)
+STACK_OCCLUDED(stack_occluded_traced, 1, 0)
+
+STACK_INTERSECT(obb_stack_intersect, 0, 1, 0)
+STACK_INTERSECT(obb_stack_intersect_traced, 1, 1, 0)
+STACK_INTERSECT(obb_stack_intersect_attrs, 0, 1, 1)
+STACK_INTERSECT(obb_stack_intersect_attrs_traced, 1, 1, 1)
+STACK_OCCLUDED(obb_stack_occluded, 0, 1)
+STACK_OCCLUDED(obb_stack_occluded_traced, 1, 1)
+
+#undef RECURSIVE_INTERSECT
+#undef RECURSIVE_OCCLUDED
+#undef STACK_INTERSECT
+#undef STACK_OCCLUDED
+
+/* {closest hit, closest hit traced, any hit, any hit traced} per walk. */
+static const sidx__walk_table aabb_walks[BVH_WALK_COUNT] = {
+    [BVH_WALK_NAIVE] = {naive_intersect, naive_intersect_traced, naive_occluded, naive_occluded_traced},
+    [BVH_WALK_ORDERED] = {ordered_intersect, ordered_intersect_traced, ordered_occluded, ordered_occluded_traced},
+    [BVH_WALK_STACK] = {stack_intersect, stack_intersect_traced, stack_occluded, stack_occluded_traced},
+    [BVH_WALK_STACK_ATTRS] = {stack_intersect_attrs, stack_intersect_attrs_traced, stack_occluded,
+                              stack_occluded_traced},
+};
+static const sidx__walk_table obb_walks[BVH_WALK_COUNT] = {
+    [BVH_WALK_NAIVE] = {naive_intersect, naive_intersect_traced, naive_occluded, naive_occluded_traced},
+    [BVH_WALK_ORDERED] = {ordered_intersect, ordered_intersect_traced, ordered_occluded, ordered_occluded_traced},
+    [BVH_WALK_STACK] = {obb_stack_intersect, obb_stack_intersect_traced, obb_stack_occluded,
+                        obb_stack_occluded_traced},
+    [BVH_WALK_STACK_ATTRS] = {obb_stack_intersect_attrs, obb_stack_intersect_attrs_traced, obb_stack_occluded,
+                              obb_stack_occluded_traced},
+};
+
+void sidx__bvh_pick_walks(bvh *b) { b->walks = b->obbs ? obb_walks : aabb_walks; }
+
+/* The table for this query's traversal (anything but naive and ordered
+ * is the stack walk) and, for the stack walk, for whether it asks for u,
+ * v or the normal.  q is never NULL here (sidx_internal.h §1). */
+static SIDX_INLINE const sidx__walk_table *walks_for(const sidx_accel *a, const sidx_query *q)
 {
     const bvh *b = a->impl;
-    walk w;
-    w.a = a;
-    w.b = b;
-    w.r = r;
-    w.q = q;
-    bvh_ray_setup(&w.br, r);
-    w.scale = a->opt.box == SIDX_BOX_ROBUST ? SIDX_ROBUST_TFAR_SCALE : 1.0f;
-    w.best = anyhit ? r->tmax : hit->t;
-    w.tri = SIDX_NO_HIT;
-    w.visited = 0;
-    w.anyhit = anyhit;
-    w.obb = b->obbs != NULL;
-    int found = 0, missed_root = b->num_nodes == 0;
-    if (!missed_root) {
-        if (ordered) {
-            float tn, tf;
-            const int h = walk_box(&w, 0, &tn, &tf);
-            EMIT_BOX(0u, h, tn, tf);
-            if (h) found = traced ? ordered_rec1(&w, 0, 0, tn, tf) : ordered_rec0(&w, 0, 0, tn, tf);
-            else missed_root = 1;
-        } else {
-            found = traced ? naive_rec1(&w, 0, 0) : naive_rec0(&w, 0, 0);
-            missed_root = w.visited == 0;
-        }
-    }
-    SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id;
-              e_.reason = found ? SIDX_TERM_ANY_HIT : missed_root ? SIDX_TERM_MISS_ROOT : SIDX_TERM_STACK_EMPTY;
-              e_.t = anyhit ? INFINITY : w.best; e_.count = w.visited);
-    if (!anyhit && w.tri != SIDX_NO_HIT) set_hit(a, b, r, q, w.best, w.tri, hit);
-    return found;
+    if (q->traversal == SIDX_TRAVERSE_NAIVE) return &b->walks[BVH_WALK_NAIVE];
+    if (q->traversal == SIDX_TRAVERSE_ORDERED) return &b->walks[BVH_WALK_ORDERED];
+    return &b->walks[(q->flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL)) ? BVH_WALK_STACK_ATTRS : BVH_WALK_STACK];
 }
 
-/* ---- entry points ---------------------------------------------------------- */
-
-/* The copies for queries asking for u, v or the normal are functions of
- * their own: inlined into the entry point beside the plain copies they
- * cost the plain walk 2-3% more instructions (callgrind: one register
- * allocation for all of them). */
-#define STACK_WALK_FN(name_, traced_, anyhit_, obb_, attrs_)                                                  \
-    static SIDX_NOINLINE int name_(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit) \
-    {                                                                                                           \
-        return stack_walk(a, r, q, hit, traced_, anyhit_, obb_, attrs_);                                        \
-    }
-STACK_WALK_FN(sw_plain, 0, 0, 0, 0)
-STACK_WALK_FN(sw_attrs, 0, 0, 0, 1)
-STACK_WALK_FN(sw_attrs_obb, 0, 0, 1, 1)
-STACK_WALK_FN(sw_traced_attrs, 1, 0, 0, 1)
-STACK_WALK_FN(sw_traced_attrs_obb, 1, 0, 1, 1)
-#undef STACK_WALK_FN
-
-/* The recursive walks (teaching paths) out of line too, for the same
- * reason: the entry point's register allocation is the stack walk's. */
-static SIDX_NOINLINE int rec_walk(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit,
-                                  int anyhit, int ordered, int traced)
-{
-    if (traced) return ordered ? recursive_walk(a, r, q, hit, anyhit, 1, 1) : recursive_walk(a, r, q, hit, anyhit, 0, 1);
-    return ordered ? recursive_walk(a, r, q, hit, anyhit, 1, 0) : recursive_walk(a, r, q, hit, anyhit, 0, 0);
-}
-
-static SIDX_INLINE int dispatch(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit,
-                                const int anyhit, const int traced)
-{
-    const int obb = ((const bvh *)a->impl)->obbs != NULL;
-    const int attrs = !anyhit && (q->flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL));
-    switch (q->traversal) {
-    case SIDX_TRAVERSE_NAIVE: return rec_walk(a, r, q, hit, anyhit, 0, traced);
-    case SIDX_TRAVERSE_ORDERED: return rec_walk(a, r, q, hit, anyhit, 1, traced);
-    default:
-        if (attrs && traced) return obb ? sw_traced_attrs_obb(a, r, q, hit) : sw_traced_attrs(a, r, q, hit);
-        if (attrs) return obb ? sw_attrs_obb(a, r, q, hit) : sw_attrs(a, r, q, hit);
-        return obb ? stack_walk(a, r, q, hit, traced, anyhit, 1, 0) : stack_walk(a, r, q, hit, traced, anyhit, 0, 0);
-    }
-}
-
-/* Every query but the hot one: u, v or normal, traced, oriented boxes,
- * the recursive walks. */
-static SIDX_NOINLINE void intersect_other(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
-{
-    if (SIDX_QUERY_TRACED(q)) dispatch(a, r, q, hit, 0, 1);
-    else dispatch(a, r, q, hit, 0, 0);
-}
-
-/* The entry point only sorts queries, before any set-up, so that each
- * walk runs in a function of its own with registers allocated for it
- * alone.  Measured (callgrind, bvh, diffuse rays, 20k): u, v or normal
- * queries — the "fair" path, as rtcIntersect1 fills them — were tested
- * inside the function holding all the walks, behind their prologue (six
- * saved registers, a 1.4 KB frame, the ray's constants): ~45 instructions
- * per ray; the plain walk on its own (sw_plain) takes 0.4% (bunny) to 1%
- * (Sponza) fewer instructions than inlined here beside the others. */
 void sidx__bvh_intersect(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
 {
-    if (q->flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL)) {
-        if (q->traversal != SIDX_TRAVERSE_NAIVE && q->traversal != SIDX_TRAVERSE_ORDERED && !SIDX_QUERY_TRACED(q)) {
-            if (((const bvh *)a->impl)->obbs != NULL) sw_attrs_obb(a, r, q, hit);
-            else sw_attrs(a, r, q, hit);
-            return;
-        }
-        intersect_other(a, r, q, hit);
-        return;
-    }
-    if (q->traversal == SIDX_TRAVERSE_NAIVE || q->traversal == SIDX_TRAVERSE_ORDERED || SIDX_QUERY_TRACED(q) ||
-        ((const bvh *)a->impl)->obbs != NULL) {
-        intersect_other(a, r, q, hit);
-        return;
-    }
-    sw_plain(a, r, q, hit);
+    sidx__walk_intersect(walks_for(a, q), a, r, q, hit);
 }
 
 int sidx__bvh_occluded(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
 {
-    return SIDX_QUERY_TRACED(q) ? dispatch(a, r, q, NULL, 1, 1) : dispatch(a, r, q, NULL, 1, 0);
+    return sidx__walk_occluded(walks_for(a, q), a, r, q);
 }

@@ -16,12 +16,10 @@
 #define GRID_VARIANT_NOMAILBOX 1
 #define GRID_VARIANT_BOXONLY 2
 
-/* λ, cells per triangle.  Measured on bunny (69k tris; primary and
- * diffuse rays, λ = 2, 4, 8, 16, 32): 4 was fastest for primary rays and
- * tied with 2 for diffuse ones; above 8 the walk through empty cells costs
- * more than the tests it saves (at 32: 32 cells and 2.3 tests per primary
- * ray, against 16 cells and 6 tests at 4).  For comparison pbrt-v1's
- * 3·∛n voxels along the longest axis is λ ≈ 27 for a cube. */
+/* λ, cells per triangle: denser grids test fewer triangles per ray but
+ * walk more empty cells, and above λ ≈ 8 the cells cost more than the
+ * tests they save; 4 was the fastest on the bunny (figures:
+ * docs/performance.md, Grids). */
 #define GRID_DEFAULT_DENSITY 4.0f
 
 /* ---- shared geometry (grid_internal.h §1) ------------------------------- */
@@ -256,8 +254,11 @@ typedef struct grid {
     uint32_t *refs;     /* original triangle indices */
     uint32_t n_refs;
     uint32_t empty;     /* cells without triangles */
-    int mailbox;
+    const sidx__walk_table *walks; /* with or without the mailbox (build) */
 } grid;
+
+/* Its walk tables, without and with the mailbox (defined after the walk). */
+static const sidx__walk_table grid_walks[2];
 
 static void grid_free(const sidx_accel *a, grid *G)
 {
@@ -275,7 +276,7 @@ static sidx_status grid_build(sidx_accel *a, sidx_error *err)
     grid *G = sidx__calloc(a, 1, sizeof *G);
     sidx_aabb *boxes = NULL;
     if (!G) return sidx__fail(err, SIDX_ERR_NOMEM, "grid: out of memory");
-    G->mailbox = !(a->variant & GRID_VARIANT_NOMAILBOX) && !a->opt.no_mailbox;
+    G->walks = &grid_walks[!(a->variant & GRID_VARIANT_NOMAILBOX) && !a->opt.no_mailbox];
     if (m->num_triangles && sidx__prim_boxes(a, &boxes, NULL) != SIDX_OK) goto nomem;
 
     const sidx_aabb scene = sidx_mesh_bounds(m);
@@ -366,8 +367,8 @@ static SIDX_INLINE int grid_walk(const sidx_accel *a, const sidx_ray *r, const s
         SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id; e_.node = cell; e_.depth = 0;
                   e_.t_near = t_in; e_.t_far = t_out; e_.cell[0] = d.c[0]; e_.cell[1] = d.c[1];
                   e_.cell[2] = d.c[2]);
-        const uint32_t b = off[cell];
-        if (sidx__cell_prims(a, r, q, hit, refs + b, off[cell + 1] - b, cell, 0, &mb, use_mb, traced, any)) {
+        const uint32_t first = off[cell];
+        if (sidx__cell_prims(a, r, q, hit, refs + first, off[cell + 1] - first, cell, 0, &mb, use_mb, traced, any)) {
             SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = SIDX_TERM_ANY_HIT;
                       e_.count = visited);
             return 1;
@@ -393,25 +394,18 @@ static SIDX_INLINE int grid_walk(const sidx_accel *a, const sidx_ray *r, const s
     return 0;
 }
 
+SIDX__GRID_WALK_TABLES(grid_walk, grid_walks);
+
 static void grid_intersect(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
 {
     const grid *G = a->impl;
-    if (SIDX_QUERY_TRACED(q)) {
-        if (G->mailbox) grid_walk(a, r, q, hit, 1, 0, 1);
-        else grid_walk(a, r, q, hit, 1, 0, 0);
-    } else {
-        if (G->mailbox) grid_walk(a, r, q, hit, 0, 0, 1);
-        else grid_walk(a, r, q, hit, 0, 0, 0);
-    }
+    sidx__walk_intersect(G->walks, a, r, q, hit);
 }
 
 static int grid_occluded(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
 {
     const grid *G = a->impl;
-    sidx_hit h = sidx_hit_none();
-    h.t = r->tmax;
-    if (SIDX_QUERY_TRACED(q)) return G->mailbox ? grid_walk(a, r, q, &h, 1, 1, 1) : grid_walk(a, r, q, &h, 1, 1, 0);
-    return G->mailbox ? grid_walk(a, r, q, &h, 0, 1, 1) : grid_walk(a, r, q, &h, 0, 1, 0);
+    return sidx__walk_occluded(G->walks, a, r, q);
 }
 
 static void grid_stats(const sidx_accel *a, sidx_accel_stats *s)

@@ -74,8 +74,11 @@ typedef struct grid2 {
     size_t cap_grids, cap_cells, cap_refs;
     uint32_t empty, max_level, max_depth;
     float lambda, lambda_top;
-    int mailbox;
+    const sidx__walk_table *walks; /* with or without the mailbox (build) */
 } grid2;
+
+/* Its walk tables, without and with the mailbox (defined after the walk). */
+static const sidx__walk_table grid2_walks[2];
 
 static void grid2_free(const sidx_accel *a, grid2 *G)
 {
@@ -207,7 +210,7 @@ static sidx_status grid2_build(sidx_accel *a, sidx_error *err)
     grid2 *G = sidx__calloc(a, 1, sizeof *G);
     sidx_aabb *boxes = NULL;
     if (!G) return sidx__fail(err, SIDX_ERR_NOMEM, "grid2: out of memory");
-    G->mailbox = !a->opt.no_mailbox;
+    G->walks = &grid2_walks[!a->opt.no_mailbox];
     G->lambda = a->opt.grid_density > 0.0f ? a->opt.grid_density : GRID2_LEAF_DENSITY;
     G->lambda_top = GRID2_TOP_DENSITY * G->lambda / GRID2_LEAF_DENSITY;
     G->max_depth = a->opt.max_depth ? a->opt.max_depth : GRID2_DEFAULT_DEPTH;
@@ -271,31 +274,31 @@ static SIDX_INLINE int grid2_walk(const sidx_accel *a, const sidx_ray *r, const 
                   e_.t = hit->t; e_.count = 0);
         return 0;
     }
-    level_walk st[GRID2_MAX_DEPTH + 1];
-    int k = 0;
-    level_enter(&st[0], r, root, t0, INFINITY);
+    level_walk levels[GRID2_MAX_DEPTH + 1];
+    int level = 0;
+    level_enter(&levels[0], r, root, t0, INFINITY);
     sidx__mailbox mb;
     if (use_mb) sidx__mailbox_clear(&mb);
     uint32_t visited = 0;
     int reason;
     for (;;) {
-        level_walk *L = &st[k];
+        level_walk *L = &levels[level];
         const int axis = sidx__dda_axis(&L->d);
         const float t_out = L->d.t_max[axis];
-        const uint32_t gc = L->g->first + L->cell;
-        const gcell cell = G->cells[gc];
+        const uint32_t cell_index = L->g->first + L->cell;
+        const gcell cell = G->cells[cell_index];
         ++visited;
-        SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id; e_.node = gc; e_.depth = (uint32_t)k;
-                  e_.t_near = L->t_in; e_.t_far = t_out; e_.cell[0] = L->d.c[0]; e_.cell[1] = L->d.c[1];
-                  e_.cell[2] = L->d.c[2]);
+        SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id; e_.node = cell_index;
+                  e_.depth = (uint32_t)level; e_.t_near = L->t_in; e_.t_far = t_out; e_.cell[0] = L->d.c[0];
+                  e_.cell[1] = L->d.c[1]; e_.cell[2] = L->d.c[2]);
         if (cell.n == GRID2_CHILD) {
-            ++k;
-            level_enter(&st[k], r, &G->grids[cell.begin], L->t_in, t_out);
+            ++level;
+            level_enter(&levels[level], r, &G->grids[cell.begin], L->t_in, t_out);
             continue;
         }
         /* a grid without references has refs NULL: no offset on it (UBSan, fuzz_build) */
-        if (sidx__cell_prims(a, r, q, hit, cell.n ? G->refs + cell.begin : NULL, cell.n, gc, (uint32_t)k, &mb,
-                             use_mb, traced, any)) {
+        if (sidx__cell_prims(a, r, q, hit, cell.n ? G->refs + cell.begin : NULL, cell.n, cell_index,
+                             (uint32_t)level, &mb, use_mb, traced, any)) {
             SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = SIDX_TERM_ANY_HIT;
                       e_.count = visited);
             return 1;
@@ -307,7 +310,7 @@ static SIDX_INLINE int grid2_walk(const sidx_accel *a, const sidx_ray *r, const 
         /* Step on; a level that runs out returns to its parent, whose
          * current cell then ends too. */
         for (;;) {
-            L = &st[k];
+            L = &levels[level];
             const int ax = sidx__dda_axis(&L->d);
             const float out = L->d.t_max[ax];
             if (out < L->limit && sidx__dda_step(&L->d, ax)) {
@@ -315,12 +318,12 @@ static SIDX_INLINE int grid2_walk(const sidx_accel *a, const sidx_ray *r, const 
                 L->t_in = out;
                 break;
             }
-            if (k == 0) {
+            if (level == 0) {
                 reason = SIDX_TERM_LEFT_GRID;
                 goto done;
             }
-            --k;
-            const level_walk *P = &st[k];
+            --level;
+            const level_walk *P = &levels[level];
             if (hit->t <= P->d.t_max[sidx__dda_axis(&P->d)]) {
                 reason = hit->prim != SIDX_NO_HIT ? SIDX_TERM_HIT_IN_CELL : SIDX_TERM_LEFT_GRID;
                 goto done;
@@ -336,26 +339,18 @@ done:
     return 0;
 }
 
+SIDX__GRID_WALK_TABLES(grid2_walk, grid2_walks);
+
 static void grid2_intersect(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
 {
     const grid2 *G = a->impl;
-    if (SIDX_QUERY_TRACED(q)) {
-        if (G->mailbox) grid2_walk(a, r, q, hit, 1, 0, 1);
-        else grid2_walk(a, r, q, hit, 1, 0, 0);
-    } else {
-        if (G->mailbox) grid2_walk(a, r, q, hit, 0, 0, 1);
-        else grid2_walk(a, r, q, hit, 0, 0, 0);
-    }
+    sidx__walk_intersect(G->walks, a, r, q, hit);
 }
 
 static int grid2_occluded(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
 {
     const grid2 *G = a->impl;
-    sidx_hit h = sidx_hit_none();
-    h.t = r->tmax;
-    if (SIDX_QUERY_TRACED(q))
-        return G->mailbox ? grid2_walk(a, r, q, &h, 1, 1, 1) : grid2_walk(a, r, q, &h, 1, 1, 0);
-    return G->mailbox ? grid2_walk(a, r, q, &h, 0, 1, 1) : grid2_walk(a, r, q, &h, 0, 1, 0);
+    return sidx__walk_occluded(G->walks, a, r, q);
 }
 
 static void grid2_stats(const sidx_accel *a, sidx_accel_stats *s)

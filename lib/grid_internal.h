@@ -6,7 +6,8 @@
  *  2. the exact triangle–box overlap test (Akenine-Möller 2001);
  *  3. binning triangles into the cells of a uniform grid (count, then fill);
  *  4. the 3D-DDA of Amanatides & Woo 1987;
- *  5. the per-ray mailbox and the primitive loop every cell runs.
+ *  5. the per-ray mailbox and the primitive loop every cell runs;
+ *  6. the walk tables: each structure's walk, copied per query kind.
  *
  * SIDX_STRUCTURE_NAME is defined here for the whole family as `(a->name)`,
  * the registered name (static), so "grid" and "grid-nomailbox" report
@@ -229,5 +230,43 @@ static SIDX_INLINE int sidx__clip(const sidx_accel *a, const sidx_ray *r, const 
 {
     return sidx__box_test(a->opt.box == SIDX_BOX_ROBUST, r, box, r->tmin, tmax, t0, t1);
 }
+
+/* ---- 6. walk tables (sidx_internal.h §1) ------------------------------- */
+
+/* Each structure of the family writes its walk once,
+ *   static SIDX_INLINE int WALK(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit,
+ *                               const int traced, const int any, const int use_mb)
+ * — closest hit (any = 0: updates *hit) or any hit (any = 1: returns 1 at
+ * the first hit), with or without the mailbox — and
+ * SIDX__GRID_WALK_TABLES(WALK, TABLES) makes its eight copies and
+ * `TABLES[2]`, the walk tables without (0) and with (1) the mailbox.  The
+ * build stores a pointer to TABLES[mailbox]; a query then only picks the
+ * traced or the plain copy.  An any-hit copy starts from a blank hit bounded by tmax.
+ * Like every walk, none tests q for NULL. */
+#define SIDX__GRID_WALK_INTERSECT(name_, walk_, traced_, use_mb_)                                              \
+    static void name_(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)             \
+    {                                                                                                           \
+        (void)walk_(a, r, q, hit, traced_, 0, use_mb_);                                                         \
+    }
+#define SIDX__GRID_WALK_OCCLUDED(name_, walk_, traced_, use_mb_)                                               \
+    static int name_(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)                              \
+    {                                                                                                           \
+        sidx_hit h = sidx_hit_none();                                                                           \
+        h.t = r->tmax;                                                                                          \
+        return walk_(a, r, q, &h, traced_, 1, use_mb_);                                                         \
+    }
+#define SIDX__GRID_WALK_TABLES(walk_, tables_)                                                                 \
+    SIDX__GRID_WALK_INTERSECT(walk_##_intersect, walk_, 0, 0)                                                  \
+    SIDX__GRID_WALK_INTERSECT(walk_##_intersect_traced, walk_, 1, 0)                                           \
+    SIDX__GRID_WALK_OCCLUDED(walk_##_occluded, walk_, 0, 0)                                                    \
+    SIDX__GRID_WALK_OCCLUDED(walk_##_occluded_traced, walk_, 1, 0)                                             \
+    SIDX__GRID_WALK_INTERSECT(walk_##_intersect_mb, walk_, 0, 1)                                               \
+    SIDX__GRID_WALK_INTERSECT(walk_##_intersect_mb_traced, walk_, 1, 1)                                        \
+    SIDX__GRID_WALK_OCCLUDED(walk_##_occluded_mb, walk_, 0, 1)                                                 \
+    SIDX__GRID_WALK_OCCLUDED(walk_##_occluded_mb_traced, walk_, 1, 1)                                          \
+    static const sidx__walk_table tables_[2] = {                                                                \
+        {walk_##_intersect, walk_##_intersect_traced, walk_##_occluded, walk_##_occluded_traced},               \
+        {walk_##_intersect_mb, walk_##_intersect_mb_traced, walk_##_occluded_mb, walk_##_occluded_mb_traced},   \
+    }
 
 #endif

@@ -63,9 +63,8 @@
  * The paper's top level is sparse; a denser top keeps the look-up short
  * (fewer octant levels).  A part is cut while more than leaf_size (opt,
  * default IRR_DEFAULT_LEAF) of its triangles are smaller than IRR_SPAN
- * times the part.  Measured on bunny / Sponza / stadium (diffuse rays):
- * λ 0.5 → 2 trades Sponza's tests per ray (8.6 → 5.9) against build time;
- * leaf 2 → 4 saves a third of the build and memory for ~15% more tests. */
+ * times the part.  Both trade tests per ray against build time and
+ * memory (figures: docs/performance.md, Grids). */
 #define IRR_TOP_DENSITY 1.0f
 #define IRR_DEFAULT_LEAF 4u
 #define IRR_MAX_DEPTH 16u
@@ -97,8 +96,11 @@ typedef struct igrid {
     icell *cells;
     uint32_t *refs;
     uint32_t n_nodes, n_cells, n_refs, empty, base_cells, depth_seen;
-    int mailbox;
+    const sidx__walk_table *walks; /* with or without the mailbox (build) */
 } igrid;
+
+/* Its walk tables, without and with the mailbox (defined after the walk). */
+static const sidx__walk_table igrid_walks[2];
 
 /* Build-only state. */
 typedef struct ibuild {
@@ -384,7 +386,7 @@ static sidx_status igrid_build(sidx_accel *a, sidx_error *err)
     sidx_status st = SIDX_ERR_NOMEM;
     if (!G) return sidx__fail(err, SIDX_ERR_NOMEM, "grid-irregular: out of memory");
     B.G = G;
-    G->mailbox = !a->opt.no_mailbox;
+    G->walks = &igrid_walks[!a->opt.no_mailbox];
     if (m->num_triangles && sidx__prim_boxes(a, &boxes, NULL) != SIDX_OK) goto fail;
     B.tri_boxes = boxes;
     B.leaf_max = a->opt.leaf_size ? a->opt.leaf_size : IRR_DEFAULT_LEAF;
@@ -565,11 +567,11 @@ static SIDX_INLINE int igrid_walk(const sidx_accel *a, const sidx_ray *r, const 
     const float *bmin = &G->box.min.x, *vs = G->vs, *ivs = G->ivs;
     const uint32_t *res = G->vres;
     float off[3];
-    uint32_t v[3];
+    uint32_t voxel[3];
     for (int i = 0; i < 3; ++i) {
         off[i] = bmin[i] - o[i];
         const float f = floorf((o[i] + t0 * dir[i] - bmin[i]) * ivs[i]);
-        v[i] = !(f >= 0.0f) ? 0u : f >= (float)res[i] ? res[i] - 1u : (uint32_t)f;
+        voxel[i] = !(f >= 0.0f) ? 0u : f >= (float)res[i] ? res[i] - 1u : (uint32_t)f;
     }
     sidx__mailbox mb;
     if (use_mb) sidx__mailbox_clear(&mb);
@@ -577,22 +579,22 @@ static SIDX_INLINE int igrid_walk(const sidx_accel *a, const sidx_ray *r, const 
     float t = t0;
     int reason;
     for (;;) {
-        const uint32_t ci = lookup(G, v);
-        const icell *c = &G->cells[ci];
+        const uint32_t cell_index = lookup(G, voxel);
+        const icell *cell = &G->cells[cell_index];
         /* Exit of the expanded box: on each moving axis, the face ahead. */
         float t_exit = INFINITY;
-        int k = 0;
+        int exit_axis = 0;
         for (int i = 0; i < 3; ++i) {
             if (dir[i] == 0.0f) continue;
-            const uint32_t face = dir[i] > 0.0f ? c->ehi[i] : c->elo[i];
+            const uint32_t face = dir[i] > 0.0f ? cell->ehi[i] : cell->elo[i];
             const float ti = ((float)face * vs[i] + off[i]) * inv[i];
-            if (ti < t_exit) { t_exit = ti; k = i; }
+            if (ti < t_exit) { t_exit = ti; exit_axis = i; }
         }
         ++visited;
-        SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id; e_.node = ci; e_.depth = 0;
-                  e_.t_near = t; e_.t_far = t_exit; e_.cell[0] = (int32_t)v[0]; e_.cell[1] = (int32_t)v[1];
-                  e_.cell[2] = (int32_t)v[2]);
-        if (sidx__cell_prims(a, r, q, hit, G->refs + c->begin, c->n, ci, 0, &mb, use_mb, traced, any)) {
+        SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id; e_.node = cell_index; e_.depth = 0;
+                  e_.t_near = t; e_.t_far = t_exit; e_.cell[0] = (int32_t)voxel[0]; e_.cell[1] = (int32_t)voxel[1];
+                  e_.cell[2] = (int32_t)voxel[2]);
+        if (sidx__cell_prims(a, r, q, hit, G->refs + cell->begin, cell->n, cell_index, 0, &mb, use_mb, traced, any)) {
             SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = SIDX_TERM_ANY_HIT;
                       e_.count = visited);
             return 1;
@@ -602,21 +604,23 @@ static SIDX_INLINE int igrid_walk(const sidx_accel *a, const sidx_ray *r, const 
             break;
         }
         /* The voxel across the exit face... */
-        if (dir[k] > 0.0f ? c->ehi[k] >= res[k] : c->elo[k] == 0) {
+        if (dir[exit_axis] > 0.0f ? cell->ehi[exit_axis] >= res[exit_axis] : cell->elo[exit_axis] == 0) {
             reason = SIDX_TERM_LEFT_GRID;
             break;
         }
-        const uint32_t nk = dir[k] > 0.0f ? c->ehi[k] : c->elo[k] - 1u;
+        const uint32_t next = dir[exit_axis] > 0.0f ? cell->ehi[exit_axis] : cell->elo[exit_axis] - 1u;
         /* ...and on the other axes where the exit point lies, kept inside
          * the expanded box and never behind the current voxel. */
         for (int i = 0; i < 3; ++i) {
-            if (i == k || dir[i] == 0.0f) continue;
+            if (i == exit_axis || dir[i] == 0.0f) continue;
             const float f = floorf((o[i] + t_exit * dir[i] - bmin[i]) * ivs[i]);
-            uint32_t n = !(f >= (float)c->elo[i]) ? c->elo[i] : f >= (float)c->ehi[i] ? c->ehi[i] - 1u : (uint32_t)f;
-            if (dir[i] > 0.0f ? n < v[i] : n > v[i]) n = v[i];
-            v[i] = n;
+            uint32_t vi = !(f >= (float)cell->elo[i])  ? cell->elo[i]
+                          : f >= (float)cell->ehi[i] ? cell->ehi[i] - 1u
+                                                     : (uint32_t)f;
+            if (dir[i] > 0.0f ? vi < voxel[i] : vi > voxel[i]) vi = voxel[i];
+            voxel[i] = vi;
         }
-        v[k] = nk;
+        voxel[exit_axis] = next;
         if (t_exit > t) t = t_exit;
     }
     SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = reason; e_.t = hit->t;
@@ -627,26 +631,18 @@ static SIDX_INLINE int igrid_walk(const sidx_accel *a, const sidx_ray *r, const 
     return 0;
 }
 
+SIDX__GRID_WALK_TABLES(igrid_walk, igrid_walks);
+
 static void igrid_intersect(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
 {
     const igrid *G = a->impl;
-    if (SIDX_QUERY_TRACED(q)) {
-        if (G->mailbox) igrid_walk(a, r, q, hit, 1, 0, 1);
-        else igrid_walk(a, r, q, hit, 1, 0, 0);
-    } else {
-        if (G->mailbox) igrid_walk(a, r, q, hit, 0, 0, 1);
-        else igrid_walk(a, r, q, hit, 0, 0, 0);
-    }
+    sidx__walk_intersect(G->walks, a, r, q, hit);
 }
 
 static int igrid_occluded(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
 {
     const igrid *G = a->impl;
-    sidx_hit h = sidx_hit_none();
-    h.t = r->tmax;
-    if (SIDX_QUERY_TRACED(q))
-        return G->mailbox ? igrid_walk(a, r, q, &h, 1, 1, 1) : igrid_walk(a, r, q, &h, 1, 1, 0);
-    return G->mailbox ? igrid_walk(a, r, q, &h, 0, 1, 1) : igrid_walk(a, r, q, &h, 0, 1, 0);
+    return sidx__walk_occluded(G->walks, a, r, q);
 }
 
 static void igrid_stats(const sidx_accel *a, sidx_accel_stats *s)

@@ -56,9 +56,12 @@ typedef struct octree {
     uint32_t leaf_max, depth_max;
     uint64_t node_budget;             /* OCT_NODES_PER_TRI·n + 1 */
     int nsplit;                       /* axes cut: 3 (octree) or 2 (quadtree) */
-    int mailbox;
+    const sidx__walk_table *walks;    /* with or without the mailbox (build) */
     const sidx_aabb *tri_boxes;       /* build only */
 } octree;
+
+/* Its walk tables, without and with the mailbox (defined after the walk). */
+static const sidx__walk_table octree_walks[2];
 
 static void octree_free(const sidx_accel *a, octree *T)
 {
@@ -171,7 +174,7 @@ static sidx_status octree_build(sidx_accel *a, sidx_error *err)
     sidx_aabb *boxes = NULL;
     if (!T) return sidx__fail(err, SIDX_ERR_NOMEM, "octree: out of memory");
     T->nsplit = a->variant == 1 ? 2 : 3;
-    T->mailbox = !a->opt.no_mailbox;
+    T->walks = &octree_walks[!a->opt.no_mailbox];
     T->leaf_max = a->opt.leaf_size ? a->opt.leaf_size : OCT_DEFAULT_LEAF;
     T->depth_max = a->opt.max_depth ? a->opt.max_depth : OCT_DEFAULT_DEPTH;
     if (T->depth_max > OCT_MAX_DEPTH) T->depth_max = OCT_MAX_DEPTH;
@@ -230,71 +233,72 @@ static SIDX_INLINE int octree_walk(const sidx_accel *a, const sidx_ray *r, const
     uint32_t visited = 0;
     int reason = SIDX_TERM_STACK_EMPTY;
     while (sp) {
-        const oentry e = stack[--sp];
-        SIDX_EMIT(traced, q->hook, SIDX_EV_STACK_POP, e_.ray_id = q->ray_id; e_.node = e.node; e_.depth = sp + 1;
-                  e_.t_near = e.t0; e_.t_far = e.t1);
+        const oentry entry = stack[--sp];
+        SIDX_EMIT(traced, q->hook, SIDX_EV_STACK_POP, e_.ray_id = q->ray_id; e_.node = entry.node;
+                  e_.depth = sp + 1; e_.t_near = entry.t0; e_.t_far = entry.t1);
         /* Front to back: everything left on the stack starts later. */
-        if (e.t0 > hit->t) {
+        if (entry.t0 > hit->t) {
             reason = hit->prim != SIDX_NO_HIT ? SIDX_TERM_HIT_IN_CELL : SIDX_TERM_STACK_EMPTY;
             break;
         }
-        const onode nd = T->nodes[e.node];
+        const onode node = T->nodes[entry.node];
         ++visited;
-        SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id; e_.node = e.node; e_.depth = e.depth;
-                  e_.t_near = e.t0; e_.t_far = e.t1; e_.bounds = e.box);
-        if (nd.n != OCT_INNER) {
+        SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id; e_.node = entry.node;
+                  e_.depth = entry.depth; e_.t_near = entry.t0; e_.t_far = entry.t1; e_.bounds = entry.box);
+        if (node.n != OCT_INNER) {
             /* a tree without references has refs NULL: no offset on it (UBSan, fuzz_build) */
-            if (sidx__cell_prims(a, r, q, hit, nd.n ? T->refs + nd.a : NULL, nd.n, e.node, e.depth, &mb, use_mb,
-                                 traced, any)) {
+            if (sidx__cell_prims(a, r, q, hit, node.n ? T->refs + node.a : NULL, node.n, entry.node, entry.depth,
+                                 &mb, use_mb, traced, any)) {
                 SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = SIDX_TERM_ANY_HIT;
                           e_.count = visited);
                 return 1;
             }
-            if (hit->t <= e.t1) {
+            if (hit->t <= entry.t1) {
                 reason = hit->prim != SIDX_NO_HIT ? SIDX_TERM_HIT_IN_CELL : SIDX_TERM_STACK_EMPTY;
                 break;
             }
             continue;
         }
         /* Mid-plane crossings and the entry child. */
-        const float *lo = &e.box.min.x, *hi = &e.box.max.x;
-        float tm[3];
+        const float *lo = &entry.box.min.x, *hi = &entry.box.max.x;
+        float t_mid[3];
         uint32_t child = 0;
-        int order[3], nc = 0;
+        int order[3], n_cross = 0;
         for (int k = 0; k < nsplit; ++k) {
             const float mk = mid(lo[k], hi[k]);
             if (dir[k] == 0.0f) {
                 /* Never crosses; the side is where the origin is (on the
                  * plane: the upper child, as the grids' floor does). */
-                tm[k] = INFINITY;
+                t_mid[k] = INFINITY;
                 if (o[k] >= mk) child |= 1u << k;
                 continue;
             }
-            tm[k] = (mk - o[k]) * inv[k];
-            const int crossed = tm[k] <= e.t0;
+            t_mid[k] = (mk - o[k]) * inv[k];
+            const int crossed = t_mid[k] <= entry.t0;
             if (crossed == (dir[k] > 0.0f)) child |= 1u << k;
-            if (tm[k] > e.t0 && tm[k] < e.t1) order[nc++] = k;
+            if (t_mid[k] > entry.t0 && t_mid[k] < entry.t1) order[n_cross++] = k;
         }
         /* Sort the crossings inside (t0, t1) by t (at most 3). */
-        for (int i = 1; i < nc; ++i)
-            for (int j = i; j > 0 && tm[order[j]] < tm[order[j - 1]]; --j) {
+        for (int i = 1; i < n_cross; ++i)
+            for (int j = i; j > 0 && t_mid[order[j]] < t_mid[order[j - 1]]; --j) {
                 const int tmp = order[j];
                 order[j] = order[j - 1];
                 order[j - 1] = tmp;
             }
-        /* Children in ray order: c_0 over [t0, tm_0], c_1 = c_0 ^ bit over
-         * [tm_0, tm_1], ...; pushed last-first so the first pops first. */
-        uint32_t ids[4];
-        float ts[5];
-        ids[0] = child;
-        ts[0] = e.t0;
-        for (int i = 0; i < nc; ++i) {
-            ts[i + 1] = tm[order[i]];
-            ids[i + 1] = ids[i] ^ (1u << order[i]);
+        /* Children in ray order: c_0 over [t0, t_mid_0], c_1 = c_0 ^ bit over
+         * [t_mid_0, t_mid_1], ...; pushed last-first so the first pops first. */
+        uint32_t child_ids[4];
+        float t_bounds[5];
+        child_ids[0] = child;
+        t_bounds[0] = entry.t0;
+        for (int i = 0; i < n_cross; ++i) {
+            t_bounds[i + 1] = t_mid[order[i]];
+            child_ids[i + 1] = child_ids[i] ^ (1u << order[i]);
         }
-        ts[nc + 1] = e.t1;
-        for (int i = nc; i >= 0; --i) {
-            const oentry c = {child_box(e.box, ids[i], nsplit), ts[i], ts[i + 1], nd.a + ids[i], e.depth + 1};
+        t_bounds[n_cross + 1] = entry.t1;
+        for (int i = n_cross; i >= 0; --i) {
+            const oentry c = {child_box(entry.box, child_ids[i], nsplit), t_bounds[i], t_bounds[i + 1],
+                              node.a + child_ids[i], entry.depth + 1};
             stack[sp++] = c;
             SIDX_EMIT(traced, q->hook, SIDX_EV_STACK_PUSH, e_.ray_id = q->ray_id; e_.node = c.node; e_.depth = sp;
                       e_.t_near = c.t0; e_.t_far = c.t1);
@@ -307,26 +311,18 @@ static SIDX_INLINE int octree_walk(const sidx_accel *a, const sidx_ray *r, const
     return 0;
 }
 
+SIDX__GRID_WALK_TABLES(octree_walk, octree_walks);
+
 static void octree_intersect(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
 {
     const octree *T = a->impl;
-    if (SIDX_QUERY_TRACED(q)) {
-        if (T->mailbox) octree_walk(a, r, q, hit, 1, 0, 1);
-        else octree_walk(a, r, q, hit, 1, 0, 0);
-    } else {
-        if (T->mailbox) octree_walk(a, r, q, hit, 0, 0, 1);
-        else octree_walk(a, r, q, hit, 0, 0, 0);
-    }
+    sidx__walk_intersect(T->walks, a, r, q, hit);
 }
 
 static int octree_occluded(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
 {
     const octree *T = a->impl;
-    sidx_hit h = sidx_hit_none();
-    h.t = r->tmax;
-    if (SIDX_QUERY_TRACED(q))
-        return T->mailbox ? octree_walk(a, r, q, &h, 1, 1, 1) : octree_walk(a, r, q, &h, 1, 1, 0);
-    return T->mailbox ? octree_walk(a, r, q, &h, 0, 1, 1) : octree_walk(a, r, q, &h, 0, 1, 0);
+    return sidx__walk_occluded(T->walks, a, r, q);
 }
 
 static void octree_stats(const sidx_accel *a, sidx_accel_stats *s)
