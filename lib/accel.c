@@ -162,7 +162,7 @@ void sidx__hit_attrs_from_mesh(const sidx_accel *a, const sidx_ray *r, uint32_t 
                     p2 = sidx_mesh_vertex(m, hit->prim, 2);
     if (need & SIDX_QUERY_UV) {
         float u = 0.0f, v = 0.0f;
-        if (sidx__tri_hit_uv_at(a->opt.tri, r, &p0.x, &p1.x, &p2.x, 1, &u, &v)) {
+        if (sidx__tri_hit_uv_at(a->opt.tri, r, sidx_v3_array(&p0), sidx_v3_array(&p1), sidx_v3_array(&p2), 1, &u, &v)) {
             hit->u = u;
             hit->v = v;
         }

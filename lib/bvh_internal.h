@@ -165,7 +165,7 @@ typedef struct bvh_ray {
 
 static SIDX_INLINE void bvh_ray_setup(bvh_ray *br, const sidx_ray *r)
 {
-    const float *o = &r->org.x, *inv = &r->inv_dir.x;
+    const float *o = sidx_v3_array(&r->org), *inv = sidx_v3_array(&r->inv_dir);
     for (int k = 0; k < 3; ++k) {
         br->org[k] = o[k];
         br->inv[k] = inv[k];

@@ -80,7 +80,7 @@ static SIDX_INLINE void set_hit(const sidx_accel *a, const bvh *b, const sidx_ra
     hit->t = t;
     hit->prim = b->prim_id[tri];
     if (q->flags & SIDX_QUERY_UV)
-        (void)sidx__tri_hit_uv_at(a->opt.tri, r, &T->v[0].x, &T->v[1].x, &T->v[2].x, 1, &hit->u, &hit->v);
+        (void)sidx__tri_hit_uv_at(a->opt.tri, r, sidx_v3_array(&T->v[0]), sidx_v3_array(&T->v[1]), sidx_v3_array(&T->v[2]), 1, &hit->u, &hit->v);
     if (q->flags & SIDX_QUERY_NORMAL) hit->ng = sidx__tri_normal(T->v[0], T->v[1], T->v[2]);
 }
 

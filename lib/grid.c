@@ -37,7 +37,7 @@ sidx_aabb sidx__grid_box(sidx_aabb scene)
      * than a few ulps of the coordinates. */
     float pad = emax > 0.0f ? 1e-3f * emax : (mag > 0.0f ? 1e-3f * mag : 1.0f);
     if (pad < 1e-5f * mag) pad = 1e-5f * mag;
-    float *lo = &scene.min.x, *hi = &scene.max.x;
+    float *lo = sidx_v3_array_rw(&scene.min), *hi = sidx_v3_array_rw(&scene.max);
     for (int i = 0; i < 3; ++i)
         if (hi[i] - lo[i] <= 1e-6f * emax || hi[i] - lo[i] <= 8.0f * FLT_EPSILON * mag) {
             lo[i] -= pad;
@@ -207,12 +207,12 @@ uint64_t sidx__grid_bin(const sidx_mesh *m, const sidx_aabb *tri_boxes, const ui
                         const sidx__grid_geom *g, int exact, uint32_t *counts, uint32_t *refs)
 {
     uint64_t total = 0;
-    const float *gmin = &g->box.min.x, *ic = &g->inv_cell.x, *cs = &g->cell.x;
+    const float *gmin = sidx_v3_array(&g->box.min), *ic = sidx_v3_array(&g->inv_cell), *cs = sidx_v3_array(&g->cell);
     const sidx_vec3 half = sidx_v3_scale(g->cell, 0.5f);
     for (uint32_t k = 0; k < n; ++k) {
         const uint32_t prim = ids ? ids[k] : k;
         const sidx_aabb tb = tri_boxes[prim];
-        const float *bl = &tb.min.x, *bh = &tb.max.x;
+        const float *bl = sidx_v3_array(&tb.min), *bh = sidx_v3_array(&tb.max);
         int32_t lo[3], hi[3];
         for (int i = 0; i < 3; ++i) {
             /* A box touching a boundary (within 1e-4 of a cell) goes on

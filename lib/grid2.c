@@ -101,7 +101,7 @@ static void grid2_free(const sidx_accel *a, grid2 *G)
  * near the faces, and no hit can fall between levels. */
 static sidx_aabb child_box(sidx_aabb cb)
 {
-    float *lo = &cb.min.x, *hi = &cb.max.x;
+    float *lo = sidx_v3_array_rw(&cb.min), *hi = sidx_v3_array_rw(&cb.max);
     for (int k = 0; k < 3; ++k) {
         const float pad = (fabsf(lo[k]) + fabsf(hi[k]) + (hi[k] - lo[k])) * 0x1p-20f;
         lo[k] -= pad;

@@ -119,8 +119,8 @@ typedef struct sidx__dda {
  * and no 0·inf = NaN ever enters a comparison. */
 static SIDX_INLINE void sidx__dda_init(sidx__dda *d, const sidx_ray *r, const sidx__grid_geom *g, float t_enter)
 {
-    const float *o = &r->org.x, *dir = &r->dir.x, *inv = &r->inv_dir.x;
-    const float *bmin = &g->box.min.x, *cs = &g->cell.x, *ic = &g->inv_cell.x;
+    const float *o = sidx_v3_array(&r->org), *dir = sidx_v3_array(&r->dir), *inv = sidx_v3_array(&r->inv_dir);
+    const float *bmin = sidx_v3_array(&g->box.min), *cs = sidx_v3_array(&g->cell), *ic = sidx_v3_array(&g->inv_cell);
     for (int i = 0; i < 3; ++i) {
         const int32_t res = (int32_t)g->res[i];
         const float p = o[i] + t_enter * dir[i];

@@ -127,8 +127,8 @@ static void igrid_free(const sidx_accel *a, igrid *G)
 static sidx_aabb vbox(const igrid *G, const uint32_t lo[3], const uint32_t hi[3])
 {
     sidx_aabb b;
-    float *mn = &b.min.x, *mx = &b.max.x;
-    const float *bmin = &G->box.min.x;
+    float *mn = sidx_v3_array_rw(&b.min), *mx = sidx_v3_array_rw(&b.max);
+    const float *bmin = sidx_v3_array(&G->box.min);
     for (int i = 0; i < 3; ++i) {
         mn[i] = (float)lo[i] * G->vs[i] + bmin[i];
         mx[i] = (float)hi[i] * G->vs[i] + bmin[i];
@@ -202,7 +202,7 @@ static sidx_status build_node(sidx_accel *a, ibuild *B, uint32_t k, const uint32
         uint32_t small = 0;
         for (uint32_t t = 0; t < n && small <= B->leaf_max; ++t) {
             const sidx_aabb tb = B->tri_boxes[B->scratch[s + t]];
-            const float *tl = &tb.min.x, *th = &tb.max.x;
+            const float *tl = sidx_v3_array(&tb.min), *th = sidx_v3_array(&tb.max);
             float te = 0.0f;
             for (uint32_t j = 0; j < G->nsplit; ++j) {
                 const float e = th[G->axes[j]] - tl[G->axes[j]];
@@ -400,7 +400,7 @@ static sidx_status igrid_build(sidx_accel *a, sidx_error *err)
     sidx__grid_resolution(sidx_aabb_is_empty(scene) ? G->box : scene, (double)m->num_triangles, lambda,
                           SIDX__GRID_MAX_RES, IRR_MAX_TOP_CELLS, G->top);
     const sidx_vec3 sext = sidx_aabb_is_empty(scene) ? sidx_v3(0, 0, 0) : sidx_aabb_extent(scene);
-    const float *se = &sext.x;
+    const float *se = sidx_v3_array(&sext);
     const float emax = se[0] > se[1] ? (se[0] > se[2] ? se[0] : se[2]) : (se[1] > se[2] ? se[1] : se[2]);
     uint32_t topbits = 0;
     for (int i = 0; i < 3; ++i) {
@@ -420,7 +420,7 @@ static sidx_status igrid_build(sidx_accel *a, sidx_error *err)
     if (G->nsplit == 0) B.depth_max = 0;
     {
         const sidx_vec3 e = sidx_aabb_extent(G->box);
-        const float *ep = &e.x;
+        const float *ep = sidx_v3_array(&e);
         for (int i = 0; i < 3; ++i) {
             G->vs[i] = ep[i] / (float)G->vres[i];
             G->ivs[i] = 1.0f / G->vs[i];
@@ -563,8 +563,8 @@ static SIDX_INLINE int igrid_walk(const sidx_accel *a, const sidx_ray *r, const 
                   e_.t = hit->t; e_.count = 0);
         return 0;
     }
-    const float *o = &r->org.x, *dir = &r->dir.x, *inv = &r->inv_dir.x;
-    const float *bmin = &G->box.min.x, *vs = G->vs, *ivs = G->ivs;
+    const float *o = sidx_v3_array(&r->org), *dir = sidx_v3_array(&r->dir), *inv = sidx_v3_array(&r->inv_dir);
+    const float *bmin = sidx_v3_array(&G->box.min), *vs = G->vs, *ivs = G->ivs;
     const uint32_t *res = G->vres;
     float off[3];
     uint32_t voxel[3];

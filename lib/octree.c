@@ -79,7 +79,7 @@ static SIDX_INLINE float mid(float lo, float hi) { return 0.5f * (lo + hi); }
 /* Child `i` of box b: bit k of i set = upper half on axis k. */
 static SIDX_INLINE sidx_aabb child_box(sidx_aabb b, uint32_t i, int nsplit)
 {
-    float *lo = &b.min.x, *hi = &b.max.x;
+    float *lo = sidx_v3_array_rw(&b.min), *hi = sidx_v3_array_rw(&b.max);
     for (int k = 0; k < nsplit; ++k) {
         const float m = mid(lo[k], hi[k]);
         if (i & (1u << k)) lo[k] = m;
@@ -132,7 +132,7 @@ static sidx_status build_node(sidx_accel *a, octree *T, uint32_t node, uint32_t 
     {
         /* Children must stay well above the float spacing of the
          * coordinates (a scene at 1e6 has an ulp of 0.06). */
-        const float *lo = &box.min.x, *hi = &box.max.x;
+        const float *lo = sidx_v3_array(&box.min), *hi = sidx_v3_array(&box.max);
         for (int k = 0; k < T->nsplit; ++k) {
             const float mag = fabsf(lo[k]) > fabsf(hi[k]) ? fabsf(lo[k]) : fabsf(hi[k]);
             if (0.5f * (hi[k] - lo[k]) < 16.0f * FLT_EPSILON * mag)
@@ -223,7 +223,7 @@ static SIDX_INLINE int octree_walk(const sidx_accel *a, const sidx_ray *r, const
         return 0;
     }
     const int nsplit = T->nsplit;
-    const float *o = &r->org.x, *dir = &r->dir.x, *inv = &r->inv_dir.x;
+    const float *o = sidx_v3_array(&r->org), *dir = sidx_v3_array(&r->dir), *inv = sidx_v3_array(&r->inv_dir);
     /* Each level pushes at most 3 children beyond the one taken next. */
     oentry stack[3u * (OCT_MAX_DEPTH + 1u) + 4u];
     uint32_t sp = 0;
@@ -260,7 +260,7 @@ static SIDX_INLINE int octree_walk(const sidx_accel *a, const sidx_ray *r, const
             continue;
         }
         /* Mid-plane crossings and the entry child. */
-        const float *lo = &entry.box.min.x, *hi = &entry.box.max.x;
+        const float *lo = sidx_v3_array(&entry.box.min), *hi = sidx_v3_array(&entry.box.max);
         float t_mid[3];
         uint32_t child = 0;
         int order[3], n_cross = 0;

@@ -249,7 +249,7 @@ static void test_counts_past_32bit_indices_are_refused(void **state)
     assert_int_equal(sidx_mesh_validate(&m, NULL), SIDX_ERR_LIMIT);
     sidx_mesh out;
     memset(&out, 0, sizeof out);
-    assert_int_equal(sidx_mesh_from_arrays(&out, &pos[0].x, 3, idx, UINT32_MAX / 3u + 1u, &err), SIDX_ERR_LIMIT);
+    assert_int_equal(sidx_mesh_from_arrays(&out, sidx_v3_array(&pos[0]), 3, idx, UINT32_MAX / 3u + 1u, &err), SIDX_ERR_LIMIT);
     assert_null(out.positions);
     /* the true count passes */
     m.num_triangles = 1;
