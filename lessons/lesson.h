@@ -197,7 +197,12 @@ static inline void lesson_parse(lesson_args *a, int argc, char **argv)
         if (!o) {
             sidx_build_options scratch = {0};
             if (sidx_viz_build_knob(arg, NULL, &scratch, NULL, 0) != 0) {
-                fprintf(stderr, "%s: this lesson builds with the default knobs and takes no %s\n", a->name, arg);
+                int takes = 0;
+                for (const lesson_option *k = a->options; k && k->flag; ++k) takes |= k->build != NULL;
+                fprintf(stderr,
+                        takes ? "%s: this lesson takes no %s (--help lists the knobs it takes)\n"
+                              : "%s: this lesson builds with the default knobs and takes no %s\n",
+                        a->name, arg);
                 exit(2);
             }
             lesson__usage_error(a, "unexpected argument", arg);
