@@ -49,92 +49,85 @@ start() {
 
 screen() { $T capture-pane -p -t "$1" 2>/dev/null; }
 
-# wait_for NAME TEXT: until the screen of NAME shows TEXT (fixed string)
-wait_for() {
+# until_ok COMMAND...: run it every tenth of a second until it succeeds, $WAIT times at most
+until_ok() {
     n=0
-    while [ $n -lt "$WAIT" ]; do
-        screen "$1" | grep -qF -- "$2" && return 0
+    until "$@"; do
+        [ $n -ge "$WAIT" ] && return 1
         sleep 0.1
         n=$((n + 1))
     done
-    return 1
 }
 
-# current NAME: the row of the current step (marked '>')
+shows() { screen "$1" | grep -qF -- "$2"; }
+gone() { ! $T has-session -t "$1" 2>/dev/null; }
+# wait_for NAME TEXT: until the screen of NAME shows TEXT (fixed string)
+wait_for() { until_ok shows "$1" "$2"; }
+
+# current NAME: the row of the current step (marked '>'); step_of NAME: its number
 current() { screen "$1" | grep '^>'; }
+# lands NAME TEXT ROW WHAT: the screen shows TEXT with ROW in the current row
+lands() {
+    if wait_for "$1" "$2" && current "$1" | grep -qF -- "$3"; then
+        ok "$4: $(current "$1" | cut -c1-60)"
+    else
+        bad "$4: wanted '$3' in the current row, got '$(current "$1")'"
+    fi
+}
+step_of() { current "$1" | awk '{print $2}'; }
+moved() { [ "$(step_of "$1")" != "$2" ]; }
 
 # the K-th event line of the plain output, without its indentation
 nth_event() { "$STEP" --accel "$1" $SCENE --ray $RAY --leaf-size 1 --all </dev/null | sed -n "$2p" | sed 's/^ *//'; }
 
 echo "step-tmux: sidx-step in tmux $(tmux -V | cut -d' ' -f2)"
+# a session that outlives the others, so the server does not exit between them
+$T new-session -d -s hold "sleep 300" </dev/null || { echo "step-tmux: FAILED: tmux cannot start a server"; exit 1; }
 
 # ---- forward, back, go to step ----
 start fb --accel bvh $SCENE --ray $RAY --leaf-size 1 || exit 1
 total=$("$STEP" --accel bvh $SCENE --ray $RAY --leaf-size 1 --all </dev/null | wc -l | tr -d ' ')
-if wait_for fb "step 1/$total "; then ok "starts at step 1 of $total"; else bad "no 'step 1/$total' on the screen"; fi
+lands fb "step 1/$total " "ray 0 begin" "starts at step 1 of $total"
 $T send-keys -t fb n n n n
 wait_for fb "step 5/$total " || bad "four n keys did not reach step 5"
 screen fb >"$TMP/at5"
-$T send-keys -t fb Enter
-wait_for fb "step 6/$total " || bad "Enter did not reach step 6"
-$T send-keys -t fb b
-if wait_for fb "step 5/$total " && screen fb | cmp -s - "$TMP/at5"; then
-    ok "forward then back shows step 5 again, the same screen"
-else
-    bad "forward then back: the screen of step 5 differs"
-    screen fb | diff "$TMP/at5" - | head -10
-fi
-$T send-keys -t fb Right
-wait_for fb "step 6/$total " || bad "Right did not reach step 6"
-$T send-keys -t fb Left
-if wait_for fb "step 5/$total " && screen fb | cmp -s - "$TMP/at5"; then ok "Right then Left: step 5 again"; else bad "Right then Left"; fi
+for keys in "Enter b" "Right Left"; do
+    $T send-keys -t fb ${keys% *}
+    wait_for fb "step 6/$total " || bad "${keys% *} did not reach step 6"
+    $T send-keys -t fb ${keys#* }
+    if wait_for fb "step 5/$total " && screen fb | cmp -s - "$TMP/at5"; then
+        ok "$keys: forward then back shows step 5 again, the same screen"
+    else
+        bad "$keys: the screen of step 5 differs"
+        screen fb | diff "$TMP/at5" - | head -10
+    fi
+done
 want=$(nth_event bvh 12)
 $T send-keys -t fb g 12 Enter
-if wait_for fb "step 12/$total " && current fb | grep -qF -- "$want"; then
-    ok "g 12 Enter shows step 12: $want"
-else
-    bad "g 12 Enter: wanted step 12 '$want', current row: $(current fb)"
-fi
+lands fb "step 12/$total " "$want" "g 12 Enter shows step 12: $want"
 $T send-keys -t fb a
-if wait_for fb "step $total/$total " && current fb | grep -qF "ray 0 end"; then ok "a runs to the end"; else bad "a did not reach the end"; fi
+lands fb "step $total/$total " "ray 0 end" "a runs to the end"
 $T send-keys -t fb q
-n=0
-while $T has-session -t fb 2>/dev/null && [ $n -lt "$WAIT" ]; do
-    sleep 0.1
-    n=$((n + 1))
-done
-if $T has-session -t fb 2>/dev/null; then bad "q did not end sidx-step"; else ok "q ends it"; fi
+if until_ok gone fb; then ok "q ends it"; else bad "q did not end sidx-step"; fi
 
-# ---- --break push, c, l (kd-tree, the deck's kD-Tree Traversal slides) ----
+# ---- --break push, l, C (kd-tree, the deck's kD-Tree Traversal slides) ----
 start br --accel kdtree $SCENE --ray $RAY --leaf-size 1 --break push || exit 1
-if wait_for br "break: stack_push" && current br | grep -q "push node"; then
-    ok "--break push stops on a push: $(current br | cut -c1-60)"
-else
-    bad "--break push: current row is '$(current br)'"
-fi
+lands br "break: stack_push" "push node" "--break push stops on a push"
 if screen br | grep -q "^Stack: .*\["; then ok "the Stack line lists the pushed node"; else bad "no Stack line with a node"; fi
 $T send-keys -t br l
-if wait_for br "step 5/" && current br | grep -q "enter.*| [0-9]* leaf"; then
-    ok "l stops on a leaf entered: $(current br | cut -c1-70)"
-else
-    bad "l: current row is '$(current br)'"
-fi
+lands br "step 5/" " leaf [" "l stops on a leaf entered"
 $T send-keys -t br C
-if wait_for br "step 3/" && current br | grep -q "push node"; then ok "C goes back to the push"; else bad "C: $(current br)"; fi
+lands br "step 3/" "push node" "C goes back to the push"
 $T send-keys -t br q
+until_ok gone br || bad "q did not end sidx-step"
 
 # ---- c in a trace with several pushes (bvh) ----
 start bc --accel bvh $SCENE --ray $RAY --leaf-size 1 --break push || exit 1
 wait_for bc "break: stack_push"
-first=$(current bc | awk '{print $2}')
+first=$(step_of bc)
 $T send-keys -t bc c
-n=0
-while [ "$(current bc | awk '{print $2}')" = "$first" ] && [ $n -lt "$WAIT" ]; do
-    sleep 0.1
-    n=$((n + 1))
-done
-if [ "$(current bc | awk '{print $2}')" != "$first" ] && current bc | grep -q "push node"; then
-    ok "c goes from the push at step $first to the next push at step $(current bc | awk '{print $2}')"
+if until_ok moved bc "$first" && current bc | grep -qF "push node"; then
+    ok "c goes from the push at step $first to the next push at step $(step_of bc)"
 else
     bad "c: current row is '$(current bc)'"
 fi
