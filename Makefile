@@ -24,10 +24,12 @@
 #   Graphviz (libgraphviz-dev)          sidx-dot and the tree drawings
 #   SDL2 + SDL2_image (libsdl2-dev ...) sidx-view and its screenshot tests
 #   Embree 3 (libembree-dev)            sidx-bench, the peer of the benchmark
+#   tmux                                the test of sidx-step's stepper in a terminal
+#                                       (tests/run_step_tmux.sh; skipped without)
 # HAVE_GRAPHVIZ=0, HAVE_SDL=0, HAVE_EMBREE=0 (or MINIMAL=1 for all three)
 # build without one even where it is installed.
 
-DEBS := pkg-config libcmocka-dev libgraphviz-dev libsdl2-dev libsdl2-image-dev libembree-dev gnuplot-nox valgrind
+DEBS := pkg-config libcmocka-dev libgraphviz-dev libsdl2-dev libsdl2-image-dev libembree-dev gnuplot-nox valgrind tmux
 # More packages for one call, e.g. `make deps EXTRA_DEBS="clang cppcheck"` (.ci/run).
 EXTRA_DEBS ?=
 
@@ -197,6 +199,9 @@ test-run:
 	done; \
 	if [ -x tests/run_lessons.sh ]; then \
 	  echo "== lessons"; BUILD=$(BUILD) sh tests/run_lessons.sh || { echo "!! FAILED: lessons"; failed=$$((failed+1)); }; \
+	fi; \
+	if [ -f tests/run_step_tmux.sh ]; then \
+	  echo "== sidx-step in tmux"; BUILD=$(BUILD) sh tests/run_step_tmux.sh </dev/null || { echo "!! FAILED: sidx-step in tmux"; failed=$$((failed+1)); }; \
 	fi; \
 	if [ $$failed -ne 0 ]; then echo "$$failed suite(s) failed"; exit 1; fi; \
 	echo "all suites passed"

@@ -32,12 +32,14 @@
 
 static void usage(FILE *f)
 {
-    fprintf(f, "usage: 10_kdtree_traversal [--help] [SCENE]\n"
+    fprintf(f, "usage: 10_kdtree_traversal [--help] [build knobs] [SCENE]\n"
                "\n"
                "The kd-tree stack traversal for one ray, with the slides' Current / Stack lines per\n"
                "step, including a hit outside the current cell that cannot end the walk.\n"
                "\n"
-               "  SCENE   built-in scene name or .obj/.ply (default: flat2d)\n");
+               "  SCENE   built-in scene name or .obj/.ply (default: flat2d)\n"
+               "The knobs below change the kd-tree walked (a smaller tree, other cuts); the checks\n"
+               "hold for the defaults.\n");
 }
 
 /* Is there a hit beyond the cell it was found in, followed by more steps? */
@@ -68,7 +70,11 @@ static size_t count_type(const sidx_recorder *rec, sidx_event_type t)
 
 int main(int argc, char **argv)
 {
-    lesson_args args = {.name = "10_kdtree_traversal", .usage = usage, .scene = "flat2d"};
+    sidx_build_options knobs = {0};
+    const lesson_option options[] = {LESSON_C_TRAV(knobs),    LESSON_C_TRI(knobs),       LESSON_LEAF_SIZE(knobs),
+                                     LESSON_MAX_DEPTH(knobs), LESSON_EMPTY_BONUS(knobs), LESSON_NO_MAILBOX(knobs),
+                                     {0}};
+    lesson_args args = {.name = "10_kdtree_traversal", .usage = usage, .scene = "flat2d", .options = options};
     lesson_parse(&args, argc, argv);
     lesson_need(&args, "kdtree");
     lesson_need(&args, "brute");
@@ -76,7 +82,7 @@ int main(int argc, char **argv)
     sidx_error err = {0};
     sidx_accel *kd = NULL, *ref = NULL;
     sidx_accel_stats st;
-    if (sidx_accel_build("kdtree", &mesh, NULL, &kd, &err) != SIDX_OK ||
+    if (sidx_accel_build("kdtree", &mesh, &knobs, &kd, &err) != SIDX_OK ||
         sidx_accel_build("brute", &mesh, NULL, &ref, &err) != SIDX_OK) {
         fprintf(stderr, "10_kdtree_traversal: %s\n", err.message);
         sidx_accel_destroy(kd);

@@ -34,12 +34,14 @@
 
 static void usage(FILE *f)
 {
-    fprintf(f, "usage: 11_kd_node_layout [--help] [SCENE]\n"
+    fprintf(f, "usage: 11_kd_node_layout [--help] [build knobs] [SCENE]\n"
                "\n"
                "The kd-tree's compact 8-byte node: the bit layout of a few nodes, the side-by-side\n"
                "children it relies on, and the memory against a node that keeps its box.\n"
                "\n"
-               "  SCENE   built-in scene name or .obj/.ply (default: teapot)\n");
+               "  SCENE   built-in scene name or .obj/.ply (default: teapot)\n"
+               "The knobs below change the kd-tree whose nodes are decoded; the checks hold for\n"
+               "the defaults.\n");
 }
 
 static void bits32(uint32_t w, int groups)
@@ -59,7 +61,10 @@ typedef struct {
 
 int main(int argc, char **argv)
 {
-    lesson_args args = {.name = "11_kd_node_layout", .usage = usage, .scene = "teapot"};
+    sidx_build_options knobs = {0};
+    const lesson_option options[] = {LESSON_C_TRAV(knobs),    LESSON_C_TRI(knobs),       LESSON_LEAF_SIZE(knobs),
+                                     LESSON_MAX_DEPTH(knobs), LESSON_EMPTY_BONUS(knobs), {0}};
+    lesson_args args = {.name = "11_kd_node_layout", .usage = usage, .scene = "teapot", .options = options};
     lesson_parse(&args, argc, argv);
     lesson_need(&args, "kdtree");
     sidx_mesh mesh = lesson_open_scene(&args);
@@ -67,7 +72,7 @@ int main(int argc, char **argv)
     sidx_recorder rec;
     sidx_recorder_init(&rec);
     const sidx_hook rh = sidx_recorder_hook(&rec);
-    sidx_build_options opt = {0};
+    sidx_build_options opt = knobs;
     opt.hook = &rh;
     sidx_accel *kd = NULL;
     if (sidx_accel_build("kdtree", &mesh, &opt, &kd, &err) != SIDX_OK) {

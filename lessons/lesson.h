@@ -35,8 +35,14 @@
  *     const lesson_option options[] = {LESSON_BINS(knobs), LESSON_NO_MAILBOX(knobs), {0}};
  *     lesson_args args = {.name = ..., .usage = ..., .scene = ..., .options = options};
  *
- * The lesson's usage text lists its options: what a knob means depends on
- * what the lesson builds with it.
+ * LESSON_KNOBS(knobs) is all eight.  The knobs are the programs' own
+ * (sidx_viz_build_knob, sidx/viz.h: the same flags, values and messages
+ * as sidx-step, sidx-dot and sidx-view).  Every lesson knows all eight:
+ * --help ends with the lines of those its table takes, and a knob it does
+ * not take is refused (exit 2) with a line saying the lesson builds with
+ * the defaults, rather than reported as an unknown option.  The lesson's
+ * usage text says what a knob changes in what the lesson builds; its CHECK
+ * lines are only asserted with the defaults.
  */
 #ifndef LESSON_H
 #define LESSON_H
@@ -47,24 +53,30 @@
 #include <stdlib.h>
 #include <string.h>
 #include "sidx/sidx.h"
+#include "sidx/viz.h"
 
 /* One option and the one field it fills: exactly one pointer is set. */
 typedef struct lesson_option {
-    const char *flag;  /* "--bins"; NULL ends the table */
-    uint32_t *count;   /* --flag N: a whole number >= 1 */
-    float *number;     /* --flag X: a finite number >= 0 */
-    int *on;           /* --flag: sets it to 1 */
-    const char **text; /* --flag S: the string itself */
+    const char *flag;          /* "--bins"; NULL ends the table */
+    uint32_t *count;           /* --flag N: a whole number >= 1 */
+    float *number;             /* --flag X: a finite number >= 0 */
+    int *on;                   /* --flag: sets it to 1 */
+    const char **text;         /* --flag S: the string itself */
+    sidx_build_options *build; /* a build knob: the field sidx_viz_build_knob fills for flag */
 } lesson_option;
 
 /* The build knobs, each filling one field of the sidx_build_options b. */
-#define LESSON_BINS(b) {"--bins", .count = &(b).bins}
-#define LESSON_LEAF_SIZE(b) {"--leaf-size", .count = &(b).leaf_size}
-#define LESSON_MAX_DEPTH(b) {"--max-depth", .count = &(b).max_depth}
-#define LESSON_C_TRAV(b) {"--c-trav", .number = &(b).c_trav}
-#define LESSON_LAMBDA(b) {"--lambda", .number = &(b).grid_density}
-#define LESSON_EMPTY_BONUS(b) {"--empty-bonus", .number = &(b).empty_bonus}
-#define LESSON_NO_MAILBOX(b) {"--no-mailbox", .on = &(b).no_mailbox}
+#define LESSON_BINS(b) {"--bins", .build = &(b)}
+#define LESSON_C_TRAV(b) {"--c-trav", .build = &(b)}
+#define LESSON_C_TRI(b) {"--c-tri", .build = &(b)}
+#define LESSON_LEAF_SIZE(b) {"--leaf-size", .build = &(b)}
+#define LESSON_MAX_DEPTH(b) {"--max-depth", .build = &(b)}
+#define LESSON_LAMBDA(b) {"--lambda", .build = &(b)}
+#define LESSON_NO_MAILBOX(b) {"--no-mailbox", .build = &(b)}
+#define LESSON_EMPTY_BONUS(b) {"--empty-bonus", .build = &(b)}
+#define LESSON_KNOBS(b)                                                                                      \
+    LESSON_BINS(b), LESSON_C_TRAV(b), LESSON_C_TRI(b), LESSON_LEAF_SIZE(b), LESSON_MAX_DEPTH(b),             \
+        LESSON_LAMBDA(b), LESSON_NO_MAILBOX(b), LESSON_EMPTY_BONUS(b)
 
 typedef struct lesson_args {
     const char *name;             /* the program's name: every message starts with it */
@@ -96,6 +108,21 @@ static inline const char *lesson__value(const lesson_args *a, int argc, char **a
     return argv[++*i];
 }
 
+/* A build knob from table entry o: how many arguments after the flag it
+ * took (0 or 1), or exit 2 saying what it wants. */
+static inline int lesson__knob(const lesson_args *a, const lesson_option *o, const char *value)
+{
+    char msg[160];
+    const int took = sidx_viz_build_knob(o->flag, value, o->build, msg, sizeof msg);
+    if (took == 0) lesson__usage_error(a, "the option table names no build knob", o->flag);
+    if (took < 0) {
+        fprintf(stderr, "%s: %s\n", a->name, msg);
+        a->usage(stderr);
+        exit(2);
+    }
+    return took - 1;
+}
+
 /* Fills the option's field from value, or exits 2 saying what it wants. */
 static inline void lesson__set(const lesson_args *a, const lesson_option *o, const char *value)
 {
@@ -105,6 +132,7 @@ static inline void lesson__set(const lesson_args *a, const lesson_option *o, con
         *o->text = value;
         return;
     }
+
     if (o->count) {
         const unsigned long long n = value[0] >= '0' && value[0] <= '9' ? strtoull(value, &end, 10) : 0;
         if (end && !*end && n >= 1 && n <= UINT32_MAX) {
@@ -123,12 +151,40 @@ static inline void lesson__set(const lesson_args *a, const lesson_option *o, con
     lesson__usage_error(a, what, value);
 }
 
+static inline const lesson_option *lesson__find(const lesson_args *a, const char *flag)
+{
+    const lesson_option *o = a->options;
+    while (o && o->flag && strcmp(o->flag, flag)) ++o;
+    return o && o->flag ? o : NULL;
+}
+
+/* After the lesson's usage: the help lines of the knobs it takes, or one
+ * line saying it takes none. */
+static inline void lesson__knobs_help(const lesson_args *a, FILE *f)
+{
+    const char *p = sidx_viz_build_knobs_help();
+    int taken = 0;
+    for (const char *line = strstr(p, "\n  --"); line; line = strstr(line + 1, "\n  --")) {
+        char flag[32];
+        if (sscanf(line + 3, "%31s", flag) != 1) continue;
+        const lesson_option *o = lesson__find(a, flag);
+        if (!o || !o->build) continue;
+        if (!taken++) fprintf(f, "\nbuild knobs (left out = the structure's default):\n");
+        fprintf(f, "%.*s\n", (int)strcspn(line + 1, "\n"), line + 1);
+    }
+    if (!taken)
+        fprintf(f, "\nThe build knobs of sidx-step (--bins, --c-trav, --c-tri, --leaf-size, --max-depth,\n"
+                   "--lambda, --no-mailbox, --empty-bonus) are refused: this lesson builds with the\n"
+                   "defaults its figures are about.\n");
+}
+
 static inline void lesson_parse(lesson_args *a, int argc, char **argv)
 {
     for (int i = 1; i < argc; ++i) {
         const char *arg = argv[i];
         if (!strcmp(arg, "--help") || !strcmp(arg, "-h")) {
             a->usage(stdout);
+            lesson__knobs_help(a, stdout);
             exit(0);
         }
         if (a->scene_flag ? !strcmp(arg, a->scene_flag) : arg[0] != '-') {
@@ -137,10 +193,22 @@ static inline void lesson_parse(lesson_args *a, int argc, char **argv)
             a->scene_given = 1;
             continue;
         }
-        const lesson_option *o = a->options;
-        while (o && o->flag && strcmp(o->flag, arg)) ++o;
-        if (!o || !o->flag) lesson__usage_error(a, "unexpected argument", arg);
-        if (o->on) *o->on = 1;
+        const lesson_option *o = lesson__find(a, arg);
+        if (!o) {
+            sidx_build_options scratch = {0};
+            if (sidx_viz_build_knob(arg, NULL, &scratch, NULL, 0) != 0) {
+                int takes = 0;
+                for (const lesson_option *k = a->options; k && k->flag; ++k) takes |= k->build != NULL;
+                fprintf(stderr,
+                        takes ? "%s: this lesson takes no %s (--help lists the knobs it takes)\n"
+                              : "%s: this lesson builds with the default knobs and takes no %s\n",
+                        a->name, arg);
+                exit(2);
+            }
+            lesson__usage_error(a, "unexpected argument", arg);
+        }
+        if (o->build) i += lesson__knob(a, o, i + 1 < argc ? argv[i + 1] : NULL);
+        else if (o->on) *o->on = 1;
         else lesson__set(a, o, lesson__value(a, argc, argv, &i));
     }
 }

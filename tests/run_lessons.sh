@@ -3,9 +3,11 @@
 #
 #   BUILD=build sh tests/run_lessons.sh        (make test does this; BUILD=build/san under SAN=1)
 #
-# For each program in $BUILD/lessons/: `--help` must exit 0, an unknown
-# option must exit 2, a scene that cannot be loaded must exit 1 with a
-# line on stderr naming the lesson (lessons/lesson.h does all three),
+# For each program in $BUILD/lessons/: `--help` must exit 0 and name the
+# build knobs (those the lesson takes, or that it refuses them), an
+# unknown option and a bad knob (--bins 1) must exit 2, a scene that
+# cannot be loaded must exit 1 with a line on stderr naming the lesson
+# (lessons/lesson.h does all of this),
 # and a run with no arguments must exit 0 and print, among its output,
 # every "CHECK name=value" line listed for it below.
 # The lessons compute those values from what they measure (leak counts,
@@ -89,7 +91,10 @@ for prog in "$DIR"/*; do
         continue
     fi
     why=""
-    "$prog" --help >/dev/null 2>&1 || why="$why --help did not exit 0;"
+    "$prog" --help >"$out" 2>&1 || why="$why --help did not exit 0;"
+    grep -q "build knobs" "$out" || why="$why --help does not name the build knobs;"
+    "$prog" --bins 1 >/dev/null 2>&1
+    [ $? -eq 2 ] || why="$why a bad build knob (--bins 1) did not exit 2;"
     "$prog" --no-such-option >/dev/null 2>&1
     [ $? -eq 2 ] || why="$why a bad option did not exit 2;"
     "$prog" /no/such/scene.obj >/dev/null 2>"$out"

@@ -910,6 +910,15 @@ static void test_viz_bad_arguments(void **state)
     CHECK(sidx_viz_parse_ray("1,2,3,4,5,6,7", &o, &d) != 0);
     CHECK_EQ(sidx_viz_parse_ray("1,2,3,4,5,6", &o, &d), 0);
 
+    sidx_build_options knobs = {0};
+    char kmsg[128];
+    CHECK_EQ(sidx_viz_build_knob(NULL, "4", &knobs, kmsg, sizeof kmsg), -1);
+    CHECK_EQ(sidx_viz_build_knob("--bins", "4", NULL, kmsg, sizeof kmsg), -1);
+    CHECK_EQ(sidx_viz_build_knob("--bins", NULL, &knobs, NULL, 0), -1);
+    CHECK_EQ(sidx_viz_build_knob("--bins", "4", &knobs, NULL, 0), 2);
+    CHECK_EQ(sidx_viz_build_knob("--no-such-knob", "4", &knobs, kmsg, sizeof kmsg), 0);
+    CHECK(sidx_viz_build_knobs_help() != NULL);
+
     sidx_recorder_free(&rec);
     sidx_accel_destroy(a);
     sidx_mesh_free(&m);

@@ -1107,6 +1107,136 @@ static void step_matches_expected(void **state)
 #endif
 }
 
+/* The build knobs: each fills its field, bad values are refused with the
+ * options untouched, and a knob reaches the structure sidx-step builds. */
+static void build_knobs_fill_options(void **state)
+{
+    (void)state;
+    sidx_build_options bo;
+    memset(&bo, 0, sizeof bo);
+    char msg[160];
+    assert_int_equal(sidx_viz_build_knob("--bins", "8", &bo, msg, sizeof msg), 2);
+    assert_int_equal(sidx_viz_build_knob("--c-trav", "1.5", &bo, msg, sizeof msg), 2);
+    assert_int_equal(sidx_viz_build_knob("--c-tri", "2", &bo, msg, sizeof msg), 2);
+    assert_int_equal(sidx_viz_build_knob("--leaf-size", "3", &bo, msg, sizeof msg), 2);
+    assert_int_equal(sidx_viz_build_knob("--max-depth", "12", &bo, msg, sizeof msg), 2);
+    assert_int_equal(sidx_viz_build_knob("--lambda", "0.5", &bo, msg, sizeof msg), 2);
+    assert_int_equal(sidx_viz_build_knob("--no-mailbox", "8", &bo, msg, sizeof msg), 1);
+    assert_int_equal(sidx_viz_build_knob("--empty-bonus", "0.25", &bo, msg, sizeof msg), 2);
+    assert_int_equal(bo.bins, 8);
+    assert_true(bo.c_trav == 1.5f && bo.c_tri == 2.0f && bo.grid_density == 0.5f && bo.empty_bonus == 0.25f);
+    assert_int_equal(bo.leaf_size, 3);
+    assert_int_equal(bo.max_depth, 12);
+    assert_int_equal(bo.no_mailbox, 1);
+
+    const sidx_build_options before = bo;
+    static const char *const bad[][2] = {
+        {"--bins", "1"},         {"--bins", "-3"},      {"--bins", "8x"},       {"--leaf-size", "0"},
+        {"--max-depth", ""},     {"--c-trav", "0"},     {"--c-tri", "nan"},     {"--lambda", "inf"},
+        {"--lambda", "-1"},      {"--empty-bonus", "1"}, {"--empty-bonus", "-0.1"}, {"--bins", NULL},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
+        msg[0] = '\0';
+        assert_int_equal(sidx_viz_build_knob(bad[i][0], bad[i][1], &bo, msg, sizeof msg), -1);
+        assert_non_null(strstr(msg, bad[i][0]));
+        assert_memory_equal(&bo, &before, sizeof bo);
+    }
+    assert_int_equal(sidx_viz_build_knob("--accel", "bvh", &bo, msg, sizeof msg), 0);
+    assert_int_equal(sidx_viz_build_knob("--bin", "8", &bo, msg, sizeof msg), 0);
+
+    /* every program says so in --help and exits 2 on a bad value */
+    static const char *const progs[] = {"sidx-step", "sidx-dot", "sidx-view"};
+    for (size_t i = 0; i < sizeof progs / sizeof progs[0]; ++i) {
+        char cmd[1024], path[600];
+        snprintf(path, sizeof path, "%s/%s", bin_dir, progs[i]);
+        if (access(path, X_OK) != 0) continue; /* sidx-dot, sidx-view: optional parts */
+        snprintf(cmd, sizeof cmd, "%s --help", path);
+        char *help = run_capture(cmd);
+        for (const char *const *k = (const char *const[]){"--bins", "--c-trav", "--c-tri", "--leaf-size",
+                                                          "--max-depth", "--lambda", "--no-mailbox",
+                                                          "--empty-bonus", NULL};
+             *k; ++k)
+            if (!strstr(help, *k)) fail_msg("%s --help does not list %s", progs[i], *k);
+        free(help);
+        /* the knob first: each program reads its arguments in order */
+        snprintf(cmd, sizeof cmd, "%s --bins 1 --accel bvh >/dev/null 2>&1", path);
+        const int rc = system(cmd);
+        if (!WIFEXITED(rc) || WEXITSTATUS(rc) != 2) fail_msg("%s --bins 1 did not exit 2", progs[i]);
+        snprintf(cmd, sizeof cmd, "%s --bins 1 --accel bvh 2>&1 >/dev/null || true", path);
+        char *err = run_capture(cmd);
+        if (!strstr(err, "--bins wants a whole number from 2")) fail_msg("%s --bins 1 said: %s", progs[i], err);
+        free(err);
+    }
+
+    /* --leaf-size 8 makes the tiny scene's kd-tree one leaf: the ray enters only the root */
+    char cmd[1024];
+    snprintf(cmd, sizeof cmd, "%s/sidx-step --accel kdtree %s --ray %s --leaf-size 8 --all </dev/null", bin_dir,
+             TINY_SCENE, TINY_RAY);
+    if (sidx_accel_is_registered("kdtree")) {
+        char *out = run_capture(cmd);
+        assert_non_null(strstr(out, "node 0 enter"));
+        assert_null(strstr(out, "push node"));
+        free(out);
+    }
+}
+
+/* Without a terminal: --panel adds the Current / Stack columns (deck 000,
+ * kD-Tree Traversal), --step K prints K steps, --break TYPE stops on the
+ * first TYPE event (exit 1 if there is none, 2 for no such type). */
+static void step_panel_step_break(void **state)
+{
+    (void)state;
+    if (!sidx_accel_is_registered("bvh")) skip();
+    char cmd[1024];
+    const char *base = "--accel bvh " TINY_SCENE " --ray " TINY_RAY " --leaf-size 1";
+    snprintf(cmd, sizeof cmd, "%s/sidx-step %s --panel </dev/null", bin_dir, base);
+    char *out = run_capture(cmd);
+    /* the two pushes, then both on the stack (top first) while leaf 7 is visited */
+    assert_non_null(strstr(out, "push node 2  t=[6, 8]  (stack 0 -> 1)     | 1 [2, 8]             | 2 [6, 8]\n"));
+    assert_non_null(strstr(out, "node 7 enter  depth 3  t=[2, 2]     | 7 leaf [2, 2]        | 6 [4, 4]  2 [6, 8]\n"));
+    assert_non_null(strstr(out, "pop node 2  t=[6, 8]  (stack 1 -> 0)      | 2 [6, 8]             |\n"));
+    free(out);
+
+    snprintf(cmd, sizeof cmd, "%s/sidx-step %s --step 4 </dev/null", bin_dir, base);
+    out = run_capture(cmd);
+    size_t lines = 0;
+    for (const char *p = out; *p; ++p) lines += *p == '\n';
+    assert_int_equal(lines, 4);
+    assert_non_null(strstr(out, "box node 1 hit  t=[2, 8]\n"));
+    free(out);
+
+    static const char *const breaks[][2] = {
+        {"push", "  push node 2  t=[6, 8]  (stack 0 -> 1)\n"},
+        {"stack_pop", "  pop node 6  t=[4, 4]  (stack 2 -> 1)\n"},
+        {"leaf", "        node 7 enter  depth 3  t=[2, 2]\n"},
+        {"prim", "    prim 6 test: hit t=2\n"},
+        {"terminate", "terminate: stack_empty  visited 4  best t=2\n"},
+    };
+    for (size_t i = 0; i < sizeof breaks / sizeof breaks[0]; ++i) {
+        snprintf(cmd, sizeof cmd, "%s/sidx-step %s --break %s </dev/null", bin_dir, base, breaks[i][0]);
+        out = run_capture(cmd);
+        const size_t n = strlen(out), m = strlen(breaks[i][1]);
+        if (n < m || strcmp(out + n - m, breaks[i][1]) != 0)
+            fail_msg("--break %s: the output does not end on '%s' but:\n%s", breaks[i][0], breaks[i][1], out);
+        free(out);
+    }
+    /* from step 11 on, the next push is node 6's */
+    snprintf(cmd, sizeof cmd, "%s/sidx-step %s --step 11 --break push </dev/null | tail -n 1", bin_dir, base);
+    out = run_capture(cmd);
+    assert_string_equal(out, "  push node 6  t=[4, 4]  (stack 1 -> 2)\n");
+    free(out);
+
+    snprintf(cmd, sizeof cmd, "%s/sidx-step %s --break mailbox </dev/null >/dev/null 2>&1", bin_dir, base);
+    int rc = system(cmd);
+    assert_true(WIFEXITED(rc) && WEXITSTATUS(rc) == 1);
+    static const char *const refused[] = {"--break test", "--break nothing", "--step 0", "--step x"};
+    for (size_t i = 0; i < sizeof refused / sizeof refused[0]; ++i) {
+        snprintf(cmd, sizeof cmd, "%s/sidx-step %s %s </dev/null >/dev/null 2>&1", bin_dir, base, refused[i]);
+        rc = system(cmd);
+        if (!WIFEXITED(rc) || WEXITSTATUS(rc) != 2) fail_msg("sidx-step %s did not exit 2", refused[i]);
+    }
+}
+
 int main(int argc, char **argv)
 {
     (void)argc;
@@ -1132,6 +1262,8 @@ int main(int argc, char **argv)
         cmocka_unit_test(leaf_prims_from_real_builds),
         cmocka_unit_test(dot_real_leaf_labels),
         cmocka_unit_test(step_matches_expected),
+        cmocka_unit_test(build_knobs_fill_options),
+        cmocka_unit_test(step_panel_step_break),
     };
     return cmocka_run_group_tests_name("viz", tests, NULL, NULL);
 }

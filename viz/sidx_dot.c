@@ -1,6 +1,6 @@
 /* sidx-dot — a structure's tree as a Graphviz picture.
  *
- *   sidx-dot --accel NAME SCENE [--depth K] [--ray ox,oy,oz,dx,dy,dz] -o tree.{dot,gv,svg,png,pdf}
+ *   sidx-dot --accel NAME SCENE [--depth K] [--ray ox,oy,oz,dx,dy,dz] [build knobs] -o tree.{dot,gv,svg,png,pdf}
  *
  * Exit status: 0 written, 1 failure (build, no tree, I/O), 2 usage. */
 #include <stdio.h>
@@ -12,7 +12,7 @@
 static void usage(FILE *f)
 {
     fprintf(f,
-            "usage: sidx-dot --accel NAME SCENE [--depth K] [--ray ox,oy,oz,dx,dy,dz] -o OUT\n"
+            "usage: sidx-dot --accel NAME SCENE [--depth K] [--ray ox,oy,oz,dx,dy,dz] [build knobs] -o OUT\n"
             "\n"
             "Builds structure NAME over SCENE (a .obj/.ply file or a built-in scene such as\n"
             "teapot, flat2d, icosphere:2), rebuilds its tree from the build events and writes it\n"
@@ -24,11 +24,11 @@ static void usage(FILE *f)
             "                   one summary node \"+N nodes, M prims\" (default %u, 0 = no cut)\n"
             "  --ray R          trace the ray ox,oy,oz,dx,dy,dz: visited nodes coloured in visit\n"
             "                   order and numbered, pruned ones grey, the hit leaf outlined red\n"
-            "  --leaf-size N    build option: leaf at or below N primitives\n"
             "  -o, --output OUT output file\n"
             "  --list           list the registered structures\n"
-            "  -h, --help       this help\n",
-            SIDX_DOT_DEFAULT_DEPTH);
+            "  -h, --help       this help\n"
+            "\n%s",
+            SIDX_DOT_DEFAULT_DEPTH, sidx_viz_build_knobs_help());
 }
 
 int main(int argc, char **argv)
@@ -41,7 +41,14 @@ int main(int argc, char **argv)
     for (int i = 1; i < argc; ++i) {
         const char *a = argv[i];
         const int has_val = i + 1 < argc;
-        if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
+        char msg[160];
+        const int knob = sidx_viz_build_knob(a, has_val ? argv[i + 1] : NULL, &bo, msg, sizeof msg);
+        if (knob < 0) {
+            fprintf(stderr, "sidx-dot: %s\n", msg);
+            return 2;
+        } else if (knob > 0) {
+            i += knob - 1;
+        } else if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
             usage(stdout);
             return 0;
         } else if (!strcmp(a, "--list")) {
@@ -60,14 +67,6 @@ int main(int argc, char **argv)
                 return 2;
             }
             opt.max_depth = k == 0 ? SIDX_DOT_ALL_DEPTHS : (uint32_t)k;
-        } else if (!strcmp(a, "--leaf-size") && has_val) {
-            char *end;
-            long k = strtol(argv[++i], &end, 10);
-            if (*end || k < 1 || k > 1000000) {
-                fprintf(stderr, "sidx-dot: --leaf-size wants a number >= 1, not '%s'\n", argv[i]);
-                return 2;
-            }
-            bo.leaf_size = (uint32_t)k;
         } else if (!strcmp(a, "--ray") && has_val) {
             if (sidx_viz_parse_ray(argv[++i], &opt.ray_org, &opt.ray_dir) != 0) {
                 fprintf(stderr, "sidx-dot: --ray wants ox,oy,oz,dx,dy,dz (finite, non-zero direction), not '%s'\n",

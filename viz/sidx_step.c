@@ -1,22 +1,31 @@
 /* sidx-step — step through one ray's traversal (or a build) event by event.
  *
  *   sidx-step --accel NAME SCENE --ray ox,oy,oz,dx,dy,dz [--all] [--json] [--build]
+ *             [--step K] [--break TYPE] [--panel] [build knobs]
  *   sidx-step --diff A.jsonl B.jsonl [--exact] [--notes]
  *
  * One event per line, indented by depth (sidx_event_format, the printer's
  * layout), or JSON Lines with --json.  When stdin and stdout are both a
- * terminal it waits for Enter after each line ('a' + Enter prints the rest,
- * 'q' + Enter stops); otherwise, or with --all, it prints everything.
+ * terminal it is a full-screen stepper: one key per step, forwards and
+ * back, jumps to a step number, to the next event of a type or the next
+ * leaf, with a Current / Stack column for the tree structures (deck 000,
+ * "kD-Tree Traversal (1)-(11)": the node being visited and the subtrees
+ * still to traverse, one row per step).  Otherwise, or with --all, it
+ * prints the events, up to --step K or the first --break TYPE event.
  * --diff aligns two JSON Lines traces (as --json and sidx-check --trace
  * write them) event by event, prints the first divergence and the count of
  * each event type on both sides.
  * Exit status: 0 ok (--diff: the traces agree), 1 failure (--diff: they
- * part), 2 usage. */
+ * part; --break: no such event), 2 usage. */
 #include <errno.h>
 #include <math.h>
+#include <poll.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/ioctl.h>
+#include <termios.h>
 #include <unistd.h>
 #include "sidx/sidx.h"
 #include "sidx/viz.h"
@@ -25,18 +34,32 @@ static void usage(FILE *f)
 {
     fprintf(f,
             "usage: sidx-step --accel NAME SCENE [--ray ox,oy,oz,dx,dy,dz] [--build] [--all] [--json]\n"
+            "                 [--step K] [--break TYPE] [--panel] [build knobs]\n"
             "       sidx-step --diff A.jsonl B.jsonl [--exact] [--notes]\n"
             "\n"
             "Builds structure NAME over SCENE (a .obj/.ply file or a built-in scene such as\n"
             "teapot, flat2d) and prints the ray's traversal one event per line, indented by\n"
-            "depth.  On a terminal it waits for Enter between steps (a = all, q = quit).\n"
+            "depth.  On a terminal it is a stepper, one key per step:\n"
+            "  Enter Space n Right  next step          b Backspace Left  previous step\n"
+            "  g K Enter            go to step K       Home End          first, last step\n"
+            "  c / C                next / previous event of the --break type (t changes it)\n"
+            "  l / L                next / previous leaf entered\n"
+            "  a                    run to the end     q                 quit\n"
+            "with a Current / Stack column for trees: the node visited and the stack of\n"
+            "subtrees still to traverse, top first, each with its t range.\n"
             "\n"
             "  --accel NAME       structure (see --list)\n"
             "  --ray R            the ray: origin ox,oy,oz and direction dx,dy,dz\n"
             "  --build            print the build decisions (before the traversal, if --ray)\n"
             "  --traversal KIND   default, stack, ordered or naive\n"
-            "  --leaf-size N      build option: leaf at or below N primitives\n"
             "  --bounds           also print node boxes\n"
+            "  --step K           start at step K (without a terminal: print steps 1..K)\n"
+            "  --break TYPE       run to the first event of TYPE at or after the start\n"
+            "                     (without a terminal: print up to it; exit 1 if there is none):\n"
+            "                     an event name (stack_push, node_enter, prim_test, ...), the\n"
+            "                     part of it after or before '_' if unique (push, pop, enter,\n"
+            "                     box, prim, hit, mailbox, terminate), or leaf (a leaf entered)\n"
+            "  --panel            add the Current / Stack columns to the printed lines\n"
             "  --all              do not wait between steps\n"
             "  --json             JSON Lines (one object per event) instead of text\n"
             "  --list             list the registered structures\n"
@@ -44,51 +67,416 @@ static void usage(FILE *f)
             "                     divergence and the events of each type on both sides\n"
             "                     (exit 0 agree, 1 they part); floats agree within 1e-5\n"
             "                     relative unless --exact; note events are skipped unless --notes\n"
-            "  -h, --help         this help\n");
+            "  -h, --help         this help\n"
+            "\n%s",
+            sidx_viz_build_knobs_help());
 }
 
-typedef struct step_out {
-    int json, bounds, interactive, stop;
-    FILE *in;
-} step_out;
+/* ---- the events to step through ------------------------------------------------------------ */
 
-static void print_event(step_out *o, const sidx_event *ev)
+/* --break's pseudo-type: a NODE_ENTER of a node the build made a leaf. */
+#define BREAK_LEAF SIDX_EV_COUNT
+#define BREAK_NONE (-1)
+
+typedef struct steps {
+    const sidx_event **ev; /* the build events shown (--build), then the traversal */
+    size_t n, nbuild;
+    uint32_t *leaves;      /* sorted ids of the leaves (BUILD_LEAF) */
+    size_t nleaves;
+    int json, bounds, panel;
+    int width;             /* of the event column beside the panel: the longest traversal line */
+} steps;
+
+static int cmp_u32(const void *a, const void *b)
 {
-    char small[512];
-    char *buf = small;
-    int n = o->json ? sidx_event_to_json(ev, buf, sizeof small) : sidx_event_format(ev, buf, sizeof small);
-    if (n < 0) return;
-    if ((size_t)n >= sizeof small) {
-        buf = malloc((size_t)n + 1);
-        if (!buf) return;
-        n = o->json ? sidx_event_to_json(ev, buf, (size_t)n + 1) : sidx_event_format(ev, buf, (size_t)n + 1);
+    const uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+    return (x > y) - (x < y);
+}
+
+static int is_leaf(const steps *s, uint32_t node)
+{
+    return s->nleaves && bsearch(&node, s->leaves, s->nleaves, sizeof node, cmp_u32) != NULL;
+}
+
+/* Does step i (0-based) stop a run to `type`? */
+static int step_is(const steps *s, size_t i, int type)
+{
+    const sidx_event *e = s->ev[i];
+    if (type == BREAK_LEAF)
+        return i >= s->nbuild && e->type == SIDX_EV_NODE_ENTER && (e->cell[0] >= 0 || is_leaf(s, e->node));
+    return (int)e->type == type;
+}
+
+/* "stack_push", "push" or "stack" (if unique), or "leaf": the type, or BREAK_NONE. */
+static int parse_break(const char *name)
+{
+    if (!strcmp(name, "leaf")) return BREAK_LEAF;
+    int found = BREAK_NONE, matches = 0;
+    for (int t = 0; t < SIDX_EV_COUNT; ++t) {
+        const char *full = sidx_event_type_name((sidx_event_type)t), *us = strchr(full, '_');
+        if (!strcmp(full, name)) return t;
+        const size_t n = strlen(name);
+        if ((us && !strcmp(us + 1, name)) || (us && (size_t)(us - full) == n && !strncmp(full, name, n))) {
+            found = t;
+            ++matches;
+        }
     }
-    if (!o->json && o->bounds && (ev->type == SIDX_EV_NODE_ENTER || ev->type == SIDX_EV_BUILD_NODE ||
-                                  ev->type == SIDX_EV_BOX_TEST) && !sidx_aabb_is_empty(ev->bounds))
-        printf("%s  box [(%g, %g, %g), (%g, %g, %g)]\n", buf, (double)ev->bounds.min.x, (double)ev->bounds.min.y,
-               (double)ev->bounds.min.z, (double)ev->bounds.max.x, (double)ev->bounds.max.y,
-               (double)ev->bounds.max.z);
-    else
-        printf("%s\n", buf);
-    if (buf != small) free(buf);
+    return matches == 1 ? found : BREAK_NONE;
+}
+
+static const char *break_name(int type)
+{
+    return type == BREAK_LEAF ? "leaf" : type == BREAK_NONE ? "(none)" : sidx_event_type_name((sidx_event_type)type);
+}
+
+/* The step after (dir +1) or before (dir -1) `from` (0-based) that is `type`; from itself if none. */
+static size_t find_step(const steps *s, size_t from, int dir, int type)
+{
+    for (size_t i = from; dir > 0 ? i + 1 < s->n : i > 0;) {
+        i = dir > 0 ? i + 1 : i - 1;
+        if (step_is(s, i, type)) return i;
+    }
+    return from;
+}
+
+/* Step i as one line: the printer's (or the JSON) text, plus its box with
+ * --bounds.  In buf if it fits, else in a malloc'd copy the caller frees
+ * (a build_leaf's JSON lists all its primitives). */
+static char *step_text(const steps *s, size_t i, char *buf, size_t size)
+{
+    const sidx_event *ev = s->ev[i];
+    char *out = buf;
+    int n = s->json ? sidx_event_to_json(ev, out, size) : sidx_event_format(ev, out, size);
+    if (n >= 0 && (size_t)n + 100 >= size && (out = malloc((size_t)n + 101)) != NULL) {
+        size = (size_t)n + 101;
+        n = s->json ? sidx_event_to_json(ev, out, size) : sidx_event_format(ev, out, size);
+    }
+    if (!out) out = buf;
+    if (n < 0) {
+        out[0] = '\0';
+        return out;
+    }
+    if ((size_t)n >= size) n = (int)size - 1;
+    if (!s->json && s->bounds &&
+        (ev->type == SIDX_EV_NODE_ENTER || ev->type == SIDX_EV_BUILD_NODE || ev->type == SIDX_EV_BOX_TEST) &&
+        !sidx_aabb_is_empty(ev->bounds))
+        snprintf(out + n, size - (size_t)n, "  box [(%g, %g, %g), (%g, %g, %g)]", (double)ev->bounds.min.x,
+                 (double)ev->bounds.min.y, (double)ev->bounds.min.z, (double)ev->bounds.max.x,
+                 (double)ev->bounds.max.y, (double)ev->bounds.max.z);
+    return out;
+}
+
+static void text_free(char *text, const char *buf)
+{
+    if (text != buf) free(text);
+}
+
+/* ---- Current / Stack (deck 000, "kD-Tree Traversal (1)-(11)") ------------------------------ */
+
+/* What the traversal holds after a step: the node it is at (entered, or
+ * just taken off the stack) and the deferred subtrees with their t
+ * ranges.  Replayed from the events alone, so it shows what the walk
+ * reported, for any structure that reports pushes and pops. */
+typedef struct entry {
+    uint32_t node;
+    float t_near, t_far;
+} entry;
+
+typedef struct replay {
+    entry cur;
+    int has_cur;
+    entry *stack;
+    size_t n, cap;
+} replay;
+
+static void replay_event(replay *r, const sidx_event *e)
+{
+    switch (e->type) {
+    case SIDX_EV_RAY_BEGIN:
+    case SIDX_EV_TERMINATE:
+    case SIDX_EV_RAY_END:
+        r->has_cur = 0;
+        if (e->type == SIDX_EV_RAY_BEGIN) r->n = 0;
+        break;
+    case SIDX_EV_NODE_ENTER:
+        r->cur = (entry){e->node, e->t_near, e->t_far};
+        r->has_cur = 1;
+        break;
+    case SIDX_EV_STACK_PUSH:
+        if (r->n == r->cap) {
+            const size_t nc = r->cap ? 2 * r->cap : 64;
+            entry *ns = realloc(r->stack, nc * sizeof *ns);
+            if (!ns) break;
+            r->stack = ns;
+            r->cap = nc;
+        }
+        r->stack[r->n++] = (entry){e->node, e->t_near, e->t_far};
+        break;
+    case SIDX_EV_STACK_POP:
+        if (r->n) --r->n;
+        r->cur = (entry){e->node, e->t_near, e->t_far};
+        r->has_cur = 1;
+        break;
+    default:
+        break;
+    }
+}
+
+/* The tree structures report NODE_ENTER of nodes; grids enter cells. */
+static int has_panel(const steps *s)
+{
+    for (size_t i = s->nbuild; i < s->n; ++i)
+        if (s->ev[i]->type == SIDX_EV_NODE_ENTER) return s->ev[i]->cell[0] < 0;
+    return 0;
+}
+
+static void panel_text(const steps *s, const replay *r, char *cur, size_t csize, char *stk, size_t ssize)
+{
+    cur[0] = stk[0] = '\0';
+    if (r->has_cur)
+        snprintf(cur, csize, "%u%s [%g, %g]", r->cur.node, is_leaf(s, r->cur.node) ? " leaf" : "",
+                 (double)r->cur.t_near, (double)r->cur.t_far);
+    size_t off = 0;
+    for (size_t k = r->n; k-- > 0 && off < ssize;) {
+        const entry *e = &r->stack[k];
+        const int w = snprintf(stk + off, ssize - off, "%s%u [%g, %g]", off ? "  " : "", e->node,
+                               (double)e->t_near, (double)e->t_far);
+        if (w < 0) break;
+        off += (size_t)w;
+    }
+}
+
+/* ---- without a terminal: print steps [0, end) -------------------------------------------- */
+
+static void print_steps(const steps *s, size_t end)
+{
+    char buf[512], cur[96], stk[1024];
+    replay r = {0};
+    const int panel = s->panel && !s->json && has_panel(s);
+    for (size_t i = 0; i < end; ++i) {
+        char *line = step_text(s, i, buf, sizeof buf);
+        if (panel && i >= s->nbuild) {
+            replay_event(&r, s->ev[i]);
+            panel_text(s, &r, cur, sizeof cur, stk, sizeof stk);
+            printf("%-*s | %-20s |%s%s\n", s->width, line, cur, stk[0] ? " " : "", stk);
+        } else {
+            printf("%s\n", line);
+        }
+        text_free(line, buf);
+    }
+    free(r.stack);
+}
+
+/* ---- the full-screen stepper ---------------------------------------------------------------- */
+
+static struct termios saved_tty;
+static int tty_raw;
+
+static void tty_restore(void)
+{
+    if (tty_raw) tcsetattr(STDIN_FILENO, TCSAFLUSH, &saved_tty);
+    tty_raw = 0;
+}
+
+static void on_signal(int sig)
+{
+    tty_restore();
+    signal(sig, SIG_DFL);
+    raise(sig);
+}
+
+/* Keys without Enter and without echo; restored at exit and on a fatal signal. */
+static int tty_enter_raw(void)
+{
+    if (tcgetattr(STDIN_FILENO, &saved_tty) != 0) return -1;
+    struct termios t = saved_tty;
+    t.c_lflag &= ~(tcflag_t)(ICANON | ECHO);
+    t.c_cc[VMIN] = 1;
+    t.c_cc[VTIME] = 0;
+    if (tcsetattr(STDIN_FILENO, TCSAFLUSH, &t) != 0) return -1;
+    tty_raw = 1;
+    atexit(tty_restore);
+    signal(SIGINT, on_signal);
+    signal(SIGTERM, on_signal);
+    signal(SIGHUP, on_signal);
+    return 0;
+}
+
+enum { KEY_EOF = -1, KEY_LEFT = 256, KEY_RIGHT, KEY_UP, KEY_DOWN, KEY_HOME, KEY_END };
+
+static int read_key(void)
+{
+    unsigned char c;
+    if (read(STDIN_FILENO, &c, 1) != 1) return KEY_EOF;
+    if (c != 27) return c;
+    /* an escape sequence arrives at once; a lone Escape does not */
+    struct pollfd p = {STDIN_FILENO, POLLIN, 0};
+    unsigned char seq[3];
+    if (poll(&p, 1, 50) <= 0 || read(STDIN_FILENO, &seq[0], 1) != 1) return 27;
+    if (poll(&p, 1, 50) <= 0 || read(STDIN_FILENO, &seq[1], 1) != 1) return 27;
+    if (seq[0] == '[' && seq[1] >= '1' && seq[1] <= '8') { /* ESC [ 1 ~ (Home), ESC [ 4 ~ (End) */
+        if (poll(&p, 1, 50) <= 0 || read(STDIN_FILENO, &seq[2], 1) != 1) return 27;
+        return seq[1] == '1' || seq[1] == '7' ? KEY_HOME : seq[1] == '4' || seq[1] == '8' ? KEY_END : 27;
+    }
+    switch (seq[1]) {
+    case 'A': return KEY_UP;
+    case 'B': return KEY_DOWN;
+    case 'C': return KEY_RIGHT;
+    case 'D': return KEY_LEFT;
+    case 'H': return KEY_HOME;
+    case 'F': return KEY_END;
+    default: return 27;
+    }
+}
+
+static void term_size(int *rows, int *cols)
+{
+    struct winsize ws;
+    *rows = 24;
+    *cols = 80;
+    if (ioctl(STDOUT_FILENO, TIOCGWINSZ, &ws) == 0 && ws.ws_row > 0 && ws.ws_col > 0) {
+        *rows = ws.ws_row;
+        *cols = ws.ws_col;
+    }
+    if (*rows < 10) *rows = 10;
+    if (*cols < 40) *cols = 40;
+}
+
+/* One screen line: at most cols characters, then clear to its end. */
+static void put_line(const char *text, int cols)
+{
+    printf("%.*s\033[K\n", cols, text);
+}
+
+/* The screen for step pos (0-based): a title, the steps up to pos (one
+ * row each, the Current / Stack columns for a tree's traversal), the
+ * state at pos in the slides' words, a message line and the keys. */
+static void draw(const steps *s, size_t pos, int brk, const char *title, const char *msg)
+{
+    int rows, cols;
+    term_size(&rows, &cols);
+    const int panel = !s->json && has_panel(s);
+    const int window = rows - (panel ? 7 : 5);
+    const size_t first = pos + 1 > (size_t)window ? pos + 1 - (size_t)window : 0;
+    char buf[512], row[1400], cur[96], stk[1024];
+    replay r = {0};
+    const int width = s->width < cols / 2 ? s->width : cols / 2;
+    printf("\033[H");
+    snprintf(row, sizeof row, "%s   step %zu/%zu   break: %s", title, pos + 1, s->n, break_name(brk));
+    put_line(row, cols);
+    if (panel) snprintf(row, sizeof row, "   step  %-*s | %-20s | %s", width, "event", "current", "stack (top first)");
+    else snprintf(row, sizeof row, "   step  event");
+    put_line(row, cols);
+    for (size_t i = s->nbuild; panel && i < first; ++i) replay_event(&r, s->ev[i]);
+    for (size_t i = first; i <= pos; ++i) {
+        char *line = step_text(s, i, buf, sizeof buf);
+        const char *mark = i == pos ? ">" : " ";
+        if (panel && i >= s->nbuild) {
+            replay_event(&r, s->ev[i]);
+            panel_text(s, &r, cur, sizeof cur, stk, sizeof stk);
+            snprintf(row, sizeof row, "%s %5zu  %-*.*s | %-20s | %s", mark, i + 1, width, width, line, cur, stk);
+        } else {
+            snprintf(row, sizeof row, "%s %5zu  %s", mark, i + 1, line);
+        }
+        text_free(line, buf);
+        if (i == pos) printf("\033[1m");
+        printf("%.*s\033[K\033[0m\n", cols, row);
+    }
+    for (size_t k = pos + 1 - first; k < (size_t)window; ++k) put_line("", cols);
+    if (panel) {
+        panel_text(s, &r, cur, sizeof cur, stk, sizeof stk);
+        snprintf(row, sizeof row, "Current: %s", pos >= s->nbuild ? cur : "");
+        put_line(row, cols);
+        snprintf(row, sizeof row, "Stack:   %s", pos >= s->nbuild ? stk : "");
+        put_line(row, cols);
+    }
+    put_line(msg ? msg : "", cols);
+    put_line("Enter/n next  b back  g go to step  c/C next/prev break  t break type  l/L next/prev leaf  a end  q quit",
+             cols);
     fflush(stdout);
-    if (o->interactive) {
-        char line[64];
-        if (!fgets(line, sizeof line, o->in)) {
-            o->interactive = 0; /* EOF: print the rest */
-        } else if (line[0] == 'q') {
-            o->stop = 1;
-        } else if (line[0] == 'a') {
-            o->interactive = 0;
+    free(r.stack);
+}
+
+/* A line typed at the bottom of the screen (Enter ends it, Escape cancels: returns -1). */
+static int prompt(const char *what, char *buf, size_t size)
+{
+    int rows, cols;
+    term_size(&rows, &cols);
+    size_t n = 0;
+    buf[0] = '\0';
+    for (;;) {
+        printf("\033[%d;1H%s%s\033[K", rows - 1, what, buf);
+        fflush(stdout);
+        const int k = read_key();
+        if (k == '\n' || k == '\r') return 0;
+        if (k == 27 || k == KEY_EOF) return -1;
+        if ((k == 127 || k == 8) && n) buf[--n] = '\0';
+        else if (k >= 32 && k < 127 && n + 1 < size) {
+            buf[n++] = (char)k;
+            buf[n] = '\0';
         }
     }
 }
 
-static void print_all(step_out *o, const sidx_recorder *r)
+static void run_stepper(const steps *s, size_t pos, int brk, const char *title)
 {
-    for (size_t i = 0; i < r->count && !o->stop; ++i) print_event(o, &r->events[i]);
+    char msg[160] = "", in[64];
+    printf("\033[H\033[2J");
+    for (;;) {
+        draw(s, pos, brk, title, msg);
+        msg[0] = '\0';
+        const int k = read_key();
+        const size_t was = pos;
+        switch (k) {
+        case KEY_EOF:
+        case 'q':
+            return;
+        case '\n': case '\r': case ' ': case 'n': case 'j': case KEY_RIGHT: case KEY_DOWN:
+            if (pos + 1 < s->n) ++pos;
+            else snprintf(msg, sizeof msg, "the last step (q quits)");
+            break;
+        case 'b': case 'p': case 'k': case 127: case 8: case KEY_LEFT: case KEY_UP:
+            if (pos > 0) --pos;
+            else snprintf(msg, sizeof msg, "the first step");
+            break;
+        case KEY_HOME: case '<':
+            pos = 0;
+            break;
+        case KEY_END: case '>': case 'a':
+            pos = s->n - 1;
+            break;
+        case 'g':
+            if (prompt("go to step: ", in, sizeof in) == 0 && in[0]) {
+                char *end;
+                const unsigned long long v = strtoull(in, &end, 10);
+                if (*end || v < 1 || v > s->n) snprintf(msg, sizeof msg, "no step '%s' (1 to %zu)", in, s->n);
+                else pos = (size_t)v - 1;
+            }
+            break;
+        case 't':
+            if (prompt("break on (push, pop, enter, prim, leaf, ...): ", in, sizeof in) == 0 && in[0]) {
+                const int t = parse_break(in);
+                if (t == BREAK_NONE) snprintf(msg, sizeof msg, "no event type '%s'", in);
+                else brk = t;
+            }
+            break;
+        case 'c': case 'C': case 'l': case 'L': {
+            const int type = k == 'l' || k == 'L' ? BREAK_LEAF : brk;
+            const int dir = k == 'c' || k == 'l' ? 1 : -1;
+            if (type == BREAK_NONE) {
+                snprintf(msg, sizeof msg, "no break type: t sets one, or --break TYPE");
+                break;
+            }
+            pos = find_step(s, pos, dir, type);
+            if (pos == was)
+                snprintf(msg, sizeof msg, "no %s %s event", dir > 0 ? "further" : "earlier", break_name(type));
+            break;
+        }
+        default:
+            break;
+        }
+    }
 }
-
 /* ---- --diff: two JSON Lines traces side by side ------------------------------- */
 
 /* One trace line: its top-level "key":value pairs, values kept as text
@@ -349,8 +737,9 @@ out:
 int main(int argc, char **argv)
 {
     if (argc > 1 && !strcmp(argv[1], "--diff")) return diff_main(argc, argv);
-    const char *accel = NULL, *scene = NULL;
-    int all = 0, json = 0, build = 0, has_ray = 0, bounds = 0;
+    const char *accel = NULL, *scene = NULL, *ray_text = NULL;
+    int all = 0, json = 0, build = 0, has_ray = 0, bounds = 0, panel = 0, brk = BREAK_NONE;
+    unsigned long long start = 0;
     sidx_vec3 org = {0, 0, 0}, dir = {0, 0, 0};
     sidx_traversal trav = SIDX_TRAVERSE_DEFAULT;
     sidx_build_options bo;
@@ -358,7 +747,14 @@ int main(int argc, char **argv)
     for (int i = 1; i < argc; ++i) {
         const char *a = argv[i];
         const int has_val = i + 1 < argc;
-        if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
+        char msg[160];
+        const int knob = sidx_viz_build_knob(a, has_val ? argv[i + 1] : NULL, &bo, msg, sizeof msg);
+        if (knob < 0) {
+            fprintf(stderr, "sidx-step: %s\n", msg);
+            return 2;
+        } else if (knob > 0) {
+            i += knob - 1;
+        } else if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
             usage(stdout);
             return 0;
         } else if (!strcmp(a, "--list")) {
@@ -373,6 +769,8 @@ int main(int argc, char **argv)
             build = 1;
         } else if (!strcmp(a, "--bounds")) {
             bounds = 1;
+        } else if (!strcmp(a, "--panel")) {
+            panel = 1;
         } else if (!strcmp(a, "--accel") && has_val) {
             accel = argv[++i];
         } else if (!strcmp(a, "--traversal") && has_val) {
@@ -380,18 +778,28 @@ int main(int argc, char **argv)
                 fprintf(stderr, "sidx-step: --traversal wants default, stack, ordered or naive, not '%s'\n", argv[i]);
                 return 2;
             }
-        } else if (!strcmp(a, "--leaf-size") && has_val) {
+        } else if (!strcmp(a, "--step") && has_val) {
             char *end;
-            long k = strtol(argv[++i], &end, 10);
-            if (*end || k < 1 || k > 1000000) {
-                fprintf(stderr, "sidx-step: --leaf-size wants a number >= 1, not '%s'\n", argv[i]);
+            const char *v = argv[++i];
+            start = v[0] >= '0' && v[0] <= '9' ? strtoull(v, &end, 10) : 0;
+            if (!start || *end) {
+                fprintf(stderr, "sidx-step: --step wants a step number >= 1, not '%s'\n", v);
                 return 2;
             }
-            bo.leaf_size = (uint32_t)k;
-        } else if (!strcmp(a, "--ray") && has_val) {
-            if (sidx_viz_parse_ray(argv[++i], &org, &dir) != 0) {
-                fprintf(stderr, "sidx-step: --ray wants ox,oy,oz,dx,dy,dz (finite, non-zero direction), not '%s'\n",
+        } else if (!strcmp(a, "--break") && has_val) {
+            brk = parse_break(argv[++i]);
+            if (brk == BREAK_NONE) {
+                fprintf(stderr,
+                        "sidx-step: --break wants an event type (stack_push, push, pop, enter, box, prim, hit, "
+                        "mailbox, terminate, leaf, ...), not '%s'\n",
                         argv[i]);
+                return 2;
+            }
+        } else if (!strcmp(a, "--ray") && has_val) {
+            ray_text = argv[++i];
+            if (sidx_viz_parse_ray(ray_text, &org, &dir) != 0) {
+                fprintf(stderr, "sidx-step: --ray wants ox,oy,oz,dx,dy,dz (finite, non-zero direction), not '%s'\n",
+                        ray_text);
                 return 2;
             }
             has_ray = 1;
@@ -426,10 +834,13 @@ int main(int argc, char **argv)
     sidx_recorder brec, trec;
     sidx_recorder_init(&brec);
     sidx_recorder_init(&trec);
+    /* the build's leaves are always recorded: "next leaf" and the panel's "leaf" */
     sidx_hook bh = sidx_recorder_hook(&brec);
-    bh.mask = SIDX_EVMASK_BUILD | SIDX_EVMASK(SIDX_EV_NOTE);
-    if (build) bo.hook = &bh;
+    bh.mask = build ? SIDX_EVMASK_BUILD | SIDX_EVMASK(SIDX_EV_NOTE) : SIDX_EVMASK(SIDX_EV_BUILD_LEAF);
+    bo.hook = &bh;
     sidx_accel *acc = NULL;
+    steps s;
+    memset(&s, 0, sizeof s);
     int rc = 0;
     if (sidx_accel_build(accel, &mesh, &bo, &acc, &err) != SIDX_OK) {
         fprintf(stderr, "sidx-step: building %s: %s\n", accel, err.message);
@@ -452,19 +863,55 @@ int main(int argc, char **argv)
         sidx_hit hit;
         sidx_accel_intersect(acc, &ray, &q, &hit);
     }
-    if (brec.overflow || trec.overflow) {
+    s.nbuild = build ? brec.count : 0;
+    s.n = s.nbuild + trec.count;
+    s.ev = malloc((s.n ? s.n : 1) * sizeof *s.ev);
+    s.leaves = malloc((brec.count ? brec.count : 1) * sizeof *s.leaves);
+    if (brec.overflow || trec.overflow || !s.ev || !s.leaves) {
         fprintf(stderr, "sidx-step: out of memory recording the events\n");
         rc = 1;
         goto done;
     }
-    {
-        step_out o = {json, bounds, !all && isatty(STDIN_FILENO) && isatty(STDOUT_FILENO), 0, stdin};
-        if (o.interactive) fprintf(stderr, "(Enter: next step   a Enter: all   q Enter: quit)\n");
-        if (build) print_all(&o, &brec);
-        if (has_ray) print_all(&o, &trec);
+    for (size_t i = 0; i < brec.count; ++i) {
+        if (i < s.nbuild) s.ev[i] = &brec.events[i];
+        if (brec.events[i].type == SIDX_EV_BUILD_LEAF) s.leaves[s.nleaves++] = brec.events[i].node;
+    }
+    qsort(s.leaves, s.nleaves, sizeof *s.leaves, cmp_u32);
+    for (size_t i = 0; i < trec.count; ++i) s.ev[s.nbuild + i] = &trec.events[i];
+    s.json = json;
+    s.bounds = bounds;
+    s.panel = panel;
+    if (s.n == 0) goto done;
+    for (size_t i = s.nbuild; i < s.n; ++i) {
+        char buf[512], *line = step_text(&s, i, buf, sizeof buf);
+        if ((int)strlen(line) > s.width) s.width = (int)strlen(line);
+        text_free(line, buf);
+    }
+
+    /* where to stop: --step K, then the first --break event from there */
+    size_t pos = start ? (start <= s.n ? (size_t)start - 1 : s.n - 1) : 0;
+    if (brk != BREAK_NONE && !step_is(&s, pos, brk)) {
+        const size_t at = find_step(&s, pos, 1, brk);
+        if (at == pos) {
+            fprintf(stderr, "sidx-step: no %s event from step %zu on\n", break_name(brk), pos + 1);
+            rc = 1;
+        }
+        pos = at == pos ? s.n - 1 : at;
+    }
+    if (!all && isatty(STDIN_FILENO) && isatty(STDOUT_FILENO) && tty_enter_raw() == 0) {
+        char title[256];
+        snprintf(title, sizeof title, "sidx-step  %s  %s%s%s", accel, scene, ray_text ? "  ray " : "",
+                 ray_text ? ray_text : "");
+        run_stepper(&s, pos, brk, title);
+        tty_restore();
+        rc = 0;
+    } else {
+        print_steps(&s, start || brk != BREAK_NONE ? pos + 1 : s.n);
     }
     if (fflush(stdout) != 0 || ferror(stdout)) rc = 1;
 done:
+    free(s.ev);
+    free(s.leaves);
     sidx_accel_destroy(acc);
     sidx_recorder_free(&brec);
     sidx_recorder_free(&trec);

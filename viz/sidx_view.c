@@ -1,6 +1,6 @@
 /* sidx-view — watch a structure being built and a ray walking through it.
  *
- *   sidx-view [--accel NAME] [--scene S] [--mode 2d|build|3d|heat] [--ray R]
+ *   sidx-view [--accel NAME] [--scene S] [--mode 2d|build|3d|heat] [--ray R] [build knobs]
  *   sidx-view --screenshot out.png [--step N] [--mode ...] [--size WxH] ...
  *
  * With --screenshot it renders one frame into an offscreen surface and
@@ -34,7 +34,9 @@ static void usage(FILE *f)
             "  --size WxH          window / screenshot size (default 1100x700)\n"
             "  --screenshot F.png  render one frame headless to F.png and exit\n"
             "  --list              list the registered structures\n"
-            "  -h, --help          this help\n");
+            "  -h, --help          this help\n"
+            "\n%s",
+            sidx_viz_build_knobs_help());
 }
 
 static int parse_size(const char *s, int *w, int *h)
@@ -134,10 +136,19 @@ int main(int argc, char **argv)
     float yaw = NAN, pitch = NAN, zoom = NAN;
     view_mode mode = VIEW_2D;
     sidx_vec3 org = {0, 0, 0}, dir = {0, 0, 0};
+    sidx_build_options knobs;
+    memset(&knobs, 0, sizeof knobs);
     for (int i = 1; i < argc; ++i) {
         const char *a = argv[i];
         const int has_val = i + 1 < argc;
-        if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
+        char msg[160];
+        const int knob = sidx_viz_build_knob(a, has_val ? argv[i + 1] : NULL, &knobs, msg, sizeof msg);
+        if (knob < 0) {
+            fprintf(stderr, "sidx-view: %s\n", msg);
+            return 2;
+        } else if (knob > 0) {
+            i += knob - 1;
+        } else if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
             usage(stdout);
             return 0;
         } else if (!strcmp(a, "--list")) {
@@ -206,7 +217,7 @@ int main(int argc, char **argv)
 
     view_state v;
     sidx_error err;
-    if (view_open(&v, scene, accel, &err) != SIDX_OK) {
+    if (view_open_knobs(&v, scene, accel, &knobs, &err) != SIDX_OK) {
         fprintf(stderr, "sidx-view: %s\n", err.message);
         view_close(&v);
         return 1;

@@ -78,6 +78,7 @@ typedef struct view_state {
     sidx_accel *accel;
     sidx_aabb bounds;
 
+    sidx_build_options knobs;  /* every build's options (its hook is the viewer's recorder) */
     sidx_recorder build;       /* the build's events */
     sidx_viz_tree tree;        /* rebuilt from them, if the structure emits a tree */
     int has_tree;
@@ -111,6 +112,9 @@ typedef struct view_state {
  * structure without a tree still opens (tree_msg says why).  Returns
  * SIDX_OK or the error, with err filled. */
 sidx_status view_open(view_state *v, const char *scene, const char *accel, sidx_error *err);
+/* Same, building this and every later structure with knobs (NULL = defaults). */
+sidx_status view_open_knobs(view_state *v, const char *scene, const char *accel, const sidx_build_options *knobs,
+                            sidx_error *err);
 /* Same over a mesh the state takes over (moved: *mesh is zeroed). */
 sidx_status view_open_mesh(view_state *v, sidx_mesh *mesh, const char *name, const char *accel, sidx_error *err);
 void view_close(view_state *v);

@@ -40,8 +40,7 @@ static sidx_status build(view_state *v, const char *accel, sidx_error *err)
 
     sidx_hook h = sidx_recorder_hook(&v->build);
     h.mask = SIDX_EVMASK_BUILD;
-    sidx_build_options bo;
-    memset(&bo, 0, sizeof bo);
+    sidx_build_options bo = v->knobs;
     bo.hook = &h;
     sidx_status s = sidx_accel_build(accel, &v->mesh, &bo, &v->accel, err);
     if (s != SIDX_OK) return s;
@@ -63,9 +62,12 @@ static sidx_status build(view_state *v, const char *accel, sidx_error *err)
     return SIDX_OK;
 }
 
-sidx_status view_open_mesh(view_state *v, sidx_mesh *mesh, const char *name, const char *accel, sidx_error *err)
+static sidx_status open_mesh(view_state *v, sidx_mesh *mesh, const char *name, const char *accel,
+                             const sidx_build_options *knobs, sidx_error *err)
 {
     memset(v, 0, sizeof *v);
+    if (knobs) v->knobs = *knobs;
+    v->knobs.hook = NULL;
     v->mesh = *mesh;
     memset(mesh, 0, sizeof *mesh);
     snprintf(v->scene, sizeof v->scene, "%s", name ? name : "mesh");
@@ -85,7 +87,18 @@ sidx_status view_open_mesh(view_state *v, sidx_mesh *mesh, const char *name, con
     return build(v, accel, err);
 }
 
+sidx_status view_open_mesh(view_state *v, sidx_mesh *mesh, const char *name, const char *accel, sidx_error *err)
+{
+    return open_mesh(v, mesh, name, accel, NULL, err);
+}
+
 sidx_status view_open(view_state *v, const char *scene, const char *accel, sidx_error *err)
+{
+    return view_open_knobs(v, scene, accel, NULL, err);
+}
+
+sidx_status view_open_knobs(view_state *v, const char *scene, const char *accel, const sidx_build_options *knobs,
+                            sidx_error *err)
 {
     sidx_mesh m;
     memset(&m, 0, sizeof m);
@@ -94,7 +107,7 @@ sidx_status view_open(view_state *v, const char *scene, const char *accel, sidx_
     sidx_recorder_init(&v->trav);
     sidx_status s = sidx_scene_open(scene, &m, err);
     if (s != SIDX_OK) return s;
-    return view_open_mesh(v, &m, scene, accel, err);
+    return open_mesh(v, &m, scene, accel, knobs, err);
 }
 
 sidx_status view_set_accel(view_state *v, const char *accel, sidx_error *err) { return build(v, accel, err); }

@@ -128,6 +128,17 @@ sidx_status sidx_dot_write_events(const sidx_event *build, size_t nbuild, const 
 /* Parses "ox,oy,oz,dx,dy,dz" (programs' --ray).  Returns 0 on success. */
 int sidx_viz_parse_ray(const char *s, sidx_vec3 *org, sidx_vec3 *dir);
 
+/* The build knobs of the programs' and lessons' command lines: --bins N,
+ * --c-trav X, --c-tri X, --leaf-size N, --max-depth N, --lambda X
+ * (grid_density), --no-mailbox and --empty-bonus X, each filling one field
+ * of *bo.  flag is argv[i], value argv[i + 1] (NULL at the end).  Returns
+ * 0 if flag is no knob (nothing written), 1 if it took flag alone, 2 if it
+ * took flag and value, -1 on a missing or bad value (or NULL flag / bo):
+ * then msg holds "--bins wants ..., not '1'" and *bo is unchanged. */
+int sidx_viz_build_knob(const char *flag, const char *value, sidx_build_options *bo, char *msg, size_t size);
+/* Their --help lines: a heading, then one "  --flag ..." line each. */
+const char *sidx_viz_build_knobs_help(void);
+
 #ifdef __cplusplus
 }
 #endif
