@@ -3,7 +3,7 @@
 #
 #   BUILD=build sh tests/run_step_tmux.sh        (make test-run does this)
 #
-# Starts sidx-step inside a detached tmux session (its own server socket,
+# Starts sidx-step inside tmux, detached (its own server socket,
 # no configuration file, a fixed 120x32 screen), types keys with
 # `tmux send-keys` and reads the screen back with `tmux capture-pane -p`.
 # Checks that one step forward and one back redraws the same screen, that
@@ -40,11 +40,11 @@ fail=0
 ok() { echo "  ok    $1"; }
 bad() { echo "  FAIL  $1"; fail=1; }
 
-# start NAME ARGS...: sidx-step ARGS in a new session NAME
+# start NAME ARGS...: sidx-step ARGS in a new detached tmux screen NAME
 start() {
     name=$1
     shift
-    $T new-session -d -s "$name" -x 120 -y 32 "$STEP $*" </dev/null || { bad "tmux new-session $name"; return 1; }
+    $T new -d -s "$name" -x 120 -y 32 "$STEP $*" </dev/null || { bad "tmux new $name"; return 1; }
 }
 
 screen() { $T capture-pane -p -t "$1" 2>/dev/null; }
@@ -60,7 +60,7 @@ until_ok() {
 }
 
 shows() { screen "$1" | grep -qF -- "$2"; }
-gone() { ! $T has-session -t "$1" 2>/dev/null; }
+gone() { ! $T has -t "$1" 2>/dev/null; }
 # wait_for NAME TEXT: until the screen of NAME shows TEXT (fixed string)
 wait_for() { until_ok shows "$1" "$2"; }
 
@@ -81,8 +81,8 @@ moved() { [ "$(step_of "$1")" != "$2" ]; }
 nth_event() { "$STEP" --accel "$1" $SCENE --ray $RAY --leaf-size 1 --all </dev/null | sed -n "$2p" | sed 's/^ *//'; }
 
 echo "step-tmux: sidx-step in tmux $(tmux -V | cut -d' ' -f2)"
-# a session that outlives the others, so the server does not exit between them
-$T new-session -d -s hold "sleep 300" </dev/null || { echo "step-tmux: FAILED: tmux cannot start a server"; exit 1; }
+# a screen that outlives the others, so the server does not exit between them
+$T new -d -s hold "sleep 300" </dev/null || { echo "step-tmux: FAILED: tmux cannot start a server"; exit 1; }
 
 # ---- forward, back, go to step ----
 start fb --accel bvh $SCENE --ray $RAY --leaf-size 1 || exit 1
