@@ -12,8 +12,9 @@
  * inside the leaf's cell; a hit beyond it ("CANNOT terminate !!!") is kept
  * as the best so far and the walk goes on.
  *
- * Two walks take exactly the same decisions and run the same triangle
- * tests, so they return bit-identical hits (tests/test_kdtree.c):
+ * Two walks take the same decision at every node and run the same
+ * triangle tests in the same order, so they return the same hits, bit for
+ * bit (tests/test_kdtree.c):
  *
  *   kd_walk_slide  the slide's loop as it is written: three cases, named
  *                  near and far children, a push for "both".  Used for
@@ -25,32 +26,9 @@
  *                  Used for every other query: it is what the measurements
  *                  chose, and it no longer reads like the slide.
  *
- * Edge cases, decided once for both walks:
- *
- *   - rounding: t_split, t_near and t_far each carry a relative error of a
- *     few ulps, so a ray aimed exactly at a vertex on a split plane
- *     (t_split ≈ t_near) could be sent to the wrong side and miss the one
- *     triangle that touches the plane there.  A child is ruled out only
- *     when t_split lies outside [t_near, t_far] widened by 2γ₃ on both
- *     ends (Ize 2013, the bound of the robust box test); inside that
- *     window both children are visited, the slide's `<=`/`>=` ties
- *     included, and t_split is clamped into [t_near, t_far];
- *   - a ±0 direction component gives inv_dir = ±inf, so t_split = ±inf
- *     and the ray stays on its origin's side, which the sign rule picks
- *     (+0: near = left; origin above the plane → t_split = −inf → far =
- *     right).  If the origin lies exactly ON the plane, 0·inf = NaN: the
- *     ray runs inside the plane, which belongs to both closed cells, so
- *     both children are visited over the whole interval; the two
- *     intervals then overlap, so early termination is off for the rest of
- *     the ray (a hit in the first child need not be the closest);
- *   - a split exactly at a non-parallel ray's origin gives t_split = ±0 =
- *     t_near: both children, the near one with an empty interval;
- *   - the stop test widens t_far by 1 + 2γ₃ (Ize 2013) so a hit computed a
- *     rounding error past the cell still ends the walk, and a popped cell
- *     starting beyond the best hit is skipped: it cannot hold a closer one;
- *   - an empty leaf holds nothing to test; the fast walk never enters one,
- *     the slide walk enters it and goes straight on to the next cell (no
- *     stop test there, as the fast walk makes none), so both stop alike.
+ * The rules for rounding, ±0 directions, rays inside a split plane and
+ * empty leaves are written once, above kd_walk_slide; the fast walk keeps
+ * every one of them.  Leaves, events and entry points come last.
  *
  * Rejected alternatives: docs/performance.md, kd-tree. */
 #include "kdtree_internal.h"
@@ -76,16 +54,9 @@ typedef struct kd_stack_entry {
     float t_near, t_far;
 } kd_stack_entry;
 
-/* ==== leaves, shared by both walks ========================================== */
-
-/* Mailboxing (deck 000, uniform grids: "Per-ray cache of object IDs —
- * data local to a ray (better!)"), in the scalar leaf loop: a triangle
- * referenced by several leaves is tested once per ray.  A 16-entry
- * direct-mapped table on the stack, keyed by the triangle's id; a
- * collision only evicts (a re-test is correct, just slower), so concurrent
- * queries share nothing.  The SIMD block loop has none: re-testing a lane
- * inside a block costs nothing. */
-#define KD_MAILBOX 16u
+/* What both walks share: the state of the leaf tests, whose code
+ * (kd_test_leaf and the rest) follows the two walks. */
+#define KD_MAILBOX 16u /* entries of the per-ray mailbox (kd_test_leaf) */
 
 /* What a walk carries from leaf to leaf. */
 typedef struct kd_leaves {
@@ -99,175 +70,44 @@ typedef struct kd_leaves {
 #endif
 } kd_leaves;
 
-/* Untraced walks with the default (watertight) test run the SSE kernel on
- * whole blocks; traced walks test reference by reference so that every
- * test and mailbox event is reported. */
+static SIDX_INLINE int kd_enter_root(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, float best_t,
+                                     float *t_near, float *t_far, const int traced);
 static SIDX_INLINE void kd_leaves_init(kd_leaves *L, const sidx_accel *a, const sidx_ray *r, uint32_t *mbox,
-                                       float best_t, const int traced)
-{
-    L->best_t = best_t;
-    L->found = 0;
-    L->best_block = NULL;
-    L->best_lane = 0;
-#if KD_SIMD
-    L->simd = !traced && a->opt.tri == SIDX_TRI_WATERTIGHT;
-    wide_tri_ray_init(&L->simd_ray, r);
-#else
-    (void)r;
-    (void)traced;
-    L->simd = 0;
-#endif
-    L->mailbox = !a->opt.no_mailbox && !L->simd;
-    if (L->mailbox) memset(mbox, 0xff, KD_MAILBOX * sizeof *mbox);
-}
-
-/* u, v and the normal of the closest hit, when the query asks: from the
- * block's copy of the triangle, which is in cache, instead of the mesh
- * look-ups a diffuse ray mostly misses.  Run once, when the walk returns.
- * u, v by wide_lane_hit_uv (the accepting test's float edge functions and
- * its own last step, so its bits, or the whole test again when that does
- * not apply). */
-static SIDX_NOINLINE void kd_hit_attrs(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
-                                       const wide_tri4 *block, unsigned lane, sidx_hit *hit)
-{
-    float u = 0.0f, v = 0.0f;
-    if ((q->flags & SIDX_QUERY_UV) && wide_lane_hit_uv(a, r, block, lane, &u, &v)) {
-        hit->u = u;
-        hit->v = v;
-    }
-    if (q->flags & SIDX_QUERY_NORMAL) hit->ng = wide_lane_normal(block, lane);
-}
-
-/* The closest hit, written once when the walk ends. */
-static SIDX_INLINE void kd_finish(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, const kd_leaves *L,
-                                  sidx_hit *hit)
-{
-    hit->t = L->best_t;
-    hit->prim = L->best_block->prim[L->best_lane];
-    if (SIDX_UNLIKELY(q->flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL)))
-        kd_hit_attrs(a, r, q, L->best_block, L->best_lane, hit);
-}
-
-#if KD_SIMD
-/* A block the SIMD kernel declined (some lane's edge function is exactly
- * 0): the scalar test, which redoes those in double, lane by lane; the
- * smallest t wins, the lowest lane on ties, as in the kernel. */
-static SIDX_NOINLINE int kd_block_scalar(const sidx_accel *a, const sidx_ray *r, const wide_tri4 *block, float best,
-                                         float *t_out, unsigned *lane_out)
-{
-    int found = 0;
-    for (unsigned l = 0; l < 4; ++l) {
-        if (block->prim[l] == WIDE_PAD_PRIM) continue;
-        float t;
-        if (wide_lane_test(a, r, block, l, best, &t, NULL, NULL)) {
-            best = t;
-            *t_out = t;
-            *lane_out = l;
-            found = 1;
-        }
-    }
-    return found;
-}
-#endif
-
-/* Test a leaf's triangles against the best hit so far (which bounds every
- * test).  Returns 1 when an any-hit query is answered.
- *
- * With the default (watertight) test where SSE2 is there, the untraced
- * walks test every block holding one of the leaf's references, all four
- * lanes: a neighbouring leaf's triangle costs nothing extra in the SSE
- * pass and a hit on it is a true hit (kdtree_internal.h).  Which of two
- * triangles hit at exactly the same t is kept depends on the order of the
- * tests, so the scalar loop of a traced walk tests the same lanes in the
- * same order (the lowest lane wins, as in the kernel).  It reports only
- * the leaf's own references (PRIM_TEST, MAILBOX_HIT: each test after a
- * NODE_ENTER is of a triangle the leaf lists); a neighbour's lane is
- * tested without the mailbox and shows only if it becomes the closest hit
- * (HIT_UPDATE).  With another triangle test all walks test the leaf's own
- * references only. */
+                                       float best_t, const int traced);
 static SIDX_INLINE int kd_test_leaf(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, kd_leaves *L,
                                     uint32_t *mbox, const kd_node *leaf, uint32_t node, uint32_t visited,
-                                    const int traced, const int any)
-{
-    const kd_tree *kd = a->impl;
-    const uint32_t count = kd_count(leaf), offset = kd_offset(leaf);
-    (void)visited;
-#if KD_SIMD
-    if (L->simd) {
-        const wide_tri4 *block = kd->blocks + (offset >> 2), *const end = kd->blocks + ((offset + count + 3u) >> 2);
-        for (; block < end; ++block) {
-            float t;
-            unsigned lane;
-            int h = wide_tri4_test(block, &L->simd_ray, L->best_t, &t, &lane, NULL);
-            if (SIDX_UNLIKELY(h < 0)) h = kd_block_scalar(a, r, block, L->best_t, &t, &lane);
-            if (h) {
-                if (any) return 1;
-                L->found = 1;
-                L->best_t = t;
-                L->best_block = block;
-                L->best_lane = lane;
-            }
-        }
-        return 0;
-    }
-#endif
-    uint32_t ref = offset, end = offset + count;
-    if (KD_SIMD && a->opt.tri == SIDX_TRI_WATERTIGHT) { /* the SSE pass's lanes */
-        ref &= ~3u;
-        end = (end + 3u) & ~3u;
-    }
-    for (; ref < end; ++ref) {
-        const wide_tri4 *block = &kd->blocks[ref >> 2];
-        const unsigned lane = ref & 3u;
-        const uint32_t prim = block->prim[lane];
-        const int own = ref - offset < count; /* one of this leaf's references */
-        if (prim == WIDE_PAD_PRIM) continue;
-        if (own && L->mailbox) {
-            uint32_t *slot = &mbox[prim & (KD_MAILBOX - 1u)];
-            if (*slot == prim) {
-                SIDX_EMIT(traced, q->hook, SIDX_EV_MAILBOX_HIT, e_.ray_id = q->ray_id; e_.prim = prim;
-                          e_.node = node);
-                continue;
-            }
-            *slot = prim;
-        }
-        float t;
-        const int h = wide_lane_test(a, r, block, lane, L->best_t, &t, NULL, NULL);
-        if (own)
-            SIDX_EMIT(traced, q->hook, SIDX_EV_PRIM_TEST, e_.ray_id = q->ray_id; e_.prim = prim; e_.node = node;
-                      e_.result = h; e_.t = h ? t : INFINITY);
-        if (h) {
-            if (any) {
-                SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = SIDX_TERM_ANY_HIT;
-                          e_.t = t; e_.count = visited);
-                return 1;
-            }
-            L->found = 1;
-            L->best_t = t;
-            L->best_block = block;
-            L->best_lane = lane;
-            SIDX_EMIT(traced, q->hook, SIDX_EV_HIT_UPDATE, e_.ray_id = q->ray_id; e_.prim = prim; e_.t = t;
-                      e_.node = node);
-        }
-    }
-    return 0;
-}
-
-/* The ray's interval in the root cell (the scene box), or 0 if it misses. */
-static SIDX_INLINE int kd_enter_root(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, float best_t,
-                                     float *t_near, float *t_far, const int traced)
-{
-    const kd_tree *kd = a->impl;
-    if (kd->num_refs == 0 ||
-        !sidx__box_test(a->opt.box == SIDX_BOX_ROBUST, r, &kd->bounds, r->tmin, best_t, t_near, t_far)) {
-        SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = SIDX_TERM_MISS_ROOT;
-                  e_.count = 0);
-        return 0;
-    }
-    return 1;
-}
+                                    const int traced, const int any);
+static SIDX_INLINE void kd_finish(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, const kd_leaves *L,
+                                  sidx_hit *hit);
 
 /* ==== the slide walk ========================================================= */
+
+/* Edge cases, decided here once (the fast walk takes the same decisions):
+ *
+ *   - rounding: t_split, t_near and t_far each carry a relative error of a
+ *     few ulps, so a ray aimed exactly at a vertex on a split plane
+ *     (t_split ≈ t_near) could be sent to the wrong side and miss the one
+ *     triangle that touches the plane there.  A child is ruled out only
+ *     when t_split lies outside [t_near, t_far] widened by 2γ₃ on both
+ *     ends (Ize 2013, the bound of the robust box test); inside that
+ *     window both children are visited, the slide's `<=`/`>=` ties
+ *     included, and t_split is clamped into [t_near, t_far];
+ *   - a ±0 direction component gives inv_dir = ±inf, so t_split = ±inf
+ *     and the ray stays on its origin's side, which the sign rule picks
+ *     (+0: near = left; origin above the plane → t_split = −inf → far =
+ *     right).  If the origin lies exactly ON the plane, 0·inf = NaN: the
+ *     ray runs inside the plane, which belongs to both closed cells, so
+ *     both children are visited over the whole interval; the two
+ *     intervals then overlap, so early termination is off for the rest of
+ *     the ray (a hit in the first child need not be the closest);
+ *   - a split exactly at a non-parallel ray's origin gives t_split = ±0 =
+ *     t_near: both children, the near one with an empty interval;
+ *   - the stop test widens t_far by 1 + 2γ₃ (Ize 2013) so a hit computed a
+ *     rounding error past the cell still ends the walk, and a popped cell
+ *     starting beyond the best hit is skipped: it cannot hold a closer one;
+ *   - an empty leaf holds nothing to test; the fast walk never enters one,
+ *     the slide walk enters it and goes straight on to the next cell (no
+ *     stop test there, as the fast walk makes none), so both stop alike. */
 
 /* The deck's loop, one node per iteration.  Returns 1 when something was
  * hit; for closest-hit queries `hit` then carries the best hit.
@@ -278,7 +118,8 @@ static SIDX_INLINE int kd_walk_slide(const sidx_accel *a, const sidx_ray *r, con
                                      const int traced, const int any, const int naive)
 {
     const kd_tree *kd = a->impl;
-    const float *origin = &r->org.x, *inv_dir = &r->inv_dir.x;
+    const float origin[3] = {r->org.x, r->org.y, r->org.z};
+    const float inv_dir[3] = {r->inv_dir.x, r->inv_dir.y, r->inv_dir.z};
     const float best_t = any ? r->tmax : hit->t; /* the closest hit so far bounds every test */
     float t_near, t_far;
     if (!kd_enter_root(a, r, q, best_t, &t_near, &t_far, traced)) return 0;
@@ -304,6 +145,8 @@ static SIDX_INLINE int kd_walk_slide(const sidx_accel *a, const sidx_ray *r, con
             const uint32_t left = kd_child(n), negative = r->sign[axis];
             const uint32_t near_child = left + negative, far_child = left + 1u - negative;
             ++depth;
+            /* "Three cases" ("kD-Tree Traversal Operation"), each bound
+             * widened by 2γ₃ (edge cases above) */
             if (t_split < t_near - fabsf(t_near) * KD_TS_EPS) {
                 /* the plane lies before the cell: far child only */
                 node = far_child;
@@ -315,24 +158,28 @@ static SIDX_INLINE int kd_walk_slide(const sidx_accel *a, const sidx_ray *r, con
                  * (near_child, t_near, t_split); t_split clamped into the
                  * interval (NaN keeps the whole interval on both sides) */
                 if (t_split != t_split) may_stop = 0;
-                kd_stack_entry far = {far_child, depth, t_split > t_near ? t_split : t_near, t_far};
-                kd_stack_entry near = {near_child, depth, t_near, t_split < t_far ? t_split : t_far};
+                kd_stack_entry far_entry = {far_child, depth, t_split > t_near ? t_split : t_near, t_far};
+                kd_stack_entry near_entry = {near_child, depth, t_near, t_split < t_far ? t_split : t_far};
                 if (naive && negative) { /* naive: the left child first */
-                    const kd_stack_entry left_entry = far;
-                    far = near;
-                    near = left_entry;
+                    const kd_stack_entry left_entry = far_entry;
+                    far_entry = near_entry;
+                    near_entry = left_entry;
                 }
-                stack[stack_size++] = far;
-                SIDX_EMIT(traced, q->hook, SIDX_EV_STACK_PUSH, e_.ray_id = q->ray_id; e_.node = far.node;
-                          e_.depth = stack_size; e_.t_near = far.t_near; e_.t_far = far.t_far);
-                node = near.node;
-                t_near = near.t_near;
-                t_far = near.t_far;
+                stack[stack_size++] = far_entry;
+                SIDX_EMIT(traced, q->hook, SIDX_EV_STACK_PUSH, e_.ray_id = q->ray_id; e_.node = far_entry.node;
+                          e_.depth = stack_size; e_.t_near = far_entry.t_near; e_.t_far = far_entry.t_far);
+                node = near_entry.node;
+                t_near = near_entry.t_near;
+                t_far = near_entry.t_far;
             }
             continue;
         }
 
-        /* a leaf: test its triangles; stop if the best hit lies in this cell */
+        /* A leaf: test its triangles.  "Traversal can be terminated as soon
+         * as surface intersection is found in the current node": stop if
+         * the best hit lies in this cell; a hit beyond it is kept but the
+         * walk goes on ("CANNOT terminate !!!", Traversal (10)).  An empty
+         * leaf: nothing to test, on to the next cell (edge cases above). */
         if (kd_count(n) != 0) {
             if (kd_test_leaf(a, r, q, &leaves, mbox, n, node, visited, traced, any)) return 1;
             if (leaves.found && may_stop && leaves.best_t <= t_far + fabsf(t_far) * KD_TS_EPS) {
@@ -429,7 +276,7 @@ static SIDX_INLINE int kd_walk_fast(const sidx_accel *a, const sidx_ray *r, cons
             kd_finish(a, r, q, &leaves, hit);
             return 1;
         }
-    pop:
+    pop: /* the next cell; those starting beyond the best hit are skipped */
         for (;;) {
             if (stack_size == 0) {
                 if (leaves.found && !any) kd_finish(a, r, q, &leaves, hit);
@@ -442,6 +289,188 @@ static SIDX_INLINE int kd_walk_fast(const sidx_accel *a, const sidx_ray *r, cons
             if (t_near <= leaves.best_t) break;
         }
     }
+}
+
+/* ==== leaves and events, shared by both walks ============================== */
+
+/* Untraced walks with the default (watertight) test run the SSE kernel on
+ * whole blocks; traced walks test lane by lane, so that each test of the
+ * leaf's references and each mailbox hit is reported (kd_test_leaf). */
+static SIDX_INLINE void kd_leaves_init(kd_leaves *L, const sidx_accel *a, const sidx_ray *r, uint32_t *mbox,
+                                       float best_t, const int traced)
+{
+    L->best_t = best_t;
+    L->found = 0;
+    L->best_block = NULL;
+    L->best_lane = 0;
+#if KD_SIMD
+    L->simd = !traced && a->opt.tri == SIDX_TRI_WATERTIGHT;
+    wide_tri_ray_init(&L->simd_ray, r);
+#else
+    (void)r;
+    (void)traced;
+    L->simd = 0;
+#endif
+    L->mailbox = !a->opt.no_mailbox && !L->simd;
+    if (L->mailbox) memset(mbox, 0xff, KD_MAILBOX * sizeof *mbox);
+}
+
+/* u, v and the normal of the closest hit, when the query asks: from the
+ * block's copy of the triangle, which is in cache, instead of the mesh
+ * look-ups a diffuse ray mostly misses.  Run once, when the walk returns.
+ * u, v by wide_lane_hit_uv (the accepting test's float edge functions and
+ * its own last step, so its bits, or the whole test again when that does
+ * not apply). */
+static SIDX_NOINLINE void kd_hit_attrs(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
+                                       const wide_tri4 *block, unsigned lane, sidx_hit *hit)
+{
+    float u = 0.0f, v = 0.0f;
+    if ((q->flags & SIDX_QUERY_UV) && wide_lane_hit_uv(a, r, block, lane, &u, &v)) {
+        hit->u = u;
+        hit->v = v;
+    }
+    if (q->flags & SIDX_QUERY_NORMAL) hit->ng = wide_lane_normal(block, lane);
+}
+
+/* The closest hit, written once when the walk ends. */
+static SIDX_INLINE void kd_finish(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, const kd_leaves *L,
+                                  sidx_hit *hit)
+{
+    hit->t = L->best_t;
+    hit->prim = L->best_block->prim[L->best_lane];
+    if (SIDX_UNLIKELY(q->flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL)))
+        kd_hit_attrs(a, r, q, L->best_block, L->best_lane, hit);
+}
+
+#if KD_SIMD
+/* A block the SIMD kernel declined (some lane's edge function is exactly
+ * 0): the scalar test, which redoes those in double, lane by lane; the
+ * smallest t wins, the lowest lane on ties, as in the kernel. */
+static SIDX_NOINLINE int kd_block_scalar(const sidx_accel *a, const sidx_ray *r, const wide_tri4 *block, float best,
+                                         float *t_out, unsigned *lane_out)
+{
+    int found = 0;
+    for (unsigned l = 0; l < 4; ++l) {
+        if (block->prim[l] == WIDE_PAD_PRIM) continue;
+        float t;
+        if (wide_lane_test(a, r, block, l, best, &t, NULL, NULL)) {
+            best = t;
+            *t_out = t;
+            *lane_out = l;
+            found = 1;
+        }
+    }
+    return found;
+}
+#endif
+
+/* Test a leaf's triangles against the best hit so far (which bounds every
+ * test).  Returns 1 when an any-hit query is answered.
+ *
+ * Mailboxing (deck 000, uniform grids: "Per-ray cache of object IDs —
+ * data local to a ray (better!)"), in the scalar loop: a triangle
+ * referenced by several leaves is tested once per ray.  A KD_MAILBOX-entry
+ * direct-mapped table on the stack, keyed by the triangle's id; a
+ * collision only evicts (a re-test is correct, just slower), so concurrent
+ * queries share nothing.  The SIMD block loop has none: re-testing a lane
+ * inside a block costs nothing.
+ *
+ * With the default (watertight) test where SSE2 is there, the untraced
+ * walks test every block holding one of the leaf's references, all four
+ * lanes: a neighbouring leaf's triangle costs nothing extra in the SSE
+ * pass and a hit on it is a true hit (kdtree_internal.h).  Which of two
+ * triangles hit at exactly the same t is kept depends on the order of the
+ * tests, so the scalar loop of a traced walk tests the same lanes in the
+ * same order (the lowest lane wins, as in the kernel).  It reports only
+ * the leaf's own references (PRIM_TEST, MAILBOX_HIT: each test after a
+ * NODE_ENTER is of a triangle the leaf lists); a neighbour's lane shows
+ * only if it becomes the closest hit (HIT_UPDATE, with no PRIM_TEST
+ * before it), and only then enters the mailbox, so that a mailbox hit
+ * always refers to a test the trace reported.  With another triangle test
+ * all walks test the leaf's own references only. */
+static SIDX_INLINE int kd_test_leaf(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, kd_leaves *L,
+                                    uint32_t *mbox, const kd_node *leaf, uint32_t node, uint32_t visited,
+                                    const int traced, const int any)
+{
+    const kd_tree *kd = a->impl;
+    const uint32_t count = kd_count(leaf), offset = kd_offset(leaf);
+    (void)visited;
+#if KD_SIMD
+    if (L->simd) {
+        const wide_tri4 *block = kd->blocks + (offset >> 2), *const end = kd->blocks + ((offset + count + 3u) >> 2);
+        for (; block < end; ++block) {
+            float t;
+            unsigned lane;
+            int h = wide_tri4_test(block, &L->simd_ray, L->best_t, &t, &lane, NULL);
+            if (SIDX_UNLIKELY(h < 0)) h = kd_block_scalar(a, r, block, L->best_t, &t, &lane);
+            if (h) {
+                if (any) return 1;
+                L->found = 1;
+                L->best_t = t;
+                L->best_block = block;
+                L->best_lane = lane;
+            }
+        }
+        return 0;
+    }
+#endif
+    uint32_t ref = offset, end = offset + count;
+    if (KD_SIMD && a->opt.tri == SIDX_TRI_WATERTIGHT) { /* the SSE pass's lanes */
+        ref &= ~3u;
+        end = (end + 3u) & ~3u;
+    }
+    for (; ref < end; ++ref) {
+        const wide_tri4 *block = &kd->blocks[ref >> 2];
+        const unsigned lane = ref & 3u;
+        const uint32_t prim = block->prim[lane];
+        const int own = ref - offset < count; /* one of this leaf's references */
+        uint32_t *const slot = &mbox[prim & (KD_MAILBOX - 1u)];
+        if (prim == WIDE_PAD_PRIM) continue;
+        if (L->mailbox) {
+            if (*slot == prim) {
+                if (own)
+                    SIDX_EMIT(traced, q->hook, SIDX_EV_MAILBOX_HIT, e_.ray_id = q->ray_id; e_.prim = prim;
+                              e_.node = node);
+                continue;
+            }
+            if (own) *slot = prim;
+        }
+        float t;
+        const int h = wide_lane_test(a, r, block, lane, L->best_t, &t, NULL, NULL);
+        if (own)
+            SIDX_EMIT(traced, q->hook, SIDX_EV_PRIM_TEST, e_.ray_id = q->ray_id; e_.prim = prim; e_.node = node;
+                      e_.result = h; e_.t = h ? t : INFINITY);
+        else if (h && L->mailbox)
+            *slot = prim; /* reported below (HIT_UPDATE): its own leaf then shows a mailbox hit */
+        if (h) {
+            if (any) {
+                SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = SIDX_TERM_ANY_HIT;
+                          e_.t = t; e_.count = visited);
+                return 1;
+            }
+            L->found = 1;
+            L->best_t = t;
+            L->best_block = block;
+            L->best_lane = lane;
+            SIDX_EMIT(traced, q->hook, SIDX_EV_HIT_UPDATE, e_.ray_id = q->ray_id; e_.prim = prim; e_.t = t;
+                      e_.node = node);
+        }
+    }
+    return 0;
+}
+
+/* The ray's interval in the root cell (the scene box), or 0 if it misses. */
+static SIDX_INLINE int kd_enter_root(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, float best_t,
+                                     float *t_near, float *t_far, const int traced)
+{
+    const kd_tree *kd = a->impl;
+    if (kd->num_refs == 0 ||
+        !sidx__box_test(a->opt.box == SIDX_BOX_ROBUST, r, &kd->bounds, r->tmin, best_t, t_near, t_far)) {
+        SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = SIDX_TERM_MISS_ROOT;
+                  e_.count = 0);
+        return 0;
+    }
+    return 1;
 }
 
 /* ==== entry points =========================================================== */

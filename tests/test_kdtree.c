@@ -13,6 +13,9 @@
  *  - teapot in a stadium: the SAH isolates the teapot in a few levels;
  *  - Menger sponge (coplanar faces) builds and traces correctly;
  *  - mailboxing: same hits, fewer tests, MAILBOX_HIT events;
+ *  - the slide walk (traced queries, naive traversal) and the fast walk
+ *    (untraced) return the same hits bit for bit, on random rays and on
+ *    rays on, inside and across split planes;
  *  - exact build and traversal event sequences on a two-triangle scene;
  *  - the public view (sidx/kdtree.h): the tree's own node words decode to
  *    the splits and leaves the build events reported; errors for NULL
