@@ -848,9 +848,7 @@ sidx_status sidx__kd_build(sidx_accel *a, sidx_error *err)
     b.name = a->name;
     b.tris = tris;
     b.variant = a->variant;
-    /* The defaults and their measurements: kdtree_internal.h.  (With
-     * scalar leaf tests, 3:1 and 2:1 were also re-measured and traced no
-     * faster than 4:1 on the bunny; with SIMD leaf blocks 16:1 is best.) */
+    /* The defaults and why: kdtree_internal.h. */
     b.c_trav = a->opt.c_trav > 0.0f ? a->opt.c_trav : KD_DEFAULT_C_TRAV;
     b.c_tri = a->opt.c_tri > 0.0f ? a->opt.c_tri : KD_DEFAULT_C_TRI;
     const float bonus = a->opt.empty_bonus > 0.0f ? a->opt.empty_bonus : KD_DEFAULT_EMPTY_BONUS;

@@ -28,22 +28,16 @@
  *     chase ("Memory should be separated by rate of access": traversal
  *     steps touch only the 8-byte nodes, leaves only their blocks).  One
  *     SSE pass then runs the watertight test on four references at once
- *     (wide_tri4_test, bit-identical to the scalar test).  The blocks are
- *     cut from the reference array, not per leaf, so a leaf's first and
- *     last block may hold neighbouring leaves' triangles: the traversal
- *     tests those lanes too.  That is harmless: a hit on any scene
- *     triangle is a true hit, so the best so far is still a true hit and
- *     the early termination argument (every triangle hit before t_far of
+ *     (wide_tri4_test, bit-identical to the scalar test but for the sign
+ *     of a zero t).  The blocks are cut from the reference array, not per
+ *     leaf, so a leaf's first and last block may hold neighbouring leaves'
+ *     triangles: the traversal tests those lanes too.  That is harmless:
+ *     a hit on any scene triangle is a true hit, so the best so far is
+ *     still a true hit and the early termination argument (every triangle hit before t_far of
  *     the current cell lies in a cell already visited) is unchanged.
- *     Memory: 40 bytes per reference (bunny, same tree: 8.0 MB for 199k
- *     references against 2.8 + 0.8 MB for one copy per triangle plus a
- *     4-byte index per reference before; with the larger leaves the SIMD
- *     test affords, 16 : 1 below, 124k references in 5.0 MB); `prims`
- *     keeps the original triangle ids per reference for the public view
- *     (sidx_kdtree_refs).
- *     History: one plain copy per reference, scalar tests, was measured
- *     first and rejected (~5% fewer primary rays/s on the bunny than one
- *     copy per triangle); the SIMD test is what pays for the memory.
+ *     This costs 40 bytes per reference, which the SIMD test pays for
+ *     (docs/performance.md, kd-tree); `prims` keeps the original triangle
+ *     ids per reference for the public view (sidx_kdtree_refs).
  *
  * Node ids in BUILD_* and traversal events are indices in `nodes`. */
 #ifndef SIDX_KDTREE_INTERNAL_H
@@ -138,50 +132,16 @@ enum {
     KD_VARIANT_MIDDLE = 3   /* "kdtree-middle": largest extent, middle of the cell */
 };
 
-/* Defaults, measured on the Stanford bunny (69k triangles, 64k primary
- * and 64k diffuse rays, single thread, best of 5 interleaved rounds):
- *
- *   C_trav:C_tri  bonus  nodes   refs/tri  leaf  primary  diffuse (Mrays/s)
- *   1 : 1.5       0.2    1.16M   7.96      2.1   4.7      1.00   (the deck's ratio)
- *   1 : 1         0.2    911k    6.71      2.4   5.1      1.49
- *   2 : 1         0.2    452k    4.56      3.3   5.8      1.63
- *   3 : 1         0.2    251k    3.47      4.5   6.1      1.79
- *   4 : 1         0.2    155k    2.87      6.0   6.0-6.2  1.65-1.88
- *   6 : 1         0.2    90k     2.40      8.7   5.8      1.82
- *   4 : 1         0.5    103k    2.42      7.8   5.1      1.61
- *   1 : 80        0.5    113k    2.48      7.1   (pbrt's constants: most leaves hit the depth limit)
- *
- * A kd step here is one dependent load-subtract-multiply-compare chain and
- * mostly waits on memory ("Latency can harm you!"), while a leaf's
- * watertight tests read one contiguous run: a step costs about as much as
- * several triangle tests, hence C_trav = 4, C_tri = 1 (the smallest tree
- * among the fastest) while leaves were tested one triangle at a time.
- *
- * Since leaves are tested four references per SSE pass (blocks, above), a
- * reference costs about a quarter of a scalar test and larger leaves pay.
- * Re-measured (bunny, 20k rays per kind, sidx_ray_init + u, v, Ng per
- * ray, best of 4, 3 rounds interleaved with "bvh" on a loaded machine;
- * leaf = mean references per non-empty leaf, MB = sidx_accel_stats.bytes):
- *
- *   C_trav:C_tri  nodes  refs/tri  leaf  MB    primary    diffuse (Mrays/s)
- *   4 : 1         155k   2.87      6.0   10.0  7.8-8.5    2.58-2.87
- *   8 : 1         63k    2.17      11.2  7.1   8.8-9.1    2.70-3.07
- *   12 : 1        39k    1.92      16.1  6.2   9.1-9.8    3.02-3.25
- *   16 : 1        28k    1.79      20.7  5.7   9.5-10.0   3.07-3.28
- *   24 : 1        17k    1.63      30.1  5.1   9.1-9.6    3.16-3.28
- *   "bvh"                                      9.9-10.0   3.23-3.43
- *
- * so C_trav = 16 (Sponza: 1.2x "bvh" primary, 1.5x diffuse at both 4 and
- * 16).  Fewer, larger leaves also shrink the tree (28k nodes, 222 KB: the
- * nodes stay in L2).  Also tried at 16 : 1: empty bonus 0.1, 0.35, 0.5
- * (0.1 the same, the others 5-15% slower), and a per-leaf constant in the
- * SAH for the expected partial block (n + 3 instead of n references,
- * since a run of n references starting anywhere in a block spans
- * (n + 3) / 4 blocks on average): no gain at 8, 12 or 16 : 1.
- * The empty bonus is Wald & Havran's λ = 0.8 (bonus
- * 0.2, applied to the whole cost); 0.5 spends the depth limit on thin
- * empty slabs.  Leaf size 1 (pbrt) lets the SAH alone decide; the
- * intuitive builders, which have no cost to stop them, stop at 4. */
+/* Defaults.  The SAH's C_trav : C_tri is the cost of a kd step against a
+ * triangle test: a step is one dependent load-subtract-multiply-compare
+ * chain that mostly waits on memory ("Latency can harm you!"), and a leaf
+ * reference costs about a quarter of a scalar test since leaves are tested
+ * four references per SSE pass, so steps are dear and larger leaves pay:
+ * 16 : 1, against the deck's 1 : 1.5.  The empty bonus is Wald &
+ * Havran's λ = 0.8 (bonus 0.2, applied to the whole cost); 0.5 spends the
+ * depth limit on thin empty slabs.  Leaf size 1 (pbrt) lets the SAH alone decide; the intuitive
+ * builders, which have no cost to stop them, stop at 4.  Measurements and
+ * the values rejected: docs/performance.md, kd-tree. */
 #define KD_DEFAULT_C_TRAV 16.0f
 #define KD_DEFAULT_C_TRI 1.0f
 #define KD_DEFAULT_EMPTY_BONUS 0.2f

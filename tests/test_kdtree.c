@@ -13,6 +13,9 @@
  *  - teapot in a stadium: the SAH isolates the teapot in a few levels;
  *  - Menger sponge (coplanar faces) builds and traces correctly;
  *  - mailboxing: same hits, fewer tests, MAILBOX_HIT events;
+ *  - the slide walk (traced queries, naive traversal) and the fast walk
+ *    (untraced) return the same hits bit for bit, on random rays and on
+ *    rays on, inside and across split planes;
  *  - exact build and traversal event sequences on a two-triangle scene;
  *  - the public view (sidx/kdtree.h): the tree's own node words decode to
  *    the splits and leaves the build events reported; errors for NULL
@@ -414,9 +417,13 @@ static void test_cannot_terminate(void **state)
         memset(&opt, 0, sizeof opt);
         opt.no_mailbox = mb;
         sidx_accel *a = build("kdtree", &m, &opt);
-        const kd_node nodes[3] = {kd_make_inner(0, 0.5f, 1u), kd_make_leaf(1u, 0u), kd_make_leaf(2u, 1u)};
-        const uint32_t prims[3] = {0u, 0u, 1u}; /* left: A; right: A, B */
-        hand_tree(a, &m, nodes, 3, prims, 3);
+        /* left: A (reference 4); right: A, B (references 0, 1).  The
+         * leaves sit in different blocks of four, so that the left leaf's
+         * block does not test B on the way (kd_test_leaf); references 2, 3
+         * fill the right leaf's block and belong to no leaf. */
+        const kd_node nodes[3] = {kd_make_inner(0, 0.5f, 1u), kd_make_leaf(1u, 4u), kd_make_leaf(2u, 0u)};
+        const uint32_t prims[5] = {0u, 1u, 1u, 1u, 0u};
+        hand_tree(a, &m, nodes, 3, prims, 5);
 
         sidx_ray r;
         assert_int_equal(sidx_ray_init(&r, sidx_v3(-2.0f, 0.0f, 0.0f), sidx_v3(1.0f, 0.0f, 0.0f), 0.0f, INFINITY),
@@ -436,13 +443,16 @@ static void test_cannot_terminate(void **state)
         assert_int_equal(h.prim, 1u);
         int saw_a = 0, a_beyond = 0, term = 0;
         float left_far = 0.0f;
+        uint32_t current = UINT32_MAX;
         for (size_t i = 0; i < rc.n; ++i) {
             const sidx_event *e = &rc.ev[i];
+            if (e->type == SIDX_EV_NODE_ENTER) current = e->node;
             if (e->type == SIDX_EV_NODE_ENTER && e->node == 1u) left_far = e->t_far;
             if (e->type == SIDX_EV_HIT_UPDATE && e->prim == 0u) {
                 saw_a = 1;
                 a_beyond = e->t > left_far;
             }
+            if (e->type == SIDX_EV_HIT_UPDATE && e->prim == 1u) assert_int_equal(current, 2u); /* B in the right cell */
             if (e->type == SIDX_EV_TERMINATE) {
                 term = 1;
                 assert_int_equal(e->reason, SIDX_TERM_HIT_IN_CELL);
@@ -1011,6 +1021,157 @@ static void test_public_view(void **state)
     sidx_mesh_free(&m);
 }
 
+/* ---- the slide walk and the fast walk give the same hits ------------------------------------------ */
+
+/* A hook that only counts NODE_ENTER events on empty leaves, so that the
+ * test can show the slide walk took the path the fast walk skips. */
+typedef struct slide_count {
+    const kd_tree *kd;
+    uint64_t events, empty_leaf_enters;
+} slide_count;
+
+static void slide_fn(const sidx_event *e, void *user)
+{
+    slide_count *c = user;
+    c->events++;
+    if (e->type == SIDX_EV_NODE_ENTER && kd_is_empty(&c->kd->nodes[e->node])) c->empty_leaf_enters++;
+}
+
+/* Same prim, t, u, v and normal, bit for bit — except the sign of a zero
+ * t (a ray starting on the triangle): the SSE kernel reports +0 where the
+ * scalar test reports −0 (bvh_wide_internal.h), which is not the walks'. */
+static int same_bits(const sidx_hit *x, const sidx_hit *y)
+{
+    const int same_t = memcmp(&x->t, &y->t, sizeof x->t) == 0 || (x->t == 0.0f && y->t == 0.0f);
+    return x->prim == y->prim && same_t && memcmp(&x->u, &y->u, sizeof x->u) == 0 &&
+           memcmp(&x->v, &y->v, sizeof x->v) == 0 && memcmp(&x->ng, &y->ng, sizeof x->ng) == 0;
+}
+
+/* One ray: traced (slide walk) against untraced (fast walk) for the
+ * closest hit — t, prim, u, v and normal bit for bit — and for any-hit;
+ * the naive traversal traced against untraced too.  Returns 1 if all agree. */
+static int walks_agree(const sidx_accel *a, const sidx_ray *r, const sidx_hook *hook, const char *what, size_t i)
+{
+    const uint32_t flags = SIDX_QUERY_UV | SIDX_QUERY_NORMAL;
+    for (int naive = 0; naive < 2; ++naive) {
+        const sidx_traversal trav = naive ? SIDX_TRAVERSE_NAIVE : SIDX_TRAVERSE_DEFAULT;
+        const sidx_query q_fast = {flags, trav, NULL, 0}, q_slide = {flags, trav, hook, 0};
+        for (int with_attrs = 0; with_attrs < 2; ++with_attrs) {
+            sidx_query qf = q_fast, qs = q_slide;
+            if (!with_attrs) qf.flags = qs.flags = 0;
+            sidx_hit hf, hs;
+            assert_int_equal(sidx_accel_intersect(a, r, &qf, &hf), SIDX_OK);
+            assert_int_equal(sidx_accel_intersect(a, r, &qs, &hs), SIDX_OK);
+            if (!same_bits(&hf, &hs)) {
+                fprintf(stderr,
+                        "%s (%s), %s ray %zu: o=(%a %a %a) d=(%a %a %a) untraced prim %u t %a, traced prim %u t %a\n",
+                        sidx_accel_name(a), sidx_traversal_name(trav), what, i, (double)r->org.x, (double)r->org.y,
+                        (double)r->org.z, (double)r->dir.x, (double)r->dir.y, (double)r->dir.z, hf.prim, (double)hf.t,
+                        hs.prim, (double)hs.t);
+                return 0;
+            }
+        }
+    }
+    int occ_fast = -1, occ_slide = -2;
+    const sidx_query q_slide = {0, SIDX_TRAVERSE_DEFAULT, hook, 0};
+    assert_int_equal(sidx_accel_occluded(a, r, NULL, &occ_fast), SIDX_OK);
+    assert_int_equal(sidx_accel_occluded(a, r, &q_slide, &occ_slide), SIDX_OK);
+    if (occ_fast != occ_slide) {
+        fprintf(stderr, "%s any-hit, %s ray %zu: untraced %d, traced %d\n", sidx_accel_name(a), what, i, occ_fast,
+                occ_slide);
+        return 0;
+    }
+    return 1;
+}
+
+/* Awkward rays from the tree itself: origins exactly on split planes
+ * (directions in the plane with d[axis] = ±0, axis-parallel along another
+ * axis, general), and axis-parallel rays along the split axis from outside
+ * the box through a mesh vertex (SAH planes sit at vertex coordinates). */
+static size_t split_plane_rays(const sidx_mesh *m, const kd_tree *kd, tk_rng *rng, size_t max, tk_rayrec *out)
+{
+    size_t n = 0;
+    const sidx_aabb bb = kd->bounds;
+    const uint32_t stride = 1u + kd->num_nodes / 97u;
+    for (uint32_t i = 0; i < kd->num_nodes && n + 8 <= max; i += stride) {
+        const kd_node *node = &kd->nodes[i];
+        if (kd_is_leaf(node)) continue;
+        const int ax = (int)kd_axis(node);
+        for (int rep = 0; rep < 8; ++rep) {
+            float o[3], d[3];
+            for (int c = 0; c < 3; ++c) o[c] = (float)tk_rng_range(rng, sidx_v3_get(bb.min, c), sidx_v3_get(bb.max, c));
+            const sidx_vec3 u = tk_rng_sphere(rng);
+            d[0] = u.x;
+            d[1] = u.y;
+            d[2] = u.z;
+            if (rep < 6) o[ax] = node->u.split; /* on the plane */
+            if (rep < 2) {
+                d[ax] = rep ? -0.0f : 0.0f; /* inside it */
+            } else if (rep < 4 || rep >= 6) {
+                const int keep = rep >= 6 ? ax : (ax + 1 + (rep & 1)) % 3;
+                for (int c = 0; c < 3; ++c) d[c] = (rep & 1) ? -0.0f : 0.0f;
+                d[keep] = (rep & 1) ? -1.0f : 1.0f;
+                if (rep >= 6) {
+                    const sidx_vec3 v = m->positions[tk_rng_below(rng, m->num_vertices)];
+                    o[0] = v.x;
+                    o[1] = v.y;
+                    o[2] = v.z;
+                    o[ax] = (rep & 1) ? sidx_v3_get(bb.max, ax) + 1.0f : sidx_v3_get(bb.min, ax) - 1.0f;
+                }
+            }
+            out[n++] = tk_rayrec_make(sidx_v3(o[0], o[1], o[2]), sidx_v3(d[0], d[1], d[2]), 0.0f, INFINITY);
+        }
+    }
+    return n;
+}
+
+static void test_slide_walk_equals_fast_walk(void **state)
+{
+    (void)state;
+    const char *const sc[] = {"flat2d", "cornell", "menger", "teapot", "stadium", "icosphere"};
+    const uint32_t detail[] = {0, 0, 1, 0, 0, 0};
+    const size_t per_kind = tk_fast_tests() ? 60 : 200, max_split = 800;
+    tk_rayrec *rays = malloc((per_kind * TK_RAYS_KIND_COUNT + max_split + 6000) * sizeof *rays);
+    assert_non_null(rays);
+    uint64_t empty_enters = 0, checked = 0;
+    for (size_t s = 0; s < sizeof sc / sizeof sc[0]; ++s) {
+        sidx_mesh m;
+        make_scene(sc[s], detail[s], &m);
+        for (size_t k = 0; k < N_BUILDERS + 2; ++k) {
+            /* every builder with its defaults; then the SAH tree without
+             * the mailbox, and with Möller–Trumbore (scalar leaves in both walks) */
+            sidx_build_options opt;
+            memset(&opt, 0, sizeof opt);
+            opt.no_mailbox = k == N_BUILDERS;
+            opt.tri = k == N_BUILDERS + 1 ? SIDX_TRI_MOLLER_TRUMBORE : SIDX_TRI_WATERTIGHT;
+            sidx_accel *a = build(k < N_BUILDERS ? builders[k] : "kdtree", &m, &opt);
+            const kd_tree *kd = tree_of(a);
+            size_t n = 0;
+            for (int kind = 0; kind < TK_RAYS_KIND_COUNT; ++kind, n += per_kind)
+                tk_make_rays(&m, (tk_ray_kind)kind, per_kind, 31 + s * 7 + k * 101 + (uint64_t)kind, rays + n);
+            tk_rng rng;
+            tk_rng_seed(&rng, 77 + s + 13 * k);
+            n += split_plane_rays(&m, kd, &rng, max_split, rays + n);
+            if (!strcmp(sc[s], "icosphere")) n += tk_make_leak_rays(&m, sidx_v3(0.1f, -0.2f, 0.3f), 6000, rays + n);
+            slide_count cnt = {kd, 0, 0};
+            const sidx_hook hook = {slide_fn, &cnt, 0};
+            for (size_t i = 0; i < n; ++i) {
+                sidx_ray r;
+                if (tk_ray_from(&rays[i], &r) != SIDX_OK) continue;
+                if (!walks_agree(a, &r, &hook, sc[s], i)) fail();
+                ++checked;
+            }
+            assert_true(cnt.events > 0);
+            empty_enters += cnt.empty_leaf_enters;
+            sidx_accel_destroy(a);
+        }
+        sidx_mesh_free(&m);
+    }
+    assert_true(checked > 10000);
+    assert_true(empty_enters > 0); /* the slide walk's own path was taken */
+    free(rays);
+}
+
 /* ---- allocation failures ------------------------------------------------------------------------ */
 
 typedef struct fail_alloc {
@@ -1101,6 +1262,7 @@ int main(void)
         cmocka_unit_test(test_stadium_isolates_teapot),
         cmocka_unit_test(test_menger),
         cmocka_unit_test(test_mailbox),
+        cmocka_unit_test(test_slide_walk_equals_fast_walk),
         cmocka_unit_test(test_alloc_failures),
         cmocka_unit_test(test_empty_mesh),
     };
