@@ -126,13 +126,13 @@ static void igrid_free(const sidx_accel *a, igrid *G)
  * arithmetic the walk uses for its boundaries. */
 static sidx_aabb vbox(const igrid *G, const uint32_t lo[3], const uint32_t hi[3])
 {
-    sidx_aabb b;
-    float *mn = sidx_v3_array_rw(&b.min), *mx = sidx_v3_array_rw(&b.max);
+    float mn[3], mx[3];
     const float *bmin = sidx_v3_array(&G->box.min);
     for (int i = 0; i < 3; ++i) {
         mn[i] = (float)lo[i] * G->vs[i] + bmin[i];
         mx[i] = (float)hi[i] * G->vs[i] + bmin[i];
     }
+    const sidx_aabb b = {sidx_v3_from_array(mn), sidx_v3_from_array(mx)};
     return b;
 }
 

@@ -268,7 +268,7 @@ sidx_status sidx_obb_fit(const sidx_vec3 *p, uint32_t n, sidx_obb *out)
             if (d > hi[k]) hi[k] = d;
         }
     sidx_vec3 c = sidx_v3(0, 0, 0);
-    float *h = sidx_v3_array_rw(&o.half);
+    float h[3];
     for (int k = 0; k < 3; ++k) {
         /* pad by a few ulps of the magnitude so rounding keeps points inside */
         const float pad = 4.0f * FLT_EPSILON * (fabsf(lo[k]) > fabsf(hi[k]) ? fabsf(lo[k]) : fabsf(hi[k]));
@@ -278,6 +278,7 @@ sidx_status sidx_obb_fit(const sidx_vec3 *p, uint32_t n, sidx_obb *out)
         h[k] = 0.5f * (hi[k] - lo[k]);
     }
     o.center = c;
+    o.half = sidx_v3_from_array(h);
     *out = o;
     return SIDX_OK;
 }

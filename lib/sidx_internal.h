@@ -132,13 +132,13 @@ static SIDX_INLINE int sidx__hook_wants(const sidx_hook *h, sidx_event_type t)
     } while (0)
 #endif
 
-/* Is this query traced?  (Always 0 when hooks are compiled out.)  q may
- * be NULL here, for the public entry points that test before replacing
- * it; inside a structure it never is. */
+/* Is this query traced?  (Always 0 when hooks are compiled out.)  q is
+ * never NULL here: the public entry points put a blank query in place of
+ * NULL before they ask. */
 #ifdef SIDX_NO_HOOKS
 #define SIDX_QUERY_TRACED(q) 0
 #else
-#define SIDX_QUERY_TRACED(q) ((q) && (q)->hook && (q)->hook->fn)
+#define SIDX_QUERY_TRACED(q) ((q)->hook && (q)->hook->fn)
 #endif
 
 /* The walk-table dispatch (section 1): the traced copy when the query has

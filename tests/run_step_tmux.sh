@@ -114,10 +114,22 @@ if until_ok gone fb; then ok "q ends it"; else bad "q did not end sidx-step"; fi
 start br --accel kdtree $SCENE --ray $RAY --leaf-size 1 --break push || exit 1
 lands br "break: stack_push" "push node" "--break push stops on a push"
 if screen br | grep -q "^Stack: .*\["; then ok "the Stack line lists the pushed node"; else bad "no Stack line with a node"; fi
+# which steps these are depends on the tree: wait for the step to change,
+# then read what the current row shows
+at=$(step_of br)
 $T send-keys -t br l
-lands br "step 5/" " leaf [" "l stops on a leaf entered"
+if until_ok moved br "$at" && current br | grep -qF " leaf ["; then
+    ok "l stops on a leaf entered: step $at -> $(step_of br)"
+else
+    bad "l: wanted ' leaf [' in the current row, got '$(current br)'"
+fi
+at=$(step_of br)
 $T send-keys -t br C
-lands br "step 3/" "push node" "C goes back to the push"
+if until_ok moved br "$at" && current br | grep -qF "push node"; then
+    ok "C goes back to the push: step $at -> $(step_of br)"
+else
+    bad "C: wanted 'push node' in the current row, got '$(current br)'"
+fi
 $T send-keys -t br q
 until_ok gone br || bad "q did not end sidx-step"
 

@@ -53,7 +53,8 @@ int sidx_viz_build_knob(const char *flag, const char *value, sidx_build_options 
     if (k == knobs + NKNOBS) return 0;
     char *field = (char *)bo + k->offset;
     if (k->kind == KNOB_FLAG) {
-        *(int *)field = 1;
+        const int on = 1;
+        memcpy(field, &on, sizeof on); /* the field's type is the knob's kind: int */
         return 1;
     }
     char *end = NULL;
@@ -63,7 +64,8 @@ int sidx_viz_build_knob(const char *flag, const char *value, sidx_build_options 
         if (!value || value[0] < '0' || value[0] > '9') return bad(msg, size, flag, wants, value);
         const unsigned long n = strtoul(value, &end, 10);
         if (*end || n < k->min || n > KNOB_COUNT_MAX) return bad(msg, size, flag, wants, value);
-        *(uint32_t *)field = (uint32_t)n;
+        const uint32_t count = (uint32_t)n;
+        memcpy(field, &count, sizeof count);
         return 2;
     }
     const char *wants = k->kind == KNOB_FRACTION ? "a number >= 0 and < 1" : "a number > 0";
@@ -72,7 +74,7 @@ int sidx_viz_build_knob(const char *flag, const char *value, sidx_build_options 
     const int ok = end != value && !*end && isfinite(x) &&
                    (k->kind == KNOB_FRACTION ? x >= 0.0f && x < 1.0f : x > 0.0f);
     if (!ok) return bad(msg, size, flag, wants, value);
-    *(float *)field = x;
+    memcpy(field, &x, sizeof x);
     return 2;
 }
 
