@@ -27,7 +27,7 @@
  * collapse in bvh_wide.c reads it unchanged and the wide walks need no
  * change: a hit on a reference is a hit on its whole triangle, a true hit
  * wherever it lies.  It is not registered as a binary BVH of its own: the
- * binary BVHs keep "every triangle in exactly one leaf" (issue #4).
+ * binary BVHs keep every triangle in exactly one leaf.
  *
  * Robustness: a reference's box must contain the whole part of its
  * triangle inside it, or a ray could slip through the gap.  The part on
@@ -51,12 +51,9 @@
 /* The wide leaves test triangles in blocks of four, so 1 to 4 triangles
  * cost one pass: the SAH here counts a side's triangles rounded up to a
  * whole block (as Embree's builders do with their block size), and the
- * tree prefers sides the collapse can pack into full blocks.  Measured
- * against plain counts (session 7, bvh8, interleaved runs): bunny diffuse
- * +5 %, bunny primary +5 %, Sponza primary +3 %, Sponza diffuse ±0;
- * 18,060 leaves instead of 22,258 on the bunny (Embree: 17,779), 3.8
- * instead of 4.6 MB.  A default leaf size of 4 instead of 3 measured the
- * same. */
+ * tree prefers sides the collapse can pack into full blocks: fewer
+ * leaves, a smaller tree and faster rays than plain counts
+ * (docs/performance.md, "Spatial splits"). */
 #define SB_BLOCK 4u
 #define SB_ROUND(n) (((n) + SB_BLOCK - 1u) / SB_BLOCK * SB_BLOCK)
 #define SB_BUDGET 1.0        /* spatial splits may add at most this many references per triangle, in all */
@@ -280,9 +277,8 @@ static void object_split(const sbuild *S, const sref *refs, uint32_t n, float in
 /* Spatial bins for a node of n references: each reference is chopped into
  * every bin it spans, and deep in the tree a triangle spans a good part of
  * its node, so the chopping (not the sweep) is the build's cost.  Fewer
- * bins for small nodes.  Measured on the bunny (spatial splits tried at
- * 20 of every 26 nodes): 32 bins everywhere built bvh8 in 173 ms, n / 4
- * in 8..32 in 119 ms, for the same SAH cost within 0.5 %. */
+ * bins for small nodes: a faster build for the same SAH cost
+ * (docs/performance.md, "Spatial splits"). */
 static uint32_t spatial_bins(uint32_t n)
 {
     const uint32_t nb = n / SB_SPATIAL_DIV;
@@ -294,9 +290,8 @@ static uint32_t spatial_bins(uint32_t n)
  * bin and leaving its last.  The chopping here only estimates the SAH of
  * each plane, so it cuts the reference's box at the bin planes instead of
  * clipping the triangle (split_ref, which the chosen split then does for
- * real): the bunny's bvh8 built in 119 instead of 315 ms, Sponza's in 137
- * instead of 342, for the same SAH cost within 0.2 % and the same speed
- * (session 7, interleaved runs).
+ * real): a build under half as long for the same SAH cost and speed
+ * (docs/performance.md, "Spatial splits").
  *
  * A part cut from box B at planes on axis k is B on the two other axes
  * and a piece of B's range on k.  So a bin keeps two things apart: the
@@ -305,12 +300,8 @@ static uint32_t spatial_bins(uint32_t n)
  * is the first with the second's range on k — the same box as the union
  * of the parts, without cutting a box and testing two for emptiness per
  * part, and the planes are computed once per axis, not once per part.
- * With the sweep over used bins only: bvh8 builds in 85 instead of 100 ms
- * (bunny) and 96 instead of 123 ms (Sponza), the same trees (session 8).
- * Tried with it and dropped: the bins in two or four interleaved copies
- * (merged at the end) so neighbouring references do not wait for each
- * other's store, and boxes as four-float arrays (GCC -O2 did not
- * vectorize their min/max): no faster. */
+ * With the sweep over used bins only, the same trees build faster.
+ * Rejected alternatives: docs/performance.md, "Spatial splits". */
 
 /* One axis's spatial bins while references are chopped into them. */
 typedef struct sspatial {
@@ -440,9 +431,8 @@ static sidx_status defer(sbuild *S, size_t off, uint32_t n, sidx_aabb box, uint3
  * in proportion to their references, so a subtree's budget is fixed
  * before it is built: the same tree whichever thread builds which
  * subtree, in whatever order.  (Stich et al. keep one global budget,
- * spent in build order; this share measured the same: bunny and teapot
- * identical, Sponza 84,896 instead of 85,862 references, SAH cost
- * +0.005 %.) */
+ * spent in build order; this share gives trees as good:
+ * docs/performance.md, "Spatial splits".) */
 static sidx_status children(sbuild *S, uint32_t idx, int axis, uint32_t nl, uint32_t nr, uint32_t depth,
                             uint64_t budget)
 {
@@ -543,11 +533,8 @@ static sidx_status build(sbuild *S, size_t off, uint32_t n, sidx_aabb box, uint3
  * binning passes (object and spatial bins, the build's main cost) also
  * run on every thread, each over its own part of the references
  * (par_bin); their partitions stay on the calling thread.  Below ~8000
- * triangles the whole build is on one thread.  Measured (session 8, wall
- * clock, best of 5): bvh8 on 2 threads 45-48 ms instead of 80-84 (bunny),
- * 51-52 instead of 87-92 (Sponza); the tasks alone gave 1.6x, the binning
- * of the top nodes on both threads 1.7-1.8x.  4 tasks per thread measured
- * the same as 2 or 8. */
+ * triangles the whole build is on one thread.  Speed-ups on 2 threads:
+ * docs/performance.md, "Spatial splits". */
 #define SB_PAR_MIN 8192u          /* fewer triangles: one thread (a task is not worth its set-up) */
 #define SB_TASKS_PER_THREAD 4u
 #define SB_TASK_MIN 1024u         /* but no task under this many references (many threads, small scenes) */

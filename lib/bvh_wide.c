@@ -6,13 +6,9 @@
  * with spatial splits (bvh_spatial.c, Stich et al. 2009: a straddling
  * triangle may be referenced by both sides, so sibling boxes stop
  * overlapping), or with opt.no_spatial_splits the ordinary binned-SAH
- * build (bvh_build.c, Wald 2007).  Measured (session 7, interleaved runs,
- * one thread): Sponza diffuse rays bvh8 +28 %, bvh4 +32-40 %, for 30 %
- * more references and a build about twice as long (140 vs 60 ms); the
- * bunny, whose triangles are small and even, is unchanged (1 % more
- * references).  8x8 packets over bvh8 lose on Sponza primary rays (38
- * instead of 43 Mrays/s; single rays gain, 32 instead of 27), still more
- * than twice Embree's packets.
+ * build (bvh_build.c, Wald 2007).  Spatial splits pay where big
+ * triangles overlap (Sponza), and cost nothing where they are small and
+ * even (the bunny): docs/performance.md, "Spatial splits".
  *
  * The collapse picks, by dynamic programming on the SAH, which binary
  * nodes become wide nodes, which subtrees become leaves (runs of
@@ -27,8 +23,8 @@
  *
  * Kernels are chosen once, when the structure is built: for bvh8 the AVX2
  * walk compiled for AVX-512F/VL when the CPU has those (32 vector
- * registers: no spills at leaf entry; session 6, Sponza / bunny diffuse
- * rays +4 %, primary rays +8 %), else AVX2; SSE4.1 for bvh4; else the
+ * registers: no spills at leaf entry; docs/performance.md, "Wide
+ * BVHs"), else AVX2; SSE4.1 for bvh4; else the
  * scalar copy of the same walk (__builtin_cpu_supports).  SIDX_SIMD in
  * the environment caps the choice: "scalar", "sse4.1" or "avx2" (the
  * tests compare every copy the CPU can run).  A NOTE event on the build
@@ -141,16 +137,8 @@ static void set_kernels(wide_bvh *w, sidx_tri_method tri)
  * as in Embree's builders.  This replaces a greedy "open the child of
  * largest area" rule: it fills nodes where that pays and keeps subtrees
  * of up to WIDE_MAX_LEAF triangles as multi-block leaves where that pays.
- *
- * Measured (session 5, bvh8 AVX2, 20000 Sponza diffuse rays, callgrind
- * instructions in the walk): C_NODE 0.7 / 1.5 / 2, WIDE_MAX_LEAF 4 / 12 /
- * 16, a binary tree built down to 1 triangle per leaf (as Ylitie et al.
- * do) and 8 to 512 bins all moved the count by under 1 % (bins: ±4 %
- * either way, no trend) and the timing by less than the noise, so the
- * constants stay.  Again on the bunny's diffuse rays (session 9, the
- * targets' fair bvh8/Embree ratio, two alternating runs each): as they
- * are 0.97 and 0.92; WIDE_MAX_LEAF 12: 0.93, 0.97; 16: 0.93, 0.93;
- * C_NODE 1.5: 0.98, 0.95; 0.7: 0.91, 0.92 — all within the noise. */
+ * Other values of the three constants moved neither instruction counts
+ * nor times beyond the noise: docs/performance.md, "Wide BVHs". */
 #define WIDE_MAX_LEAF 8u
 #define WIDE_C_NODE 1.0f
 #define WIDE_C_BLOCK 1.0f

@@ -33,27 +33,9 @@
  * comparison on them is false, so they never hit and never trigger the
  * double-precision fallback) and prim = WIDE_PAD_PRIM.
  *
- * Tried and dropped (session 5): a quantized copy of the nodes for the
- * single-ray walk (Ylitie et al. 2017: per-node grid origin and power-of-2
- * spacing, 8-bit child planes decoded as fl(fl(q·s) + p) and checked at
- * build to contain the float box, so the robust test stayed conservative
- * and bit-identical across copies; 128-byte 8-wide nodes).  Sponza
- * diffuse: D1 misses −33 %, but instructions +13 % (decode: convert,
- * multiply, add per plane, on the critical path of every node) and
- * 3.6 vs 4.0 Mrays/s.  Folding the decode into the slab arithmetic
- * (q·(s/d) + (p − o)/d, one FMA) would pay, but its rounding error is not
- * relative to t, so Ize's bound no longer covers it.  Memory is not where
- * the walk loses: per ray it misses L2 about 1.2 times (callgrind with a
- * 2 MB last level), as Embree does.  Nor is the TLB: nodes and blocks on
- * 2 MB pages (2 MB-aligned, madvise(MADV_HUGEPAGE); the machine's THP
- * mode is "madvise", and AnonHugePages showed them taken) measured the
- * same as on 4 KB pages, bvh8 Sponza diffuse 3.8 Mrays/s both (session 7).
- * Nor where a leaf lies (session 9): nodes and blocks in one array, each
- * node followed by its leaf children's blocks (children as 32-byte
- * offsets into it), so the hardware's next-line and stream prefetchers
- * could bring a leaf in with its parent — the targets' fair bvh8/Embree
- * ratio on bunny diffuse rays was 0.95 and 0.95 against 0.97 and 0.94
- * for the same code with the two arrays apart, in alternating runs. */
+ * Plain float nodes and two separate arrays: quantized nodes, huge pages
+ * and leaves stored beside their parents were measured and rejected
+ * (docs/performance.md, "Wide BVHs"). */
 #ifndef SIDX_BVH_WIDE_INTERNAL_H
 #define SIDX_BVH_WIDE_INTERNAL_H
 

@@ -126,7 +126,8 @@ WINL unsigned WFN(boxes_)(const float *n, const WFN(wray_) * R, float best, floa
      * ray's sign mask (one per axis, in mask registers) instead of by six
      * offsets into the node: the six offsets took general registers the
      * walk needs elsewhere, so GCC reloaded five of them from the stack at
-     * every node.  The same planes, so the same bits (Sponza diffuse +3 %). */
+     * every node.  The same planes, so the same bits (docs/performance.md,
+     * "Wide BVHs"). */
     const __m256 lx = _mm256_load_ps(n), ly = _mm256_load_ps(n + 8), lz = _mm256_load_ps(n + 16);
     const __m256 hx = _mm256_load_ps(n + 24), hy = _mm256_load_ps(n + 32), hz = _mm256_load_ps(n + 40);
     const __m256 px = _mm256_mask_blend_ps(R->negx, lx, hx), qx = _mm256_mask_blend_ps(R->negx, hx, lx);
@@ -194,15 +195,11 @@ WINL unsigned WFN(boxes_)(const float *n, const WFN(wray_) * R, float best, floa
  * The walk is bound by the latency of these loads (perf: most samples sit
  * on the first load of a node or block), so every hit child is fetched
  * as soon as it is known, the nearest for now and the others for when
- * they are popped, inside the code that handles it anyway: a separate
- * loop over the hit mask cost ~9 mispredicted branches per Sponza diffuse
- * ray (callgrind --branch-sim), as much as it saved.  GCC still compiles
- * the leaf/node choice below to a branch (~2.4 mispredicts per ray in
- * the same count); forcing a conditional move (inline asm, both
- * addresses computed) removed those for 5 % more instructions and
- * measured no faster (Sponza a little up, bunny a little down), and
- * prefetching a leaf's 4th line is harmless.
- * A node is 2 (bvh4) or 4 (bvh8) cache lines, a leaf block 2.5. */
+ * they are popped, inside the code that handles it anyway (a separate
+ * loop over the hit mask, and a branch-free leaf/node choice, were
+ * rejected: docs/performance.md, "Wide BVHs").  A node is 2 (bvh4) or
+ * 4 (bvh8) cache lines, a leaf block 2.5; prefetching a leaf's 4th line
+ * is harmless. */
 WINL void WFN(prefetch_)(const wide_bvh *w, const float *nodes, uint32_t c)
 {
     const uintptr_t leaf = (uintptr_t)w->blocks + (uintptr_t)(c & ~WIDE_LEAF_BIT) * sizeof(wide_tri4);
@@ -232,10 +229,9 @@ WINL uint32_t WFN(popc_)(unsigned x)
  * visited before it — nearer, or as near and in a lower slot.  This is
  * the order the insertion sort below produces (stable, so equal entries
  * keep slot order), computed for each child independently: two compares
- * of all W entries against s's, no data-dependent branches.  The
- * insertion sort's inner loop was the walk's second worst branch site
- * (callgrind --branch-sim: 67k of 324k mispredicts on 20000 Sponza
- * diffuse rays).  Entry distances are never NaN (the max with tmin). */
+ * of all W entries against s's, no data-dependent branches, where the
+ * insertion sort's inner loop mispredicts (docs/performance.md, "Wide
+ * BVHs").  Entry distances are never NaN (the max with tmin). */
 WINL uint32_t WFN(rank_)(const float *tn, unsigned s, unsigned hm)
 {
 #if WALK_ISA >= 2
@@ -260,22 +256,11 @@ WINL uint32_t WFN(rank_)(const float *tn, unsigned s, unsigned hm)
  *
  * Register pressure: the AVX2 walk holds the box constants (10 ymm) and
  * the triangle constants (6 xmm) across the node loop, so GCC stores 7 of
- * the ymm at every leaf entry and reloads them at the exit (~15
- * instructions per leaf).  Tried and dropped (session 5, callgrind on
- * 20000 Sponza diffuse rays with u, v, Ng, 1069 instructions per ray):
- * an empty asm "+m" on the box constants at the top of the node loop
- * (memory operands in the slab test, no spills: 1073 from 1086 before
- * the three-pointer rows below, but ~2 % slower measured: 16 loads per
- * node instead of 9); the same on the triangle constants at the loop top
- * (1087) or per block (1098) — GCC then copies them between stack slots;
- * re-reading az, bz, cz for T instead of holding them (CSE'd away; with
- * an asm barrier 1076); -fira-region=one / -fira-algorithm=priority /
- * -fsched-pressure / -fira-loop-pressure / -O3 on bvh_wide.c (1069 to
- * 1112).  A leaf out of line does not help: every xmm/ymm register is
- * caller-saved in the SysV ABI.  What does help is more registers: the
- * AVX-512 copy (WALK_ISA 3, the same source with ymm16-31 available)
- * keeps all the constants in registers and measured 4 % faster on
- * diffuse rays, 8 % on primary rays (session 6). */
+ * the ymm at every leaf entry and reloads them at the exit.  A leaf out
+ * of line does not help (every xmm/ymm register is caller-saved in the
+ * SysV ABI); more registers do: the AVX-512 copy keeps all the constants
+ * in registers.  Figures, and the compiler tricks rejected:
+ * docs/performance.md, "Wide BVHs". */
 WINL int WFN(leaf_)(const sidx_accel *a, const wide_bvh *w, uint32_t first_block, const sidx_ray *r,
                     const WFN(wray_) * R, const sidx_query *q, uint32_t node_id, float *best, uint32_t *prim,
                     const wide_tri4 **hit_block, unsigned *hit_lane, float *hit_vwd, const int anyhit,
@@ -357,9 +342,8 @@ WINL void WFN(uv_)(const sidx_accel *a, const sidx_ray *r, uint32_t flags, const
 {
     /* The corners are read where they are used (the normal last), not
      * held in registers across the u, v step, which spilled them.  The
-     * walks without vwd keep the old order: there the late reads made GCC
-     * allocate the whole walk differently, 1025 instead of 1011
-     * instructions per Sponza diffuse ray (without u, v, Ng). */
+     * walks without vwd read them first: there the late reads made GCC
+     * allocate the whole walk worse (docs/performance.md, "Wide BVHs"). */
     const int early = !vwd;
     sidx_vec3 p0 = {0.0f, 0.0f, 0.0f}, p1 = p0, p2 = p0;
     if (early) {

@@ -249,8 +249,8 @@ static void frustum_setup(pkt *P, const sidx_ray *rays, uint32_t n, uint32_t w)
     /* Every ray must start at the apex and lie inside the 4 planes:
      * n·d >= −1e-6 |n||d|, without a square root per ray.  One pass over
      * the rays with the 4 planes in the 4 SSE lanes (the same products in
-     * the same order as sidx_v3_dot): this check was most of the set-up,
-     * about 90 instructions per ray when done plane by plane. */
+     * the same order as sidx_v3_dot): done plane by plane, this check was
+     * most of the set-up (docs/performance.md, "Packets and frustums"). */
 #if defined(__SSE2__)
     const __m128 nx = _mm_setr_ps(P->fn[0][0], P->fn[1][0], P->fn[2][0], P->fn[3][0]);
     const __m128 ny = _mm_setr_ps(P->fn[0][1], P->fn[1][1], P->fn[2][1], P->fn[3][1]);
@@ -342,9 +342,8 @@ static int pkt_setup(pkt *P, const sidx_ray *rays, uint32_t n, float scale, int 
  * same): below SWITCH_DEPTH, when at most SWITCH_RAYS rays of the whole
  * packet still hit an inner node, they finish its subtree alone.  Finding
  * that out costs the box tests of the remaining groups, which pays only
- * deep in the tree, where rays have parted (callgrind, 142x140 primary
- * rays: bunny 8x8 tiles −5% instructions, 4x4 −1%; Sponza unchanged;
- * depth 6-16 and 2-6 rays tried, larger counts cost Sponza up to 4%). */
+ * deep in the tree, where rays have parted (the values tried:
+ * docs/performance.md, "Packets and frustums"). */
 #define SWITCH_DEPTH 8u
 #define SWITCH_RAYS 2u
 

@@ -78,9 +78,7 @@
 /* At most this many active rays: no interval test either.  The bounds
  * are the whole packet's, so with few rays left they cull little and
  * cost a pass; per-ray entry distances order the children better
- * (callgrind, bunny 142x140, 8x8 tiles over bvh8: 1 ray 6.62M
- * instructions, 2: 6.56M, 4: 6.48M, 6: 6.44M, 8: 6.43M but 4x4 tiles
- * lose from 8 on; Sponza flat). */
+ * (the values tried: docs/performance.md, "Packets and frustums"). */
 #define SOLO 6u
 #ifndef PW_PREFETCH
 #define PW_PREFETCH 1
@@ -622,10 +620,8 @@ static SIDX_INLINE void wide_walk_impl(const sidx_accel *a, wpk *P, wcount *C, c
 #if PW_PREFETCH
             /* Several children hit: start fetching them all (a node is 4
              * cache lines, a block 3), as the single-ray walk does — the
-             * nearest is needed next, the others when popped.  (Thread CPU
-             * time, interleaved runs, 8x8 tiles over bvh8: bunny −5.5%,
-             * Sponza −1..2%; prefetching the lone child too cost Sponza and
-             * 4% more instructions.) */
+             * nearest is needed next, the others when popped; not the lone
+             * child (docs/performance.md, "Packets and frustums"). */
             for (unsigned pm = hitm & (hitm - 1) ? hitm : 0; pm; pm &= pm - 1) {
                 const uint32_t c = ch[__builtin_ctz(pm)];
                 const char *p = (c & WIDE_LEAF_BIT) ? (const char *)(wb->blocks + (c & ~WIDE_LEAF_BIT))
@@ -699,10 +695,8 @@ static SIDX_INLINE void wide_walk_impl(const sidx_accel *a, wpk *P, wcount *C, c
             prims += (uint64_t)__builtin_popcountll(M) * nb * 4u;
             if (P->anyhit && !(P->live & ~P->done)) break;
         }
-        /* Pop the next deferred child that still has rays to trace.  (Also
-         * dropping the rays whose best hit lies before the child's interval
-         * entry bound saved 8% of the node visits on the bunny but cost
-         * more instructions than it saved.) */
+        /* Pop the next deferred child that still has rays to trace.
+         * Rejected alternative: docs/performance.md, "Packets and frustums". */
         for (;;) {
             if (sp == 0) goto out;
             --sp;

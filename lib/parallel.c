@@ -323,8 +323,8 @@ static void bins_clear(bins3 *b, uint32_t nb)
  * With SSE2 (every x86-64) the three axes go through one set of 4-lane
  * instructions, as in Wald 2007 and Embree's binner: centroid, bin
  * coordinate and clamp for x, y, z at once, then one min and one max per
- * axis to grow the bin.  That is most of the build (callgrind on the bunny:
- * the scalar loop was 185 M of 196 M instructions).  Bit-identical to
+ * axis to grow the bin.  That is most of the build (docs/performance.md,
+ * "Parallel build and trace").  Bit-identical to
  * bin_of: f = (c − cmin)·scale in the same float operations; _mm_max_ps(f,
  * 0) returns 0 for a NaN f (the second operand), as bin_of's !(f > 0);
  * min(f, nb − 1) then truncation gives nb − 1 for f >= nb − 1, as bin_of's
