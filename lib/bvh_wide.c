@@ -38,42 +38,55 @@
 
 #define SIDX_STRUCTURE_NAME (a->name)
 
-/* ---- the traversal, instantiated per width and instruction set -------------- */
+/* ---- the traversal, instantiated per width and instruction set --------------
+ * bvh_wide_walk.h is the walk; it includes the kernels of WALK_ISA
+ * (simd_wide_scalar.h, simd_wide_sse.h, simd_wide_avx2.h,
+ * simd_wide_avx512.h) and names every function after WALK_W and
+ * WALK_ISA_NAME: walk_8_avx512, sidx__wide_kernels_4_sse41, ... (the full
+ * list: lib/README.md, "Generated functions"). */
 
 #define WALK_TARGET
 #define WALK_ISA 0
+#define WALK_ISA_NAME scalar
 #define WALK_W 4
 #include "bvh_wide_walk.h"
 #undef WALK_W
 #define WALK_W 8
 #include "bvh_wide_walk.h"
 #undef WALK_W
+#undef WALK_ISA_NAME
 #undef WALK_ISA
 #undef WALK_TARGET
 
 #ifdef SIDX_WIDE_X86
 #define WALK_TARGET __attribute__((target("sse4.1")))
 #define WALK_ISA 1
+#define WALK_ISA_NAME sse41
 #define WALK_W 4
 #include "bvh_wide_walk.h"
 #undef WALK_W
+#undef WALK_ISA_NAME
 #undef WALK_ISA
 #undef WALK_TARGET
 
 #define WALK_TARGET __attribute__((target("avx2,fma,popcnt")))
 #define WALK_ISA 2
+#define WALK_ISA_NAME avx2
 #define WALK_W 8
 #include "bvh_wide_walk.h"
 #undef WALK_W
+#undef WALK_ISA_NAME
 #undef WALK_ISA
 #undef WALK_TARGET
 
-/* The same source again; only the compiler's register file differs. */
+/* The AVX2 walk again with 32 vector registers (simd_wide_avx512.h). */
 #define WALK_TARGET __attribute__((target("avx2,fma,popcnt,avx512f,avx512vl")))
 #define WALK_ISA 3
+#define WALK_ISA_NAME avx512
 #define WALK_W 8
 #include "bvh_wide_walk.h"
 #undef WALK_W
+#undef WALK_ISA_NAME
 #undef WALK_ISA
 #undef WALK_TARGET
 #endif
@@ -102,11 +115,11 @@ wide_isa sidx__wide_pick_isa(uint32_t width)
 
 static void set_kernels(wide_bvh *w, sidx_tri_method tri)
 {
-    const wide_kernels *k = w->width == 8 ? &sidx__wide_kernels_8_0 : &sidx__wide_kernels_4_0;
+    const wide_kernels *k = w->width == 8 ? &sidx__wide_kernels_8_scalar : &sidx__wide_kernels_4_scalar;
 #ifdef SIDX_WIDE_X86
-    if (w->isa == WIDE_ISA_AVX512) k = &sidx__wide_kernels_8_3;
-    else if (w->isa == WIDE_ISA_AVX2) k = &sidx__wide_kernels_8_2;
-    else if (w->isa == WIDE_ISA_SSE41) k = &sidx__wide_kernels_4_1;
+    if (w->isa == WIDE_ISA_AVX512) k = &sidx__wide_kernels_8_avx512;
+    else if (w->isa == WIDE_ISA_AVX2) k = &sidx__wide_kernels_8_avx2;
+    else if (w->isa == WIDE_ISA_SSE41) k = &sidx__wide_kernels_4_sse41;
 #endif
     /* The triangle test is fixed at build: decide here, not per ray. */
     const int simd_tri = tri == SIDX_TRI_WATERTIGHT;
