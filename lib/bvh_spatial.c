@@ -325,26 +325,26 @@ static void spatial_bin(const sref *refs, uint32_t i0, uint32_t i1, int k, float
                         const float *plane, sspatial *A)
 {
     for (uint32_t i = i0; i < i1; ++i) {
-        const sidx_aabb B = refs[i].box;
-        const float bmin = sidx_v3_get(B.min, k), bmax = sidx_v3_get(B.max, k);
+        const sidx_aabb box = refs[i].box;
+        const float bmin = sidx_v3_get(box.min, k), bmax = sidx_v3_get(box.max, k);
         const uint32_t b0 = sbin_of(bmin, lo, scale, nb), b1 = sbin_of(bmax, lo, scale, nb);
         A->enter[b0]++;
         A->exit[b1]++;
         /* the part in bin b spans [from, plane[b + 1]] on k; the last
-         * one, or the one after which nothing of B is left, [from, bmax] */
+         * one, or the one after which nothing of the box is left, [from, bmax] */
         float from = bmin;
         uint32_t b = b0;
         for (; b < b1; ++b) {
             const float p = plane[b + 1];
             if (from <= p) { /* the part is not empty */
-                A->other[b] = sidx_aabb_union(A->other[b], B);
+                A->other[b] = sidx_aabb_union(A->other[b], box);
                 A->klo[b] = MINF(A->klo[b], from);
                 A->khi[b] = MAXF(A->khi[b], p);
             }
-            if (p > bmax) break; /* nothing of B beyond this plane: the rest goes to bin b1 whole */
+            if (p > bmax) break; /* nothing of the box beyond this plane: the rest goes to bin b1 whole */
             from = p;
         }
-        A->other[b1] = sidx_aabb_union(A->other[b1], B);
+        A->other[b1] = sidx_aabb_union(A->other[b1], box);
         A->klo[b1] = MINF(A->klo[b1], from);
         A->khi[b1] = MAXF(A->khi[b1], bmax);
     }
@@ -545,7 +545,7 @@ typedef struct stask {
     uint32_t n, depth;
     sidx_aabb box;
     uint64_t budget;
-    sbuild B;               /* the task's own pool (its references at 0..n), nodes and leaf references */
+    sbuild build;           /* the task's own pool (its references at 0..n), nodes and leaf references */
     sidx_status status;
 } stask;
 
@@ -668,22 +668,22 @@ static sidx_status defer(sbuild *S, size_t off, uint32_t n, sidx_aabb box, uint3
     t->box = box;
     t->budget = budget;
     /* the build's parameters; arrays, counts, par and frontier start empty (memset) */
-    t->B.a = &P->shadow;
-    t->B.tris = S->tris;
-    t->B.c_trav = S->c_trav;
-    t->B.c_tri = S->c_tri;
-    t->B.min_overlap = S->min_overlap;
-    t->B.leaf_size = S->leaf_size;
-    t->B.max_leaf = S->max_leaf;
-    t->B.max_depth = S->max_depth;
+    t->build.a = &P->shadow;
+    t->build.tris = S->tris;
+    t->build.c_trav = S->c_trav;
+    t->build.c_tri = S->c_tri;
+    t->build.min_overlap = S->min_overlap;
+    t->build.leaf_size = S->leaf_size;
+    t->build.max_leaf = S->max_leaf;
+    t->build.max_depth = S->max_depth;
     P->count++; /* counted now, so the clean-up frees its arrays even if they cannot all be made */
     /* sized as the entry sizes the whole build's, so they rarely grow */
-    if (!pool_reserve(&t->B, 4u * (size_t)n) ||
-        !sidx__grow(S->a, (void **)&t->B.nodes, &t->B.cap_nodes, n, sizeof *t->B.nodes) ||
-        !sidx__grow(S->a, (void **)&t->B.out, &t->B.cap_out, n + n / 2u, sizeof *t->B.out))
+    if (!pool_reserve(&t->build, 4u * (size_t)n) ||
+        !sidx__grow(S->a, (void **)&t->build.nodes, &t->build.cap_nodes, n, sizeof *t->build.nodes) ||
+        !sidx__grow(S->a, (void **)&t->build.out, &t->build.cap_out, n + n / 2u, sizeof *t->build.out))
         return SIDX_ERR_NOMEM;
-    memcpy(t->B.pool, S->pool + off, (size_t)n * sizeof *S->pool);
-    t->B.top = n;
+    memcpy(t->build.pool, S->pool + off, (size_t)n * sizeof *S->pool);
+    t->build.top = n;
     set_box(&S->nodes[idx], box);
     S->nodes[idx].left_or_first = (uint32_t)(P->count - 1u);
     S->nodes[idx].count_axis = SB_TASK_NODE;
@@ -698,7 +698,7 @@ static void run_tasks(void *ctx, unsigned thread)
         const size_t i = atomic_fetch_add(&P->next, 1);
         if (i >= P->count) return;
         stask *t = &P->task[P->order[i]];
-        t->status = build(&t->B, 0, t->n, t->box, t->depth, t->budget);
+        t->status = build(&t->build, 0, t->n, t->box, t->depth, t->budget);
     }
 }
 
@@ -707,9 +707,9 @@ static void free_tasks(const sidx_accel *a, stasks *P)
     sidx__free(a, P->tobj);
     sidx__free(a, P->tspat);
     for (size_t i = 0; i < P->count; ++i) {
-        sidx__free(a, P->task[i].B.pool);
-        sidx__free(a, P->task[i].B.nodes);
-        sidx__free(a, P->task[i].B.out);
+        sidx__free(a, P->task[i].build.pool);
+        sidx__free(a, P->task[i].build.nodes);
+        sidx__free(a, P->task[i].build.out);
     }
     sidx__free(a, P->task);
     sidx__free(a, P->order);
@@ -724,15 +724,15 @@ static uint32_t stitch(const sbuild *S, const stasks *P, uint32_t i, bvh_node *n
     const bvh_node *src = &S->nodes[i];
     const uint32_t me = (uint32_t)*nn;
     if (src->count_axis == SB_TASK_NODE) {
-        const sbuild *B = &P->task[src->left_or_first].B;
-        for (size_t j = 0; j < B->num_nodes; ++j) {
-            bvh_node d = B->nodes[j];
+        const sbuild *task_build = &P->task[src->left_or_first].build;
+        for (size_t j = 0; j < task_build->num_nodes; ++j) {
+            bvh_node d = task_build->nodes[j];
             d.left_or_first += bvh_is_leaf(&d) ? (uint32_t)*no : me;
             nodes[me + j] = d;
         }
-        memcpy(out + *no, B->out, B->num_out * sizeof *out);
-        *nn += B->num_nodes;
-        *no += B->num_out;
+        memcpy(out + *no, task_build->out, task_build->num_out * sizeof *out);
+        *nn += task_build->num_nodes;
+        *no += task_build->num_out;
         return me;
     }
     nodes[me] = *src;
@@ -768,10 +768,10 @@ static sidx_status finish_tasks(sbuild *S, stasks *P, unsigned threads)
     for (size_t i = 0; i < P->count; ++i) {
         const stask *t = &P->task[i];
         if (t->status != SIDX_OK) return t->status;
-        nn += t->B.num_nodes;
-        no += t->B.num_out;
-        S->num_leaves += t->B.num_leaves;
-        if (t->B.max_depth_seen > S->max_depth_seen) S->max_depth_seen = t->B.max_depth_seen;
+        nn += t->build.num_nodes;
+        no += t->build.num_out;
+        S->num_leaves += t->build.num_leaves;
+        if (t->build.max_depth_seen > S->max_depth_seen) S->max_depth_seen = t->build.max_depth_seen;
     }
     bvh_node *nodes = sidx__alloc(S->a, nn, sizeof *nodes);
     sref *out = sidx__alloc(S->a, no, sizeof *out);
