@@ -233,11 +233,11 @@ static uint32_t make_leaf(collapse *C, uint32_t first, uint32_t count)
 {
     const uint32_t b0 = C->num_blocks, nb = (count + 3u) / 4u;
     for (uint32_t k = 0; k < nb; ++k) {
-        wide_tri4 *B = &C->blocks[b0 + k];
+        wide_tri4 *block = &C->blocks[b0 + k];
         for (uint32_t l = 0; l < 4; ++l) {
             const uint32_t i = 4u * k + l;
-            if (i < count) wide_set_lane(B, l, C->b->tris[first + i].v, C->b->prim_id[first + i]);
-            else wide_set_lane(B, l, NULL, 0);
+            if (i < count) wide_set_lane(block, l, C->b->tris[first + i].v, C->b->prim_id[first + i]);
+            else wide_set_lane(block, l, NULL, 0);
         }
     }
     C->blocks[b0 + nb - 1].prim[0] |= WIDE_LAST_BLOCK;
@@ -297,21 +297,21 @@ static uint32_t make_node(collapse *C, uint32_t n2, uint32_t depth)
 static uint32_t leaf_prims(const wide_bvh *w, uint32_t first_block)
 {
     uint32_t c = 0;
-    for (const wide_tri4 *B = w->blocks + first_block;; ++B) {
-        for (int l = 0; l < 4; ++l) c += (B->prim[l] & WIDE_PRIM_MASK) != WIDE_PAD_PRIM;
-        if (B->prim[0] & WIDE_LAST_BLOCK) return c;
+    for (const wide_tri4 *block = w->blocks + first_block;; ++block) {
+        for (int l = 0; l < 4; ++l) c += (block->prim[l] & WIDE_PRIM_MASK) != WIDE_PAD_PRIM;
+        if (block->prim[0] & WIDE_LAST_BLOCK) return c;
     }
 }
 
 static sidx_aabb leaf_box(const wide_bvh *w, uint32_t first_block)
 {
     sidx_aabb bb = sidx_aabb_empty();
-    for (const wide_tri4 *B = w->blocks + first_block;; ++B) {
+    for (const wide_tri4 *block = w->blocks + first_block;; ++block) {
         for (int l = 0; l < 4; ++l) {
-            if ((B->prim[l] & WIDE_PRIM_MASK) == WIDE_PAD_PRIM) continue;
-            for (int v = 0; v < 3; ++v) bb = sidx_aabb_grow(bb, sidx_v3(B->v[v][0][l], B->v[v][1][l], B->v[v][2][l]));
+            if ((block->prim[l] & WIDE_PRIM_MASK) == WIDE_PAD_PRIM) continue;
+            for (int v = 0; v < 3; ++v) bb = sidx_aabb_grow(bb, sidx_v3(block->v[v][0][l], block->v[v][1][l], block->v[v][2][l]));
         }
-        if (B->prim[0] & WIDE_LAST_BLOCK) return bb;
+        if (block->prim[0] & WIDE_LAST_BLOCK) return bb;
     }
 }
 
@@ -346,11 +346,11 @@ static void emit_build(const sidx_accel *a, const wide_bvh *w, const uint32_t *c
         /* The event lists the leaf's ids in one run; the blocks interleave them with the
          * vertices, so they are gathered (this runs only with a hook; no memory: no list). */
         uint32_t *ids = sidx__alloc(a, np, sizeof *ids), nid = 0;
-        for (const wide_tri4 *B = w->blocks + (c & ~WIDE_LEAF_BIT); ids; ++B) {
+        for (const wide_tri4 *block = w->blocks + (c & ~WIDE_LEAF_BIT); ids; ++block) {
             for (int l = 0; l < 4; ++l)
-                if ((B->prim[l] & WIDE_PRIM_MASK) != WIDE_PAD_PRIM && nid < np)
-                    ids[nid++] = B->prim[l] & WIDE_PRIM_MASK;
-            if (B->prim[0] & WIDE_LAST_BLOCK) break;
+                if ((block->prim[l] & WIDE_PRIM_MASK) != WIDE_PAD_PRIM && nid < np)
+                    ids[nid++] = block->prim[l] & WIDE_PRIM_MASK;
+            if (block->prim[0] & WIDE_LAST_BLOCK) break;
         }
         SIDX_EMIT(1, h, SIDX_EV_BUILD_LEAF, e_.node = id; e_.depth = depth + 1; e_.count = np; e_.cost = cost;
                   e_.reason = SIDX_LEAF_FEW_PRIMS; e_.bounds = wide_slot_box(n, W, s); e_.prims = ids);
@@ -402,15 +402,15 @@ static sidx_status wide_refit(sidx_accel *a, sidx_error *err)
     if (!w || w->num_inner == 0) return SIDX_OK;
     const sidx_mesh *m = a->mesh;
     for (uint32_t k = 0; k < w->num_blocks; ++k) {
-        wide_tri4 *B = &w->blocks[k];
+        wide_tri4 *block = &w->blocks[k];
         for (int l = 0; l < 4; ++l) {
-            const uint32_t id = B->prim[l] & WIDE_PRIM_MASK;
+            const uint32_t id = block->prim[l] & WIDE_PRIM_MASK;
             if (id == WIDE_PAD_PRIM) continue;
             for (int v = 0; v < 3; ++v) {
                 const sidx_vec3 p = sidx_mesh_vertex(m, id, v);
-                B->v[v][0][l] = p.x;
-                B->v[v][1][l] = p.y;
-                B->v[v][2][l] = p.z;
+                block->v[v][0][l] = p.x;
+                block->v[v][1][l] = p.y;
+                block->v[v][2][l] = p.z;
             }
         }
     }

@@ -116,21 +116,21 @@ WINL void WFN(prefetch_)(const wide_bvh *w, const float *nodes, uint32_t ref)
  * in registers.  Figures, and the compiler tricks rejected:
  * docs/performance.md, "Wide BVHs". */
 WINL int WFN(leaf_)(const sidx_accel *a, const wide_bvh *w, uint32_t first_block, const sidx_ray *r,
-                    const WFN(ray_consts_) * rc, const sidx_query *q, uint32_t node_id, float *best, uint32_t *prim,
+                    const WFN(ray_consts_) * consts, const sidx_query *q, uint32_t node_id, float *best, uint32_t *prim,
                     const wide_tri4 **hit_block, unsigned *hit_lane, float *hit_vw_det, const int anyhit,
                     const int traced, const int simd_tri)
 {
-    (void)rc;
+    (void)consts;
     (void)node_id;
     const wide_tri4 *block = w->blocks + first_block;
     const float *row_x, *row_y, *row_z; /* the block's rows on the ray's permuted axes, for tri4_ */
-    WFN(block_rows_)(rc, block, &row_x, &row_y, &row_z);
+    WFN(block_rows_)(consts, block, &row_x, &row_y, &row_z);
     for (;; ++block) {
         int scalar = 1;
         if (!traced && simd_tri) {
             float t;
             unsigned lane;
-            const int hit = WFN(tri4_)(row_x, row_y, row_z, rc, *best, &t, &lane, hit_vw_det);
+            const int hit = WFN(tri4_)(row_x, row_y, row_z, consts, *best, &t, &lane, hit_vw_det);
             if (hit >= 0) {
                 scalar = 0;
                 if (hit) {
@@ -230,12 +230,12 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
                   e_.count = 0);
         return 0;
     }
-    WFN(ray_consts_) rc;
+    WFN(ray_consts_) consts;
     /* Ize'slot factor also widens the best hit the boxes are clipped to (and
      * the pop test): a rounded entry an ulp beyond a hit must not drop a
      * box holding a triangle an ulp nearer (bvh_slab says more). */
     const float scale = a->opt.box == SIDX_BOX_ROBUST ? SIDX_ROBUST_TFAR_SCALE : 1.0f;
-    WFN(ray_consts_init_)(&rc, r, scale);
+    WFN(ray_consts_init_)(&consts, r, scale);
     int tri_ready = 0;
     (void)tri_ready;
     float best_s = best * scale; /* the widened bound boxes are clipped to (see bvh_slab) */
@@ -261,7 +261,7 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
         if (!(cur & WIDE_LEAF_BIT)) {
             const float *node = nodes + (size_t)cur * (8u * WALK_W);
             const uint32_t *child = wide_child(node, WALK_W);
-            unsigned hits = WFN(boxes_)(node, &rc, best_s, t_near, t_far, traced);
+            unsigned hits = WFN(boxes_)(node, &consts, best_s, t_near, t_far, traced);
             if (traced) {
                 const uint32_t *ids = wide_id(node, WALK_W);
                 for (uint32_t slot = 0; slot < WALK_W; ++slot) {
@@ -397,10 +397,10 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
             }
         } else {
             if (!tri_ready) { /* the triangle constants, at the first leaf: a ray that reaches none needs none */
-                WFN(tri_consts_init_)(&rc, r);
+                WFN(tri_consts_init_)(&consts, r);
                 tri_ready = 1;
             }
-            if (WFN(leaf_)(a, w, cur & ~WIDE_LEAF_BIT, r, &rc, q, cur_id, &best, &prim, &hit_block, &hit_lane,
+            if (WFN(leaf_)(a, w, cur & ~WIDE_LEAF_BIT, r, &consts, q, cur_id, &best, &prim, &hit_block, &hit_lane,
                            hit_vw_det, anyhit, traced, simd_tri)) {
                 SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = SIDX_TERM_ANY_HIT;
                           e_.count = visited);

@@ -438,9 +438,9 @@ static sidx_status run_packet(const sidx_accel *a, const sidx_ray *rays, uint32_
         const sidx_query q = {o.flags, SIDX_TRAVERSE_DEFAULT, NULL, 0};
         for (uint32_t i = 0; i < n; ++i) {
             if (anyhit) {
-                int oc = 0;
-                sidx_accel_occluded(a, &rays[i], &q, &oc);
-                occ[i] = (uint8_t)oc;
+                int occluded = 0;
+                sidx_accel_occluded(a, &rays[i], &q, &occluded);
+                occ[i] = (uint8_t)occluded;
             } else {
                 sidx_accel_intersect(a, &rays[i], &q, &hits[i]);
             }

@@ -210,9 +210,9 @@ static SIDX_INLINE void packet_bounds(wide_packet *pkt, uint64_t live, unsigned 
         pkt->inv_far_z[i] = pkt->inv_z[i] * scale;
     }
     const uint64_t real = pkt->n == 64 ? ~0ull : (1ull << pkt->n) - 1u;
-    ray_bounds rb;
-    if (avx && live == real) bounds_sse(pkt, &rb);
-    else bounds_scalar(pkt, live, &rb);
+    ray_bounds bounds;
+    if (avx && live == real) bounds_sse(pkt, &bounds);
+    else bounds_scalar(pkt, live, &bounds);
     int finite = 1;
     for (int k = 0; k < 3; ++k) {
         const int neg = (int)(cls >> k) & 1;
@@ -223,17 +223,17 @@ static SIDX_INLINE void packet_bounds(wide_packet *pkt, uint64_t live, unsigned 
          * inv < 0 (o = omin), for the smallest when inv > 0 (o = omax); the
          * exit the other way round.  x·S is monotone, so the far factors'
          * range is the ends times S. */
-        pkt->ia_org_near[k] = neg ? rb.omin[k] : rb.omax[k];
-        pkt->ia_org_far[k] = neg ? rb.omax[k] : rb.omin[k];
-        pkt->ia_inv_lo[k] = rb.imin[k];
-        pkt->ia_inv_hi[k] = rb.imax[k];
-        pkt->ia_far_lo[k] = rb.imin[k] * scale;
-        pkt->ia_far_hi[k] = rb.imax[k] * scale;
+        pkt->ia_org_near[k] = neg ? bounds.omin[k] : bounds.omax[k];
+        pkt->ia_org_far[k] = neg ? bounds.omax[k] : bounds.omin[k];
+        pkt->ia_inv_lo[k] = bounds.imin[k];
+        pkt->ia_inv_hi[k] = bounds.imax[k];
+        pkt->ia_far_lo[k] = bounds.imin[k] * scale;
+        pkt->ia_far_hi[k] = bounds.imax[k] * scale;
         /* an infinite inverse direction would be at one of the ends */
         finite &= isfinite(pkt->ia_far_lo[k]) && isfinite(pkt->ia_far_hi[k]);
     }
-    pkt->ia_tmin = rb.tmin;
-    pkt->ia_tmax = rb.tmax;
+    pkt->ia_tmin = bounds.tmin;
+    pkt->ia_tmax = bounds.tmax;
     pkt->ia_usable = finite;
 }
 
@@ -378,8 +378,8 @@ static SIDX_INLINE void wide_walk_impl(const sidx_accel *a, wide_packet *pkt, wc
                  * the lower slot is visited first), defer all but the
                  * nearest, descend into it. */
                 uint32_t order[8], n_order = 0;
-                for (unsigned hh = hit_slots; hh; hh &= hh - 1) {
-                    const uint32_t slot = (uint32_t)__builtin_ctz(hh);
+                for (unsigned pending = hit_slots; pending; pending &= pending - 1) {
+                    const uint32_t slot = (uint32_t)__builtin_ctz(pending);
                     uint32_t j = n_order++;
                     if (!pkt->anyhit)
                         while (j > 0 && key[order[j - 1]] <= key[slot]) {

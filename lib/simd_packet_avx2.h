@@ -40,19 +40,19 @@ __attribute__((target("avx2,fma"))) static void tri8_avx2(const walkopt *walk, p
                                                           const bvh_tri *tri, uint32_t prim)
 {
     const uint32_t i = group * GROUP_LANES;
-    const float *pa = &tri->v[0].x, *pb = &tri->v[1].x, *pc = &tri->v[2].x;
-    const __m256 okx = _mm256_load_ps(pkt->org_kx + i), oky = _mm256_load_ps(pkt->org_ky + i),
-                 okz = _mm256_load_ps(pkt->org_kz + i);
+    const float *corner_a = &tri->v[0].x, *corner_b = &tri->v[1].x, *corner_c = &tri->v[2].x;
+    const __m256 org_kx = _mm256_load_ps(pkt->org_kx + i), org_ky = _mm256_load_ps(pkt->org_ky + i),
+                 org_kz = _mm256_load_ps(pkt->org_kz + i);
     const __m256 sx = _mm256_load_ps(pkt->sx + i), sy = _mm256_load_ps(pkt->sy + i), sz = _mm256_load_ps(pkt->sz + i);
-    const __m256 ax = _mm256_sub_ps(_mm256_set1_ps(pa[pkt->kx]), okx),
-                 ay = _mm256_sub_ps(_mm256_set1_ps(pa[pkt->ky]), oky),
-                 az = _mm256_sub_ps(_mm256_set1_ps(pa[pkt->kz]), okz);
-    const __m256 bx = _mm256_sub_ps(_mm256_set1_ps(pb[pkt->kx]), okx),
-                 by = _mm256_sub_ps(_mm256_set1_ps(pb[pkt->ky]), oky),
-                 bz = _mm256_sub_ps(_mm256_set1_ps(pb[pkt->kz]), okz);
-    const __m256 cx = _mm256_sub_ps(_mm256_set1_ps(pc[pkt->kx]), okx),
-                 cy = _mm256_sub_ps(_mm256_set1_ps(pc[pkt->ky]), oky),
-                 cz = _mm256_sub_ps(_mm256_set1_ps(pc[pkt->kz]), okz);
+    const __m256 ax = _mm256_sub_ps(_mm256_set1_ps(corner_a[pkt->kx]), org_kx),
+                 ay = _mm256_sub_ps(_mm256_set1_ps(corner_a[pkt->ky]), org_ky),
+                 az = _mm256_sub_ps(_mm256_set1_ps(corner_a[pkt->kz]), org_kz);
+    const __m256 bx = _mm256_sub_ps(_mm256_set1_ps(corner_b[pkt->kx]), org_kx),
+                 by = _mm256_sub_ps(_mm256_set1_ps(corner_b[pkt->ky]), org_ky),
+                 bz = _mm256_sub_ps(_mm256_set1_ps(corner_b[pkt->kz]), org_kz);
+    const __m256 cx = _mm256_sub_ps(_mm256_set1_ps(corner_c[pkt->kx]), org_kx),
+                 cy = _mm256_sub_ps(_mm256_set1_ps(corner_c[pkt->ky]), org_ky),
+                 cz = _mm256_sub_ps(_mm256_set1_ps(corner_c[pkt->kz]), org_kz);
     const __m256 Ax = _mm256_sub_ps(ax, _mm256_mul_ps(sx, az)), Ay = _mm256_sub_ps(ay, _mm256_mul_ps(sy, az));
     const __m256 Bx = _mm256_sub_ps(bx, _mm256_mul_ps(sx, bz)), By = _mm256_sub_ps(by, _mm256_mul_ps(sy, bz));
     const __m256 Cx = _mm256_sub_ps(cx, _mm256_mul_ps(sx, cz)), Cy = _mm256_sub_ps(cy, _mm256_mul_ps(sy, cz));

@@ -32,35 +32,35 @@ static SIDX_INLINE void bounds_sse(const wide_packet *pkt, ray_bounds *out)
     const float *const arr[3][2] = {{pkt->org_x, pkt->inv_x}, {pkt->org_y, pkt->inv_y}, {pkt->org_z, pkt->inv_z}};
     /* every lane counts (padding repeats ray 0): 4 lanes at a time */
     for (int k = 0; k < 3; ++k) {
-        __m128 o0 = _mm_load_ps(arr[k][0]), o1 = o0, i0 = _mm_load_ps(arr[k][1]), i1 = i0;
+        __m128 org_lo = _mm_load_ps(arr[k][0]), org_hi = org_lo, inv_lo = _mm_load_ps(arr[k][1]), inv_hi = inv_lo;
         for (uint32_t i = 4; i < n_lanes; i += 4) {
-            const __m128 o = _mm_load_ps(arr[k][0] + i), v = _mm_load_ps(arr[k][1] + i);
-            o0 = _mm_min_ps(o, o0); o1 = _mm_max_ps(o, o1);
-            i0 = _mm_min_ps(v, i0); i1 = _mm_max_ps(v, i1);
+            const __m128 org = _mm_load_ps(arr[k][0] + i), inv = _mm_load_ps(arr[k][1] + i);
+            org_lo = _mm_min_ps(org, org_lo); org_hi = _mm_max_ps(org, org_hi);
+            inv_lo = _mm_min_ps(inv, inv_lo); inv_hi = _mm_max_ps(inv, inv_hi);
         }
-        o0 = _mm_min_ps(o0, _mm_shuffle_ps(o0, o0, _MM_SHUFFLE(1, 0, 3, 2)));
-        o0 = _mm_min_ps(o0, _mm_shuffle_ps(o0, o0, _MM_SHUFFLE(2, 3, 0, 1)));
-        o1 = _mm_max_ps(o1, _mm_shuffle_ps(o1, o1, _MM_SHUFFLE(1, 0, 3, 2)));
-        o1 = _mm_max_ps(o1, _mm_shuffle_ps(o1, o1, _MM_SHUFFLE(2, 3, 0, 1)));
-        i0 = _mm_min_ps(i0, _mm_shuffle_ps(i0, i0, _MM_SHUFFLE(1, 0, 3, 2)));
-        i0 = _mm_min_ps(i0, _mm_shuffle_ps(i0, i0, _MM_SHUFFLE(2, 3, 0, 1)));
-        i1 = _mm_max_ps(i1, _mm_shuffle_ps(i1, i1, _MM_SHUFFLE(1, 0, 3, 2)));
-        i1 = _mm_max_ps(i1, _mm_shuffle_ps(i1, i1, _MM_SHUFFLE(2, 3, 0, 1)));
-        out->omin[k] = _mm_cvtss_f32(o0); out->omax[k] = _mm_cvtss_f32(o1);
-        out->imin[k] = _mm_cvtss_f32(i0); out->imax[k] = _mm_cvtss_f32(i1);
+        org_lo = _mm_min_ps(org_lo, _mm_shuffle_ps(org_lo, org_lo, _MM_SHUFFLE(1, 0, 3, 2)));
+        org_lo = _mm_min_ps(org_lo, _mm_shuffle_ps(org_lo, org_lo, _MM_SHUFFLE(2, 3, 0, 1)));
+        org_hi = _mm_max_ps(org_hi, _mm_shuffle_ps(org_hi, org_hi, _MM_SHUFFLE(1, 0, 3, 2)));
+        org_hi = _mm_max_ps(org_hi, _mm_shuffle_ps(org_hi, org_hi, _MM_SHUFFLE(2, 3, 0, 1)));
+        inv_lo = _mm_min_ps(inv_lo, _mm_shuffle_ps(inv_lo, inv_lo, _MM_SHUFFLE(1, 0, 3, 2)));
+        inv_lo = _mm_min_ps(inv_lo, _mm_shuffle_ps(inv_lo, inv_lo, _MM_SHUFFLE(2, 3, 0, 1)));
+        inv_hi = _mm_max_ps(inv_hi, _mm_shuffle_ps(inv_hi, inv_hi, _MM_SHUFFLE(1, 0, 3, 2)));
+        inv_hi = _mm_max_ps(inv_hi, _mm_shuffle_ps(inv_hi, inv_hi, _MM_SHUFFLE(2, 3, 0, 1)));
+        out->omin[k] = _mm_cvtss_f32(org_lo); out->omax[k] = _mm_cvtss_f32(org_hi);
+        out->imin[k] = _mm_cvtss_f32(inv_lo); out->imax[k] = _mm_cvtss_f32(inv_hi);
     }
     /* padding lanes (tmin +inf, best −inf) change neither */
-    __m128 t0 = _mm_load_ps(pkt->tmin), t1 = _mm_load_ps(pkt->best_clip);
+    __m128 tmin_lo = _mm_load_ps(pkt->tmin), best_hi = _mm_load_ps(pkt->best_clip);
     for (uint32_t i = 4; i < n_lanes; i += 4) {
-        t0 = _mm_min_ps(_mm_load_ps(pkt->tmin + i), t0);
-        t1 = _mm_max_ps(_mm_load_ps(pkt->best_clip + i), t1);
+        tmin_lo = _mm_min_ps(_mm_load_ps(pkt->tmin + i), tmin_lo);
+        best_hi = _mm_max_ps(_mm_load_ps(pkt->best_clip + i), best_hi);
     }
-    t0 = _mm_min_ps(t0, _mm_shuffle_ps(t0, t0, _MM_SHUFFLE(1, 0, 3, 2)));
-    t0 = _mm_min_ps(t0, _mm_shuffle_ps(t0, t0, _MM_SHUFFLE(2, 3, 0, 1)));
-    t1 = _mm_max_ps(t1, _mm_shuffle_ps(t1, t1, _MM_SHUFFLE(1, 0, 3, 2)));
-    t1 = _mm_max_ps(t1, _mm_shuffle_ps(t1, t1, _MM_SHUFFLE(2, 3, 0, 1)));
-    out->tmin = _mm_cvtss_f32(t0);
-    out->tmax = _mm_cvtss_f32(t1);
+    tmin_lo = _mm_min_ps(tmin_lo, _mm_shuffle_ps(tmin_lo, tmin_lo, _MM_SHUFFLE(1, 0, 3, 2)));
+    tmin_lo = _mm_min_ps(tmin_lo, _mm_shuffle_ps(tmin_lo, tmin_lo, _MM_SHUFFLE(2, 3, 0, 1)));
+    best_hi = _mm_max_ps(best_hi, _mm_shuffle_ps(best_hi, best_hi, _MM_SHUFFLE(1, 0, 3, 2)));
+    best_hi = _mm_max_ps(best_hi, _mm_shuffle_ps(best_hi, best_hi, _MM_SHUFFLE(2, 3, 0, 1)));
+    out->tmin = _mm_cvtss_f32(tmin_lo);
+    out->tmax = _mm_cvtss_f32(best_hi);
 }
 
 /* ---- node and leaf (AVX2, SSE) ------------------------------------------------------ */

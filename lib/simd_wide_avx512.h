@@ -27,39 +27,41 @@ typedef struct WFN(ray_consts_) {
     wide_tri_ray tri;               /* watertight triangle test, lane-broadcast (simd_tri4_sse.h) */
 } WFN(ray_consts_);
 
-WINL void WFN(ray_consts_init_)(WFN(ray_consts_) * rc, const sidx_ray *r, float scale)
+WINL void WFN(ray_consts_init_)(WFN(ray_consts_) * consts, const sidx_ray *r, float scale)
 {
     const float *o = &r->org.x, *inv = &r->inv_dir.x;
-    rc->org_x = _mm256_set1_ps(o[0]); rc->org_y = _mm256_set1_ps(o[1]); rc->org_z = _mm256_set1_ps(o[2]);
-    rc->inv_x = _mm256_set1_ps(inv[0]); rc->inv_y = _mm256_set1_ps(inv[1]); rc->inv_z = _mm256_set1_ps(inv[2]);
-    rc->far_x = _mm256_set1_ps(inv[0] * scale); rc->far_y = _mm256_set1_ps(inv[1] * scale);
-    rc->far_z = _mm256_set1_ps(inv[2] * scale);
-    rc->tmin = _mm256_set1_ps(r->tmin);
-    rc->neg_x = (__mmask8)(r->sign[0] ? 0xFF : 0); rc->neg_y = (__mmask8)(r->sign[1] ? 0xFF : 0);
-    rc->neg_z = (__mmask8)(r->sign[2] ? 0xFF : 0);
+    consts->org_x = _mm256_set1_ps(o[0]); consts->org_y = _mm256_set1_ps(o[1]); consts->org_z = _mm256_set1_ps(o[2]);
+    consts->inv_x = _mm256_set1_ps(inv[0]);
+    consts->inv_y = _mm256_set1_ps(inv[1]);
+    consts->inv_z = _mm256_set1_ps(inv[2]);
+    consts->far_x = _mm256_set1_ps(inv[0] * scale); consts->far_y = _mm256_set1_ps(inv[1] * scale);
+    consts->far_z = _mm256_set1_ps(inv[2] * scale);
+    consts->tmin = _mm256_set1_ps(r->tmin);
+    consts->neg_x = (__mmask8)(r->sign[0] ? 0xFF : 0); consts->neg_y = (__mmask8)(r->sign[1] ? 0xFF : 0);
+    consts->neg_z = (__mmask8)(r->sign[2] ? 0xFF : 0);
 }
 
-WINL void WFN(tri_consts_init_)(WFN(ray_consts_) * rc, const sidx_ray *r) { wide_tri_ray_init(&rc->tri, r); }
+WINL void WFN(tri_consts_init_)(WFN(ray_consts_) * consts, const sidx_ray *r) { wide_tri_ray_init(&consts->tri, r); }
 
 /* ---- 8 boxes at once ---------------------------------------------------------- */
-WINL unsigned WFN(boxes_)(const float *node, const WFN(ray_consts_) * rc, float best, float *t_near, float *t_far,
+WINL unsigned WFN(boxes_)(const float *node, const WFN(ray_consts_) * consts, float best, float *t_near, float *t_far,
                           const int want_far)
 {
     const __m256 lo_x = _mm256_load_ps(node), lo_y = _mm256_load_ps(node + 8), lo_z = _mm256_load_ps(node + 16);
     const __m256 hi_x = _mm256_load_ps(node + 24), hi_y = _mm256_load_ps(node + 32), hi_z = _mm256_load_ps(node + 40);
-    const __m256 enter_x = _mm256_mask_blend_ps(rc->neg_x, lo_x, hi_x);
-    const __m256 exit_x = _mm256_mask_blend_ps(rc->neg_x, hi_x, lo_x);
-    const __m256 enter_y = _mm256_mask_blend_ps(rc->neg_y, lo_y, hi_y);
-    const __m256 exit_y = _mm256_mask_blend_ps(rc->neg_y, hi_y, lo_y);
-    const __m256 enter_z = _mm256_mask_blend_ps(rc->neg_z, lo_z, hi_z);
-    const __m256 exit_z = _mm256_mask_blend_ps(rc->neg_z, hi_z, lo_z);
-    const __m256 near_x = _mm256_mul_ps(_mm256_sub_ps(enter_x, rc->org_x), rc->inv_x);
-    const __m256 near_y = _mm256_mul_ps(_mm256_sub_ps(enter_y, rc->org_y), rc->inv_y);
-    const __m256 near_z = _mm256_mul_ps(_mm256_sub_ps(enter_z, rc->org_z), rc->inv_z);
-    const __m256 far_x = _mm256_mul_ps(_mm256_sub_ps(exit_x, rc->org_x), rc->far_x);
-    const __m256 far_y = _mm256_mul_ps(_mm256_sub_ps(exit_y, rc->org_y), rc->far_y);
-    const __m256 far_z = _mm256_mul_ps(_mm256_sub_ps(exit_z, rc->org_z), rc->far_z);
-    __m256 t_enter = _mm256_max_ps(near_x, rc->tmin);
+    const __m256 enter_x = _mm256_mask_blend_ps(consts->neg_x, lo_x, hi_x);
+    const __m256 exit_x = _mm256_mask_blend_ps(consts->neg_x, hi_x, lo_x);
+    const __m256 enter_y = _mm256_mask_blend_ps(consts->neg_y, lo_y, hi_y);
+    const __m256 exit_y = _mm256_mask_blend_ps(consts->neg_y, hi_y, lo_y);
+    const __m256 enter_z = _mm256_mask_blend_ps(consts->neg_z, lo_z, hi_z);
+    const __m256 exit_z = _mm256_mask_blend_ps(consts->neg_z, hi_z, lo_z);
+    const __m256 near_x = _mm256_mul_ps(_mm256_sub_ps(enter_x, consts->org_x), consts->inv_x);
+    const __m256 near_y = _mm256_mul_ps(_mm256_sub_ps(enter_y, consts->org_y), consts->inv_y);
+    const __m256 near_z = _mm256_mul_ps(_mm256_sub_ps(enter_z, consts->org_z), consts->inv_z);
+    const __m256 far_x = _mm256_mul_ps(_mm256_sub_ps(exit_x, consts->org_x), consts->far_x);
+    const __m256 far_y = _mm256_mul_ps(_mm256_sub_ps(exit_y, consts->org_y), consts->far_y);
+    const __m256 far_z = _mm256_mul_ps(_mm256_sub_ps(exit_z, consts->org_z), consts->far_z);
+    __m256 t_enter = _mm256_max_ps(near_x, consts->tmin);
     t_enter = _mm256_max_ps(near_y, t_enter);
     t_enter = _mm256_max_ps(near_z, t_enter);
     __m256 t_exit = _mm256_min_ps(far_x, _mm256_set1_ps(best));

@@ -28,22 +28,22 @@ typedef struct WFN(ray_consts_) {
     uint32_t near_off[3], far_off[3];       /* float offsets of the near / far planes of each axis inside a node */
 } WFN(ray_consts_);
 
-WINL void WFN(ray_consts_init_)(WFN(ray_consts_) * rc, const sidx_ray *r, float scale)
+WINL void WFN(ray_consts_init_)(WFN(ray_consts_) * consts, const sidx_ray *r, float scale)
 {
     const float *o = &r->org.x, *inv = &r->inv_dir.x;
     for (int k = 0; k < 3; ++k) {
         /* b[0..2] = lo, b[3..5] = hi: a negative direction enters through hi. */
-        rc->near_off[k] = (uint32_t)((r->sign[k] ? 3 + k : k) * WALK_W);
-        rc->far_off[k] = (uint32_t)((r->sign[k] ? k : 3 + k) * WALK_W);
+        consts->near_off[k] = (uint32_t)((r->sign[k] ? 3 + k : k) * WALK_W);
+        consts->far_off[k] = (uint32_t)((r->sign[k] ? k : 3 + k) * WALK_W);
     }
-    for (int k = 0; k < 3; ++k) { rc->org[k] = o[k]; rc->inv[k] = inv[k]; rc->inv_far[k] = inv[k] * scale; }
-    rc->tmin = r->tmin;
+    for (int k = 0; k < 3; ++k) { consts->org[k] = o[k]; consts->inv[k] = inv[k]; consts->inv_far[k] = inv[k] * scale; }
+    consts->tmin = r->tmin;
 }
 
 /* No triangle constants: every block takes the scalar test. */
-WINL void WFN(tri_consts_init_)(WFN(ray_consts_) * rc, const sidx_ray *r)
+WINL void WFN(tri_consts_init_)(WFN(ray_consts_) * consts, const sidx_ray *r)
 {
-    (void)rc;
+    (void)consts;
     (void)r;
 }
 
@@ -55,15 +55,15 @@ WINL void WFN(tri_consts_init_)(WFN(ray_consts_) * rc, const sidx_ray *r)
  * Returns the mask of children whose clipped interval is non-empty;
  * t_near[] (and t_far[] when want_far) receive the intervals of all W
  * slots. */
-WINL unsigned WFN(boxes_)(const float *node, const WFN(ray_consts_) * rc, float best, float *t_near, float *t_far,
+WINL unsigned WFN(boxes_)(const float *node, const WFN(ray_consts_) * consts, float best, float *t_near, float *t_far,
                           const int want_far)
 {
     unsigned hits = 0;
     for (uint32_t slot = 0; slot < WALK_W; ++slot) {
-        float t_enter = rc->tmin, t_exit = best;
+        float t_enter = consts->tmin, t_exit = best;
         for (int k = 0; k < 3; ++k) {
-            const float near_k = (node[rc->near_off[k] + slot] - rc->org[k]) * rc->inv[k];
-            const float far_k = (node[rc->far_off[k] + slot] - rc->org[k]) * rc->inv_far[k];
+            const float near_k = (node[consts->near_off[k] + slot] - consts->org[k]) * consts->inv[k];
+            const float far_k = (node[consts->far_off[k] + slot] - consts->org[k]) * consts->inv_far[k];
             t_enter = near_k > t_enter ? near_k : t_enter;
             t_exit = far_k < t_exit ? far_k : t_exit;
         }
@@ -102,20 +102,20 @@ WINL uint32_t WFN(rank_)(const float *t_near, unsigned slot, unsigned hit_mask)
 
 /* No SIMD kernel: tri4_ declines every block (-1), which sends it to the
  * scalar test lane by lane; the row pointers are never read. */
-WINL void WFN(block_rows_)(const WFN(ray_consts_) * rc, const wide_tri4 *block, const float **row_x,
+WINL void WFN(block_rows_)(const WFN(ray_consts_) * consts, const wide_tri4 *block, const float **row_x,
                            const float **row_y, const float **row_z)
 {
-    (void)rc;
+    (void)consts;
     *row_x = *row_y = *row_z = &block->v[0][0][0];
 }
 
-WINL int WFN(tri4_)(const float *row_x, const float *row_y, const float *row_z, const WFN(ray_consts_) * rc,
+WINL int WFN(tri4_)(const float *row_x, const float *row_y, const float *row_z, const WFN(ray_consts_) * consts,
                     float best, float *t_out, unsigned *lane_out, float *vw_det_out)
 {
     (void)row_x;
     (void)row_y;
     (void)row_z;
-    (void)rc;
+    (void)consts;
     (void)best;
     (void)t_out;
     (void)lane_out;

@@ -19,36 +19,36 @@ typedef struct WFN(ray_consts_) {
     uint32_t near_off[3], far_off[3]; /* float offsets of the near / far planes of each axis inside a node */
 } WFN(ray_consts_);
 
-WINL void WFN(ray_consts_init_)(WFN(ray_consts_) * rc, const sidx_ray *r, float scale)
+WINL void WFN(ray_consts_init_)(WFN(ray_consts_) * consts, const sidx_ray *r, float scale)
 {
     const float *o = &r->org.x, *inv = &r->inv_dir.x;
     for (int k = 0; k < 3; ++k) {
         /* b[0..2] = lo, b[3..5] = hi: a negative direction enters through hi. */
-        rc->near_off[k] = (uint32_t)((r->sign[k] ? 3 + k : k) * WALK_W);
-        rc->far_off[k] = (uint32_t)((r->sign[k] ? k : 3 + k) * WALK_W);
+        consts->near_off[k] = (uint32_t)((r->sign[k] ? 3 + k : k) * WALK_W);
+        consts->far_off[k] = (uint32_t)((r->sign[k] ? k : 3 + k) * WALK_W);
     }
-    rc->org_x = _mm_set1_ps(o[0]); rc->org_y = _mm_set1_ps(o[1]); rc->org_z = _mm_set1_ps(o[2]);
-    rc->inv_x = _mm_set1_ps(inv[0]); rc->inv_y = _mm_set1_ps(inv[1]); rc->inv_z = _mm_set1_ps(inv[2]);
-    rc->far_x = _mm_set1_ps(inv[0] * scale); rc->far_y = _mm_set1_ps(inv[1] * scale);
-    rc->far_z = _mm_set1_ps(inv[2] * scale);
-    rc->tmin = _mm_set1_ps(r->tmin);
+    consts->org_x = _mm_set1_ps(o[0]); consts->org_y = _mm_set1_ps(o[1]); consts->org_z = _mm_set1_ps(o[2]);
+    consts->inv_x = _mm_set1_ps(inv[0]); consts->inv_y = _mm_set1_ps(inv[1]); consts->inv_z = _mm_set1_ps(inv[2]);
+    consts->far_x = _mm_set1_ps(inv[0] * scale); consts->far_y = _mm_set1_ps(inv[1] * scale);
+    consts->far_z = _mm_set1_ps(inv[2] * scale);
+    consts->tmin = _mm_set1_ps(r->tmin);
 }
 
-WINL void WFN(tri_consts_init_)(WFN(ray_consts_) * rc, const sidx_ray *r) { wide_tri_ray_init(&rc->tri, r); }
+WINL void WFN(tri_consts_init_)(WFN(ray_consts_) * consts, const sidx_ray *r) { wide_tri_ray_init(&consts->tri, r); }
 
 /* ---- 4 boxes at once ----------------------------------------------------------
  * MAXPS / MINPS return their second operand when either is NaN, so the
  * slab value goes first and the running interval second. */
-WINL unsigned WFN(boxes_)(const float *node, const WFN(ray_consts_) * rc, float best, float *t_near, float *t_far,
+WINL unsigned WFN(boxes_)(const float *node, const WFN(ray_consts_) * consts, float best, float *t_near, float *t_far,
                           const int want_far)
 {
-    const __m128 near_x = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(node + rc->near_off[0]), rc->org_x), rc->inv_x);
-    const __m128 near_y = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(node + rc->near_off[1]), rc->org_y), rc->inv_y);
-    const __m128 near_z = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(node + rc->near_off[2]), rc->org_z), rc->inv_z);
-    const __m128 far_x = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(node + rc->far_off[0]), rc->org_x), rc->far_x);
-    const __m128 far_y = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(node + rc->far_off[1]), rc->org_y), rc->far_y);
-    const __m128 far_z = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(node + rc->far_off[2]), rc->org_z), rc->far_z);
-    __m128 t_enter = _mm_max_ps(near_x, rc->tmin);
+    const __m128 near_x = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(node + consts->near_off[0]), consts->org_x), consts->inv_x);
+    const __m128 near_y = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(node + consts->near_off[1]), consts->org_y), consts->inv_y);
+    const __m128 near_z = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(node + consts->near_off[2]), consts->org_z), consts->inv_z);
+    const __m128 far_x = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(node + consts->far_off[0]), consts->org_x), consts->far_x);
+    const __m128 far_y = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(node + consts->far_off[1]), consts->org_y), consts->far_y);
+    const __m128 far_z = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(node + consts->far_off[2]), consts->org_z), consts->far_z);
+    __m128 t_enter = _mm_max_ps(near_x, consts->tmin);
     t_enter = _mm_max_ps(near_y, t_enter);
     t_enter = _mm_max_ps(near_z, t_enter);
     __m128 t_exit = _mm_min_ps(far_x, _mm_set1_ps(best));

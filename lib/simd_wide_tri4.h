@@ -11,18 +11,18 @@
 
 /* The block's rows on the ray's permuted axes, stepped a block at a time
  * by the leaf: three pointers instead of nine hoisted offsets. */
-WINL void WFN(block_rows_)(const WFN(ray_consts_) * rc, const wide_tri4 *block, const float **row_x,
+WINL void WFN(block_rows_)(const WFN(ray_consts_) * consts, const wide_tri4 *block, const float **row_x,
                            const float **row_y, const float **row_z)
 {
-    *row_x = &block->v[0][0][0] + rc->tri.kx4;
-    *row_y = &block->v[0][0][0] + rc->tri.ky4;
-    *row_z = &block->v[0][0][0] + rc->tri.kz4;
+    *row_x = &block->v[0][0][0] + consts->tri.kx4;
+    *row_y = &block->v[0][0][0] + consts->tri.ky4;
+    *row_z = &block->v[0][0][0] + consts->tri.kz4;
 }
 
 /* 1 with the smallest t in [tmin, best) (lowest lane on ties), 0 for no
  * hit, -1 when the block must take the scalar test (simd_tri4_sse.h). */
-WINL int WFN(tri4_)(const float *row_x, const float *row_y, const float *row_z, const WFN(ray_consts_) * rc,
+WINL int WFN(tri4_)(const float *row_x, const float *row_y, const float *row_z, const WFN(ray_consts_) * consts,
                     float best, float *t_out, unsigned *lane_out, float *vw_det_out)
 {
-    return wide_tri4_test_axes(row_x, row_y, row_z, &rc->tri, best, t_out, lane_out, vw_det_out);
+    return wide_tri4_test_axes(row_x, row_y, row_z, &consts->tri, best, t_out, lane_out, vw_det_out);
 }
