@@ -27,7 +27,7 @@
  * collapse in bvh_wide.c reads it unchanged and the wide walks need no
  * change: a hit on a reference is a hit on its whole triangle, a true hit
  * wherever it lies.  It is not registered as a binary BVH of its own: the
- * binary BVHs keep "every triangle in exactly one leaf" (issue #4).
+ * binary BVHs keep every triangle in exactly one leaf.
  *
  * Robustness: a reference's box must contain the whole part of its
  * triangle inside it, or a ray could slip through the gap.  The part on
@@ -51,12 +51,9 @@
 /* The wide leaves test triangles in blocks of four, so 1 to 4 triangles
  * cost one pass: the SAH here counts a side's triangles rounded up to a
  * whole block (as Embree's builders do with their block size), and the
- * tree prefers sides the collapse can pack into full blocks.  Measured
- * against plain counts (session 7, bvh8, interleaved runs): bunny diffuse
- * +5 %, bunny primary +5 %, Sponza primary +3 %, Sponza diffuse ±0;
- * 18,060 leaves instead of 22,258 on the bunny (Embree: 17,779), 3.8
- * instead of 4.6 MB.  A default leaf size of 4 instead of 3 measured the
- * same. */
+ * tree prefers sides the collapse can pack into full blocks: fewer
+ * leaves, a smaller tree and faster rays than plain counts
+ * (docs/performance.md, "Spatial splits"). */
 #define SB_BLOCK 4u
 #define SB_ROUND(n) (((n) + SB_BLOCK - 1u) / SB_BLOCK * SB_BLOCK)
 #define SB_BUDGET 1.0        /* spatial splits may add at most this many references per triangle, in all */
@@ -280,9 +277,8 @@ static void object_split(const sbuild *S, const sref *refs, uint32_t n, float in
 /* Spatial bins for a node of n references: each reference is chopped into
  * every bin it spans, and deep in the tree a triangle spans a good part of
  * its node, so the chopping (not the sweep) is the build's cost.  Fewer
- * bins for small nodes.  Measured on the bunny (spatial splits tried at
- * 20 of every 26 nodes): 32 bins everywhere built bvh8 in 173 ms, n / 4
- * in 8..32 in 119 ms, for the same SAH cost within 0.5 %. */
+ * bins for small nodes: a faster build for the same SAH cost
+ * (docs/performance.md, "Spatial splits"). */
 static uint32_t spatial_bins(uint32_t n)
 {
     const uint32_t nb = n / SB_SPATIAL_DIV;
@@ -294,9 +290,8 @@ static uint32_t spatial_bins(uint32_t n)
  * bin and leaving its last.  The chopping here only estimates the SAH of
  * each plane, so it cuts the reference's box at the bin planes instead of
  * clipping the triangle (split_ref, which the chosen split then does for
- * real): the bunny's bvh8 built in 119 instead of 315 ms, Sponza's in 137
- * instead of 342, for the same SAH cost within 0.2 % and the same speed
- * (session 7, interleaved runs).
+ * real): a build under half as long for the same SAH cost and speed
+ * (docs/performance.md, "Spatial splits").
  *
  * A part cut from box B at planes on axis k is B on the two other axes
  * and a piece of B's range on k.  So a bin keeps two things apart: the
@@ -305,12 +300,8 @@ static uint32_t spatial_bins(uint32_t n)
  * is the first with the second's range on k — the same box as the union
  * of the parts, without cutting a box and testing two for emptiness per
  * part, and the planes are computed once per axis, not once per part.
- * With the sweep over used bins only: bvh8 builds in 85 instead of 100 ms
- * (bunny) and 96 instead of 123 ms (Sponza), the same trees (session 8).
- * Tried with it and dropped: the bins in two or four interleaved copies
- * (merged at the end) so neighbouring references do not wait for each
- * other's store, and boxes as four-float arrays (GCC -O2 did not
- * vectorize their min/max): no faster. */
+ * With the sweep over used bins only, the same trees build faster.
+ * Rejected alternatives: docs/performance.md, "Spatial splits". */
 
 /* One axis's spatial bins while references are chopped into them. */
 typedef struct sspatial {
@@ -334,26 +325,26 @@ static void spatial_bin(const sref *refs, uint32_t i0, uint32_t i1, int k, float
                         const float *plane, sspatial *A)
 {
     for (uint32_t i = i0; i < i1; ++i) {
-        const sidx_aabb B = refs[i].box;
-        const float bmin = sidx_v3_get(B.min, k), bmax = sidx_v3_get(B.max, k);
+        const sidx_aabb box = refs[i].box;
+        const float bmin = sidx_v3_get(box.min, k), bmax = sidx_v3_get(box.max, k);
         const uint32_t b0 = sbin_of(bmin, lo, scale, nb), b1 = sbin_of(bmax, lo, scale, nb);
         A->enter[b0]++;
         A->exit[b1]++;
         /* the part in bin b spans [from, plane[b + 1]] on k; the last
-         * one, or the one after which nothing of B is left, [from, bmax] */
+         * one, or the one after which nothing of the box is left, [from, bmax] */
         float from = bmin;
         uint32_t b = b0;
         for (; b < b1; ++b) {
             const float p = plane[b + 1];
             if (from <= p) { /* the part is not empty */
-                A->other[b] = sidx_aabb_union(A->other[b], B);
+                A->other[b] = sidx_aabb_union(A->other[b], box);
                 A->klo[b] = MINF(A->klo[b], from);
                 A->khi[b] = MAXF(A->khi[b], p);
             }
-            if (p > bmax) break; /* nothing of B beyond this plane: the rest goes to bin b1 whole */
+            if (p > bmax) break; /* nothing of the box beyond this plane: the rest goes to bin b1 whole */
             from = p;
         }
-        A->other[b1] = sidx_aabb_union(A->other[b1], B);
+        A->other[b1] = sidx_aabb_union(A->other[b1], box);
         A->klo[b1] = MINF(A->klo[b1], from);
         A->khi[b1] = MAXF(A->khi[b1], bmax);
     }
@@ -440,9 +431,8 @@ static sidx_status defer(sbuild *S, size_t off, uint32_t n, sidx_aabb box, uint3
  * in proportion to their references, so a subtree's budget is fixed
  * before it is built: the same tree whichever thread builds which
  * subtree, in whatever order.  (Stich et al. keep one global budget,
- * spent in build order; this share measured the same: bunny and teapot
- * identical, Sponza 84,896 instead of 85,862 references, SAH cost
- * +0.005 %.) */
+ * spent in build order; this share gives trees as good:
+ * docs/performance.md, "Spatial splits".) */
 static sidx_status children(sbuild *S, uint32_t idx, int axis, uint32_t nl, uint32_t nr, uint32_t depth,
                             uint64_t budget)
 {
@@ -543,11 +533,8 @@ static sidx_status build(sbuild *S, size_t off, uint32_t n, sidx_aabb box, uint3
  * binning passes (object and spatial bins, the build's main cost) also
  * run on every thread, each over its own part of the references
  * (par_bin); their partitions stay on the calling thread.  Below ~8000
- * triangles the whole build is on one thread.  Measured (session 8, wall
- * clock, best of 5): bvh8 on 2 threads 45-48 ms instead of 80-84 (bunny),
- * 51-52 instead of 87-92 (Sponza); the tasks alone gave 1.6x, the binning
- * of the top nodes on both threads 1.7-1.8x.  4 tasks per thread measured
- * the same as 2 or 8. */
+ * triangles the whole build is on one thread.  Speed-ups on 2 threads:
+ * docs/performance.md, "Spatial splits". */
 #define SB_PAR_MIN 8192u          /* fewer triangles: one thread (a task is not worth its set-up) */
 #define SB_TASKS_PER_THREAD 4u
 #define SB_TASK_MIN 1024u         /* but no task under this many references (many threads, small scenes) */
@@ -558,7 +545,7 @@ typedef struct stask {
     uint32_t n, depth;
     sidx_aabb box;
     uint64_t budget;
-    sbuild B;               /* the task's own pool (its references at 0..n), nodes and leaf references */
+    sbuild build;           /* the task's own pool (its references at 0..n), nodes and leaf references */
     sidx_status status;
 } stask;
 
@@ -681,22 +668,22 @@ static sidx_status defer(sbuild *S, size_t off, uint32_t n, sidx_aabb box, uint3
     t->box = box;
     t->budget = budget;
     /* the build's parameters; arrays, counts, par and frontier start empty (memset) */
-    t->B.a = &P->shadow;
-    t->B.tris = S->tris;
-    t->B.c_trav = S->c_trav;
-    t->B.c_tri = S->c_tri;
-    t->B.min_overlap = S->min_overlap;
-    t->B.leaf_size = S->leaf_size;
-    t->B.max_leaf = S->max_leaf;
-    t->B.max_depth = S->max_depth;
+    t->build.a = &P->shadow;
+    t->build.tris = S->tris;
+    t->build.c_trav = S->c_trav;
+    t->build.c_tri = S->c_tri;
+    t->build.min_overlap = S->min_overlap;
+    t->build.leaf_size = S->leaf_size;
+    t->build.max_leaf = S->max_leaf;
+    t->build.max_depth = S->max_depth;
     P->count++; /* counted now, so the clean-up frees its arrays even if they cannot all be made */
     /* sized as the entry sizes the whole build's, so they rarely grow */
-    if (!pool_reserve(&t->B, 4u * (size_t)n) ||
-        !sidx__grow(S->a, (void **)&t->B.nodes, &t->B.cap_nodes, n, sizeof *t->B.nodes) ||
-        !sidx__grow(S->a, (void **)&t->B.out, &t->B.cap_out, n + n / 2u, sizeof *t->B.out))
+    if (!pool_reserve(&t->build, 4u * (size_t)n) ||
+        !sidx__grow(S->a, (void **)&t->build.nodes, &t->build.cap_nodes, n, sizeof *t->build.nodes) ||
+        !sidx__grow(S->a, (void **)&t->build.out, &t->build.cap_out, n + n / 2u, sizeof *t->build.out))
         return SIDX_ERR_NOMEM;
-    memcpy(t->B.pool, S->pool + off, (size_t)n * sizeof *S->pool);
-    t->B.top = n;
+    memcpy(t->build.pool, S->pool + off, (size_t)n * sizeof *S->pool);
+    t->build.top = n;
     set_box(&S->nodes[idx], box);
     S->nodes[idx].left_or_first = (uint32_t)(P->count - 1u);
     S->nodes[idx].count_axis = SB_TASK_NODE;
@@ -711,7 +698,7 @@ static void run_tasks(void *ctx, unsigned thread)
         const size_t i = atomic_fetch_add(&P->next, 1);
         if (i >= P->count) return;
         stask *t = &P->task[P->order[i]];
-        t->status = build(&t->B, 0, t->n, t->box, t->depth, t->budget);
+        t->status = build(&t->build, 0, t->n, t->box, t->depth, t->budget);
     }
 }
 
@@ -720,9 +707,9 @@ static void free_tasks(const sidx_accel *a, stasks *P)
     sidx__free(a, P->tobj);
     sidx__free(a, P->tspat);
     for (size_t i = 0; i < P->count; ++i) {
-        sidx__free(a, P->task[i].B.pool);
-        sidx__free(a, P->task[i].B.nodes);
-        sidx__free(a, P->task[i].B.out);
+        sidx__free(a, P->task[i].build.pool);
+        sidx__free(a, P->task[i].build.nodes);
+        sidx__free(a, P->task[i].build.out);
     }
     sidx__free(a, P->task);
     sidx__free(a, P->order);
@@ -737,15 +724,15 @@ static uint32_t stitch(const sbuild *S, const stasks *P, uint32_t i, bvh_node *n
     const bvh_node *src = &S->nodes[i];
     const uint32_t me = (uint32_t)*nn;
     if (src->count_axis == SB_TASK_NODE) {
-        const sbuild *B = &P->task[src->left_or_first].B;
-        for (size_t j = 0; j < B->num_nodes; ++j) {
-            bvh_node d = B->nodes[j];
+        const sbuild *task_build = &P->task[src->left_or_first].build;
+        for (size_t j = 0; j < task_build->num_nodes; ++j) {
+            bvh_node d = task_build->nodes[j];
             d.left_or_first += bvh_is_leaf(&d) ? (uint32_t)*no : me;
             nodes[me + j] = d;
         }
-        memcpy(out + *no, B->out, B->num_out * sizeof *out);
-        *nn += B->num_nodes;
-        *no += B->num_out;
+        memcpy(out + *no, task_build->out, task_build->num_out * sizeof *out);
+        *nn += task_build->num_nodes;
+        *no += task_build->num_out;
         return me;
     }
     nodes[me] = *src;
@@ -781,10 +768,10 @@ static sidx_status finish_tasks(sbuild *S, stasks *P, unsigned threads)
     for (size_t i = 0; i < P->count; ++i) {
         const stask *t = &P->task[i];
         if (t->status != SIDX_OK) return t->status;
-        nn += t->B.num_nodes;
-        no += t->B.num_out;
-        S->num_leaves += t->B.num_leaves;
-        if (t->B.max_depth_seen > S->max_depth_seen) S->max_depth_seen = t->B.max_depth_seen;
+        nn += t->build.num_nodes;
+        no += t->build.num_out;
+        S->num_leaves += t->build.num_leaves;
+        if (t->build.max_depth_seen > S->max_depth_seen) S->max_depth_seen = t->build.max_depth_seen;
     }
     bvh_node *nodes = sidx__alloc(S->a, nn, sizeof *nodes);
     sref *out = sidx__alloc(S->a, no, sizeof *out);

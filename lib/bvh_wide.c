@@ -6,13 +6,9 @@
  * with spatial splits (bvh_spatial.c, Stich et al. 2009: a straddling
  * triangle may be referenced by both sides, so sibling boxes stop
  * overlapping), or with opt.no_spatial_splits the ordinary binned-SAH
- * build (bvh_build.c, Wald 2007).  Measured (session 7, interleaved runs,
- * one thread): Sponza diffuse rays bvh8 +28 %, bvh4 +32-40 %, for 30 %
- * more references and a build about twice as long (140 vs 60 ms); the
- * bunny, whose triangles are small and even, is unchanged (1 % more
- * references).  8x8 packets over bvh8 lose on Sponza primary rays (38
- * instead of 43 Mrays/s; single rays gain, 32 instead of 27), still more
- * than twice Embree's packets.
+ * build (bvh_build.c, Wald 2007).  Spatial splits pay where big
+ * triangles overlap (Sponza), and cost nothing where they are small and
+ * even (the bunny): docs/performance.md, "Spatial splits".
  *
  * The collapse picks, by dynamic programming on the SAH, which binary
  * nodes become wide nodes, which subtrees become leaves (runs of
@@ -27,8 +23,8 @@
  *
  * Kernels are chosen once, when the structure is built: for bvh8 the AVX2
  * walk compiled for AVX-512F/VL when the CPU has those (32 vector
- * registers: no spills at leaf entry; session 6, Sponza / bunny diffuse
- * rays +4 %, primary rays +8 %), else AVX2; SSE4.1 for bvh4; else the
+ * registers: no spills at leaf entry; docs/performance.md, "Wide
+ * BVHs"), else AVX2; SSE4.1 for bvh4; else the
  * scalar copy of the same walk (__builtin_cpu_supports).  SIDX_SIMD in
  * the environment caps the choice: "scalar", "sse4.1" or "avx2" (the
  * tests compare every copy the CPU can run).  A NOTE event on the build
@@ -42,42 +38,55 @@
 
 #define SIDX_STRUCTURE_NAME (a->name)
 
-/* ---- the traversal, instantiated per width and instruction set -------------- */
+/* ---- the traversal, instantiated per width and instruction set --------------
+ * bvh_wide_walk.h is the walk; it includes the kernels of WALK_ISA
+ * (simd_wide_scalar.h, simd_wide_sse.h, simd_wide_avx2.h,
+ * simd_wide_avx512.h) and names every function after WALK_W and
+ * WALK_ISA_NAME: walk_8_avx512, sidx__wide_kernels_4_sse41, ... (the full
+ * list: lib/README.md, "Generated functions"). */
 
 #define WALK_TARGET
 #define WALK_ISA 0
+#define WALK_ISA_NAME scalar
 #define WALK_W 4
 #include "bvh_wide_walk.h"
 #undef WALK_W
 #define WALK_W 8
 #include "bvh_wide_walk.h"
 #undef WALK_W
+#undef WALK_ISA_NAME
 #undef WALK_ISA
 #undef WALK_TARGET
 
 #ifdef SIDX_WIDE_X86
 #define WALK_TARGET __attribute__((target("sse4.1")))
 #define WALK_ISA 1
+#define WALK_ISA_NAME sse41
 #define WALK_W 4
 #include "bvh_wide_walk.h"
 #undef WALK_W
+#undef WALK_ISA_NAME
 #undef WALK_ISA
 #undef WALK_TARGET
 
 #define WALK_TARGET __attribute__((target("avx2,fma,popcnt")))
 #define WALK_ISA 2
+#define WALK_ISA_NAME avx2
 #define WALK_W 8
 #include "bvh_wide_walk.h"
 #undef WALK_W
+#undef WALK_ISA_NAME
 #undef WALK_ISA
 #undef WALK_TARGET
 
-/* The same source again; only the compiler's register file differs. */
+/* The AVX2 walk again with 32 vector registers (simd_wide_avx512.h). */
 #define WALK_TARGET __attribute__((target("avx2,fma,popcnt,avx512f,avx512vl")))
 #define WALK_ISA 3
+#define WALK_ISA_NAME avx512
 #define WALK_W 8
 #include "bvh_wide_walk.h"
 #undef WALK_W
+#undef WALK_ISA_NAME
 #undef WALK_ISA
 #undef WALK_TARGET
 #endif
@@ -106,11 +115,11 @@ wide_isa sidx__wide_pick_isa(uint32_t width)
 
 static void set_kernels(wide_bvh *w, sidx_tri_method tri)
 {
-    const wide_kernels *k = w->width == 8 ? &sidx__wide_kernels_8_0 : &sidx__wide_kernels_4_0;
+    const wide_kernels *k = w->width == 8 ? &sidx__wide_kernels_8_scalar : &sidx__wide_kernels_4_scalar;
 #ifdef SIDX_WIDE_X86
-    if (w->isa == WIDE_ISA_AVX512) k = &sidx__wide_kernels_8_3;
-    else if (w->isa == WIDE_ISA_AVX2) k = &sidx__wide_kernels_8_2;
-    else if (w->isa == WIDE_ISA_SSE41) k = &sidx__wide_kernels_4_1;
+    if (w->isa == WIDE_ISA_AVX512) k = &sidx__wide_kernels_8_avx512;
+    else if (w->isa == WIDE_ISA_AVX2) k = &sidx__wide_kernels_8_avx2;
+    else if (w->isa == WIDE_ISA_SSE41) k = &sidx__wide_kernels_4_sse41;
 #endif
     /* The triangle test is fixed at build: decide here, not per ray. */
     const int simd_tri = tri == SIDX_TRI_WATERTIGHT;
@@ -141,16 +150,8 @@ static void set_kernels(wide_bvh *w, sidx_tri_method tri)
  * as in Embree's builders.  This replaces a greedy "open the child of
  * largest area" rule: it fills nodes where that pays and keeps subtrees
  * of up to WIDE_MAX_LEAF triangles as multi-block leaves where that pays.
- *
- * Measured (session 5, bvh8 AVX2, 20000 Sponza diffuse rays, callgrind
- * instructions in the walk): C_NODE 0.7 / 1.5 / 2, WIDE_MAX_LEAF 4 / 12 /
- * 16, a binary tree built down to 1 triangle per leaf (as Ylitie et al.
- * do) and 8 to 512 bins all moved the count by under 1 % (bins: ±4 %
- * either way, no trend) and the timing by less than the noise, so the
- * constants stay.  Again on the bunny's diffuse rays (session 9, the
- * targets' fair bvh8/Embree ratio, two alternating runs each): as they
- * are 0.97 and 0.92; WIDE_MAX_LEAF 12: 0.93, 0.97; 16: 0.93, 0.93;
- * C_NODE 1.5: 0.98, 0.95; 0.7: 0.91, 0.92 — all within the noise. */
+ * Other values of the three constants moved neither instruction counts
+ * nor times beyond the noise: docs/performance.md, "Wide BVHs". */
 #define WIDE_MAX_LEAF 8u
 #define WIDE_C_NODE 1.0f
 #define WIDE_C_BLOCK 1.0f
@@ -232,11 +233,11 @@ static uint32_t make_leaf(collapse *C, uint32_t first, uint32_t count)
 {
     const uint32_t b0 = C->num_blocks, nb = (count + 3u) / 4u;
     for (uint32_t k = 0; k < nb; ++k) {
-        wide_tri4 *B = &C->blocks[b0 + k];
+        wide_tri4 *block = &C->blocks[b0 + k];
         for (uint32_t l = 0; l < 4; ++l) {
             const uint32_t i = 4u * k + l;
-            if (i < count) wide_set_lane(B, l, C->b->tris[first + i].v, C->b->prim_id[first + i]);
-            else wide_set_lane(B, l, NULL, 0);
+            if (i < count) wide_set_lane(block, l, C->b->tris[first + i].v, C->b->prim_id[first + i]);
+            else wide_set_lane(block, l, NULL, 0);
         }
     }
     C->blocks[b0 + nb - 1].prim[0] |= WIDE_LAST_BLOCK;
@@ -296,21 +297,21 @@ static uint32_t make_node(collapse *C, uint32_t n2, uint32_t depth)
 static uint32_t leaf_prims(const wide_bvh *w, uint32_t first_block)
 {
     uint32_t c = 0;
-    for (const wide_tri4 *B = w->blocks + first_block;; ++B) {
-        for (int l = 0; l < 4; ++l) c += (B->prim[l] & WIDE_PRIM_MASK) != WIDE_PAD_PRIM;
-        if (B->prim[0] & WIDE_LAST_BLOCK) return c;
+    for (const wide_tri4 *block = w->blocks + first_block;; ++block) {
+        for (int l = 0; l < 4; ++l) c += (block->prim[l] & WIDE_PRIM_MASK) != WIDE_PAD_PRIM;
+        if (block->prim[0] & WIDE_LAST_BLOCK) return c;
     }
 }
 
 static sidx_aabb leaf_box(const wide_bvh *w, uint32_t first_block)
 {
     sidx_aabb bb = sidx_aabb_empty();
-    for (const wide_tri4 *B = w->blocks + first_block;; ++B) {
+    for (const wide_tri4 *block = w->blocks + first_block;; ++block) {
         for (int l = 0; l < 4; ++l) {
-            if ((B->prim[l] & WIDE_PRIM_MASK) == WIDE_PAD_PRIM) continue;
-            for (int v = 0; v < 3; ++v) bb = sidx_aabb_grow(bb, sidx_v3(B->v[v][0][l], B->v[v][1][l], B->v[v][2][l]));
+            if ((block->prim[l] & WIDE_PRIM_MASK) == WIDE_PAD_PRIM) continue;
+            for (int v = 0; v < 3; ++v) bb = sidx_aabb_grow(bb, sidx_v3(block->v[v][0][l], block->v[v][1][l], block->v[v][2][l]));
         }
-        if (B->prim[0] & WIDE_LAST_BLOCK) return bb;
+        if (block->prim[0] & WIDE_LAST_BLOCK) return bb;
     }
 }
 
@@ -345,11 +346,11 @@ static void emit_build(const sidx_accel *a, const wide_bvh *w, const uint32_t *c
         /* The event lists the leaf's ids in one run; the blocks interleave them with the
          * vertices, so they are gathered (this runs only with a hook; no memory: no list). */
         uint32_t *ids = sidx__alloc(a, np, sizeof *ids), nid = 0;
-        for (const wide_tri4 *B = w->blocks + (c & ~WIDE_LEAF_BIT); ids; ++B) {
+        for (const wide_tri4 *block = w->blocks + (c & ~WIDE_LEAF_BIT); ids; ++block) {
             for (int l = 0; l < 4; ++l)
-                if ((B->prim[l] & WIDE_PRIM_MASK) != WIDE_PAD_PRIM && nid < np)
-                    ids[nid++] = B->prim[l] & WIDE_PRIM_MASK;
-            if (B->prim[0] & WIDE_LAST_BLOCK) break;
+                if ((block->prim[l] & WIDE_PRIM_MASK) != WIDE_PAD_PRIM && nid < np)
+                    ids[nid++] = block->prim[l] & WIDE_PRIM_MASK;
+            if (block->prim[0] & WIDE_LAST_BLOCK) break;
         }
         SIDX_EMIT(1, h, SIDX_EV_BUILD_LEAF, e_.node = id; e_.depth = depth + 1; e_.count = np; e_.cost = cost;
                   e_.reason = SIDX_LEAF_FEW_PRIMS; e_.bounds = wide_slot_box(n, W, s); e_.prims = ids);
@@ -401,15 +402,15 @@ static sidx_status wide_refit(sidx_accel *a, sidx_error *err)
     if (!w || w->num_inner == 0) return SIDX_OK;
     const sidx_mesh *m = a->mesh;
     for (uint32_t k = 0; k < w->num_blocks; ++k) {
-        wide_tri4 *B = &w->blocks[k];
+        wide_tri4 *block = &w->blocks[k];
         for (int l = 0; l < 4; ++l) {
-            const uint32_t id = B->prim[l] & WIDE_PRIM_MASK;
+            const uint32_t id = block->prim[l] & WIDE_PRIM_MASK;
             if (id == WIDE_PAD_PRIM) continue;
             for (int v = 0; v < 3; ++v) {
                 const sidx_vec3 p = sidx_mesh_vertex(m, id, v);
-                B->v[v][0][l] = p.x;
-                B->v[v][1][l] = p.y;
-                B->v[v][2][l] = p.z;
+                block->v[v][0][l] = p.x;
+                block->v[v][1][l] = p.y;
+                block->v[v][2][l] = p.z;
             }
         }
     }

@@ -4,10 +4,13 @@
  * Layout: a packet holds its rays in structure-of-arrays form, padded to
  * groups of 8 lanes; a padding lane has best = −inf so every box and every
  * triangle misses it.  The kernels that test one box or one triangle
- * against a group of 8 rays exist twice: AVX2 (target attribute, chosen
- * at run time) and a scalar loop doing the same arithmetic.  They are
- * called per group, not inlined into the walk, which keeps one walk for
- * both instruction sets; a call costs a few cycles against 8 slab tests.
+ * against a group of 8 rays exist twice: a scalar loop, the reference
+ * (simd_packet_scalar.h), and AVX2 doing the same arithmetic
+ * (simd_packet_avx2.h; target attribute, chosen at run time); the
+ * frustum's kernels are SSE2 (simd_packet_sse.h) with the same
+ * reference.  The walk is written once and compiled twice
+ * (packet_walk_avx2, packet_walk_generic); in the generic copy the kernels
+ * are called per group, which costs a few cycles against 8 slab tests.
  *
  * Correctness is the single-ray walk's: each lane keeps its own best t,
  * box tests are the robust slab test of bvh_slab (far planes times the
@@ -23,17 +26,18 @@
 #define PKT_X86 1
 #endif
 
-#define GL 8u                      /* lanes per group */
-#define NG (SIDX_PACKET_MAX / GL)  /* groups per packet */
+#define GROUP_LANES 8u                             /* rays per group */
+#define MAX_GROUPS (SIDX_PACKET_MAX / GROUP_LANES) /* groups per packet */
 #define STACK (2u * BVH_DEPTH_LIMIT + 2u)
 
-typedef struct pkt {
-    _Alignas(32) float ox[SIDX_PACKET_MAX], oy[SIDX_PACKET_MAX], oz[SIDX_PACKET_MAX];
-    _Alignas(32) float ix[SIDX_PACKET_MAX], iy[SIDX_PACKET_MAX], iz[SIDX_PACKET_MAX];
-    _Alignas(32) float fx[SIDX_PACKET_MAX], fy[SIDX_PACKET_MAX], fz[SIDX_PACKET_MAX]; /* 1/d · Ize factor */
+typedef struct packet {
+    _Alignas(32) float org_x[SIDX_PACKET_MAX], org_y[SIDX_PACKET_MAX], org_z[SIDX_PACKET_MAX];
+    _Alignas(32) float inv_x[SIDX_PACKET_MAX], inv_y[SIDX_PACKET_MAX], inv_z[SIDX_PACKET_MAX]; /* 1/d */
+    _Alignas(32) float inv_far_x[SIDX_PACKET_MAX], inv_far_y[SIDX_PACKET_MAX],
+        inv_far_z[SIDX_PACKET_MAX]; /* 1/d · Ize */
     _Alignas(32) float tmin[SIDX_PACKET_MAX], best[SIDX_PACKET_MAX];
     /* watertight test, permuted by the (common) kx, ky, kz */
-    _Alignas(32) float okx[SIDX_PACKET_MAX], oky[SIDX_PACKET_MAX], okz[SIDX_PACKET_MAX];
+    _Alignas(32) float org_kx[SIDX_PACKET_MAX], org_ky[SIDX_PACKET_MAX], org_kz[SIDX_PACKET_MAX];
     _Alignas(32) float sx[SIDX_PACKET_MAX], sy[SIDX_PACKET_MAX], sz[SIDX_PACKET_MAX];
     uint32_t prim[SIDX_PACKET_MAX];
     uint32_t n, ngroups;
@@ -42,13 +46,14 @@ typedef struct pkt {
     uint8_t sign[3];
     int anyhit;
     const sidx_ray *rays;
-    /* frustum: 4 inward plane normals through the common origin */
+    /* frustum: 4 inward plane normals through the common origin, the apex */
     int frustum;
-    float fo[3], fn[4][3], fl1[4]; /* plane normals and their L1 norms */
+    float apex[3], plane_n[4][3], plane_l1[4]; /* plane normals and their L1 norms */
 #if defined(__SSE2__)
-    __m128 fnv[3], fpos[3], fl1v; /* the same, one plane per lane; fpos: normal component >= 0 */
+    /* the same, one plane per lane (simd_packet_sse.h); plane_pos_lanes: normal component >= 0 */
+    __m128 plane_n_lanes[3], plane_pos_lanes[3], plane_l1_lanes;
 #endif
-} pkt;
+} packet;
 
 typedef struct walkopt {
     const sidx_accel *a;
@@ -56,284 +61,140 @@ typedef struct walkopt {
     float scale;
     int avx, simd_tri, frustum;
     uint32_t frustum_depth;
-    sidx_packet_stats *st;
+    sidx_packet_stats *stats;
 } walkopt;
 
 /* A deferred node: its index, the first group of rays that may hit it
  * (the groups before it missed its parent) and its depth. */
 typedef struct pstack {
-    uint32_t node, g, depth;
+    uint32_t node, first_group, depth;
 } pstack;
 
-/* ---- kernels: one box / one triangle against 8 rays -------------------------------- */
+/* ---- kernels: one box / one triangle against 8 rays; the frustum ----------------
+ * One header per instruction set: simd_packet_scalar.h (the reference),
+ * simd_packet_sse.h (the frustum, SSE2), simd_packet_avx2.h (box and
+ * triangle, AVX2).  The choice is made here, once. */
 
-static unsigned box8_scalar(const pkt *P, uint32_t g, const float pl[6])
-{
-    unsigned m = 0;
-    for (uint32_t l = 0; l < GL; ++l) {
-        const uint32_t i = g * GL + l;
-        const float o[3] = {P->ox[i], P->oy[i], P->oz[i]}, inv[3] = {P->ix[i], P->iy[i], P->iz[i]},
-                    fin[3] = {P->fx[i], P->fy[i], P->fz[i]};
-        float t0 = P->tmin[i], t1 = P->best[i];
-        for (int k = 0; k < 3; ++k) {
-            const float a = (pl[k] - o[k]) * inv[k], b = (pl[3 + k] - o[k]) * fin[k];
-            t0 = a > t0 ? a : t0;
-            t1 = b < t1 ? b : t1;
-        }
-        m |= (unsigned)(t0 <= t1) << l;
-    }
-    return m;
-}
-
+#include "simd_packet_scalar.h"
+#if defined(__SSE2__)
+#include "simd_packet_sse.h"
+#endif
 #ifdef PKT_X86
-__attribute__((target("avx2,fma"))) static unsigned box8_avx2(const pkt *P, uint32_t g, const float pl[6])
+#include "simd_packet_avx2.h"
+#else
+/* No AVX2 kernels here, and avx is always 0: the walk's avx branches,
+ * which name them, are dead; the reference stands in. */
+static unsigned box8_avx2(const packet *pkt, uint32_t group, const float planes[6])
 {
-    const uint32_t i = g * GL;
-    const __m256 ox = _mm256_load_ps(P->ox + i), oy = _mm256_load_ps(P->oy + i), oz = _mm256_load_ps(P->oz + i);
-    const __m256 nx = _mm256_mul_ps(_mm256_sub_ps(_mm256_set1_ps(pl[0]), ox), _mm256_load_ps(P->ix + i));
-    const __m256 ny = _mm256_mul_ps(_mm256_sub_ps(_mm256_set1_ps(pl[1]), oy), _mm256_load_ps(P->iy + i));
-    const __m256 nz = _mm256_mul_ps(_mm256_sub_ps(_mm256_set1_ps(pl[2]), oz), _mm256_load_ps(P->iz + i));
-    const __m256 fx = _mm256_mul_ps(_mm256_sub_ps(_mm256_set1_ps(pl[3]), ox), _mm256_load_ps(P->fx + i));
-    const __m256 fy = _mm256_mul_ps(_mm256_sub_ps(_mm256_set1_ps(pl[4]), oy), _mm256_load_ps(P->fy + i));
-    const __m256 fz = _mm256_mul_ps(_mm256_sub_ps(_mm256_set1_ps(pl[5]), oz), _mm256_load_ps(P->fz + i));
-    __m256 t0 = _mm256_max_ps(nx, _mm256_load_ps(P->tmin + i)); /* slab value first: NaN never narrows */
-    t0 = _mm256_max_ps(ny, t0);
-    t0 = _mm256_max_ps(nz, t0);
-    __m256 t1 = _mm256_min_ps(fx, _mm256_load_ps(P->best + i));
-    t1 = _mm256_min_ps(fy, t1);
-    t1 = _mm256_min_ps(fz, t1);
-    return (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(t0, t1, _CMP_LE_OQ));
+    return box8_scalar(pkt, group, planes);
+}
+static void tri8_avx2(const walkopt *walk, packet *pkt, uint32_t group, const bvh_tri *tri, uint32_t prim)
+{
+    tri8_scalar(walk, pkt, group, tri, prim);
 }
 #endif
 
-/* One lane, one triangle, the single-ray test; returns 1 on a hit (best updated). */
-static int tri_lane(const walkopt *W, pkt *P, uint32_t i, const bvh_tri *T, uint32_t prim)
+/* The frustum's kernels: SSE2 wherever it is there (every x86-64). */
+#if defined(__SSE2__)
+static int frustum_overlap(const packet *pkt, const bvh_node *n) { return frustum_overlap_sse(pkt, n); }
+static SIDX_INLINE int frustum_rays_inside(const packet *pkt, const sidx_ray *rays, uint32_t n, const float len2[4])
 {
-    if (i >= P->n) return 0;
-    float t;
-    if (!sidx__tri_test(W->a->opt.tri, &P->rays[i], T->v[0], T->v[1], T->v[2], P->best[i], &t, NULL, NULL))
-        return 0;
-    P->prim[i] = prim;
-    P->best[i] = P->anyhit ? -INFINITY : t; /* an occluded shadow ray is done */
-    return 1;
+    return frustum_rays_inside_sse(pkt, rays, n, len2);
 }
-
-static void tri8_scalar(const walkopt *W, pkt *P, uint32_t g, const bvh_tri *T, uint32_t prim)
+static SIDX_INLINE void frustum_lanes(packet *pkt) { frustum_lanes_sse(pkt); }
+#else
+static int frustum_overlap(const packet *pkt, const bvh_node *n) { return frustum_overlap_scalar(pkt, n); }
+static SIDX_INLINE int frustum_rays_inside(const packet *pkt, const sidx_ray *rays, uint32_t n, const float len2[4])
 {
-    for (uint32_t l = 0; l < GL; ++l) tri_lane(W, P, g * GL + l, T, prim);
+    return frustum_rays_inside_scalar(pkt, rays, n, len2);
 }
-
-#ifdef PKT_X86
-/* The watertight test across 8 rays sharing kx, ky, kz: the triangle is
- * broadcast, each lane translates and shears it by its own ray. */
-__attribute__((target("avx2,fma"))) static void tri8_avx2(const walkopt *W, pkt *P, uint32_t g, const bvh_tri *T,
-                                                          uint32_t prim)
-{
-    const uint32_t i = g * GL;
-    const float *pa = &T->v[0].x, *pb = &T->v[1].x, *pc = &T->v[2].x;
-    const __m256 okx = _mm256_load_ps(P->okx + i), oky = _mm256_load_ps(P->oky + i), okz = _mm256_load_ps(P->okz + i);
-    const __m256 sx = _mm256_load_ps(P->sx + i), sy = _mm256_load_ps(P->sy + i), sz = _mm256_load_ps(P->sz + i);
-    const __m256 ax = _mm256_sub_ps(_mm256_set1_ps(pa[P->kx]), okx), ay = _mm256_sub_ps(_mm256_set1_ps(pa[P->ky]), oky),
-                 az = _mm256_sub_ps(_mm256_set1_ps(pa[P->kz]), okz);
-    const __m256 bx = _mm256_sub_ps(_mm256_set1_ps(pb[P->kx]), okx), by = _mm256_sub_ps(_mm256_set1_ps(pb[P->ky]), oky),
-                 bz = _mm256_sub_ps(_mm256_set1_ps(pb[P->kz]), okz);
-    const __m256 cx = _mm256_sub_ps(_mm256_set1_ps(pc[P->kx]), okx), cy = _mm256_sub_ps(_mm256_set1_ps(pc[P->ky]), oky),
-                 cz = _mm256_sub_ps(_mm256_set1_ps(pc[P->kz]), okz);
-    const __m256 Ax = _mm256_sub_ps(ax, _mm256_mul_ps(sx, az)), Ay = _mm256_sub_ps(ay, _mm256_mul_ps(sy, az));
-    const __m256 Bx = _mm256_sub_ps(bx, _mm256_mul_ps(sx, bz)), By = _mm256_sub_ps(by, _mm256_mul_ps(sy, bz));
-    const __m256 Cx = _mm256_sub_ps(cx, _mm256_mul_ps(sx, cz)), Cy = _mm256_sub_ps(cy, _mm256_mul_ps(sy, cz));
-    const __m256 U = _mm256_sub_ps(_mm256_mul_ps(Cx, By), _mm256_mul_ps(Cy, Bx));
-    const __m256 V = _mm256_sub_ps(_mm256_mul_ps(Ax, Cy), _mm256_mul_ps(Ay, Cx));
-    const __m256 Wv = _mm256_sub_ps(_mm256_mul_ps(Bx, Ay), _mm256_mul_ps(By, Ax));
-    const __m256 zero = _mm256_setzero_ps();
-    const unsigned zm = (unsigned)_mm256_movemask_ps(_mm256_or_ps(
-        _mm256_or_ps(_mm256_cmp_ps(U, zero, _CMP_EQ_OQ), _mm256_cmp_ps(V, zero, _CMP_EQ_OQ)),
-        _mm256_cmp_ps(Wv, zero, _CMP_EQ_OQ)));
-    const __m256 neg = _mm256_or_ps(_mm256_or_ps(_mm256_cmp_ps(U, zero, _CMP_LT_OQ), _mm256_cmp_ps(V, zero, _CMP_LT_OQ)),
-                                    _mm256_cmp_ps(Wv, zero, _CMP_LT_OQ));
-    const __m256 pos = _mm256_or_ps(_mm256_or_ps(_mm256_cmp_ps(U, zero, _CMP_GT_OQ), _mm256_cmp_ps(V, zero, _CMP_GT_OQ)),
-                                    _mm256_cmp_ps(Wv, zero, _CMP_GT_OQ));
-    const __m256 det = _mm256_add_ps(_mm256_add_ps(U, V), Wv);
-    const __m256 Tt = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(U, _mm256_mul_ps(sz, az)), _mm256_mul_ps(V, _mm256_mul_ps(sz, bz))),
-                                    _mm256_mul_ps(Wv, _mm256_mul_ps(sz, cz)));
-    const __m256 t = _mm256_div_ps(Tt, det);
-    const __m256 best = _mm256_load_ps(P->best + i);
-    const __m256 ok = _mm256_andnot_ps(
-        _mm256_and_ps(neg, pos),
-        _mm256_and_ps(_mm256_cmp_ps(det, zero, _CMP_NEQ_UQ),
-                      _mm256_and_ps(_mm256_cmp_ps(t, _mm256_load_ps(P->tmin + i), _CMP_GE_OQ),
-                                    _mm256_cmp_ps(t, best, _CMP_LT_OQ))));
-    unsigned m = (unsigned)_mm256_movemask_ps(ok) & ~zm;
-    if (m) {
-        _mm256_store_ps(P->best + i, _mm256_blendv_ps(best, P->anyhit ? _mm256_set1_ps(-INFINITY) : t, ok));
-        /* ok lanes with a zero edge were blended too; they are redone below */
-        while (m) {
-            P->prim[i + (uint32_t)__builtin_ctz(m)] = prim;
-            m &= m - 1;
-        }
-    }
-    if (SIDX_UNLIKELY(zm)) {
-        /* Exact zero edge function: the scalar test (double fallback) for
-         * those lanes, from the bound they had before this triangle. */
-        const float *bp = (const float *)&best;
-        for (unsigned z = zm; z; z &= z - 1) {
-            const uint32_t l = (uint32_t)__builtin_ctz(z);
-            P->best[i + l] = bp[l];
-            tri_lane(W, P, i + l, T, prim);
-        }
-    }
-}
+static SIDX_INLINE void frustum_lanes(packet *pkt) { (void)pkt; /* the reference reads the planes as they are */ }
 #endif
 
 /* ---- frustum ---------------------------------------------------------------------- */
-
-/* Is the node box possibly inside the pyramid of the corner rays?  Per
- * plane, the box corner farthest along the inward normal decides; a
- * relative margin keeps the test conservative under rounding (see
- * frustum_setup for the bound). */
-static int frustum_overlap(const pkt *P, const bvh_node *n)
-{
-    const float diag = (n->bmax[0] - n->bmin[0]) + (n->bmax[1] - n->bmin[1]) + (n->bmax[2] - n->bmin[2]);
-#if defined(__SSE2__)
-    /* The 4 planes in the 4 lanes of SSE2 (baseline x86-64): the same
-     * operations in the same order as the scalar loop below. */
-    __m128 dot = _mm_setzero_ps(), mag = _mm_setzero_ps();
-    const __m128 absmask = _mm_castsi128_ps(_mm_set1_epi32(0x7FFFFFFF));
-    for (int k = 0; k < 3; ++k) {
-        const __m128 sel = _mm_or_ps(_mm_and_ps(P->fpos[k], _mm_set1_ps(n->bmax[k])),
-                                     _mm_andnot_ps(P->fpos[k], _mm_set1_ps(n->bmin[k])));
-        const __m128 c = _mm_sub_ps(sel, _mm_set1_ps(P->fo[k]));
-        dot = _mm_add_ps(dot, _mm_mul_ps(P->fnv[k], c));
-        mag = _mm_add_ps(mag, _mm_and_ps(c, absmask));
-    }
-    const __m128 lim = _mm_mul_ps(_mm_mul_ps(_mm_set1_ps(-1e-5f), P->fl1v), _mm_add_ps(mag, _mm_set1_ps(diag)));
-    return _mm_movemask_ps(_mm_cmplt_ps(dot, lim)) == 0;
-#else
-    for (int p = 0; p < 4; ++p) {
-        const float *nn = P->fn[p];
-        float dot = 0.0f, mag = 0.0f;
-        for (int k = 0; k < 3; ++k) {
-            const float c = (nn[k] >= 0.0f ? n->bmax[k] : n->bmin[k]) - P->fo[k];
-            dot += nn[k] * c;
-            mag += fabsf(c);
-        }
-        if (dot < (-1e-5f * P->fl1[p]) * (mag + diag)) return 0;
-    }
-    return 1;
-#endif
-}
 
 /* Planes through the common origin spanned by neighbouring corner rays,
  * oriented inward; kept only if every ray of the packet lies inside them
  * (n·d >= −1e-6 |n||d|), which the margin in frustum_overlap (1e-5 times
  * distance plus box size) then covers: a culled box is at least that far
  * outside, a ray at most 1e-6 of its distance. */
-static void frustum_setup(pkt *P, const sidx_ray *rays, uint32_t n, uint32_t w)
+static void frustum_setup(packet *pkt, const sidx_ray *rays, uint32_t n, uint32_t w)
 {
-    P->frustum = 0;
+    pkt->frustum = 0;
     if (w == 0 || n % w || n < 4 || w < 2 || n / w < 2) return;
-    const sidx_vec3 c[4] = {rays[0].dir, rays[w - 1].dir, rays[n - 1].dir, rays[n - w].dir}; /* around the tile */
-    const sidx_vec3 mid = sidx_v3_add(sidx_v3_add(c[0], c[1]), sidx_v3_add(c[2], c[3]));
+    const sidx_vec3 corner[4] = {rays[0].dir, rays[w - 1].dir, rays[n - 1].dir, rays[n - w].dir}; /* around the tile */
+    const sidx_vec3 mid = sidx_v3_add(sidx_v3_add(corner[0], corner[1]), sidx_v3_add(corner[2], corner[3]));
     float len2[4];
-    for (int p = 0; p < 4; ++p) {
-        sidx_vec3 nn = sidx_v3_cross(c[p], c[(p + 1) % 4]);
-        if (sidx_v3_dot(nn, mid) < 0.0f) nn = sidx_v3_scale(nn, -1.0f);
-        const float len = sidx_v3_length(nn);
+    for (int plane = 0; plane < 4; ++plane) {
+        sidx_vec3 normal = sidx_v3_cross(corner[plane], corner[(plane + 1) % 4]);
+        if (sidx_v3_dot(normal, mid) < 0.0f) normal = sidx_v3_scale(normal, -1.0f);
+        const float len = sidx_v3_length(normal);
         if (!(len > 0.0f) || !isfinite(len)) return;
-        len2[p] = len * len;
-        P->fn[p][0] = nn.x;
-        P->fn[p][1] = nn.y;
-        P->fn[p][2] = nn.z;
-        P->fl1[p] = fabsf(nn.x) + fabsf(nn.y) + fabsf(nn.z);
+        len2[plane] = len * len;
+        pkt->plane_n[plane][0] = normal.x;
+        pkt->plane_n[plane][1] = normal.y;
+        pkt->plane_n[plane][2] = normal.z;
+        pkt->plane_l1[plane] = fabsf(normal.x) + fabsf(normal.y) + fabsf(normal.z);
     }
     /* Every ray must start at the apex and lie inside the 4 planes:
      * n·d >= −1e-6 |n||d|, without a square root per ray.  One pass over
      * the rays with the 4 planes in the 4 SSE lanes (the same products in
-     * the same order as sidx_v3_dot): this check was most of the set-up,
-     * about 90 instructions per ray when done plane by plane. */
-#if defined(__SSE2__)
-    const __m128 nx = _mm_setr_ps(P->fn[0][0], P->fn[1][0], P->fn[2][0], P->fn[3][0]);
-    const __m128 ny = _mm_setr_ps(P->fn[0][1], P->fn[1][1], P->fn[2][1], P->fn[3][1]);
-    const __m128 nz = _mm_setr_ps(P->fn[0][2], P->fn[1][2], P->fn[2][2], P->fn[3][2]);
-    const __m128 tol = _mm_mul_ps(_mm_set1_ps(1e-12f), _mm_setr_ps(len2[0], len2[1], len2[2], len2[3]));
-    __m128 bad = _mm_setzero_ps();
-    for (uint32_t i = 0; i < n; ++i) {
-        if (i && memcmp(&rays[i].org, &rays[0].org, sizeof rays[0].org)) return;
-        const sidx_vec3 d = rays[i].dir;
-        const __m128 dd = _mm_add_ps(_mm_add_ps(_mm_mul_ps(nx, _mm_set1_ps(d.x)), _mm_mul_ps(ny, _mm_set1_ps(d.y))),
-                                     _mm_mul_ps(nz, _mm_set1_ps(d.z)));
-        const __m128 d2 = _mm_set1_ps(sidx_v3_dot(d, d));
-        bad = _mm_or_ps(bad, _mm_and_ps(_mm_cmplt_ps(dd, _mm_setzero_ps()),
-                                        _mm_cmpgt_ps(_mm_mul_ps(dd, dd), _mm_mul_ps(tol, d2))));
-    }
-    if (_mm_movemask_ps(bad)) return;
-#else
-    for (uint32_t i = 1; i < n; ++i)
-        if (memcmp(&rays[i].org, &rays[0].org, sizeof rays[0].org)) return;
-    for (int p = 0; p < 4; ++p) {
-        const sidx_vec3 nn = sidx_v3(P->fn[p][0], P->fn[p][1], P->fn[p][2]);
-        for (uint32_t i = 0; i < n; ++i) {
-            const float dd = sidx_v3_dot(nn, rays[i].dir);
-            if (dd < 0.0f && dd * dd > 1e-12f * len2[p] * sidx_v3_dot(rays[i].dir, rays[i].dir)) return;
-        }
-    }
-#endif
-    P->fo[0] = rays[0].org.x;
-    P->fo[1] = rays[0].org.y;
-    P->fo[2] = rays[0].org.z;
-#if defined(__SSE2__)
-    for (int k = 0; k < 3; ++k) {
-        P->fnv[k] = _mm_setr_ps(P->fn[0][k], P->fn[1][k], P->fn[2][k], P->fn[3][k]);
-        P->fpos[k] = _mm_cmpge_ps(P->fnv[k], _mm_setzero_ps());
-    }
-    P->fl1v = _mm_setr_ps(P->fl1[0], P->fl1[1], P->fl1[2], P->fl1[3]);
-#endif
-    P->frustum = 1;
+     * the same order as sidx_v3_dot): done plane by plane, this check was
+     * most of the set-up (docs/performance.md, "Packets and frustums"). */
+    if (!frustum_rays_inside(pkt, rays, n, len2)) return;
+    pkt->apex[0] = rays[0].org.x;
+    pkt->apex[1] = rays[0].org.y;
+    pkt->apex[2] = rays[0].org.z;
+    frustum_lanes(pkt);
+    pkt->frustum = 1;
 }
 
 /* ---- set-up ----------------------------------------------------------------------- */
 
 /* 0 when the packet is not coherent enough (direction signs differ). */
-static int pkt_setup(pkt *P, const sidx_ray *rays, uint32_t n, float scale, int anyhit)
+static int pkt_setup(packet *pkt, const sidx_ray *rays, uint32_t n, float scale, int anyhit)
 {
-    P->n = n;
-    P->ngroups = (n + GL - 1) / GL;
-    P->rays = rays;
-    P->anyhit = anyhit;
-    for (int k = 0; k < 3; ++k) P->sign[k] = rays[0].sign[k];
-    P->kx = rays[0].kx;
-    P->ky = rays[0].ky;
-    P->kz = rays[0].kz;
-    P->uniform_k = 1;
+    pkt->n = n;
+    pkt->ngroups = (n + GROUP_LANES - 1) / GROUP_LANES;
+    pkt->rays = rays;
+    pkt->anyhit = anyhit;
+    for (int k = 0; k < 3; ++k) pkt->sign[k] = rays[0].sign[k];
+    pkt->kx = rays[0].kx;
+    pkt->ky = rays[0].ky;
+    pkt->kz = rays[0].kz;
+    pkt->uniform_k = 1;
     for (uint32_t i = 0; i < n; ++i) {
         const sidx_ray *r = &rays[i];
-        if (r->sign[0] != P->sign[0] || r->sign[1] != P->sign[1] || r->sign[2] != P->sign[2]) return 0;
-        if (r->kx != P->kx || r->ky != P->ky || r->kz != P->kz) P->uniform_k = 0;
+        if (r->sign[0] != pkt->sign[0] || r->sign[1] != pkt->sign[1] || r->sign[2] != pkt->sign[2]) return 0;
+        if (r->kx != pkt->kx || r->ky != pkt->ky || r->kz != pkt->kz) pkt->uniform_k = 0;
     }
-    for (uint32_t i = 0; i < P->ngroups * GL; ++i) {
+    for (uint32_t i = 0; i < pkt->ngroups * GROUP_LANES; ++i) {
         if (i < n) {
             const sidx_ray *r = &rays[i];
             const float *o = &r->org.x;
-            P->ox[i] = r->org.x; P->oy[i] = r->org.y; P->oz[i] = r->org.z;
-            P->ix[i] = r->inv_dir.x; P->iy[i] = r->inv_dir.y; P->iz[i] = r->inv_dir.z;
-            P->fx[i] = r->inv_dir.x * scale; P->fy[i] = r->inv_dir.y * scale; P->fz[i] = r->inv_dir.z * scale;
-            P->tmin[i] = r->tmin;
-            P->best[i] = r->tmax;
-            P->okx[i] = o[P->kx]; P->oky[i] = o[P->ky]; P->okz[i] = o[P->kz];
-            P->sx[i] = r->sx; P->sy[i] = r->sy; P->sz[i] = r->sz;
+            pkt->org_x[i] = r->org.x; pkt->org_y[i] = r->org.y; pkt->org_z[i] = r->org.z;
+            pkt->inv_x[i] = r->inv_dir.x; pkt->inv_y[i] = r->inv_dir.y; pkt->inv_z[i] = r->inv_dir.z;
+            pkt->inv_far_x[i] = r->inv_dir.x * scale;
+            pkt->inv_far_y[i] = r->inv_dir.y * scale;
+            pkt->inv_far_z[i] = r->inv_dir.z * scale;
+            pkt->tmin[i] = r->tmin;
+            pkt->best[i] = r->tmax;
+            pkt->org_kx[i] = o[pkt->kx]; pkt->org_ky[i] = o[pkt->ky]; pkt->org_kz[i] = o[pkt->kz];
+            pkt->sx[i] = r->sx; pkt->sy[i] = r->sy; pkt->sz[i] = r->sz;
         } else { /* padding: misses everything */
-            P->ox[i] = P->oy[i] = P->oz[i] = 0.0f;
-            P->ix[i] = P->iy[i] = P->iz[i] = P->fx[i] = P->fy[i] = P->fz[i] = 1.0f;
-            P->okx[i] = P->oky[i] = P->okz[i] = P->sx[i] = P->sy[i] = 0.0f;
-            P->sz[i] = 1.0f;
-            P->tmin[i] = INFINITY;
-            P->best[i] = -INFINITY;
+            pkt->org_x[i] = pkt->org_y[i] = pkt->org_z[i] = 0.0f;
+            pkt->inv_x[i] = pkt->inv_y[i] = pkt->inv_z[i] = pkt->inv_far_x[i] = pkt->inv_far_y[i] = pkt->inv_far_z[i] =
+                1.0f;
+            pkt->org_kx[i] = pkt->org_ky[i] = pkt->org_kz[i] = pkt->sx[i] = pkt->sy[i] = 0.0f;
+            pkt->sz[i] = 1.0f;
+            pkt->tmin[i] = INFINITY;
+            pkt->best[i] = -INFINITY;
         }
-        P->prim[i] = SIDX_NO_HIT;
+        pkt->prim[i] = SIDX_NO_HIT;
     }
     for (int k = 0; k < 3; ++k) {
-        P->near_i[k] = (uint32_t)(P->sign[k] ? 4 + k : k);
-        P->far_i[k] = (uint32_t)(P->sign[k] ? k : 4 + k);
+        pkt->near_i[k] = (uint32_t)(pkt->sign[k] ? 4 + k : k);
+        pkt->far_i[k] = (uint32_t)(pkt->sign[k] ? k : 4 + k);
     }
     return 1;
 }
@@ -342,48 +203,47 @@ static int pkt_setup(pkt *P, const sidx_ray *rays, uint32_t n, float scale, int 
  * same): below SWITCH_DEPTH, when at most SWITCH_RAYS rays of the whole
  * packet still hit an inner node, they finish its subtree alone.  Finding
  * that out costs the box tests of the remaining groups, which pays only
- * deep in the tree, where rays have parted (callgrind, 142x140 primary
- * rays: bunny 8x8 tiles −5% instructions, 4x4 −1%; Sponza unchanged;
- * depth 6-16 and 2-6 rays tried, larger counts cost Sponza up to 4%). */
+ * deep in the tree, where rays have parted (the values tried:
+ * docs/performance.md, "Packets and frustums"). */
 #define SWITCH_DEPTH 8u
 #define SWITCH_RAYS 2u
 
 /* ---- the walks --------------------------------------------------------------------- */
 
 /* One ray alone through the subtree at root (the adaptive switch). */
-static void single_subtree(const walkopt *W, pkt *P, uint32_t i, uint32_t root)
+static void single_subtree(const walkopt *walk, packet *pkt, uint32_t i, uint32_t root)
 {
-    const bvh *b = W->b;
-    const sidx_ray *r = &P->rays[i];
-    bvh_ray br;
-    bvh_ray_setup(&br, r);
-    uint32_t stk[BVH_DEPTH_LIMIT + 1], sp = 0;
-    stk[sp++] = root;
-    W->st->switched_rays++;
-    while (sp) {
-        const uint32_t ni = stk[--sp];
-        const bvh_node *n = &b->nodes[ni];
-        float tn, tf;
-        W->st->box_tests++;
-        if (!bvh_slab(&br, n, W->scale, r->tmin, P->best[i], &tn, &tf)) continue;
-        if (bvh_is_leaf(n)) {
-            for (uint32_t k = n->left_or_first; k < n->left_or_first + bvh_count(n); ++k) {
-                W->st->prim_tests++;
-                if (tri_lane(W, P, i, &b->tris[k], b->prim_id[k]) && P->anyhit) return;
+    const bvh *b = walk->b;
+    const sidx_ray *r = &pkt->rays[i];
+    bvh_ray bray;
+    bvh_ray_setup(&bray, r);
+    uint32_t stack[BVH_DEPTH_LIMIT + 1], stack_len = 0;
+    stack[stack_len++] = root;
+    walk->stats->switched_rays++;
+    while (stack_len) {
+        const uint32_t node_i = stack[--stack_len];
+        const bvh_node *node = &b->nodes[node_i];
+        float t_near, t_far;
+        walk->stats->box_tests++;
+        if (!bvh_slab(&bray, node, walk->scale, r->tmin, pkt->best[i], &t_near, &t_far)) continue;
+        if (bvh_is_leaf(node)) {
+            for (uint32_t k = node->left_or_first; k < node->left_or_first + bvh_count(node); ++k) {
+                walk->stats->prim_tests++;
+                if (tri_lane(walk, pkt, i, &b->tris[k], b->prim_id[k]) && pkt->anyhit) return;
             }
             continue;
         }
-        const uint32_t l = ni + 1, rc = n->left_or_first;
-        const int s = r->sign[bvh_axis(n)];
-        stk[sp++] = s ? l : rc; /* far first, near on top */
-        stk[sp++] = s ? rc : l;
+        const uint32_t left = node_i + 1, right = node->left_or_first;
+        const int neg = r->sign[bvh_axis(node)];
+        stack[stack_len++] = neg ? left : right; /* far first, near on top */
+        stack[stack_len++] = neg ? right : left;
     }
 }
 
-static int all_done(const pkt *P)
+static int all_done(const packet *pkt)
 {
-    for (uint32_t i = 0; i < P->n; ++i)
-        if (P->best[i] != -INFINITY) return 0;
+    for (uint32_t i = 0; i < pkt->n; ++i)
+        if (pkt->best[i] != -INFINITY) return 0;
     return 1;
 }
 
@@ -395,139 +255,126 @@ static int all_done(const pkt *P)
  * the stats once per packet: through the stats pointer every node visit
  * cost a load and a store per counter, the compiler being unable to prove
  * that the pointer does not alias the packet. */
-static SIDX_INLINE void packet_walk_impl(const walkopt *W, pkt *P, const int avx)
+static SIDX_INLINE void packet_walk_impl(const walkopt *walk, packet *pkt, const int avx)
 {
-    const bvh *b = W->b;
+    const bvh *b = walk->b;
     if (b->num_nodes == 0) return;
-    sidx_packet_stats *st = W->st;
-    uint64_t visits = 0, boxes = 0, ftests = 0, fculls = 0, prims = 0;
-    pstack stk[STACK];
-    uint32_t sp = 0;
-    stk[sp++] = (pstack){0, 0, 0};
-    while (sp) {
-        const pstack e = stk[--sp];
-        const uint32_t ni = e.node, g0 = e.g, depth = e.depth;
-        const bvh_node *n = &b->nodes[ni];
-        const float *nf = (const float *)(const void *)n;
+    sidx_packet_stats *stats = walk->stats;
+    uint64_t visits = 0, boxes = 0, frustum_tests = 0, frustum_culls = 0, prims = 0;
+    pstack stack[STACK];
+    uint32_t stack_len = 0;
+    stack[stack_len++] = (pstack){0, 0, 0};
+    while (stack_len) {
+        const pstack entry = stack[--stack_len];
+        const uint32_t node_i = entry.node, first_group = entry.first_group, depth = entry.depth;
+        const bvh_node *node = &b->nodes[node_i];
+        const float *node_words = (const float *)(const void *)node;
         ++visits;
-        float pl[6];
+        float planes[6];
         for (int k = 0; k < 3; ++k) {
-            pl[k] = nf[P->near_i[k]];
-            pl[3 + k] = nf[P->far_i[k]];
+            planes[k] = node_words[pkt->near_i[k]];
+            planes[3 + k] = node_words[pkt->far_i[k]];
         }
         /* First group of rays with a hit; the ones before it miss.  The
          * order of Wald et al. 2007: the first active group first (if it
          * hits, nothing can cull the node), then the frustum, then the
          * remaining groups one by one. */
-        uint32_t g = g0;
-        unsigned m = 0;
-        for (; g < P->ngroups; ++g) {
+        uint32_t hit_group = first_group;
+        unsigned hits = 0;
+        for (; hit_group < pkt->ngroups; ++hit_group) {
             /* The frustum only where it can replace two group tests or
              * more: against one it can never save work (a 4x4 tile has
              * only 2 groups, so it never uses the frustum). */
-            if (g == g0 + 1 && g + 2 <= P->ngroups && W->frustum &&
-                (W->frustum_depth == 0 || depth < W->frustum_depth)) {
-                ++ftests;
-                if (!frustum_overlap(P, n)) {
-                    ++fculls;
-                    g = P->ngroups;
+            if (hit_group == first_group + 1 && hit_group + 2 <= pkt->ngroups && walk->frustum &&
+                (walk->frustum_depth == 0 || depth < walk->frustum_depth)) {
+                ++frustum_tests;
+                if (!frustum_overlap(pkt, node)) {
+                    ++frustum_culls;
+                    hit_group = pkt->ngroups;
                     break;
                 }
             }
-            boxes += GL;
-#ifdef PKT_X86
-            m = avx ? box8_avx2(P, g, pl) : box8_scalar(P, g, pl);
-#else
-            m = box8_scalar(P, g, pl);
-#endif
-            if (m) break;
+            boxes += GROUP_LANES;
+            hits = avx ? box8_avx2(pkt, hit_group, planes) : box8_scalar(pkt, hit_group, planes);
+            if (hits) break;
         }
-        if (g == P->ngroups) continue; /* no ray hits: early exit */
-        if (bvh_is_leaf(n)) {
-            const uint32_t first = n->left_or_first, cnt = bvh_count(n);
-            for (uint32_t gg = g; gg < P->ngroups; ++gg) {
-                if (gg != g) {
-                    boxes += GL;
-#ifdef PKT_X86
-                    if (!(avx ? box8_avx2(P, gg, pl) : box8_scalar(P, gg, pl))) continue;
-#else
-                    if (!box8_scalar(P, gg, pl)) continue;
-#endif
+        if (hit_group == pkt->ngroups) continue; /* no ray hits: early exit */
+        if (bvh_is_leaf(node)) {
+            const uint32_t first = node->left_or_first, count = bvh_count(node);
+            for (uint32_t group = hit_group; group < pkt->ngroups; ++group) {
+                if (group != hit_group) {
+                    boxes += GROUP_LANES;
+                    if (!(avx ? box8_avx2(pkt, group, planes) : box8_scalar(pkt, group, planes))) continue;
                 }
-                prims += (uint64_t)GL * cnt;
-                for (uint32_t k = first; k < first + cnt; ++k) {
-#ifdef PKT_X86
-                    if (avx && W->simd_tri) tri8_avx2(W, P, gg, &b->tris[k], b->prim_id[k]);
-                    else tri8_scalar(W, P, gg, &b->tris[k], b->prim_id[k]);
-#else
-                    tri8_scalar(W, P, gg, &b->tris[k], b->prim_id[k]);
-#endif
+                prims += (uint64_t)GROUP_LANES * count;
+                for (uint32_t k = first; k < first + count; ++k) {
+                    if (avx && walk->simd_tri) tri8_avx2(walk, pkt, group, &b->tris[k], b->prim_id[k]);
+                    else tri8_scalar(walk, pkt, group, &b->tris[k], b->prim_id[k]);
                 }
             }
-            if (P->anyhit && all_done(P)) break;
+            if (pkt->anyhit && all_done(pkt)) break;
             continue;
         }
         /* Adaptive switch: only 1 or 2 rays of the last group still want
          * this subtree — they finish it alone instead of dragging the
-         * packet's bookkeeping through it. */
-        if (g + 1 == P->ngroups && (m & (m - 1) & ((m & (m - 1)) - 1)) == 0) { /* at most 2 bits set */
-            for (unsigned mm = m; mm; mm &= mm - 1) single_subtree(W, P, g * GL + (uint32_t)__builtin_ctz(mm), ni);
-            if (P->anyhit && all_done(P)) break;
+         * packet'neg bookkeeping through it. */
+        if (hit_group + 1 == pkt->ngroups &&
+            (hits & (hits - 1) & ((hits & (hits - 1)) - 1)) == 0) { /* at most 2 bits set */
+            for (unsigned rays = hits; rays; rays &= rays - 1)
+                single_subtree(walk, pkt, hit_group * GROUP_LANES + (uint32_t)__builtin_ctz(rays), node_i);
+            if (pkt->anyhit && all_done(pkt)) break;
             continue;
         }
-        if (depth >= SWITCH_DEPTH && g + 1 < P->ngroups && (m & (m - 1) & ((m & (m - 1)) - 1)) == 0) {
-            unsigned mg[NG];
-            uint32_t total = (uint32_t)__builtin_popcount(m);
-            mg[g] = m;
-            for (uint32_t gg = g + 1; gg < P->ngroups && total <= SWITCH_RAYS; ++gg) {
-                boxes += GL;
-#ifdef PKT_X86
-                mg[gg] = avx ? box8_avx2(P, gg, pl) : box8_scalar(P, gg, pl);
-#else
-                mg[gg] = box8_scalar(P, gg, pl);
-#endif
-                total += (uint32_t)__builtin_popcount(mg[gg]);
+        if (depth >= SWITCH_DEPTH && hit_group + 1 < pkt->ngroups &&
+            (hits & (hits - 1) & ((hits & (hits - 1)) - 1)) == 0) {
+            unsigned group_hits[MAX_GROUPS];
+            uint32_t total = (uint32_t)__builtin_popcount(hits);
+            group_hits[hit_group] = hits;
+            for (uint32_t group = hit_group + 1; group < pkt->ngroups && total <= SWITCH_RAYS; ++group) {
+                boxes += GROUP_LANES;
+                group_hits[group] = avx ? box8_avx2(pkt, group, planes) : box8_scalar(pkt, group, planes);
+                total += (uint32_t)__builtin_popcount(group_hits[group]);
             }
             if (total <= SWITCH_RAYS) {
-                for (uint32_t gg = g; gg < P->ngroups; ++gg)
-                    for (unsigned mm = mg[gg]; mm; mm &= mm - 1)
-                        single_subtree(W, P, gg * GL + (uint32_t)__builtin_ctz(mm), ni);
-                if (P->anyhit && all_done(P)) break;
+                for (uint32_t group = hit_group; group < pkt->ngroups; ++group)
+                    for (unsigned rays = group_hits[group]; rays; rays &= rays - 1)
+                        single_subtree(walk, pkt, group * GROUP_LANES + (uint32_t)__builtin_ctz(rays), node_i);
+                if (pkt->anyhit && all_done(pkt)) break;
                 continue;
             }
         }
         /* The packet shares direction signs: the near child along the
          * split axis is the same for every ray. */
-        const uint32_t l = ni + 1, rc = n->left_or_first;
-        const int s = P->sign[bvh_axis(n)];
-        stk[sp++] = (pstack){s ? l : rc, g, depth + 1};
-        stk[sp++] = (pstack){s ? rc : l, g, depth + 1};
+        const uint32_t left = node_i + 1, right = node->left_or_first;
+        const int neg = pkt->sign[bvh_axis(node)];
+        stack[stack_len++] = (pstack){neg ? left : right, hit_group, depth + 1};
+        stack[stack_len++] = (pstack){neg ? right : left, hit_group, depth + 1};
     }
-    st->node_visits += visits;
-    st->box_tests += boxes;
-    st->frustum_tests += ftests;
-    st->frustum_culls += fculls;
-    st->prim_tests += prims;
+    stats->node_visits += visits;
+    stats->box_tests += boxes;
+    stats->frustum_tests += frustum_tests;
+    stats->frustum_culls += frustum_culls;
+    stats->prim_tests += prims;
 }
 
 #ifdef PKT_X86
 /* flatten: every kernel inlined into this AVX2 copy of the walk. */
-__attribute__((target("avx2,fma"), flatten)) static void packet_walk_avx2(const walkopt *W, pkt *P)
+__attribute__((target("avx2,fma"), flatten)) static void packet_walk_avx2(const walkopt *walk, packet *pkt)
 {
-    packet_walk_impl(W, P, 1);
+    packet_walk_impl(walk, pkt, 1);
 }
 #endif
-static void packet_walk_generic(const walkopt *W, pkt *P) { packet_walk_impl(W, P, 0); }
+static void packet_walk_generic(const walkopt *walk, packet *pkt) { packet_walk_impl(walk, pkt, 0); }
 
-static void packet_walk(const walkopt *W, pkt *P)
+static void packet_walk(const walkopt *walk, packet *pkt)
 {
 #ifdef PKT_X86
-    if (W->avx) {
-        packet_walk_avx2(W, P);
+    if (walk->avx) {
+        packet_walk_avx2(walk, pkt);
         return;
     }
 #endif
-    packet_walk_generic(W, P);
+    packet_walk_generic(walk, pkt);
 }
 
 /* ---- entry points ---------------------------------------------------------------------- */
@@ -585,42 +432,42 @@ static sidx_status run_packet(const sidx_accel *a, const sidx_ray *rays, uint32_
         sidx__packet_wide(a, rays, n, n, n, &o, hits, occ, stats, avx);
         return SIDX_OK;
     }
-    pkt P;
-    if (o.mode == SIDX_PACKET_SINGLE || !packet_capable(a) || n == 0 || !pkt_setup(&P, rays, n, scale, anyhit)) {
+    packet pkt;
+    if (o.mode == SIDX_PACKET_SINGLE || !packet_capable(a) || n == 0 || !pkt_setup(&pkt, rays, n, scale, anyhit)) {
         stats->single_packets++;
         const sidx_query q = {o.flags, SIDX_TRAVERSE_DEFAULT, NULL, 0};
         for (uint32_t i = 0; i < n; ++i) {
             if (anyhit) {
-                int oc = 0;
-                sidx_accel_occluded(a, &rays[i], &q, &oc);
-                occ[i] = (uint8_t)oc;
+                int occluded = 0;
+                sidx_accel_occluded(a, &rays[i], &q, &occluded);
+                occ[i] = (uint8_t)occluded;
             } else {
                 sidx_accel_intersect(a, &rays[i], &q, &hits[i]);
             }
         }
         return SIDX_OK;
     }
-    walkopt W;
-    W.a = a;
-    W.b = a->impl;
-    W.scale = scale;
-    W.avx = avx;
-    W.simd_tri = a->opt.tri == SIDX_TRI_WATERTIGHT && P.uniform_k;
-    W.st = stats;
-    if (o.mode == SIDX_PACKET_FRUSTUM && P.ngroups >= 3) frustum_setup(&P, rays, n, w); /* see packet_walk_impl */
-    else P.frustum = 0;
-    W.frustum = P.frustum;
-    W.frustum_depth = o.frustum_depth;
-    packet_walk(&W, &P);
+    walkopt walk;
+    walk.a = a;
+    walk.b = a->impl;
+    walk.scale = scale;
+    walk.avx = avx;
+    walk.simd_tri = a->opt.tri == SIDX_TRI_WATERTIGHT && pkt.uniform_k;
+    walk.stats = stats;
+    if (o.mode == SIDX_PACKET_FRUSTUM && pkt.ngroups >= 3) frustum_setup(&pkt, rays, n, w); /* see packet_walk_impl */
+    else pkt.frustum = 0;
+    walk.frustum = pkt.frustum;
+    walk.frustum_depth = o.frustum_depth;
+    packet_walk(&walk, &pkt);
     for (uint32_t i = 0; i < n; ++i) {
         if (anyhit) {
-            occ[i] = P.prim[i] != SIDX_NO_HIT;
+            occ[i] = pkt.prim[i] != SIDX_NO_HIT;
             continue;
         }
         hits[i] = sidx_hit_none();
-        if (P.prim[i] != SIDX_NO_HIT) {
-            hits[i].t = P.best[i];
-            hits[i].prim = P.prim[i];
+        if (pkt.prim[i] != SIDX_NO_HIT) {
+            hits[i].t = pkt.best[i];
+            hits[i].prim = pkt.prim[i];
             if (o.flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL)) /* a call only when asked */
                 sidx__packet_finish(a, &rays[i], o.flags, &hits[i]);
         }
@@ -649,7 +496,8 @@ sidx_status sidx_trace_tiles(const sidx_accel *a, const sidx_ray *rays, uint32_t
         return SIDX_ERR_INVALID_ARG;
     sidx_ray pr[SIDX_PACKET_MAX];
     sidx_hit ph[SIDX_PACKET_MAX];
-    const int avx = sidx__packet_have_avx2(); /* once per image: getenv scans the environment (a third of an empty tile) */
+    const int avx =
+        sidx__packet_have_avx2(); /* once per image: getenv scans the environment (a third of an empty tile) */
     const int wide = sidx__is_wide(a) && !(opt && opt->mode == SIDX_PACKET_SINGLE);
     sidx_packet_stats dummy;
     memset(&dummy, 0, sizeof dummy);

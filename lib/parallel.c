@@ -41,9 +41,6 @@
 #include "bvh_internal.h"
 #include "pool.h"
 #include "sidx/parallel.h"
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
 
 unsigned sidx_hardware_threads(void)
 {
@@ -135,7 +132,8 @@ static sidx_status trace_common(const sidx_accel *a, const sidx_ray *rays, size_
     j.nt = threads;
     for (unsigned t = 0; t < threads; ++t) {
         /* share boundaries on whole batches, so only the last batch is short */
-        const size_t lo = batches * t / threads * SIDX_PARALLEL_BATCH, hi = batches * (t + 1) / threads * SIDX_PARALLEL_BATCH;
+        const size_t lo = batches * t / threads * SIDX_PARALLEL_BATCH,
+                     hi = batches * (t + 1) / threads * SIDX_PARALLEL_BATCH;
         atomic_init(&j.share[t].next, lo);
         j.share[t].end = hi < n ? hi : n;
     }
@@ -187,21 +185,14 @@ typedef struct pref {
 } pref;
 _Static_assert(sizeof(pref) <= sizeof(bvh_tri), "the references borrow the vertex copies' array");
 
-typedef struct pb {
+typedef struct par_build {
     const sidx_accel *a;
-    bvh_par_params P;
-    pref *pr;
+    bvh_par_params params;
+    pref *refs;
     unsigned threads;
-} pb;
+} par_build;
 
 static inline float pref_c(const pref *r, int k) { return (r->lo[k] + r->hi[k]) * 0.5f; }
-#if !defined(__SSE2__) /* only the portable paths below read a reference or a bin as a sidx_aabb */
-static inline sidx_aabb pref_box(const pref *r)
-{
-    sidx_aabb b = {{r->lo[0], r->lo[1], r->lo[2]}, {r->hi[0], r->hi[1], r->hi[2]}};
-    return b;
-}
-#endif
 
 /* One node array under construction, in pre-order. */
 typedef struct nodebuf {
@@ -266,13 +257,6 @@ typedef struct bins3 {
     uint32_t count[3][1024];
 } bins3;
 
-#if !defined(__SSE2__)
-static inline sidx_aabb binbox_get(const binbox *b)
-{
-    sidx_aabb r = {{b->lo[0], b->lo[1], b->lo[2]}, {b->hi[0], b->hi[1], b->hi[2]}};
-    return r;
-}
-#endif
 static inline void binbox_empty(binbox *b)
 {
     for (int k = 0; k < 4; ++k) {
@@ -295,10 +279,10 @@ typedef struct binspec {
     uint32_t nb;
 } binspec;
 
-static binspec make_binspec(const pb *B, sidx_aabb cb)
+static binspec make_binspec(const par_build *build, sidx_aabb cb)
 {
     binspec s;
-    s.nb = B->P.bins;
+    s.nb = build->params.bins;
     for (int k = 0; k < 3; ++k) {
         s.cmin[k] = sidx_v3_get(cb.min, k);
         const float ext = sidx_v3_get(cb.max, k) - s.cmin[k];
@@ -317,103 +301,23 @@ static void bins_clear(bins3 *b, uint32_t nb)
         }
 }
 
-/* All three axes in one pass over the triangles: one read of each box and
- * centroid instead of three (the sequential builder's axis loop).
- *
- * With SSE2 (every x86-64) the three axes go through one set of 4-lane
- * instructions, as in Wald 2007 and Embree's binner: centroid, bin
- * coordinate and clamp for x, y, z at once, then one min and one max per
- * axis to grow the bin.  That is most of the build (callgrind on the bunny:
- * the scalar loop was 185 M of 196 M instructions).  Bit-identical to
- * bin_of: f = (c − cmin)·scale in the same float operations; _mm_max_ps(f,
- * 0) returns 0 for a NaN f (the second operand), as bin_of's !(f > 0);
- * min(f, nb − 1) then truncation gives nb − 1 for f >= nb − 1, as bin_of's
- * f >= nb test followed by truncation does.  A flat axis (scale 0) puts
- * every triangle in bin 0, where best_split sees a single used bin and no
- * plane, exactly as if it had not been binned. */
-static void bin_range(const pb *B, const binspec *s, uint32_t first, uint32_t count, bins3 *out)
-{
-    const pref *pr = B->pr + first;
+/* ---- the kernels -----------------------------------------------------------------
+ * All three axes in one pass over the references: one read of each box and
+ * centroid instead of three (the sequential builder's axis loop).  With
+ * SSE2 (every x86-64) the three axes go through one set of 4-lane
+ * instructions — that is most of the build (docs/performance.md,
+ * "Parallel build and trace") — else the reference; both bit for bit the
+ * sequential builder's results.  bin_range, bounds_range, used_bins,
+ * sweep_*, partition: */
 #if defined(__SSE2__)
-    const __m128 cmin = _mm_setr_ps(s->cmin[0], s->cmin[1], s->cmin[2], 0.0f);
-    const __m128 scale = _mm_setr_ps(s->scale[0], s->scale[1], s->scale[2], 0.0f);
-    const __m128 top = _mm_set1_ps((float)(s->nb - 1)), half = _mm_set1_ps(0.5f), zero = _mm_setzero_ps();
-    const __m128 xyz = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0)); /* lane 3 holds the id: zeroed */
-    for (uint32_t i = 0; i < count; ++i) {
-        const __m128 lo = _mm_and_ps(_mm_loadu_ps(pr[i].lo), xyz), hi = _mm_and_ps(_mm_loadu_ps(pr[i].hi), xyz);
-        const __m128 c = _mm_mul_ps(_mm_add_ps(lo, hi), half);
-        __m128 f = _mm_mul_ps(_mm_sub_ps(c, cmin), scale);
-        f = _mm_min_ps(_mm_max_ps(f, zero), top);
-        int32_t bj[4];
-        _mm_storeu_si128((__m128i *)(void *)bj, _mm_cvttps_epi32(f));
-        binbox *bx = &out->box[0][bj[0]], *by = &out->box[1][bj[1]], *bz = &out->box[2][bj[2]];
-        out->count[0][bj[0]]++;
-        out->count[1][bj[1]]++;
-        out->count[2][bj[2]]++;
-        _mm_storeu_ps(bx->lo, _mm_min_ps(_mm_loadu_ps(bx->lo), lo));
-        _mm_storeu_ps(bx->hi, _mm_max_ps(_mm_loadu_ps(bx->hi), hi));
-        _mm_storeu_ps(by->lo, _mm_min_ps(_mm_loadu_ps(by->lo), lo));
-        _mm_storeu_ps(by->hi, _mm_max_ps(_mm_loadu_ps(by->hi), hi));
-        _mm_storeu_ps(bz->lo, _mm_min_ps(_mm_loadu_ps(bz->lo), lo));
-        _mm_storeu_ps(bz->hi, _mm_max_ps(_mm_loadu_ps(bz->hi), hi));
-    }
+#include "simd_bin_sse.h"
 #else
-    for (uint32_t i = 0; i < count; ++i) {
-        binbox pb_;
-        for (int k = 0; k < 3; ++k) {
-            pb_.lo[k] = pr[i].lo[k];
-            pb_.hi[k] = pr[i].hi[k];
-        }
-        pb_.lo[3] = pb_.hi[3] = 0.0f;
-        for (int k = 0; k < 3; ++k) {
-            if (!s->use[k]) continue;
-            const uint32_t j = bin_of(pref_c(&pr[i], k), s->cmin[k], s->scale[k], s->nb);
-            out->count[k][j]++;
-            binbox_union(&out->box[k][j], &pb_);
-        }
-    }
+#include "simd_bin_scalar.h"
 #endif
-}
-
-/* Node bounds and centroid bounds; the SSE2 loop is sidx_aabb_union /
- * sidx_aabb_grow lane by lane (same operand order, same results). */
-static void bounds_range(const pb *B, uint32_t first, uint32_t count, sidx_aabb *bb, sidx_aabb *cb)
-{
-    const pref *pr = B->pr + first;
-#if defined(__SSE2__)
-    __m128 blo = _mm_set1_ps(INFINITY), bhi = _mm_set1_ps(-INFINITY), clo = blo, chi = bhi;
-    const __m128 half = _mm_set1_ps(0.5f);
-    /* lane 3 holds the id: zeroed, or as a float it would be a denormal (slow) */
-    const __m128 xyz = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0));
-    for (uint32_t i = 0; i < count; ++i) {
-        const __m128 lo = _mm_and_ps(_mm_loadu_ps(pr[i].lo), xyz), hi = _mm_and_ps(_mm_loadu_ps(pr[i].hi), xyz);
-        const __m128 c = _mm_mul_ps(_mm_add_ps(lo, hi), half);
-        blo = _mm_min_ps(blo, lo);
-        bhi = _mm_max_ps(bhi, hi);
-        clo = _mm_min_ps(clo, c);
-        chi = _mm_max_ps(chi, c);
-    }
-    float v[4][4];
-    _mm_storeu_ps(v[0], blo);
-    _mm_storeu_ps(v[1], bhi);
-    _mm_storeu_ps(v[2], clo);
-    _mm_storeu_ps(v[3], chi);
-    *bb = (sidx_aabb){{v[0][0], v[0][1], v[0][2]}, {v[1][0], v[1][1], v[1][2]}};
-    *cb = (sidx_aabb){{v[2][0], v[2][1], v[2][2]}, {v[3][0], v[3][1], v[3][2]}};
-#else
-    sidx_aabb b = sidx_aabb_empty(), c = sidx_aabb_empty();
-    for (uint32_t i = 0; i < count; ++i) {
-        b = sidx_aabb_union(b, pref_box(&pr[i]));
-        c = sidx_aabb_grow(c, sidx_v3(pref_c(&pr[i], 0), pref_c(&pr[i], 1), pref_c(&pr[i], 2)));
-    }
-    *bb = b;
-    *cb = c;
-#endif
-}
 
 /* The parallel versions: each thread a contiguous chunk. */
 typedef struct pass_ctx {
-    const pb *B;
+    const par_build *build;
     const binspec *s;
     uint32_t first, count;
     unsigned nt;
@@ -432,7 +336,7 @@ static void bounds_worker(void *ctx, unsigned t)
     pass_ctx *c = ctx;
     uint32_t f, n;
     chunk(c, t, &f, &n);
-    bounds_range(c->B, f, n, &c->bb[t], &c->cb[t]);
+    bounds_range(c->build, f, n, &c->bb[t], &c->cb[t]);
 }
 static void bin_worker(void *ctx, unsigned t)
 {
@@ -440,7 +344,7 @@ static void bin_worker(void *ctx, unsigned t)
     uint32_t f, n;
     chunk(c, t, &f, &n);
     bins_clear(&c->bins[t], c->s->nb);
-    bin_range(c->B, c->s, f, n, &c->bins[t]);
+    bin_range(c->build, c->s, f, n, &c->bins[t]);
 }
 
 typedef struct scratch {
@@ -455,21 +359,6 @@ typedef struct split {
     float cost;
 } split;
 
-#if defined(__SSE2__)
-/* sidx_aabb_area of a NON-EMPTY box held as two 4-lane rows (x, y, z, 0):
- * e = hi − lo, then 2·((e.x·e.y + e.y·e.z) + e.z·e.x) — the products in
- * one multiply, the sums in the scalar expression's order, so the result
- * is bit for bit sidx_aabb_area's. */
-static inline float area_sse(__m128 lo, __m128 hi)
-{
-    const __m128 e = _mm_sub_ps(hi, lo);
-    const __m128 p = _mm_mul_ps(e, _mm_shuffle_ps(e, e, _MM_SHUFFLE(3, 0, 2, 1))); /* x·y, y·z, z·x, 0 */
-    __m128 sum = _mm_add_ss(p, _mm_shuffle_ps(p, p, _MM_SHUFFLE(3, 3, 3, 1)));
-    sum = _mm_add_ss(sum, _mm_shuffle_ps(p, p, _MM_SHUFFLE(3, 3, 3, 2)));
-    return 2.0f * _mm_cvtss_f32(sum);
-}
-#endif
-
 /* The sequential builder's find_binned: the same costs from the same float
  * expressions, the same tie rule (first minimum over axis, then plane) —
  * but only at planes right after a NON-EMPTY bin.  Behind an empty bin
@@ -478,70 +367,32 @@ static inline float area_sse(__m128 lo, __m128 hi)
  * the first, can never win.  A node of 8 triangles has at most 8 of the
  * 32 bins filled: 7 planes per axis instead of 31, which is most of the
  * build time in the many small nodes near the leaves. */
-static int best_split(const pb *B, const bins3 *bn, uint32_t count, float inv_area, scratch *S, split *best)
+static int best_split(const par_build *build, const bins3 *bn, uint32_t count, float inv_area, scratch *S, split *best)
 {
-    const uint32_t nb = B->P.bins;
+    const uint32_t nb = build->params.bins;
     int found = 0;
     best->cost = INFINITY;
     for (int axis = 0; axis < 3; ++axis) {
         const binbox *box = bn->box[axis];
         const uint32_t *cnt = bn->count[axis];
         uint32_t *used = S->used[axis];
-        uint32_t k = 0;
-#if defined(__SSE2__)
-        /* the non-empty bins, 4 counts per compare (the scan over all 32
-         * bins of every small node was a tenth of the build) */
-        uint32_t p = 0;
-        for (; p + 4 <= nb; p += 4) {
-            const __m128i c4 = _mm_loadu_si128((const __m128i *)(const void *)(cnt + p));
-            unsigned m = 0xFu & ~(unsigned)_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(c4, _mm_setzero_si128())));
-            for (; m; m &= m - 1) used[k++] = p + (uint32_t)__builtin_ctz(m);
-        }
-        for (; p < nb; ++p)
-            if (cnt[p]) used[k++] = p;
-#else
-        for (uint32_t p = 0; p < nb; ++p)
-            if (cnt[p]) used[k++] = p;
-#endif
+        const uint32_t k = used_bins(cnt, nb, used);
         S->nused[axis] = k;
         if (k < 2) continue; /* flat axis (not binned) or one bin: no plane */
-#if defined(__SSE2__)
-        /* The sweeps with a box in one register pair: one min and one max
-         * per bin instead of six scalar selects, and the area without the
-         * empty-box test (a union of non-empty bins is never empty, so the
-         * test always fails there).  Same results as the scalar code below:
-         * _mm_min_ps(acc, b) is sidx_v3_min(acc, b) lane by lane, and
-         * area_sse sums the products in sidx_aabb_area's order. */
-        __m128 lo = _mm_set1_ps(INFINITY), hi = _mm_set1_ps(-INFINITY);
+        sweep_box acc = sweep_empty();
         for (uint32_t j = k; j-- > 1;) { /* right_area[j] = area of bins used[j..k) */
-            lo = _mm_min_ps(lo, _mm_loadu_ps(box[used[j]].lo));
-            hi = _mm_max_ps(hi, _mm_loadu_ps(box[used[j]].hi));
-            S->right_area[j] = area_sse(lo, hi);
+            acc = sweep_add(acc, &box[used[j]]);
+            S->right_area[j] = sweep_area(acc);
         }
-        lo = _mm_set1_ps(INFINITY);
-        hi = _mm_set1_ps(-INFINITY);
-#else
-        sidx_aabb acc = sidx_aabb_empty();
-        for (uint32_t j = k; j-- > 1;) { /* right_area[j] = area of bins used[j..k) */
-            acc = sidx_aabb_union(acc, binbox_get(&box[used[j]]));
-            S->right_area[j] = sidx_aabb_area(acc);
-        }
-        acc = sidx_aabb_empty();
-#endif
+        acc = sweep_empty();
         uint32_t nl = 0;
         for (uint32_t j = 0; j + 1 < k; ++j) {
-#if defined(__SSE2__)
-            lo = _mm_min_ps(lo, _mm_loadu_ps(box[used[j]].lo));
-            hi = _mm_max_ps(hi, _mm_loadu_ps(box[used[j]].hi));
-            const float left_area = area_sse(lo, hi);
-#else
-            acc = sidx_aabb_union(acc, binbox_get(&box[used[j]]));
-            const float left_area = sidx_aabb_area(acc);
-#endif
+            acc = sweep_add(acc, &box[used[j]]);
+            const float left_area = sweep_area(acc);
             nl += cnt[used[j]];
             const float cost =
-                B->P.c_trav + B->P.c_tri * (left_area * (float)nl + S->right_area[j + 1] * (float)(count - nl)) *
-                                  inv_area;
+                build->params.c_trav +
+                build->params.c_tri * (left_area * (float)nl + S->right_area[j + 1] * (float)(count - nl)) * inv_area;
             if (cost < best->cost) {
                 best->cost = cost;
                 best->axis = axis;
@@ -554,85 +405,6 @@ static int best_split(const pb *B, const bins3 *bn, uint32_t count, float inv_ar
     return found;
 }
 
-/* bvh_build.c's two-pointer loop, element for element, and while every
- * reference passes through the registers anyway, the children's boxes
- * (Wald 2007 gathers them the same way): the children then skip their own
- * pass over the references, a third of the memory traffic of a node.
- *
- * The boxes must be the bits the children's own pass would compute, and
- * min/max keep their SECOND operand on a tie (sidx_v3_min: a < b ? a : b),
- * which matters for -0.0 against +0.0: the pass keeps the LAST of equal
- * minima in index order.  The left side is finalised in index order (i
- * only grows), so it folds like the pass.  The right side is finalised in
- * REVERSE order (each element lands at --j), so it folds with the operands
- * swapped, min(x, acc): a tie then keeps the accumulator, which is the
- * element seen first in reverse, i.e. the last in index order.  (No NaN
- * can occur: coordinates are finite, so lo + hi is never inf − inf.) */
-static uint32_t partition(const pb *B, const binspec *s, uint32_t first, uint32_t count, int axis, uint32_t plane,
-                          nodebox *left, nodebox *right)
-{
-    pref *pr = B->pr;
-    uint32_t i = first, j = first + count;
-#if defined(__SSE2__)
-    const __m128 half = _mm_set1_ps(0.5f), xyz = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0));
-    __m128 lblo = _mm_set1_ps(INFINITY), lbhi = _mm_set1_ps(-INFINITY), lclo = lblo, lchi = lbhi;
-    __m128 rblo = lblo, rbhi = lbhi, rclo = lblo, rchi = lbhi;
-    while (i < j) {
-        const __m128 lo = _mm_and_ps(_mm_loadu_ps(pr[i].lo), xyz), hi = _mm_and_ps(_mm_loadu_ps(pr[i].hi), xyz);
-        const __m128 c = _mm_mul_ps(_mm_add_ps(lo, hi), half);
-        if (bin_of(pref_c(&pr[i], axis), s->cmin[axis], s->scale[axis], s->nb) < plane) {
-            lblo = _mm_min_ps(lblo, lo);
-            lbhi = _mm_max_ps(lbhi, hi);
-            lclo = _mm_min_ps(lclo, c);
-            lchi = _mm_max_ps(lchi, c);
-            ++i;
-        } else {
-            rblo = _mm_min_ps(lo, rblo);
-            rbhi = _mm_max_ps(hi, rbhi);
-            rclo = _mm_min_ps(c, rclo);
-            rchi = _mm_max_ps(c, rchi);
-            const pref t = pr[i];
-            pr[i] = pr[--j];
-            pr[j] = t;
-        }
-    }
-    float v[8][4];
-    _mm_storeu_ps(v[0], lblo);
-    _mm_storeu_ps(v[1], lbhi);
-    _mm_storeu_ps(v[2], lclo);
-    _mm_storeu_ps(v[3], lchi);
-    _mm_storeu_ps(v[4], rblo);
-    _mm_storeu_ps(v[5], rbhi);
-    _mm_storeu_ps(v[6], rclo);
-    _mm_storeu_ps(v[7], rchi);
-    left->bb = (sidx_aabb){{v[0][0], v[0][1], v[0][2]}, {v[1][0], v[1][1], v[1][2]}};
-    left->cb = (sidx_aabb){{v[2][0], v[2][1], v[2][2]}, {v[3][0], v[3][1], v[3][2]}};
-    right->bb = (sidx_aabb){{v[4][0], v[4][1], v[4][2]}, {v[5][0], v[5][1], v[5][2]}};
-    right->cb = (sidx_aabb){{v[6][0], v[6][1], v[6][2]}, {v[7][0], v[7][1], v[7][2]}};
-#else
-    nodebox l = {sidx_aabb_empty(), sidx_aabb_empty()}, r = l;
-    while (i < j) {
-        const sidx_aabb b = pref_box(&pr[i]);
-        const sidx_vec3 c = sidx_v3(pref_c(&pr[i], 0), pref_c(&pr[i], 1), pref_c(&pr[i], 2));
-        if (bin_of(pref_c(&pr[i], axis), s->cmin[axis], s->scale[axis], s->nb) < plane) {
-            l.bb = sidx_aabb_union(l.bb, b);
-            l.cb = sidx_aabb_grow(l.cb, c);
-            ++i;
-        } else {
-            r.bb = sidx_aabb_union(b, r.bb); /* swapped: see above */
-            r.cb.min = sidx_v3_min(c, r.cb.min);
-            r.cb.max = sidx_v3_max(c, r.cb.max);
-            const pref t = pr[i];
-            pr[i] = pr[--j];
-            pr[j] = t;
-        }
-    }
-    *left = l;
-    *right = r;
-#endif
-    return i - first;
-}
-
 /* One node and its subtree into out.  top: the top phase (parallel passes,
  * small subtrees become tasks) or 0 inside a task. */
 typedef struct topctx {
@@ -642,14 +414,14 @@ typedef struct topctx {
     int par_passes;    /* the caller's top phase: large nodes' passes on all threads */
 } topctx;
 
-static uint32_t build_rec(const pb *B, scratch *S, nodebuf *out, topctx *top, uint32_t first, uint32_t count,
+static uint32_t build_rec(const par_build *build, scratch *S, nodebuf *out, topctx *top, uint32_t first, uint32_t count,
                           uint32_t depth, const nodebox *given)
 {
     const uint32_t ni = out->num++;
     bvh_node *n = &out->nodes[ni];
     uint32_t ti;
     if (top && count <= (top->mid_max > top->task_max ? top->mid_max : top->task_max) &&
-        count > B->P.leaf_size && depth < B->P.max_depth && (ti = task_new(top->ts)) != NO_TASK) {
+        count > build->params.leaf_size && depth < build->params.max_depth && (ti = task_new(top->ts)) != NO_TASK) {
         task *t = &top->ts->tasks[ti];
         t->mid = count > top->task_max;
         t->first = first;
@@ -662,23 +434,23 @@ static uint32_t build_rec(const pb *B, scratch *S, nodebuf *out, topctx *top, ui
         n->count_axis = TASK_MARK;
         return ni;
     }
-    const int par = top && top->par_passes && count >= PAR_PASS_MIN && B->threads > 1;
+    const int par = top && top->par_passes && count >= PAR_PASS_MIN && build->threads > 1;
     sidx_aabb bb, cb;
     if (given) { /* gathered by the parent's partition */
         bb = given->bb;
         cb = given->cb;
     } else if (par) {
         sidx_aabb pbb[MAX_THREADS], pcb[MAX_THREADS];
-        pass_ctx c = {B, NULL, first, count, B->threads, NULL, pbb, pcb};
-        par_run(B->threads, bounds_worker, &c);
+        pass_ctx c = {build, NULL, first, count, build->threads, NULL, pbb, pcb};
+        par_run(build->threads, bounds_worker, &c);
         bb = pbb[0];
         cb = pcb[0];
-        for (unsigned t = 1; t < B->threads; ++t) {
+        for (unsigned t = 1; t < build->threads; ++t) {
             bb = sidx_aabb_union(bb, pbb[t]);
             cb = sidx_aabb_union(cb, pcb[t]);
         }
     } else {
-        bounds_range(B, first, count, &bb, &cb);
+        bounds_range(build, first, count, &bb, &cb);
     }
     n->bmin[0] = bb.min.x; n->bmin[1] = bb.min.y; n->bmin[2] = bb.min.z;
     n->bmax[0] = bb.max.x; n->bmax[1] = bb.max.y; n->bmax[2] = bb.max.z;
@@ -686,34 +458,34 @@ static uint32_t build_rec(const pb *B, scratch *S, nodebuf *out, topctx *top, ui
 
     const float area = sidx_aabb_area(bb);
     const float inv_area = area > 0.0f ? 1.0f / area : 0.0f;
-    const float leaf_cost = (float)count * B->P.c_tri;
+    const float leaf_cost = (float)count * build->params.c_tri;
     int leaf = 0, axis = -1;
     uint32_t nl = 0;
     nodebox kids[2];
     int have_kids = 0;
-    if (count <= B->P.leaf_size || depth >= B->P.max_depth) {
+    if (count <= build->params.leaf_size || depth >= build->params.max_depth) {
         leaf = 1;
     } else if (!(cb.max.x > cb.min.x) && !(cb.max.y > cb.min.y) && !(cb.max.z > cb.min.z)) {
-        if (count > B->P.max_leaf) nl = count / 2; /* equal centroids: halve in index order */
+        if (count > build->params.max_leaf) nl = count / 2; /* equal centroids: halve in index order */
         else leaf = 1;
     } else {
-        const binspec s = make_binspec(B, cb);
+        const binspec s = make_binspec(build, cb);
         const bins3 *bn;
         if (par) {
-            pass_ctx c = {B, &s, first, count, B->threads, S->bins, NULL, NULL};
-            par_run(B->threads, bin_worker, &c);
-            for (unsigned t = 1; t < B->threads; ++t)
+            pass_ctx c = {build, &s, first, count, build->threads, S->bins, NULL, NULL};
+            par_run(build->threads, bin_worker, &c);
+            for (unsigned t = 1; t < build->threads; ++t)
                 for (int k = 0; k < 3; ++k)
                     for (uint32_t j = 0; j < s.nb; ++j) {
                         S->bins[0].count[k][j] += S->bins[t].count[k][j];
                         binbox_union(&S->bins[0].box[k][j], &S->bins[t].box[k][j]);
                     }
         } else {
-            bin_range(B, &s, first, count, &S->bins[0]); /* bins[0] is clean on entry */
+            bin_range(build, &s, first, count, &S->bins[0]); /* bins[0] is clean on entry */
         }
         bn = &S->bins[0];
         split sp = {0, 0, 0, INFINITY};
-        const int found = best_split(B, bn, count, inv_area, S, &sp);
+        const int found = best_split(build, bn, count, inv_area, S, &sp);
         /* Clean bins[0] for the next node by resetting only what was filled
          * (clearing all 3 x 32 boxes per node cost more than the binning
          * of a small node). */
@@ -729,9 +501,9 @@ static uint32_t build_rec(const pb *B, scratch *S, nodebuf *out, topctx *top, ui
              * as the sequential builder does: the leaf's triangle order
              * (and so its tie-breaking) stays the same. */
             axis = sp.axis;
-            nl = partition(B, &s, first, count, sp.axis, sp.plane, &kids[0], &kids[1]);
+            nl = partition(build, &s, first, count, sp.axis, sp.plane, &kids[0], &kids[1]);
             have_kids = 1;
-            if (!(sp.cost < leaf_cost) && count <= B->P.max_leaf) leaf = 1;
+            if (!(sp.cost < leaf_cost) && count <= build->params.max_leaf) leaf = 1;
         }
     }
     if (leaf) {
@@ -740,8 +512,9 @@ static uint32_t build_rec(const pb *B, scratch *S, nodebuf *out, topctx *top, ui
         out->leaves++;
         return ni;
     }
-    build_rec(B, S, out, top, first, nl, depth + 1, have_kids ? &kids[0] : NULL);
-    const uint32_t right = build_rec(B, S, out, top, first + nl, count - nl, depth + 1, have_kids ? &kids[1] : NULL);
+    build_rec(build, S, out, top, first, nl, depth + 1, have_kids ? &kids[0] : NULL);
+    const uint32_t right =
+        build_rec(build, S, out, top, first + nl, count - nl, depth + 1, have_kids ? &kids[1] : NULL);
     n = &out->nodes[ni];
     n->left_or_first = right + out->base;
     n->count_axis = (uint32_t)(axis < 0 ? 0 : axis) << BVH_AXIS_SHIFT;
@@ -749,7 +522,7 @@ static uint32_t build_rec(const pb *B, scratch *S, nodebuf *out, topctx *top, ui
 }
 
 typedef struct task_job {
-    const pb *B;
+    const par_build *build;
     taskset *ts;
     uint32_t task_max;
     scratch *S; /* one per thread; allocated by the caller (a user allocator need not be thread-safe) */
@@ -783,14 +556,14 @@ static void task_worker(void *ctx, unsigned w)
         if (tk->mid) {
             /* the top phase continued on this thread: its small subtrees become tasks */
             topctx tc = {ts, j->task_max, 0, 0};
-            build_rec(j->B, &j->S[w], &tk->out, &tc, tk->first, tk->count, tk->depth, box);
+            build_rec(j->build, &j->S[w], &tk->out, &tc, tk->first, tk->count, tk->depth, box);
             pthread_mutex_lock(&ts->mu);
             uint32_t off = tk->off;
             reserve(&tk->out, ts->tasks, 0, &off, j->F); /* its tasks get regions inside its own: ready */
             ts->active_mids--;
             pthread_cond_broadcast(&ts->cv);
         } else {
-            build_rec(j->B, &j->S[w], &tk->out, NULL, tk->first, tk->count, tk->depth, box);
+            build_rec(j->build, &j->S[w], &tk->out, NULL, tk->first, tk->count, tk->depth, box);
             pthread_mutex_lock(&ts->mu);
         }
     }
@@ -870,7 +643,7 @@ static void fill_worker(void *ctx, unsigned t)
  * the calling thread alone would otherwise do before any split). */
 typedef struct pref_ctx {
     const sidx_mesh *m;
-    pref *pr;
+    pref *refs;
     uint32_t n;
     unsigned nt;
 } pref_ctx;
@@ -881,7 +654,7 @@ static void pref_worker(void *ctx, unsigned t)
     for (uint32_t i = lo; i < hi; ++i) {
         sidx_aabb bb = sidx_aabb_empty(); /* as sidx__prim_boxes */
         for (int k = 0; k < 3; ++k) bb = sidx_aabb_grow(bb, sidx_mesh_vertex(c->m, i, k));
-        pref *r = &c->pr[i];
+        pref *r = &c->refs[i];
         r->lo[0] = bb.min.x; r->lo[1] = bb.min.y; r->lo[2] = bb.min.z;
         r->hi[0] = bb.max.x; r->hi[1] = bb.max.y; r->hi[2] = bb.max.z;
         r->id = i;
@@ -893,11 +666,11 @@ sidx_status sidx__bvh_build_parallel(sidx_accel *a, const bvh_par_params *p, sid
 {
     const sidx_mesh *m = a->mesh;
     const uint32_t n = m->num_triangles;
-    pb B;
-    B.pr = NULL;
-    B.a = a;
-    B.P = *p;
-    B.threads = a->opt.threads > MAX_THREADS ? MAX_THREADS : a->opt.threads;
+    par_build build;
+    build.refs = NULL;
+    build.a = a;
+    build.params = *p;
+    build.threads = a->opt.threads > MAX_THREADS ? MAX_THREADS : a->opt.threads;
     sidx_status s = SIDX_ERR_NOMEM;
     nodebuf top = {NULL, 0, 0, 0, 0};
     taskset ts;
@@ -915,26 +688,26 @@ sidx_status sidx__bvh_build_parallel(sidx_accel *a, const bvh_par_params *p, sid
     b->tris = sidx__alloc(a, n, sizeof *b->tris);
     b->prim_id = sidx__alloc(a, n, sizeof *b->prim_id);
     if (!b->tris || !b->prim_id) goto fail;
-    B.pr = (pref *)(void *)b->tris;
+    build.refs = (pref *)(void *)b->tris;
     {
-        pref_ctx pc = {m, B.pr, n, n >= PAR_PASS_MIN ? B.threads : 1u};
+        pref_ctx pc = {m, build.refs, n, n >= PAR_PASS_MIN ? build.threads : 1u};
         par_run(pc.nt, pref_worker, &pc);
     }
 
     /* Top phase on this thread, down to the mid tasks. */
     topctx tc;
     tc.ts = &ts;
-    tc.task_max = n / (B.threads * TASK_SPLIT);
+    tc.task_max = n / (build.threads * TASK_SPLIT);
     if (tc.task_max < TASK_MIN) tc.task_max = TASK_MIN;
-    tc.mid_max = n / (B.threads * MID_SPLIT);
+    tc.mid_max = n / (build.threads * MID_SPLIT);
     tc.par_passes = 1;
     ts.cap = 2u * (n / tc.task_max + 1u) + 8u;
     ts.tasks = sidx__calloc(a, ts.cap, sizeof *ts.tasks);
     top.nodes = sidx__alloc(a, 2u * (size_t)n - 1u, sizeof *top.nodes);
     S = sidx__alloc(a, 1, sizeof *S);
-    bins = sidx__alloc(a, B.threads, sizeof *bins);
-    wS = sidx__calloc(a, B.threads, sizeof *wS);
-    wbins = sidx__alloc(a, B.threads, sizeof *wbins);
+    bins = sidx__alloc(a, build.threads, sizeof *bins);
+    wS = sidx__calloc(a, build.threads, sizeof *wS);
+    wbins = sidx__alloc(a, build.threads, sizeof *wbins);
     if (!ts.tasks || !top.nodes || !S || !bins || !wS || !wbins) goto fail;
     if (pthread_mutex_init(&ts.mu, NULL) != 0) goto fail;
     if (pthread_cond_init(&ts.cv, NULL) != 0) {
@@ -943,8 +716,8 @@ sidx_status sidx__bvh_build_parallel(sidx_accel *a, const bvh_par_params *p, sid
     }
     ts_init = 1;
     S->bins = bins;
-    bins_clear(&bins[0], B.P.bins);
-    build_rec(&B, S, &top, &tc, 0, n, 0, NULL);
+    bins_clear(&bins[0], build.params.bins);
+    build_rec(&build, S, &top, &tc, 0, n, 0, NULL);
 
     /* Regions in the final array for the top's tasks (a mid task's
      * region holds its own nodes and its tasks' regions); node buffers
@@ -971,12 +744,12 @@ sidx_status sidx__bvh_build_parallel(sidx_accel *a, const bvh_par_params *p, sid
     }
 
     /* Task phase: mid and plain tasks on every thread, largest first. */
-    for (unsigned t = 0; t < B.threads; ++t) {
+    for (unsigned t = 0; t < build.threads; ++t) {
         wS[t].bins = &wbins[t];
-        bins_clear(&wbins[t], B.P.bins);
+        bins_clear(&wbins[t], build.params.bins);
     }
-    task_job j = {&B, &ts, tc.task_max, wS, b->nodes};
-    par_run(ts.num ? B.threads : 1u, task_worker, &j);
+    task_job j = {&build, &ts, tc.task_max, wS, b->nodes};
+    par_run(ts.num ? build.threads : 1u, task_worker, &j);
 
     uint32_t total = top.num, leaves = top.leaves, maxd = top.max_depth;
     for (uint32_t i = 0; i < ts.num; ++i) {
@@ -987,11 +760,11 @@ sidx_status sidx__bvh_build_parallel(sidx_accel *a, const bvh_par_params *p, sid
     uint32_t pos = 0;
     place(&top, ts.tasks, 0, b->nodes, &pos);
     b->num_nodes = total;
-    for (uint32_t i = 0; i < n; ++i) b->prim_id[i] = B.pr[i].id; /* before the copies overwrite the references */
+    for (uint32_t i = 0; i < n; ++i) b->prim_id[i] = build.refs[i].id; /* before the copies overwrite the references */
     b->num_leaves = leaves;
     b->max_depth = maxd;
     {
-        fill_ctx fc = {m, b, n, n >= PAR_PASS_MIN ? B.threads : 1u};
+        fill_ctx fc = {m, b, n, n >= PAR_PASS_MIN ? build.threads : 1u};
         par_run(fc.nt, fill_worker, &fc);
     }
     /* The SAH cost exactly as bvh_build.c's tree_sah sums it. */
@@ -999,12 +772,12 @@ sidx_status sidx__bvh_build_parallel(sidx_accel *a, const bvh_par_params *p, sid
         const double root = sidx_aabb_area(bvh_node_box(&b->nodes[0]));
         double sum = 0.0;
         if (!(root > 0.0)) {
-            sum = (double)n * B.P.c_tri;
+            sum = (double)n * build.params.c_tri;
         } else {
             for (uint32_t i = 0; i < total; ++i) {
                 const bvh_node *nd = &b->nodes[i];
                 const double ar = sidx_aabb_area(bvh_node_box(nd)) / root;
-                sum += bvh_is_leaf(nd) ? ar * B.P.c_tri * bvh_count(nd) : ar * B.P.c_trav;
+                sum += bvh_is_leaf(nd) ? ar * build.params.c_tri * bvh_count(nd) : ar * build.params.c_trav;
             }
         }
         b->sah_cost = sum;
