@@ -181,7 +181,7 @@ static void sweep(const sbuild *S, const sbin *bins, uint32_t nb, uint32_t n, fl
     for (uint32_t b = 0; b < nb; ++b)
         if (bins[b].enter | bins[b].exit || !sidx_aabb_is_empty(bins[b].box)) used[m++] = b;
     float right_area[SB_BINS];
-    uint32_t right_n[SB_BINS];
+    uint32_t right_n[SB_BINS] = {0}; /* filled for j >= 1 below; zeroed so no reader wonders about [0] */
     sidx_aabb right_box[SB_BINS];
     sidx_aabb acc = sidx_aabb_empty();
     uint32_t nr = 0;
@@ -378,8 +378,8 @@ static void spatial_split(const sbuild *S, const sref *refs, uint32_t n, sidx_aa
             const sspatial *A = &acc[k];
             bins[b].box = A->other[b];
             if (A->klo[b] <= A->khi[b]) {
-                (&bins[b].box.min.x)[k] = A->klo[b];
-                (&bins[b].box.max.x)[k] = A->khi[b];
+                (sidx_v3_array_rw(&bins[b].box.min))[k] = A->klo[b];
+                (sidx_v3_array_rw(&bins[b].box.max))[k] = A->khi[b];
             }
             bins[b].enter = A->enter[b];
             bins[b].exit = A->exit[b];

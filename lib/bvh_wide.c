@@ -188,8 +188,8 @@ static void collapse_costs(collapse *C)
             continue;
         }
         const float *cl = C->cost + (size_t)(i + 1) * W, *cr = C->cost + (size_t)bn[i].left_or_first * W;
-        float split[8];
-        uint8_t split_k[8];
+        float split[8] = {0}; /* [1, W) filled below, [W - 1] read */
+        uint8_t split_k[8] = {0};
         for (uint32_t j = 2; j <= W; ++j) {
             split[j - 1] = INFINITY;
             split_k[j - 1] = 1;
@@ -580,7 +580,7 @@ static void wide_intersect(const sidx_accel *a, const sidx_ray *r, const sidx_qu
 {
     const wide_bvh *w = a->impl;
     if (SIDX_QUERY_TRACED(q)) w->isect_traced(a, r, q, hit);
-    else if (q && (q->flags & SIDX_QUERY_UV)) w->isect_uv(a, r, q, hit);
+    else if (q->flags & SIDX_QUERY_UV) w->isect_uv(a, r, q, hit);
     else w->isect(a, r, q, hit);
 }
 

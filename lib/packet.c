@@ -171,7 +171,7 @@ static int pkt_setup(packet *pkt, const sidx_ray *rays, uint32_t n, float scale,
     for (uint32_t i = 0; i < pkt->ngroups * GROUP_LANES; ++i) {
         if (i < n) {
             const sidx_ray *r = &rays[i];
-            const float *o = &r->org.x;
+            const float *o = sidx_v3_array(&r->org);
             pkt->org_x[i] = r->org.x; pkt->org_y[i] = r->org.y; pkt->org_z[i] = r->org.z;
             pkt->inv_x[i] = r->inv_dir.x; pkt->inv_y[i] = r->inv_dir.y; pkt->inv_z[i] = r->inv_dir.z;
             pkt->inv_far_x[i] = r->inv_dir.x * scale;

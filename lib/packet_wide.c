@@ -382,6 +382,8 @@ static SIDX_INLINE void wide_walk_impl(const sidx_accel *a, wide_packet *pkt, wc
                     const uint32_t slot = (uint32_t)__builtin_ctz(pending);
                     uint32_t j = n_order++;
                     if (!pkt->anyhit)
+                        /* order[0, j) was written by earlier passes (j < n_order) */
+                        /* cppcheck-suppress uninitvar */
                         while (j > 0 && key[order[j - 1]] <= key[slot]) {
                             order[j] = order[j - 1];
                             --j;
@@ -390,6 +392,7 @@ static SIDX_INLINE void wide_walk_impl(const sidx_accel *a, wide_packet *pkt, wc
                 }
                 for (uint32_t k = 0; k + 1 < n_order; ++k)
                     stack[stack_len++] = (wstack){child[order[k]], child_rays[order[k]]};
+                /* cppcheck-suppress uninitvar ; n_order >= 2 here, every slot written above */
                 ref = child[order[n_order - 1]];
                 active = child_rays[order[n_order - 1]];
                 continue;

@@ -40,7 +40,7 @@ __attribute__((target("avx2,fma"))) static void tri8_avx2(const walkopt *walk, p
                                                           const bvh_tri *tri, uint32_t prim)
 {
     const uint32_t i = group * GROUP_LANES;
-    const float *corner_a = &tri->v[0].x, *corner_b = &tri->v[1].x, *corner_c = &tri->v[2].x;
+    const float *corner_a = sidx_v3_array(&tri->v[0]), *corner_b = sidx_v3_array(&tri->v[1]), *corner_c = sidx_v3_array(&tri->v[2]);
     const __m256 org_kx = _mm256_load_ps(pkt->org_kx + i), org_ky = _mm256_load_ps(pkt->org_ky + i),
                  org_kz = _mm256_load_ps(pkt->org_kz + i);
     const __m256 sx = _mm256_load_ps(pkt->sx + i), sy = _mm256_load_ps(pkt->sy + i), sz = _mm256_load_ps(pkt->sz + i);

@@ -31,7 +31,7 @@ typedef struct wide_tri_ray {
 
 static SIDX_INLINE void wide_tri_ray_init(wide_tri_ray *ray, const sidx_ray *r)
 {
-    const float *o = &r->org.x;
+    const float *o = sidx_v3_array(&r->org);
     ray->org_kx = _mm_set1_ps(o[r->kx]); ray->org_ky = _mm_set1_ps(o[r->ky]); ray->org_kz = _mm_set1_ps(o[r->kz]);
     ray->sx = _mm_set1_ps(r->sx); ray->sy = _mm_set1_ps(r->sy); ray->sz = _mm_set1_ps(r->sz);
     ray->tmin = _mm_set1_ps(r->tmin);

@@ -29,7 +29,7 @@ typedef struct WFN(ray_consts_) {
 
 WINL void WFN(ray_consts_init_)(WFN(ray_consts_) * consts, const sidx_ray *r, float scale)
 {
-    const float *o = &r->org.x, *inv = &r->inv_dir.x;
+    const float *o = sidx_v3_array(&r->org), *inv = sidx_v3_array(&r->inv_dir);
     consts->org_x = _mm256_set1_ps(o[0]); consts->org_y = _mm256_set1_ps(o[1]); consts->org_z = _mm256_set1_ps(o[2]);
     consts->inv_x = _mm256_set1_ps(inv[0]);
     consts->inv_y = _mm256_set1_ps(inv[1]);

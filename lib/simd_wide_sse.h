@@ -21,7 +21,7 @@ typedef struct WFN(ray_consts_) {
 
 WINL void WFN(ray_consts_init_)(WFN(ray_consts_) * consts, const sidx_ray *r, float scale)
 {
-    const float *o = &r->org.x, *inv = &r->inv_dir.x;
+    const float *o = sidx_v3_array(&r->org), *inv = sidx_v3_array(&r->inv_dir);
     for (int k = 0; k < 3; ++k) {
         /* b[0..2] = lo, b[3..5] = hi: a negative direction enters through hi. */
         consts->near_off[k] = (uint32_t)((r->sign[k] ? 3 + k : k) * WALK_W);
