@@ -46,6 +46,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include "sidx/sidx.h"
 
 /* One option and the one field it fills: exactly one pointer is set. */
@@ -169,5 +170,71 @@ static inline sidx_mesh lesson_open(const lesson_args *a, const char *spec)
 static inline sidx_mesh lesson_open_scene(const lesson_args *a) { return lesson_open(a, a->scene); }
 
 static inline void lesson_check(const char *name, long value) { printf("CHECK %s=%ld\n", name, value); }
+
+/* ---- shared by the later lessons: clock, random rays, counted work ---- */
+
+/* Wall-clock seconds (CLOCK_MONOTONIC); times are printed, never checked. */
+static inline double lesson_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* A uniform number in [0, 1) from a 32-bit LCG: the same sequence on every
+ * machine, so the lessons' counts are reproducible. */
+static inline float lesson_random(uint32_t *seed)
+{
+    *seed = *seed * 1664525u + 1013904223u;
+    return (float)(*seed >> 8) / 16777216.0f;
+}
+
+/* n rays from random points on the sphere around box (radius = its
+ * diagonal) to random points inside it: "ordinary" rays that all cross
+ * the scene, from every direction. */
+static inline void lesson_rays_into_box(sidx_aabb box, sidx_ray *rays, size_t n, uint32_t seed)
+{
+    const sidx_vec3 ext = sidx_aabb_extent(box), ctr = sidx_aabb_centroid(box);
+    const float R = sidx_v3_length(ext);
+    for (size_t i = 0; i < n; ++i) {
+        float f[5];
+        for (int j = 0; j < 5; ++j) f[j] = lesson_random(&seed);
+        const float z = 2 * f[0] - 1, ang = 6.2831853f * f[1], s = sqrtf(1 - z * z);
+        const sidx_vec3 o = sidx_v3_add(ctr, sidx_v3(R * s * cosf(ang), R * s * sinf(ang), R * z));
+        const sidx_vec3 t = sidx_v3(box.min.x + f[2] * ext.x, box.min.y + f[3] * ext.y, box.min.z + f[4] * ext.z);
+        sidx_ray_init(&rays[i], o, sidx_v3_sub(t, o), 0.0f, INFINITY);
+    }
+}
+
+/* The events of n closest-hit queries, counted (c) and their hits (hits,
+ * may be NULL). */
+static inline void lesson_count_rays(const sidx_accel *a, const sidx_ray *rays, size_t n, sidx_counters *c,
+                                     sidx_hit *hits)
+{
+    sidx_counters_init(c);
+    const sidx_hook h = sidx_counters_hook(c);
+    for (size_t i = 0; i < n; ++i) {
+        const sidx_query q = {0, SIDX_TRAVERSE_DEFAULT, &h, (uint32_t)i};
+        sidx_hit hit;
+        sidx_accel_intersect(a, &rays[i], &q, &hit);
+        if (hits) hits[i] = hit;
+    }
+}
+
+/* Best of `passes` untraced passes over the rays: microseconds per ray. */
+static inline double lesson_us_per_ray(const sidx_accel *a, const sidx_ray *rays, size_t n, int passes)
+{
+    double best = INFINITY;
+    for (int p = 0; p < passes; ++p) {
+        const double t0 = lesson_seconds();
+        for (size_t i = 0; i < n; ++i) {
+            sidx_hit hit;
+            sidx_accel_intersect(a, &rays[i], NULL, &hit);
+        }
+        const double dt = lesson_seconds() - t0;
+        if (dt < best) best = dt;
+    }
+    return 1e6 * best / (double)n;
+}
 
 #endif

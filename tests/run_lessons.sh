@@ -32,6 +32,7 @@ needs() {
     14_*) echo "bvh bvh4 bvh8" ;;
     15_*) echo "bvh rayclass" ;;
     16_*) echo "bvh" ;;
+    17_*) echo "bvh bvh-obb" ;;
     *) echo "" ;;
     esac
 }
@@ -61,6 +62,7 @@ expect() {
                            frustum_culls_nodes=1" ;;
     15_shadows) echo "same_answers=1 any_hit_cheaper=1 light_buffer_saves=1" ;;
     16_time_vs_error) echo "watertight_leaks=0 moller_leaks_more=1 robust_box_misses=0 plain_box_misses_more=1" ;;
+    17_oriented_bvh) echo "same_hits=1 obb_fewer_box_tests=1 obb_fewer_box_hits=1 obb_more_memory=1" ;;
     *) echo "" ;;
     esac
 }
