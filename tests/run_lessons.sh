@@ -33,6 +33,7 @@ needs() {
     15_*) echo "bvh rayclass" ;;
     16_*) echo "bvh" ;;
     17_*) echo "bvh bvh-obb" ;;
+    18_*) echo "bvh" ;;
     *) echo "" ;;
     esac
 }
@@ -63,6 +64,9 @@ expect() {
     15_shadows) echo "same_answers=1 any_hit_cheaper=1 light_buffer_saves=1" ;;
     16_time_vs_error) echo "watertight_leaks=0 moller_leaks_more=1 robust_box_misses=0 plain_box_misses_more=1" ;;
     17_oriented_bvh) echo "same_hits=1 obb_fewer_box_tests=1 obb_fewer_box_hits=1 obb_more_memory=1" ;;
+    18_beams_and_cones) echo "tree_matches_brute=1 conservative=1 tile_beam_fewer_visits=1
+                              candidates_exceed_hits=1 subdivision_narrows=1 own_subdivision_matches=1
+                              cones_cost_more=1" ;;
     *) echo "" ;;
     esac
 }
