@@ -33,7 +33,7 @@ needs() {
     15_*) echo "bvh rayclass" ;;
     16_*) echo "bvh" ;;
     17_*) echo "bvh bvh-obb" ;;
-    18_*) echo "bvh" ;;
+    18_*|19_*) echo "bvh" ;;
     *) echo "" ;;
     esac
 }
@@ -67,6 +67,7 @@ expect() {
     18_beams_and_cones) echo "tree_matches_brute=1 conservative=1 tile_beam_fewer_visits=1
                               candidates_exceed_hits=1 subdivision_narrows=1 own_subdivision_matches=1
                               cones_cost_more=1" ;;
+    19_instancing) echo "hits_agree=1 nested_hits_agree=1 one_shared_child=1 instancing_saves_memory=1" ;;
     *) echo "" ;;
     esac
 }
