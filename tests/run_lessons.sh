@@ -34,6 +34,7 @@ needs() {
     16_*) echo "bvh" ;;
     17_*) echo "bvh bvh-obb" ;;
     18_*|19_*) echo "bvh" ;;
+    20_*) echo "bvh kdtree grid" ;;
     *) echo "" ;;
     esac
 }
@@ -68,6 +69,7 @@ expect() {
                               candidates_exceed_hits=1 subdivision_narrows=1 own_subdivision_matches=1
                               cones_cost_more=1" ;;
     19_instancing) echo "hits_agree=1 nested_hits_agree=1 one_shared_child=1 instancing_saves_memory=1" ;;
+    20_log_n) echo "tree_work_exponent_small=1 grid_exponent_near_third=1" ;;
     *) echo "" ;;
     esac
 }
