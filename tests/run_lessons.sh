@@ -23,7 +23,7 @@ needs() {
     case $1 in
     03_*|04_*|05_*) echo "bvh bvh-sweep bvh-everyb bvh-median bvh-middle" ;;
     06_*) echo "bvh kdtree" ;;
-    07_*) echo "grid grid-nomailbox" ;;
+    07_*|21_*) echo "grid grid-nomailbox" ;;
     08_*) echo "grid grid2 grid-irregular kdtree" ;;
     09_*) echo "kdtree kdtree-median kdtree-middle" ;;
     10_*|11_*) echo "kdtree" ;;
@@ -70,6 +70,8 @@ expect() {
                               cones_cost_more=1" ;;
     19_instancing) echo "hits_agree=1 nested_hits_agree=1 one_shared_child=1 instancing_saves_memory=1" ;;
     20_log_n) echo "tree_work_exponent_small=1 grid_exponent_near_third=1" ;;
+    21_mailboxes) echo "same_hits=1 replay_matches_library=1 mailbox_saves_tests=1 per_object_saves_most=1
+                        sharing_loses_skips=1 sharing_moves_lines=1" ;;
     *) echo "" ;;
     esac
 }
