@@ -25,7 +25,7 @@ needs() {
     06_*) echo "bvh kdtree" ;;
     07_*|21_*) echo "grid grid-nomailbox" ;;
     08_*) echo "grid grid2 grid-irregular kdtree" ;;
-    09_*) echo "kdtree kdtree-median kdtree-middle" ;;
+    09_*|22_*) echo "kdtree kdtree-median kdtree-middle" ;;
     10_*|11_*) echo "kdtree" ;;
     12_*) echo "octree quadtree bsp" ;;
     13_*) echo "bvh kdtree grid octree" ;;
@@ -72,6 +72,8 @@ expect() {
     20_log_n) echo "tree_work_exponent_small=1 grid_exponent_near_third=1" ;;
     21_mailboxes) echo "same_hits=1 replay_matches_library=1 mailbox_saves_tests=1 per_object_saves_most=1
                         sharing_loses_skips=1 sharing_moves_lines=1" ;;
+    22_kd_round_robin) echo "same_hits=1 round_robin_scale_invariant=1 largest_extent_cheaper=1
+                             gap_grows_when_stretched=1" ;;
     *) echo "" ;;
     esac
 }
