@@ -140,8 +140,8 @@ static double ns_per_test(const sidx_aabb *ab, const sidx_obb *ob, int oriented,
 static void box_line(const sidx_event *ev, void *user)
 {
     int *n = user;
-    if (ev->type != SIDX_EV_BOX_TEST || *n >= 12) return;
-    printf("%s node %u %s", *n == 0 ? "" : *n % 6 ? "," : ",\n          ", ev->node, ev->result ? "hit" : "miss");
+    if (ev->type != SIDX_EV_BOX_TEST || *n >= 10) return;
+    printf("%s node %u %s", *n == 0 ? "" : *n % 5 ? "," : ",\n          ", ev->node, ev->result ? "hit" : "miss");
     ++*n;
 }
 
@@ -181,7 +181,7 @@ int main(int argc, char **argv)
         sidx_hit hit;
         printf("  %-8s", s ? "bvh-obb" : "bvh");
         sidx_accel_intersect(t[s], &rays[pick], &q, &hit);
-        printf("%s\n           %llu box tests in all, hit triangle %u at t = %g\n", n >= 12 ? ", ..." : "",
+        printf("%s\n           %llu box tests in all, hit triangle %u at t = %g\n", n >= 10 ? ", ..." : "",
                (unsigned long long)c.n[SIDX_EV_BOX_TEST], hit.prim, hit.t);
         trace_fewer = s ? trace_fewer - (int)c.n[SIDX_EV_BOX_TEST] : (int)c.n[SIDX_EV_BOX_TEST];
     }

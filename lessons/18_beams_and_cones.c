@@ -242,11 +242,11 @@ int main(int argc, char **argv)
     const sidx_beam b1 = beam_of(tx, ty, TILE);
     sidx_bundle_result r1 = {0};
     if (sidx_beam_trace(tree, &b1, 0, 0, &fh, &r1) != SIDX_OK) lesson_fail(&args, "beam trace failed");
-    printf("  ... %d tests more\n  %llu nodes visited, %llu culled, %llu triangle tests: %u candidates:", fe.dropped,
+    printf("  ... %d tests more\n  %llu nodes visited, %llu culled, %llu triangle tests; %u candidates:\n   ", fe.dropped,
            (unsigned long long)r1.nodes_visited, (unsigned long long)r1.nodes_culled,
            (unsigned long long)r1.tri_tests, r1.num_cands);
-    for (uint32_t i = 0; i < r1.num_cands && i < 12; ++i) printf(" %u", r1.cands[i]);
-    printf("%s\n", r1.num_cands > 12 ? " ..." : "");
+    for (uint32_t i = 0; i < r1.num_cands && i < 8; ++i) printf(" %u", r1.cands[i]);
+    printf("%s\n", r1.num_cands > 8 ? " ..." : "");
     uint32_t seen_hit[TILE * TILE], nseen = 0;
     for (int y = ty; y < ty + TILE; ++y)
         for (int x = tx; x < tx + TILE; ++x) {

@@ -102,7 +102,7 @@ static void flush_inside(ray_trace *t)
     printf("      inside copy %u: %llu nodes, %llu triangle tests", t->copy, (unsigned long long)t->nodes,
            (unsigned long long)t->tris);
     if (t->prim != SIDX_NO_HIT) printf(", closest hit so far: triangle %u at t = %g", t->prim, t->t);
-    if (t->nodes == 0) printf(" (the object's root box missed: a turned copy's world box is looser)");
+    if (t->nodes == 0) printf("\n      (the object's root box missed: a turned copy's world box is looser)");
     printf("\n");
     t->inside = 0;
 }

@@ -37,6 +37,13 @@
  *
  * The lesson's usage text lists its options: what a knob means depends on
  * what the lesson builds with it.
+ *
+ * Shared measuring helpers (the later lessons use them):
+ * lesson_seconds     wall clock, for printed times (never checked)
+ * lesson_random      a reproducible uniform number in [0, 1)
+ * lesson_rays_into_box  random rays from around a box into it
+ * lesson_count_rays  the events of closest-hit queries, counted, and their hits
+ * lesson_us_per_ray  best-of-N microseconds per untraced query
  */
 #ifndef LESSON_H
 #define LESSON_H
