@@ -57,22 +57,21 @@ static void usage(FILE *f)
 #define NTILES ((W / TILE) * (H / TILE))
 #define SPLIT_CANDS 16 /* subdivide a bundle with more candidates than this */
 
-static sidx_vec3 eye, fwd, right, up;
+static lesson_camera cam;
 static sidx_ray rays[W * H];
 static sidx_hit hits[W * H];
 
 /* The direction through image point (x, y), in pixels (pixel i spans [i, i+1]). */
 static sidx_vec3 dir_at(float x, float y)
 {
-    const float u = (2.0f * x / W - 1.0f) * 0.3f, v = (1.0f - 2.0f * y / H) * 0.3f;
-    return sidx_v3_add(fwd, sidx_v3_add(sidx_v3_scale(right, u), sidx_v3_scale(up, v)));
+    return lesson_camera_dir(&cam, (2.0f * x / W - 1.0f) * 0.3f, (1.0f - 2.0f * y / H) * 0.3f);
 }
 
 /* The beam through the outer corners of pixels [x0, x0+n) x [y0, y0+n). */
 static sidx_beam beam_of(int x0, int y0, int n)
 {
     const float a = (float)x0, b = (float)(x0 + n), c = (float)y0, d = (float)(y0 + n);
-    sidx_beam bm = {eye, {dir_at(a, c), dir_at(b, c), dir_at(b, d), dir_at(a, d)}};
+    sidx_beam bm = {cam.eye, {dir_at(a, c), dir_at(b, c), dir_at(b, d), dir_at(a, d)}};
     return bm;
 }
 
@@ -87,7 +86,7 @@ static sidx_cone cone_of(const sidx_beam *b, int x0, int y0, int n)
         const float c = sidx_v3_dot(axis, unit(b->dir[k]));
         cmin = c < cmin ? c : cmin;
     }
-    sidx_cone cn = {eye, axis, acosf(cmin) * 1.0001f};
+    sidx_cone cn = {cam.eye, axis, acosf(cmin) * 1.0001f};
     return cn;
 }
 
@@ -208,15 +207,10 @@ int main(int argc, char **argv)
         sidx_accel_build("bvh", &mesh, NULL, &bvh, &err) != SIDX_OK)
         lesson_fail(&args, err.message);
 
-    const sidx_aabb box = sidx_mesh_bounds(&mesh);
-    const sidx_vec3 ctr = sidx_aabb_centroid(box);
-    const float R = sidx_v3_length(sidx_aabb_extent(box));
-    eye = sidx_v3(ctr.x + 0.35f * R, ctr.y + 0.3f * R, ctr.z + 1.2f * R);
-    fwd = unit(sidx_v3_sub(ctr, eye));
-    right = unit(sidx_v3_cross(fwd, sidx_v3(0, 1, 0)));
-    up = sidx_v3_cross(right, fwd);
+    cam = lesson_camera_at(sidx_mesh_bounds(&mesh), 0.35f, 0.3f, 1.2f);
     for (int y = 0; y < H; ++y)
-        for (int x = 0; x < W; ++x) sidx_ray_init(&rays[y * W + x], eye, dir_at((float)x + 0.5f, (float)y + 0.5f), 0.0f, INFINITY);
+        for (int x = 0; x < W; ++x)
+            sidx_ray_init(&rays[y * W + x], cam.eye, dir_at((float)x + 0.5f, (float)y + 0.5f), 0.0f, INFINITY);
     sidx_accel_intersect_n(bvh, rays, (size_t)W * H, NULL, hits);
     printf("== '%s' (%u triangles); a %d x %d camera image in %d tiles of %d x %d pixels\n", args.scene,
            mesh.num_triangles, W, H, NTILES, TILE, TILE);

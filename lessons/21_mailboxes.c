@@ -190,20 +190,8 @@ int main(int argc, char **argv)
     sidx_accel_stats_get(mb, &st);
 
     /* a pinhole camera in front of the scene */
-    const sidx_aabb box = sidx_mesh_bounds(&mesh);
-    const sidx_vec3 ctr = sidx_aabb_centroid(box);
-    const float R = sidx_v3_length(sidx_aabb_extent(box));
-    const sidx_vec3 eye = sidx_v3(ctr.x + 0.4f * R, ctr.y + 0.35f * R, ctr.z + 1.1f * R);
-    const sidx_vec3 fwd = sidx_v3_scale(sidx_v3_sub(ctr, eye), 1.0f / sidx_v3_length(sidx_v3_sub(ctr, eye)));
-    sidx_vec3 right = sidx_v3_cross(fwd, sidx_v3(0, 1, 0));
-    right = sidx_v3_scale(right, 1.0f / sidx_v3_length(right));
-    const sidx_vec3 up = sidx_v3_cross(right, fwd);
-    for (int y = 0; y < H; ++y)
-        for (int x = 0; x < W; ++x) {
-            const float u = (2.0f * ((float)x + 0.5f) / W - 1.0f) * 0.3f, v = (1.0f - 2.0f * ((float)y + 0.5f) / H) * 0.22f;
-            sidx_ray_init(&rays[y * W + x], eye,
-                          sidx_v3_add(fwd, sidx_v3_add(sidx_v3_scale(right, u), sidx_v3_scale(up, v))), 0.0f, INFINITY);
-        }
+    const lesson_camera cam = lesson_camera_at(sidx_mesh_bounds(&mesh), 0.4f, 0.35f, 1.1f);
+    lesson_camera_rays(&cam, W, H, 0.3f, 0.22f, rays);
     printf("== '%s' (%u triangles), grid %u x %u x %u (lambda = %g): %llu references, %.2f cells per triangle;\n"
            "   %d x %d camera rays\n",
            args.scene, mesh.num_triangles, st.res[0], st.res[1], st.res[2], LAMBDA, (unsigned long long)st.prim_refs,

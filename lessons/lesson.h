@@ -44,6 +44,7 @@
  * lesson_rays_into_box  random rays from around a box into it
  * lesson_count_rays  the events of closest-hit queries, counted, and their hits
  * lesson_us_per_ray  best-of-N microseconds per untraced query
+ * lesson_camera_*    a pinhole camera looking at a box, and its image's rays
  */
 #ifndef LESSON_H
 #define LESSON_H
@@ -211,6 +212,44 @@ static inline void lesson_rays_into_box(sidx_aabb box, sidx_ray *rays, size_t n,
         const sidx_vec3 t = sidx_v3(box.min.x + f[2] * ext.x, box.min.y + f[3] * ext.y, box.min.z + f[4] * ext.z);
         sidx_ray_init(&rays[i], o, sidx_v3_sub(t, o), 0.0f, INFINITY);
     }
+}
+
+/* A pinhole camera at box centre + R (ex, ey, ez), R = the box's
+ * diagonal, looking at the centre, y up.  Every ray starts at the eye, so
+ * the rays of an image tile lie inside the pyramid of its corner rays. */
+typedef struct lesson_camera {
+    sidx_vec3 eye, fwd, right, up;
+} lesson_camera;
+
+static inline lesson_camera lesson_camera_at(sidx_aabb box, float ex, float ey, float ez)
+{
+    const sidx_vec3 ctr = sidx_aabb_centroid(box);
+    const float R = sidx_v3_length(sidx_aabb_extent(box));
+    lesson_camera c;
+    c.eye = sidx_v3(ctr.x + ex * R, ctr.y + ey * R, ctr.z + ez * R);
+    c.fwd = sidx_v3_scale(sidx_v3_sub(ctr, c.eye), 1.0f / sidx_v3_length(sidx_v3_sub(ctr, c.eye)));
+    c.right = sidx_v3_cross(c.fwd, sidx_v3(0, 1, 0));
+    c.right = sidx_v3_scale(c.right, 1.0f / sidx_v3_length(c.right));
+    c.up = sidx_v3_cross(c.right, c.fwd);
+    return c;
+}
+
+/* The direction through screen point (u, v): u to the right, v up. */
+static inline sidx_vec3 lesson_camera_dir(const lesson_camera *c, float u, float v)
+{
+    return sidx_v3_add(c->fwd, sidx_v3_add(sidx_v3_scale(c->right, u), sidx_v3_scale(c->up, v)));
+}
+
+/* A w x h image, row by row, through the pixel centres; the screen spans
+ * u in [-su, su], v in [-sv, sv]. */
+static inline void lesson_camera_rays(const lesson_camera *c, int w, int h, float su, float sv, sidx_ray *rays)
+{
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const float u = (2.0f * ((float)x + 0.5f) / (float)w - 1.0f) * su;
+            const float v = (1.0f - 2.0f * ((float)y + 0.5f) / (float)h) * sv;
+            sidx_ray_init(&rays[y * w + x], c->eye, lesson_camera_dir(c, u, v), 0.0f, INFINITY);
+        }
 }
 
 /* The events of n closest-hit queries, counted (c) and their hits (hits,
