@@ -218,20 +218,8 @@ int main(int argc, char **argv)
 
     /* a pinhole camera in front of the scene: every ray starts at the eye,
      * so each tile's rays lie inside the pyramid of its 4 corner rays */
-    const sidx_aabb box = sidx_mesh_bounds(&mesh);
-    const sidx_vec3 ext = sidx_aabb_extent(box), ctr = sidx_aabb_centroid(box);
-    const float R = sidx_v3_length(ext);
-    const sidx_vec3 eye = sidx_v3(ctr.x + 0.3f * R, ctr.y + 0.4f * R, ctr.z + 1.3f * R);
-    const sidx_vec3 fwd = sidx_v3_scale(sidx_v3_sub(ctr, eye), 1.0f / sidx_v3_length(sidx_v3_sub(ctr, eye)));
-    sidx_vec3 right = sidx_v3_cross(fwd, sidx_v3(0, 1, 0));
-    right = sidx_v3_scale(right, 1.0f / sidx_v3_length(right));
-    const sidx_vec3 up = sidx_v3_cross(right, fwd);
-    for (int y = 0; y < H; ++y)
-        for (int x = 0; x < W; ++x) {
-            const float u = (2.0f * ((float)x + 0.5f) / W - 1.0f) * 0.27f, v = (1.0f - 2.0f * ((float)y + 0.5f) / H) * 0.2f;
-            sidx_ray_init(&rays[y * W + x], eye, sidx_v3_add(fwd, sidx_v3_add(sidx_v3_scale(right, u), sidx_v3_scale(up, v))),
-                          0.0f, INFINITY);
-        }
+    const lesson_camera cam = lesson_camera_at(sidx_mesh_bounds(&mesh), 0.3f, 0.4f, 1.3f);
+    lesson_camera_rays(&cam, W, H, 0.27f, 0.2f, rays);
     sidx_accel_intersect_n(acc[0], rays, NRAYS, NULL, ref);
     size_t hit_rays = 0;
     for (size_t i = 0; i < NRAYS; ++i) hit_rays += ref[i].prim != SIDX_NO_HIT;

@@ -43,6 +43,14 @@
  * the defaults, rather than reported as an unknown option.  The lesson's
  * usage text says what a knob changes in what the lesson builds; its CHECK
  * lines are only asserted with the defaults.
+ *
+ * Shared measuring helpers (the later lessons use them):
+ * lesson_seconds     wall clock, for printed times (never checked)
+ * lesson_random      a reproducible uniform number in [0, 1)
+ * lesson_rays_into_box  random rays from around a box into it
+ * lesson_count_rays  the events of closest-hit queries, counted, and their hits
+ * lesson_us_per_ray  best-of-N microseconds per untraced query
+ * lesson_camera_*    a pinhole camera looking at a box, and its image's rays
  */
 #ifndef LESSON_H
 #define LESSON_H
@@ -52,6 +60,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include "sidx/sidx.h"
 #include "sidx/viz.h"
 
@@ -237,5 +246,109 @@ static inline sidx_mesh lesson_open(const lesson_args *a, const char *spec)
 static inline sidx_mesh lesson_open_scene(const lesson_args *a) { return lesson_open(a, a->scene); }
 
 static inline void lesson_check(const char *name, long value) { printf("CHECK %s=%ld\n", name, value); }
+
+/* ---- shared by the later lessons: clock, random rays, counted work ---- */
+
+/* Wall-clock seconds (CLOCK_MONOTONIC); times are printed, never checked. */
+static inline double lesson_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* A uniform number in [0, 1) from a 32-bit LCG: the same sequence on every
+ * machine, so the lessons' counts are reproducible. */
+static inline float lesson_random(uint32_t *seed)
+{
+    *seed = *seed * 1664525u + 1013904223u;
+    return (float)(*seed >> 8) / 16777216.0f;
+}
+
+/* n rays from random points on the sphere around box (radius = its
+ * diagonal) to random points inside it: "ordinary" rays that all cross
+ * the scene, from every direction. */
+static inline void lesson_rays_into_box(sidx_aabb box, sidx_ray *rays, size_t n, uint32_t seed)
+{
+    const sidx_vec3 ext = sidx_aabb_extent(box), ctr = sidx_aabb_centroid(box);
+    const float R = sidx_v3_length(ext);
+    for (size_t i = 0; i < n; ++i) {
+        float f[5];
+        for (int j = 0; j < 5; ++j) f[j] = lesson_random(&seed);
+        const float z = 2 * f[0] - 1, ang = 6.2831853f * f[1], s = sqrtf(1 - z * z);
+        const sidx_vec3 o = sidx_v3_add(ctr, sidx_v3(R * s * cosf(ang), R * s * sinf(ang), R * z));
+        const sidx_vec3 t = sidx_v3(box.min.x + f[2] * ext.x, box.min.y + f[3] * ext.y, box.min.z + f[4] * ext.z);
+        sidx_ray_init(&rays[i], o, sidx_v3_sub(t, o), 0.0f, INFINITY);
+    }
+}
+
+/* A pinhole camera at box centre + R (ex, ey, ez), R = the box's
+ * diagonal, looking at the centre, y up.  Every ray starts at the eye, so
+ * the rays of an image tile lie inside the pyramid of its corner rays. */
+typedef struct lesson_camera {
+    sidx_vec3 eye, fwd, right, up;
+} lesson_camera;
+
+static inline lesson_camera lesson_camera_at(sidx_aabb box, float ex, float ey, float ez)
+{
+    const sidx_vec3 ctr = sidx_aabb_centroid(box);
+    const float R = sidx_v3_length(sidx_aabb_extent(box));
+    lesson_camera c;
+    c.eye = sidx_v3(ctr.x + ex * R, ctr.y + ey * R, ctr.z + ez * R);
+    c.fwd = sidx_v3_scale(sidx_v3_sub(ctr, c.eye), 1.0f / sidx_v3_length(sidx_v3_sub(ctr, c.eye)));
+    c.right = sidx_v3_cross(c.fwd, sidx_v3(0, 1, 0));
+    c.right = sidx_v3_scale(c.right, 1.0f / sidx_v3_length(c.right));
+    c.up = sidx_v3_cross(c.right, c.fwd);
+    return c;
+}
+
+/* The direction through screen point (u, v): u to the right, v up. */
+static inline sidx_vec3 lesson_camera_dir(const lesson_camera *c, float u, float v)
+{
+    return sidx_v3_add(c->fwd, sidx_v3_add(sidx_v3_scale(c->right, u), sidx_v3_scale(c->up, v)));
+}
+
+/* A w x h image, row by row, through the pixel centres; the screen spans
+ * u in [-su, su], v in [-sv, sv]. */
+static inline void lesson_camera_rays(const lesson_camera *c, int w, int h, float su, float sv, sidx_ray *rays)
+{
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const float u = (2.0f * ((float)x + 0.5f) / (float)w - 1.0f) * su;
+            const float v = (1.0f - 2.0f * ((float)y + 0.5f) / (float)h) * sv;
+            sidx_ray_init(&rays[y * w + x], c->eye, lesson_camera_dir(c, u, v), 0.0f, INFINITY);
+        }
+}
+
+/* The events of n closest-hit queries, counted (c) and their hits (hits,
+ * may be NULL). */
+static inline void lesson_count_rays(const sidx_accel *a, const sidx_ray *rays, size_t n, sidx_counters *c,
+                                     sidx_hit *hits)
+{
+    sidx_counters_init(c);
+    const sidx_hook h = sidx_counters_hook(c);
+    for (size_t i = 0; i < n; ++i) {
+        const sidx_query q = {0, SIDX_TRAVERSE_DEFAULT, &h, (uint32_t)i};
+        sidx_hit hit;
+        sidx_accel_intersect(a, &rays[i], &q, &hit);
+        if (hits) hits[i] = hit;
+    }
+}
+
+/* Best of `passes` untraced passes over the rays: microseconds per ray. */
+static inline double lesson_us_per_ray(const sidx_accel *a, const sidx_ray *rays, size_t n, int passes)
+{
+    double best = INFINITY;
+    for (int p = 0; p < passes; ++p) {
+        const double t0 = lesson_seconds();
+        for (size_t i = 0; i < n; ++i) {
+            sidx_hit hit;
+            sidx_accel_intersect(a, &rays[i], NULL, &hit);
+        }
+        const double dt = lesson_seconds() - t0;
+        if (dt < best) best = dt;
+    }
+    return 1e6 * best / (double)n;
+}
 
 #endif

@@ -25,15 +25,18 @@ needs() {
     case $1 in
     03_*|04_*|05_*) echo "bvh bvh-sweep bvh-everyb bvh-median bvh-middle" ;;
     06_*) echo "bvh kdtree" ;;
-    07_*) echo "grid grid-nomailbox" ;;
+    07_*|21_*) echo "grid grid-nomailbox" ;;
     08_*) echo "grid grid2 grid-irregular kdtree" ;;
-    09_*) echo "kdtree kdtree-median kdtree-middle" ;;
+    09_*|22_*) echo "kdtree kdtree-median kdtree-middle" ;;
     10_*|11_*) echo "kdtree" ;;
     12_*) echo "octree quadtree bsp" ;;
     13_*) echo "bvh kdtree grid octree" ;;
     14_*) echo "bvh bvh4 bvh8" ;;
     15_*) echo "bvh rayclass" ;;
     16_*) echo "bvh" ;;
+    17_*) echo "bvh bvh-obb" ;;
+    18_*|19_*) echo "bvh" ;;
+    20_*) echo "bvh kdtree grid" ;;
     *) echo "" ;;
     esac
 }
@@ -63,6 +66,16 @@ expect() {
                            frustum_culls_nodes=1" ;;
     15_shadows) echo "same_answers=1 any_hit_cheaper=1 light_buffer_saves=1" ;;
     16_time_vs_error) echo "watertight_leaks=0 moller_leaks_more=1 robust_box_misses=0 plain_box_misses_more=1" ;;
+    17_oriented_bvh) echo "same_hits=1 obb_fewer_box_tests=1 obb_fewer_box_hits=1 obb_more_memory=1" ;;
+    18_beams_and_cones) echo "tree_matches_brute=1 conservative=1 tile_beam_fewer_visits=1
+                              candidates_exceed_hits=1 subdivision_narrows=1 own_subdivision_matches=1
+                              cones_cost_more=1" ;;
+    19_instancing) echo "hits_agree=1 nested_hits_agree=1 one_shared_child=1 instancing_saves_memory=1" ;;
+    20_log_n) echo "tree_work_exponent_small=1 grid_exponent_near_third=1" ;;
+    21_mailboxes) echo "same_hits=1 replay_matches_library=1 mailbox_saves_tests=1 per_object_saves_most=1
+                        sharing_loses_skips=1 sharing_moves_lines=1" ;;
+    22_kd_round_robin) echo "same_hits=1 round_robin_scale_invariant=1 largest_extent_cheaper=1
+                             gap_grows_when_stretched=1" ;;
     *) echo "" ;;
     esac
 }
