@@ -135,7 +135,7 @@ static void reference(size_t i, const sidx_hook *h)
         return;
     }
     i -= RES_CASES;
-    grid_reference_ray((int)(i / GRID_RAYS), (int)(i % GRID_RAYS), h);
+    grid_reference_ray((int)(i / GRID_RAYS), (int)(i % GRID_RAYS), 0, h);
 }
 
 static void walk(const sidx_ex *ex, const sidx_grid_cells *g, sidx_hit *best, void *user)
@@ -151,7 +151,7 @@ static void student(size_t i, const sidx_hook *h)
         return;
     }
     i -= RES_CASES;
-    grid_student_ray((int)(i / GRID_RAYS), (int)(i % GRID_RAYS), h, "grid-nomailbox", walk, NULL);
+    grid_student_ray((int)(i / GRID_RAYS), (int)(i % GRID_RAYS), 0, h, "grid-nomailbox", walk, NULL);
 }
 
 static const char *hint(size_t i, const sidx_event *ref, const sidx_event *stu)

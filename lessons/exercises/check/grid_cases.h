@@ -14,6 +14,7 @@
 #include <string.h>
 #include "check.h"
 #include "sidx/grid.h"
+#include "grid_internal.h"
 
 #define GRID_NSCENES 3
 #define GRID_FIXED 12 /* hand-made rays of scene 0 */
@@ -107,11 +108,12 @@ static void grid_teardown(void)
     }
 }
 
-static void grid_reference_ray(int s, int r, const sidx_hook *h)
+static void grid_reference_ray(int s, int r, uint32_t ray_id, const sidx_hook *h)
 {
     sidx_query q;
     memset(&q, 0, sizeof q);
     q.hook = h;
+    q.ray_id = ray_id;
     sidx_hit hit;
     sidx_accel_intersect(grid_accels[s], &grid_rays[s][r], &q, &hit);
 }
@@ -140,7 +142,8 @@ typedef void (*grid_walk_fn)(const sidx_ex *ex, const sidx_grid_cells *g, sidx_h
  * the walk, TERMINATE (no cell: the grid box was missed; a hit at or
  * before the last cell's exit: hit in cell; else the walk left the grid),
  * RAY_END. */
-static void grid_student_ray(int s, int r, const sidx_hook *h, const char *structure, grid_walk_fn walk, void *user)
+static void grid_student_ray(int s, int r, uint32_t ray_id, const sidx_hook *h, const char *structure,
+                             grid_walk_fn walk, void *user)
 {
     const sidx_ray *ray = &grid_rays[s][r];
     grid_counting c = {h, 0, -INFINITY};
@@ -149,12 +152,14 @@ static void grid_student_ray(int s, int r, const sidx_hook *h, const char *struc
     memset(&ex, 0, sizeof ex);
     ex.hook = &ch;
     ex.structure = structure;
+    ex.ray_id = ray_id;
     ex.ray = ray;
     ex.mesh = &grid_meshes[s];
     ex.tri = SIDX_TRI_WATERTIGHT;
     ex.box = SIDX_BOX_PLAIN;
     sidx_event e = sidx_event_blank(SIDX_EV_RAY_BEGIN);
     e.structure = structure;
+    e.ray_id = ray_id;
     e.t_near = ray->tmin;
     e.t_far = ray->tmax;
     sidx_hook_emit(h, &e);
@@ -163,6 +168,7 @@ static void grid_student_ray(int s, int r, const sidx_hook *h, const char *struc
     walk(&ex, &grid_views[s], &best, user);
     e = sidx_event_blank(SIDX_EV_TERMINATE);
     e.structure = structure;
+    e.ray_id = ray_id;
     e.reason = c.entered == 0                                         ? SIDX_TERM_MISS_ROOT
                : best.t <= c.t_out && best.prim != SIDX_NO_HIT ? SIDX_TERM_HIT_IN_CELL
                                                                : SIDX_TERM_LEFT_GRID;
@@ -171,10 +177,37 @@ static void grid_student_ray(int s, int r, const sidx_hook *h, const char *struc
     sidx_hook_emit(h, &e);
     e = sidx_event_blank(SIDX_EV_RAY_END);
     e.structure = structure;
+    e.ray_id = ray_id;
     e.prim = best.prim;
     e.t = best.prim == SIDX_NO_HIT ? INFINITY : best.t;
     e.result = best.prim != SIDX_NO_HIT;
     sidx_hook_emit(h, &e);
+}
+
+/* The library's 3D-DDA (grid_internal.h) over a view's cells, reporting
+ * each cell; `cell` tests the cell's triangles.  Stops as grid.c's walk
+ * does: at a hit inside the current cell, or when the walk leaves. */
+typedef void (*grid_cell_fn)(const sidx_ex *ex, const uint32_t *refs, uint32_t n, sidx_hit *best, void *user);
+
+static inline void grid_dda_walk(const sidx_ex *ex, const sidx_grid_cells *g, sidx_hit *best, grid_cell_fn cell,
+                          void *user)
+{
+    float t0, t1;
+    if (!sidx_intersect_aabb(SIDX_BOX_PLAIN, ex->ray, &g->box, ex->ray->tmin, best->t, &t0, &t1)) return;
+    sidx__grid_geom geom;
+    sidx__grid_geom_init(&geom, g->box, g->res);
+    sidx__dda d;
+    sidx__dda_init(&d, ex->ray, &geom, t0);
+    float t_in = t0;
+    for (;;) {
+        const int axis = sidx__dda_axis(&d);
+        const float t_out = d.t_max[axis];
+        const uint32_t id = (uint32_t)d.c[0] + g->res[0] * ((uint32_t)d.c[1] + g->res[1] * (uint32_t)d.c[2]);
+        sidx_ex_cell_enter(ex, id, d.c[0], d.c[1], d.c[2], t_in, t_out);
+        cell(ex, g->refs + g->offsets[id], g->offsets[id + 1] - g->offsets[id], best, user);
+        if (best->t <= t_out || !sidx__dda_step(&d, axis)) return;
+        t_in = t_out;
+    }
 }
 
 #endif
