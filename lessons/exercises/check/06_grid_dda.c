@@ -171,9 +171,17 @@ static const char *hint(size_t i, const sidx_event *ref, const sidx_event *stu)
 
 static void teardown(void) { grid_teardown(); }
 
+static int format(const sidx_event *e, char *buf, size_t size)
+{
+    if (e->type != SIDX_EV_NOTE) return 0;
+    snprintf(buf, size, "resolution %d x %d x %d = %u cells", (int)e->cell[0], (int)e->cell[1], (int)e->cell[2],
+             (unsigned)e->count);
+    return 1;
+}
+
 const ex_driver ex_driver_this = {
     "06_grid_dda",
     "the uniform grid: the resolution formula, then the 3D-DDA cell walk",
     "deck 000, \"Uniform Grids\" (Resolution) and \"Uniform Grid Traversal\" (3D-DDA)",
-    setup, num_cases, describe, reference, student, hint, teardown,
+    setup, num_cases, describe, reference, student, hint, teardown, format,
 };

@@ -34,6 +34,9 @@ typedef struct ex_driver {
      * trace ended); NULL = the case's hint. */
     const char *(*hint)(size_t i, const sidx_event *ref, const sidx_event *stu);
     void (*teardown)(void);
+    /* Prints an event the library's printer cannot (a NOTE, whose text
+     * stays in the child): 1 if it wrote buf, 0 for the default; or NULL. */
+    int (*format)(const sidx_event *e, char *buf, size_t size);
 } ex_driver;
 
 extern const ex_driver ex_driver_this;

@@ -210,7 +210,7 @@ static int same_event(const sidx_event *a, const sidx_event *b)
     case SIDX_EV_BUILD_SPLIT:
         return a->node == b->node && a->axis == b->axis && same_float(a->pos, b->pos) &&
                same_float(a->cost, b->cost) && a->count == b->count && a->aux == b->aux;
-    case SIDX_EV_NOTE: /* a grid's resolution: cell[] = R per axis, count = cells */
+    case SIDX_EV_NOTE: /* a result the driver reports: cell[] and count (its format callback prints it) */
         return a->cell[0] == b->cell[0] && a->cell[1] == b->cell[1] && a->cell[2] == b->cell[2] &&
                a->count == b->count;
     default: return 1;
@@ -224,12 +224,7 @@ static void print_event(FILE *f, const char *label, const sidx_event *e)
         fprintf(f, "  %-10s (nothing: the trace ends here)\n", label);
         return;
     }
-    if (e->type == SIDX_EV_NOTE) { /* the text stayed in the child: say what the comparison reads */
-        fprintf(f, "  %-10s resolution %d x %d x %d = %u cells\n", label, (int)e->cell[0], (int)e->cell[1],
-                (int)e->cell[2], (unsigned)e->count);
-        return;
-    }
-    sidx_event_format(e, buf, sizeof buf);
+    if (!ex_driver_this.format || !ex_driver_this.format(e, buf, sizeof buf)) sidx_event_format(e, buf, sizeof buf);
     const char *p = buf;
     while (*p == ' ') ++p; /* the printer's indentation means nothing out of context */
     fprintf(f, "  %-10s %s\n", label, p);
