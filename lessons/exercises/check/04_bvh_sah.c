@@ -97,26 +97,6 @@ typedef struct node_case {
 static node_case nodes[NBUILDERS][NSCENES][NODES_PER];
 static uint32_t num_nodes[NBUILDERS][NSCENES];
 
-typedef struct recorder {
-    sidx_event *ev;
-    size_t n, cap;
-} recorder;
-
-static void record_fn(const sidx_event *ev, void *user)
-{
-    recorder *r = user;
-    if (r->n == r->cap) {
-        r->cap = r->cap ? 2 * r->cap : 1024;
-        sidx_event *p = realloc(r->ev, r->cap * sizeof *p);
-        if (!p) exit(2);
-        r->ev = p;
-    }
-    r->ev[r->n] = *ev;
-    r->ev[r->n].prims = NULL;
-    r->ev[r->n].text = NULL;
-    r->n++;
-}
-
 /* The triangles under node (the leaves of its subtree). */
 static uint32_t subtree_prims(const sidx_bvh_node *nd, const uint32_t *pr, uint32_t node, uint32_t *out, uint32_t n)
 {
@@ -143,8 +123,8 @@ static int setup(void)
             cents[s][i] = sidx_aabb_centroid(boxes[s][i]);
         }
         for (int b = 0; b < NBUILDERS; ++b) {
-            recorder rec = {NULL, 0, 0};
-            const sidx_hook h = {record_fn, &rec,
+            ex_trace rec = {NULL, 0, 0};
+            const sidx_hook h = {ex_trace_hook_fn, &rec,
                                  SIDX_EVMASK(SIDX_EV_BUILD_CANDIDATE) | SIDX_EVMASK(SIDX_EV_BUILD_SPLIT)};
             sidx_build_options bo;
             memset(&bo, 0, sizeof bo);

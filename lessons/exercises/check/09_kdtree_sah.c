@@ -40,26 +40,6 @@ typedef struct node_case {
 static node_case cases[MAX_CASES];
 static size_t ncases;
 
-typedef struct recorder {
-    sidx_event *ev;
-    size_t n, cap;
-} recorder;
-
-static void record_fn(const sidx_event *ev, void *user)
-{
-    recorder *r = user;
-    if (r->n == r->cap) {
-        r->cap = r->cap ? 2 * r->cap : 1024;
-        sidx_event *p = realloc(r->ev, r->cap * sizeof *p);
-        if (!p) exit(2);
-        r->ev = p;
-    }
-    r->ev[r->n] = *ev;
-    r->ev[r->n].prims = NULL;
-    r->ev[r->n].text = NULL;
-    r->n++;
-}
-
 /* A cluster of 40 small triangles near one corner, and one triangle at
  * the far corner that makes the box ten times larger. */
 static int make_corner(sidx_mesh *m)
@@ -90,7 +70,7 @@ static sidx_aabb tri_box(const sidx_mesh *m, uint32_t i)
 
 /* Keeps node's events (its CANDIDATEs and its SPLIT) as a case, with the
  * boxes it starts from; 0 when the library did not split it. */
-static int add_case(const recorder *rec, int scene, uint32_t node, sidx_aabb cell, sidx_aabb *boxes, uint32_t n)
+static int add_case(const ex_trace *rec, int scene, uint32_t node, sidx_aabb cell, sidx_aabb *boxes, uint32_t n)
 {
     size_t first = rec->n, last = rec->n;
     for (size_t k = 0; k < rec->n; ++k) {
@@ -120,8 +100,8 @@ static int setup(void)
     for (int s = 0; s < NSCENES; ++s) {
         sidx_mesh m;
         if (s == 1 ? make_corner(&m) != 0 : sidx_scene_open(scene_names[s], &m, NULL) != SIDX_OK) return -1;
-        recorder rec = {NULL, 0, 0};
-        const sidx_hook h = {record_fn, &rec,
+        ex_trace rec = {NULL, 0, 0};
+        const sidx_hook h = {ex_trace_hook_fn, &rec,
                              SIDX_EVMASK(SIDX_EV_BUILD_NODE) | SIDX_EVMASK(SIDX_EV_BUILD_CANDIDATE) |
                                  SIDX_EVMASK(SIDX_EV_BUILD_SPLIT)};
         sidx_build_options bo;

@@ -23,6 +23,7 @@ static const char *const grid_scene_names[GRID_NSCENES] = {"slanted", "soup:120"
 static sidx_mesh grid_meshes[GRID_NSCENES];
 static sidx_accel *grid_accels[GRID_NSCENES];
 static sidx_grid_cells grid_views[GRID_NSCENES];
+static sidx__grid_geom grid_geoms[GRID_NSCENES]; /* the views' geometry, for the library's DDA */
 static sidx_ray grid_rays[GRID_NSCENES][GRID_RAYS];
 static const char *grid_ray_kind[GRID_NSCENES][GRID_RAYS];
 
@@ -65,6 +66,7 @@ static int grid_setup(const char *structure)
         bo.grid_density = s == 0 ? 16.0f : 0.0f; /* slanted: R = 4·∛(16·4/64) = 4 per axis */
         if (sidx_accel_build(structure, &grid_meshes[s], &bo, &grid_accels[s], NULL) != SIDX_OK) return -1;
         if (sidx_grid_cells_get(grid_accels[s], &grid_views[s], NULL) != SIDX_OK) return -1;
+        sidx__grid_geom_init(&grid_geoms[s], grid_views[s].box, grid_views[s].res);
         const sidx_aabb b = sidx_mesh_bounds(&grid_meshes[s]);
         const sidx_vec3 c = sidx_aabb_centroid(b), e = sidx_aabb_extent(b);
         uint32_t st = 7u + (uint32_t)s;
@@ -194,10 +196,8 @@ static inline void grid_dda_walk(const sidx_ex *ex, const sidx_grid_cells *g, si
 {
     float t0, t1;
     if (!sidx_intersect_aabb(SIDX_BOX_PLAIN, ex->ray, &g->box, ex->ray->tmin, best->t, &t0, &t1)) return;
-    sidx__grid_geom geom;
-    sidx__grid_geom_init(&geom, g->box, g->res);
     sidx__dda d;
-    sidx__dda_init(&d, ex->ray, &geom, t0);
+    sidx__dda_init(&d, ex->ray, &grid_geoms[g - grid_views], t0);
     float t_in = t0;
     for (;;) {
         const int axis = sidx__dda_axis(&d);

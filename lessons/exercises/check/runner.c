@@ -51,14 +51,9 @@ float ex_rand(uint32_t *state)
 
 /* ---- traces ------------------------------------------------------------------ */
 
-typedef struct trace {
-    sidx_event *ev;
-    size_t n, cap;
-} trace;
-
-static void trace_hook_fn(const sidx_event *ev, void *user)
+void ex_trace_hook_fn(const sidx_event *ev, void *user)
 {
-    trace *t = user;
+    ex_trace *t = user;
     if (t->n == t->cap) {
         size_t cap = t->cap ? 2 * t->cap : 256;
         sidx_event *p = realloc(t->ev, cap * sizeof *p);
@@ -107,7 +102,7 @@ static const char done_mark[8] = "EX-DONE";
 
 typedef enum run_status { RUN_OK = 0, RUN_CRASH, RUN_TIMEOUT, RUN_TOO_MANY, RUN_ERROR } run_status;
 
-static run_status run_student(size_t i, unsigned timeout, trace *out, int *sig, int *code)
+static run_status run_student(size_t i, unsigned timeout, ex_trace *out, int *sig, int *code)
 {
     char path[] = "/tmp/sidx-check-XXXXXX";
     int fd = mkstemp(path);
@@ -154,7 +149,7 @@ static run_status run_student(size_t i, unsigned timeout, trace *out, int *sig, 
     for (size_t k = 0; k < n; ++k) {
         sidx_event e;
         if (pread(fd, &e, sizeof e, (off_t)(k * sizeof e)) != (ssize_t)sizeof e) break;
-        trace_hook_fn(&e, out);
+        ex_trace_hook_fn(&e, out);
     }
     close(fd);
     *sig = 0;
@@ -230,7 +225,7 @@ static void print_event(FILE *f, const char *label, const sidx_event *e)
     fprintf(f, "  %-10s %s\n", label, p);
 }
 
-static int write_jsonl(const char *dir, const char *name, const trace *t)
+static int write_jsonl(const char *dir, const char *name, const ex_trace *t)
 {
     char path[4096];
     snprintf(path, sizeof path, "%s/%s", dir, name);
@@ -292,7 +287,7 @@ int main(int argc, char **argv)
         fprintf(stderr, "sidx-check %s: --case wants 1..%zu\n", d->name, n);
         return 2;
     }
-    trace ref = {0}, stu = {0};
+    ex_trace ref = {0}, stu = {0};
     int rc = 0;
     size_t steps = 0, ran = 0;
     for (size_t i = only ? (size_t)only - 1 : 0; i < (only ? (size_t)only : n); ++i) {
@@ -300,7 +295,7 @@ int main(int argc, char **argv)
         memset(&info, 0, sizeof info);
         d->describe(i, &info);
         ref.n = 0;
-        sidx_hook rh = {trace_hook_fn, &ref, 0};
+        sidx_hook rh = {ex_trace_hook_fn, &ref, 0};
         d->reference(i, &rh);
         int sig = 0, code = 0;
         const run_status rs = run_student(i, timeout, &stu, &sig, &code);

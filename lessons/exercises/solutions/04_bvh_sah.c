@@ -30,6 +30,26 @@ static int key_cmp(const void *pa, const void *pb)
     return (x->id > y->id) - (x->id < y->id);
 }
 
+/* The cheapest candidate so far ("if (cost < best_cost)"). */
+typedef struct best_split {
+    float cost, pos;
+    int axis;
+    uint32_t nl;
+} best_split;
+
+/* Reports a candidate and keeps it if strictly cheaper. */
+static void candidate(const sidx_ex *ex, uint32_t node, best_split *b, int axis, float pos, float cost, uint32_t nl,
+                      uint32_t count)
+{
+    sidx_ex_candidate(ex, node, axis, pos, cost, nl, count - nl);
+    if (cost < b->cost) {
+        b->cost = cost;
+        b->axis = axis;
+        b->pos = pos;
+        b->nl = nl;
+    }
+}
+
 static void node_bounds(const uint32_t *prims, uint32_t count, const sidx_aabb *boxes, const sidx_vec3 *cents,
                         sidx_aabb *bb, sidx_aabb *cb)
 {
@@ -50,9 +70,7 @@ void split_sweep(const sidx_ex *ex, uint32_t node, const uint32_t *prims, uint32
     if (step < 1) step = 1;
     key *k = malloc(count * sizeof *k);
     float *right = malloc(count * sizeof *right);
-    float best = INFINITY, best_pos = 0;
-    int best_axis = -1;
-    uint32_t best_nl = 0;
+    best_split best = {INFINITY, 0, -1, 0};
     for (int axis = 0; axis < 3 && k && right; ++axis) {
         if (!(sidx_v3_get(cb.max, axis) > sidx_v3_get(cb.min, axis))) continue;
         for (uint32_t i = 0; i < count; ++i) {
@@ -71,16 +89,10 @@ void split_sweep(const sidx_ex *ex, uint32_t node, const uint32_t *prims, uint32
             if (i % step) continue;
             const float cost = cost_of(sidx_aabb_area(acc), i, right[i], count - i, sidx_aabb_area(bb), c_trav, c_tri);
             const float pos = 0.5f * (k[i - 1].c + k[i].c);
-            sidx_ex_candidate(ex, node, axis, pos, cost, i, count - i);
-            if (cost < best) {
-                best = cost;
-                best_axis = axis;
-                best_pos = pos;
-                best_nl = i;
-            }
+            candidate(ex, node, &best, axis, pos, cost, i, count);
         }
     }
-    if (best_axis >= 0) sidx_ex_split(ex, node, best_axis, best_pos, best, best_nl, count - best_nl);
+    if (best.axis >= 0) sidx_ex_split(ex, node, best.axis, best.pos, best.cost, best.nl, count - best.nl);
     free(k);
     free(right);
 }
@@ -92,9 +104,7 @@ void split_binned(const sidx_ex *ex, uint32_t node, const uint32_t *prims, uint3
     node_bounds(prims, count, boxes, cents, &bb, &cb);
     sidx_aabb *bin = malloc(bins * sizeof *bin);
     uint32_t *n = malloc(bins * sizeof *n);
-    float best = INFINITY, best_pos = 0;
-    int best_axis = -1;
-    uint32_t best_nl = 0;
+    best_split best = {INFINITY, 0, -1, 0};
     for (int axis = 0; axis < 3 && bin && n; ++axis) {
         const float cmin = sidx_v3_get(cb.min, axis), ext = sidx_v3_get(cb.max, axis) - cmin;
         if (!(ext > 0.0f)) continue;
@@ -120,16 +130,10 @@ void split_binned(const sidx_ex *ex, uint32_t node, const uint32_t *prims, uint3
             if (nl == 0 || nl == count) continue;
             const float cost = sah_cost(bb, a, nl, b, count - nl, c_trav, c_tri);
             const float pos = cmin + ext * (float)j / (float)bins;
-            sidx_ex_candidate(ex, node, axis, pos, cost, nl, count - nl);
-            if (cost < best) {
-                best = cost;
-                best_axis = axis;
-                best_pos = pos;
-                best_nl = nl;
-            }
+            candidate(ex, node, &best, axis, pos, cost, nl, count);
         }
     }
-    if (best_axis >= 0) sidx_ex_split(ex, node, best_axis, best_pos, best, best_nl, count - best_nl);
+    if (best.axis >= 0) sidx_ex_split(ex, node, best.axis, best.pos, best.cost, best.nl, count - best.nl);
     free(bin);
     free(n);
 }
