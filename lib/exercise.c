@@ -3,6 +3,9 @@
  * same step (field for field as in docs/events.md). */
 #include "sidx_internal.h"
 #include "sidx/exercise.h"
+#include "grid_internal.h"
+
+_Static_assert(SIDX_EX_MAILBOX_SIZE == SIDX__MAILBOX_SIZE, "exercise 07 mailbox = the grids' mailbox");
 
 static int ex_wants(const sidx_ex *ex, sidx_event_type type)
 {

@@ -222,6 +222,8 @@ static sidx_aabb clip_bounds(const kd_tri *t, sidx_aabb cell)
     return r;
 }
 
+sidx_aabb sidx__kd_clip_bounds(const kd_tri *t, sidx_aabb cell) { return clip_bounds(t, cell); }
+
 /* ==== the SAH builder: Wald & Havran 2006 event sweep ===================== */
 
 /* An event is one 64-bit key: the position as an order-preserving 32-bit

@@ -153,6 +153,9 @@ sidx_status sidx__kd_build(sidx_accel *a, sidx_error *err);
  * hand-made trees).  SIDX_ERR_NOMEM leaves kd->blocks NULL. */
 sidx_status sidx__kd_make_blocks(const sidx_accel *a, kd_tree *kd, const sidx_mesh *m);
 void sidx__kd_destroy(sidx_accel *a);
+/* The build's "perfect split" clipping: the bounds of triangle t ∩ cell
+ * (exercise 09's checker hands a child cell's clipped boxes to the student). */
+sidx_aabb sidx__kd_clip_bounds(const kd_tri *t, sidx_aabb cell);
 void sidx__kd_stats(const sidx_accel *a, sidx_accel_stats *s);
 
 #endif

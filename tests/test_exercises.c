@@ -43,13 +43,10 @@ static int find_checker(void)
     return access(checker, X_OK);
 }
 
-/* Runs sidx-check NAME FILE; returns its exit status and its output (malloc'd). */
-static int check(const char *name, const char *file, char **out)
+/* Reads p to the end into a malloc'd string and closes it; returns the
+ * command's exit status. */
+static int drain(FILE *p, char **out)
 {
-    char cmd[3 * PATH_MAX];
-    snprintf(cmd, sizeof cmd, "'%s' '%s' '%s' 2>&1", checker, name, file);
-    FILE *p = popen(cmd, "r");
-    assert_non_null(p);
     size_t cap = 4096, n = 0;
     char *buf = malloc(cap);
     assert_non_null(buf);
@@ -67,6 +64,34 @@ static int check(const char *name, const char *file, char **out)
     const int st = pclose(p);
     *out = buf;
     return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+}
+
+static FILE *start_check(const char *name, const char *file)
+{
+    char cmd[3 * PATH_MAX];
+    snprintf(cmd, sizeof cmd, "'%s' '%s' '%s' 2>&1", checker, name, file);
+    FILE *p = popen(cmd, "r");
+    assert_non_null(p);
+    return p;
+}
+
+/* Runs sidx-check NAME FILE; returns its exit status and its output (malloc'd). */
+static int check(const char *name, const char *file, char **out)
+{
+    return drain(start_check(name, file), out);
+}
+
+/* Runs sidx-check on n (name, file) pairs, CHECK_JOBS at a time (most of
+ * a run is the compiler, and the checks are independent): rc[i], out[i]. */
+#define CHECK_JOBS 4
+static void check_all(int n, const char *const *name, const char *const *file, int *rc, char **out)
+{
+    for (int i = 0; i < n; i += CHECK_JOBS) {
+        FILE *p[CHECK_JOBS];
+        const int m = n - i < CHECK_JOBS ? n - i : CHECK_JOBS;
+        for (int j = 0; j < m; ++j) p[j] = start_check(name[i + j], file[i + j]);
+        for (int j = 0; j < m; ++j) rc[i + j] = drain(p[j], &out[i + j]);
+    }
 }
 
 /* The exercise names: lessons/exercises/[0-9]*.c without .c, sorted. */
@@ -89,42 +114,47 @@ static int names(char list[][64], int max)
     return n;
 }
 
-static void solutions_pass(void **state)
+/* Checks DIR/NAME.c for every exercise NAME: the exit status must be
+ * want and the report must contain each of the texts in expect (NULL-ended). */
+static void check_every(const char *dir, int want, const char *const *expect)
 {
-    (void)state;
     char list[32][64];
     const int n = names(list, 32);
     assert_true(n >= 4);
+    static char files[32][PATH_MAX];
+    const char *names_[32] = {0}, *files_[32] = {0};
+    char *out[32];
+    int rc[32];
+    for (int i = 0; i < n; ++i) {
+        snprintf(files[i], sizeof files[i], "%s/%s.c", dir, list[i]);
+        names_[i] = list[i];
+        files_[i] = files[i];
+    }
+    check_all(n, names_, files_, rc, out);
+    for (int i = 0; i < n; ++i) {
+        if (rc[i] != want) print_message("%s: exit %d\n%s", files[i], rc[i], out[i]);
+        assert_int_equal(rc[i], want);
+        for (const char *const *e = expect; *e; ++e) assert_non_null(strstr(out[i], *e));
+        free(out[i]);
+    }
+}
+
+static void solutions_pass(void **state)
+{
+    (void)state;
     if (access("lessons/exercises/solutions", R_OK) != 0) {
         print_message("skipped: no lessons/exercises/solutions/ (a handout tree)\n");
         return;
     }
-    for (int i = 0; i < n; ++i) {
-        char file[PATH_MAX], *out;
-        snprintf(file, sizeof file, "lessons/exercises/solutions/%s.c", list[i]);
-        const int rc = check(list[i], file, &out);
-        if (rc != 0) print_message("%s: exit %d\n%s", file, rc, out);
-        assert_int_equal(rc, 0);
-        assert_non_null(strstr(out, "pass"));
-        free(out);
-    }
+    static const char *const expect[] = {"pass", NULL};
+    check_every("lessons/exercises/solutions", 0, expect);
 }
 
 static void stubs_fail_cleanly(void **state)
 {
     (void)state;
-    char list[32][64];
-    const int n = names(list, 32);
-    for (int i = 0; i < n; ++i) {
-        char file[PATH_MAX], *out;
-        snprintf(file, sizeof file, "lessons/exercises/%s.c", list[i]);
-        const int rc = check(list[i], file, &out);
-        if (rc != 1) print_message("%s: exit %d\n%s", file, rc, out);
-        assert_int_equal(rc, 1);
-        assert_non_null(strstr(out, "leaves the reference at step"));
-        assert_non_null(strstr(out, "FAIL (exit 1)"));
-        free(out);
-    }
+    static const char *const expect[] = {"leaves the reference at step", "FAIL (exit 1)", NULL};
+    check_every("lessons/exercises", 1, expect);
 }
 
 /* One planted mistake of tests/exercises/mistakes.txt. */
@@ -226,22 +256,29 @@ static void planted_mistakes_caught(void **state)
     assert_true(n >= 8);
     char dir[] = "/tmp/sidx-test-ex-XXXXXX";
     assert_non_null(mkdtemp(dir));
+    static char files[64][PATH_MAX];
+    const char *names_[64] = {0}, *files_[64] = {0};
+    char *out[64];
+    int rc[64];
+    for (int i = 0; i < n; ++i) {
+        assert_true(ms[i].exit_ == 1 || ms[i].exit_ == 2);
+        assert_int_equal(plant(&ms[i], dir, files[i], sizeof files[i]), 0);
+        names_[i] = ms[i].name;
+        files_[i] = files[i];
+    }
+    check_all(n, names_, files_, rc, out);
     for (int i = 0; i < n; ++i) {
         const mistake *m = &ms[i];
-        char file[PATH_MAX], *out;
-        assert_true(m->exit_ == 1 || m->exit_ == 2);
-        assert_int_equal(plant(m, dir, file, sizeof file), 0);
-        const int rc = check(m->name, file, &out);
-        int ok = rc == m->exit_;
+        int ok = rc[i] == m->exit_;
         for (int k = 0; k < m->nexp; ++k)
-            if (!strstr(out, m->expect[k])) {
+            if (!strstr(out[i], m->expect[k])) {
                 print_message("%s--%s: the report lacks \"%s\"\n", m->name, m->slug, m->expect[k]);
                 ok = 0;
             }
-        if (!ok) print_message("%s--%s: exit %d (want %d)\n%s", m->name, m->slug, rc, m->exit_, out);
+        if (!ok) print_message("%s--%s: exit %d (want %d)\n%s", m->name, m->slug, rc[i], m->exit_, out[i]);
         assert_true(ok);
-        free(out);
-        unlink(file);
+        free(out[i]);
+        unlink(files[i]);
     }
     assert_int_equal(rmdir(dir), 0);
 }

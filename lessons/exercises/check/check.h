@@ -34,6 +34,9 @@ typedef struct ex_driver {
      * trace ended); NULL = the case's hint. */
     const char *(*hint)(size_t i, const sidx_event *ref, const sidx_event *stu);
     void (*teardown)(void);
+    /* Prints an event the library's printer cannot (a NOTE, whose text
+     * stays in the child): 1 if it wrote buf, 0 for the default; or NULL. */
+    int (*format)(const sidx_event *e, char *buf, size_t size);
 } ex_driver;
 
 extern const ex_driver ex_driver_this;
@@ -42,6 +45,15 @@ extern const ex_driver ex_driver_this;
 void ex_format_ray(char *buf, size_t size, const sidx_ray *r);
 /* A ray from components, checked (aborts the driver on an invalid ray). */
 sidx_ray ex_ray(float ox, float oy, float oz, float dx, float dy, float dz, float tmin, float tmax);
+/* A growing array of events; ex_trace_hook_fn (a hook's fn, user = the
+ * ex_trace) appends a copy of each event without its pointers (prims,
+ * text).  Free ev when done. */
+typedef struct ex_trace {
+    sidx_event *ev;
+    size_t n, cap;
+} ex_trace;
+void ex_trace_hook_fn(const sidx_event *ev, void *user);
+
 /* A small deterministic generator for the random part of a battery. */
 float ex_rand(uint32_t *state);
 

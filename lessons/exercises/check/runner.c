@@ -51,14 +51,9 @@ float ex_rand(uint32_t *state)
 
 /* ---- traces ------------------------------------------------------------------ */
 
-typedef struct trace {
-    sidx_event *ev;
-    size_t n, cap;
-} trace;
-
-static void trace_hook_fn(const sidx_event *ev, void *user)
+void ex_trace_hook_fn(const sidx_event *ev, void *user)
 {
-    trace *t = user;
+    ex_trace *t = user;
     if (t->n == t->cap) {
         size_t cap = t->cap ? 2 * t->cap : 256;
         sidx_event *p = realloc(t->ev, cap * sizeof *p);
@@ -107,7 +102,7 @@ static const char done_mark[8] = "EX-DONE";
 
 typedef enum run_status { RUN_OK = 0, RUN_CRASH, RUN_TIMEOUT, RUN_TOO_MANY, RUN_ERROR } run_status;
 
-static run_status run_student(size_t i, unsigned timeout, trace *out, int *sig, int *code)
+static run_status run_student(size_t i, unsigned timeout, ex_trace *out, int *sig, int *code)
 {
     char path[] = "/tmp/sidx-check-XXXXXX";
     int fd = mkstemp(path);
@@ -154,7 +149,7 @@ static run_status run_student(size_t i, unsigned timeout, trace *out, int *sig, 
     for (size_t k = 0; k < n; ++k) {
         sidx_event e;
         if (pread(fd, &e, sizeof e, (off_t)(k * sizeof e)) != (ssize_t)sizeof e) break;
-        trace_hook_fn(&e, out);
+        ex_trace_hook_fn(&e, out);
     }
     close(fd);
     *sig = 0;
@@ -210,6 +205,9 @@ static int same_event(const sidx_event *a, const sidx_event *b)
     case SIDX_EV_BUILD_SPLIT:
         return a->node == b->node && a->axis == b->axis && same_float(a->pos, b->pos) &&
                same_float(a->cost, b->cost) && a->count == b->count && a->aux == b->aux;
+    case SIDX_EV_NOTE: /* a result the driver reports: cell[] and count (its format callback prints it) */
+        return a->cell[0] == b->cell[0] && a->cell[1] == b->cell[1] && a->cell[2] == b->cell[2] &&
+               a->count == b->count;
     default: return 1;
     }
 }
@@ -221,13 +219,13 @@ static void print_event(FILE *f, const char *label, const sidx_event *e)
         fprintf(f, "  %-10s (nothing: the trace ends here)\n", label);
         return;
     }
-    sidx_event_format(e, buf, sizeof buf);
+    if (!ex_driver_this.format || !ex_driver_this.format(e, buf, sizeof buf)) sidx_event_format(e, buf, sizeof buf);
     const char *p = buf;
     while (*p == ' ') ++p; /* the printer's indentation means nothing out of context */
     fprintf(f, "  %-10s %s\n", label, p);
 }
 
-static int write_jsonl(const char *dir, const char *name, const trace *t)
+static int write_jsonl(const char *dir, const char *name, const ex_trace *t)
 {
     char path[4096];
     snprintf(path, sizeof path, "%s/%s", dir, name);
@@ -289,7 +287,7 @@ int main(int argc, char **argv)
         fprintf(stderr, "sidx-check %s: --case wants 1..%zu\n", d->name, n);
         return 2;
     }
-    trace ref = {0}, stu = {0};
+    ex_trace ref = {0}, stu = {0};
     int rc = 0;
     size_t steps = 0, ran = 0;
     for (size_t i = only ? (size_t)only - 1 : 0; i < (only ? (size_t)only : n); ++i) {
@@ -297,7 +295,7 @@ int main(int argc, char **argv)
         memset(&info, 0, sizeof info);
         d->describe(i, &info);
         ref.n = 0;
-        sidx_hook rh = {trace_hook_fn, &ref, 0};
+        sidx_hook rh = {ex_trace_hook_fn, &ref, 0};
         d->reference(i, &rh);
         int sig = 0, code = 0;
         const run_status rs = run_student(i, timeout, &stu, &sig, &code);

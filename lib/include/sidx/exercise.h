@@ -49,6 +49,14 @@ void sidx_ex_hit_update(const sidx_ex *ex, uint32_t prim, float t);
 /* MAILBOX_HIT: prim was already tested for this ray and is skipped. */
 void sidx_ex_mailbox_hit(const sidx_ex *ex, uint32_t prim);
 
+/* The per-ray cache of object IDs of exercise 07 (deck 000, "Uniform Grid
+ * Traversal": "Per-ray cache of object IDs — data local to a ray"): the
+ * library's grids keep the same table, direct-mapped, slot prim mod 32. */
+#define SIDX_EX_MAILBOX_SIZE 32u
+typedef struct sidx_ex_mailbox {
+    uint32_t id[SIDX_EX_MAILBOX_SIZE];
+} sidx_ex_mailbox;
+
 /* ---- build steps ------------------------------------------------------------ */
 
 /* BUILD_CANDIDATE / BUILD_SPLIT: a split plane of node evaluated / chosen. */

@@ -1,0 +1,187 @@
+/* 06_grid_dda.c — checker driver: the uniform grid's resolution formula,
+ * then the 3D-DDA cell walk (deck 000, "Uniform Grids" and "Uniform Grid
+ * Traversal").  References: the library's resolution (grid_internal.h,
+ * the function grid.c's build calls) and its traced walk over a
+ * "grid-nomailbox" (NODE_ENTER per cell, PRIM_TEST, HIT_UPDATE,
+ * TERMINATE), which the student's walk reproduces through sidx/grid.h. */
+#include <string.h>
+#include "check.h"
+#include "grid_cases.h"
+#include "grid_internal.h"
+
+void grid_resolution(sidx_vec3 d, double n, double lambda, uint32_t res[3]);
+void grid_walk(const sidx_ex *ex, const sidx_grid_cells *g, sidx_hit *best);
+
+/* ---- part 1: R = d·∛(λn/V) ------------------------------------------------ */
+
+typedef struct res_case {
+    float d[3];
+    double n, lambda;
+    const char *name;
+} res_case;
+
+#define RES_FIXED 6
+#define RES_RANDOM 10
+#define RES_CASES (RES_FIXED + RES_RANDOM)
+static res_case res_cases[RES_CASES] = {
+    {{1, 1, 1}, 1000, 1, "a unit cube, n = 1000, λ = 1: 10 cells per axis"},
+    {{4, 4, 4}, 4, 16, "the slanted scene: d = (4, 4, 4), n = 4, λ = 16"},
+    {{8, 2, 1}, 500, 4, "a long flat box: d = (8, 2, 1)"},
+    {{3, 3, 3}, 100, 2, "a cube where d·∛(λn/V) = 5.85: rounding, not truncating"},
+    {{10, 10, 0}, 200, 2, "a flat scene (d_z = 0): one cell on that axis, the root over the other two"},
+    {{0.5f, 6, 0}, 50, 4, "a flat, thin scene (d_z = 0)"},
+};
+
+static const char *const hint_formula =
+    "\"Usually R_{x,y,z} = d_{x,y,z}·∛(λn/V)\" with d the box's diagonal (its extent per axis), V = d_x·d_y·d_z "
+    "the box's volume, n the number of objects, λ the density: compute in double, round to the nearest "
+    "integer, at least 1 cell";
+static const char *const hint_flat =
+    "an axis of zero extent (a flat scene) gets one cell, and the formula is taken over the other k axes: "
+    "V is their product and the root is the k-th, R = d·(λn/V)^(1/k)";
+
+static void res_setup(void)
+{
+    uint32_t st = 2024u;
+    for (int i = RES_FIXED; i < RES_CASES; ++i) {
+        res_case *c = &res_cases[i];
+        for (int k = 0; k < 3; ++k) c->d[k] = 0.25f + 9.75f * ex_rand(&st);
+        c->n = (double)(1u + (uint32_t)(5000.0f * ex_rand(&st)));
+        c->lambda = 0.5 + 7.5 * (double)ex_rand(&st);
+        c->name = "a random box";
+    }
+}
+
+static void res_emit(const sidx_hook *h, const uint32_t res[3])
+{
+    sidx_event e = sidx_event_blank(SIDX_EV_NOTE);
+    e.structure = "grid";
+    e.text = "grid resolution R = d*cbrt(lambda*n/V) per axis (cell[] = R)";
+    e.cell[0] = (int32_t)res[0];
+    e.cell[1] = (int32_t)res[1];
+    e.cell[2] = (int32_t)res[2];
+    e.count = res[0] * res[1] * res[2];
+    sidx_hook_emit(h, &e);
+}
+
+static void res_reference(int i, const sidx_hook *h)
+{
+    const res_case *c = &res_cases[i];
+    sidx_aabb box = {{0, 0, 0}, {c->d[0], c->d[1], c->d[2]}};
+    uint32_t res[3];
+    sidx__grid_resolution(box, c->n, c->lambda, SIDX__GRID_MAX_RES, SIDX__GRID_MAX_CELLS, res);
+    res_emit(h, res);
+}
+
+static void res_student(int i, const sidx_hook *h)
+{
+    const res_case *c = &res_cases[i];
+    uint32_t res[3] = {0, 0, 0};
+    grid_resolution(sidx_v3(c->d[0], c->d[1], c->d[2]), c->n, c->lambda, res);
+    res_emit(h, res);
+}
+
+/* ---- part 2: the 3D-DDA walk ---------------------------------------------- */
+
+#define WALK_CASES (GRID_NSCENES * GRID_RAYS)
+
+static int setup(void)
+{
+    res_setup();
+    return grid_setup("grid-nomailbox");
+}
+
+static size_t num_cases(void) { return RES_CASES + WALK_CASES; }
+
+static const char *const hint_start =
+    "clip the ray to the grid box (sidx_intersect_aabb over [tmin, best.t]); the first cell is the one "
+    "holding o + t_enter·d, floor((p - box.min)·inv_cell) clamped to [0, res - 1], entered over [t_enter, "
+    "its first t_max]";
+static const char *const hint_step =
+    "3D-DDA: t_max per axis is the t of the next cell boundary, computed as ((c + up)·cell + (box.min - o))"
+    "·(1/d); step along the axis with the smallest t_max (on a tie the later axis: z before y before x); an "
+    "axis with d = 0 never steps (t_max = inf)";
+static const char *const hint_stop =
+    "a hit ends the walk only if it lies in the current cell (t <= the cell's exit t_max): a triangle can "
+    "stick out into later cells, where a nearer one may wait; without a hit the walk ends where it leaves "
+    "the grid";
+static const char *const hint_prims =
+    "\"Intersect with primitives inside non-empty cells\": test each of the cell's triangles, "
+    "refs[offsets[c] .. offsets[c+1]), against the best hit so far";
+
+static void describe(size_t i, ex_case_info *out)
+{
+    if (i < RES_CASES) {
+        const res_case *c = &res_cases[i];
+        snprintf(out->name, sizeof out->name, "resolution: %s", c->name);
+        snprintf(out->what, sizeof out->what, "d = (%g, %g, %g)  n = %g  lambda = %g", (double)c->d[0],
+                 (double)c->d[1], (double)c->d[2], c->n, c->lambda);
+        out->hint = c->d[2] == 0.0f ? hint_flat : hint_formula;
+        return;
+    }
+    i -= RES_CASES;
+    const int s = (int)(i / GRID_RAYS), r = (int)(i % GRID_RAYS);
+    const sidx_grid_cells *g = &grid_views[s];
+    snprintf(out->name, sizeof out->name, "walk, scene %s (%u x %u x %u cells), ray %d (%s)", grid_scene_names[s],
+             g->res[0], g->res[1], g->res[2], r + 1, grid_ray_kind[s][r]);
+    ex_format_ray(out->what, sizeof out->what, &grid_rays[s][r]);
+    out->hint = NULL;
+}
+
+static void reference(size_t i, const sidx_hook *h)
+{
+    if (i < RES_CASES) {
+        res_reference((int)i, h);
+        return;
+    }
+    i -= RES_CASES;
+    grid_reference_ray((int)(i / GRID_RAYS), (int)(i % GRID_RAYS), 0, h);
+}
+
+static void walk(const sidx_ex *ex, const sidx_grid_cells *g, sidx_hit *best, void *user)
+{
+    (void)user;
+    grid_walk(ex, g, best);
+}
+
+static void student(size_t i, const sidx_hook *h)
+{
+    if (i < RES_CASES) {
+        res_student((int)i, h);
+        return;
+    }
+    i -= RES_CASES;
+    grid_student_ray((int)(i / GRID_RAYS), (int)(i % GRID_RAYS), 0, h, "grid-nomailbox", walk, NULL);
+}
+
+static const char *hint(size_t i, const sidx_event *ref, const sidx_event *stu)
+{
+    if (i < RES_CASES) return NULL;
+    if (ref && stu && ref->type == SIDX_EV_NODE_ENTER && stu->type == SIDX_EV_NODE_ENTER)
+        return ref->t_near == stu->t_near ? hint_step : hint_start; /* same entry t: a wrong step */
+    if ((ref && ref->type == SIDX_EV_TERMINATE && ref->reason == SIDX_TERM_MISS_ROOT) ||
+        (stu && stu->type == SIDX_EV_TERMINATE && stu->reason == SIDX_TERM_MISS_ROOT))
+        return hint_start;
+    if (ref && ref->type == SIDX_EV_NODE_ENTER && stu && stu->type == SIDX_EV_TERMINATE) return hint_stop;
+    if (stu && stu->type == SIDX_EV_NODE_ENTER && ref && ref->type == SIDX_EV_TERMINATE) return hint_stop;
+    if ((ref && ref->type == SIDX_EV_PRIM_TEST) || (stu && stu->type == SIDX_EV_PRIM_TEST)) return hint_prims;
+    if ((ref && ref->type == SIDX_EV_HIT_UPDATE) || (stu && stu->type == SIDX_EV_HIT_UPDATE)) return hint_prims;
+    return hint_start;
+}
+
+static void teardown(void) { grid_teardown(); }
+
+static int format(const sidx_event *e, char *buf, size_t size)
+{
+    if (e->type != SIDX_EV_NOTE) return 0;
+    snprintf(buf, size, "resolution %d x %d x %d = %u cells", (int)e->cell[0], (int)e->cell[1], (int)e->cell[2],
+             (unsigned)e->count);
+    return 1;
+}
+
+const ex_driver ex_driver_this = {
+    "06_grid_dda",
+    "the uniform grid: the resolution formula, then the 3D-DDA cell walk",
+    "deck 000, \"Uniform Grids\" (Resolution) and \"Uniform Grid Traversal\" (3D-DDA)",
+    setup, num_cases, describe, reference, student, hint, teardown, format,
+};
