@@ -25,6 +25,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 #include <cmocka.h>
+#include "common/testkit.h"
 
 static char checker[PATH_MAX + 32];
 
@@ -47,20 +48,8 @@ static int find_checker(void)
  * command's exit status. */
 static int drain(FILE *p, char **out)
 {
-    size_t cap = 4096, n = 0;
-    char *buf = malloc(cap);
+    char *buf = tk_read_all(p);
     assert_non_null(buf);
-    size_t k;
-    while ((k = fread(buf + n, 1, cap - n - 1, p)) > 0) {
-        n += k;
-        if (cap - n < 2) {
-            cap *= 2;
-            char *nb = realloc(buf, cap);
-            assert_non_null(nb);
-            buf = nb;
-        }
-    }
-    buf[n] = '\0';
     const int st = pclose(p);
     *out = buf;
     return WIFEXITED(st) ? WEXITSTATUS(st) : -1;

@@ -18,6 +18,7 @@
 #include <cmocka.h>
 #include "sidx/sidx.h"
 #include "sidx/viz.h"
+#include "common/testkit.h"
 #if SIDX_HAVE_GRAPHVIZ
 #include <graphviz/cgraph.h>
 #endif
@@ -1013,20 +1014,8 @@ static char *run_capture(const char *cmd)
 {
     FILE *p = popen(cmd, "r");
     assert_non_null(p);
-    size_t cap = 4096, n = 0;
-    char *buf = malloc(cap);
+    char *buf = tk_read_all(p);
     assert_non_null(buf);
-    size_t k;
-    while ((k = fread(buf + n, 1, cap - n - 1, p)) > 0) {
-        n += k;
-        if (cap - n < 2) {
-            cap *= 2;
-            char *grown = realloc(buf, cap);
-            assert_non_null(grown);
-            buf = grown;
-        }
-    }
-    buf[n] = '\0';
     int rc = pclose(p);
     assert_int_equal(rc, 0);
     return buf;

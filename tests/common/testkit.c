@@ -744,3 +744,24 @@ sidx_allocator tk_failing_allocator(tk_failing *f)
     sidx_allocator al = {tk_fail_alloc, tk_fail_free, f};
     return al;
 }
+
+char *tk_read_all(FILE *f)
+{
+    size_t cap = 4096, n = 0, k;
+    char *buf = malloc(cap);
+    if (!buf) return NULL;
+    while ((k = fread(buf + n, 1, cap - n - 1, f)) > 0) {
+        n += k;
+        if (cap - n < 2) {
+            char *grown = realloc(buf, cap * 2);
+            if (!grown) {
+                free(buf);
+                return NULL;
+            }
+            buf = grown;
+            cap *= 2;
+        }
+    }
+    buf[n] = '\0';
+    return buf;
+}

@@ -18,6 +18,7 @@
 
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 #include "sidx/sidx.h"
 
 /* ---- PRNG ---------------------------------------------------------------- */
@@ -142,5 +143,9 @@ double tk_process_cpu_ms(void);
  *   sidx_allocator al = tk_failing_allocator(&f); */
 typedef struct tk_failing { long left; long live; } tk_failing;
 sidx_allocator tk_failing_allocator(tk_failing *f);
+
+/* Reads f to its end into a malloc'd, NUL-terminated string; NULL when
+ * memory runs out.  The caller frees it (and closes f). */
+char *tk_read_all(FILE *f);
 
 #endif
