@@ -1,5 +1,7 @@
 /* sidx.h — spatial index structures for ray tracing, with trace hooks.
- * Include this one header; see docs/architecture.md for the map. */
+ * Include this one header: it brings every public header of the library
+ * but sidx/viz.h (the drawing and viewer helpers of libsidxviz.a, which
+ * need Graphviz); see docs/architecture.md for the map. */
 #ifndef SIDX_H
 #define SIDX_H
 
@@ -10,6 +12,17 @@
 #include "sinks.h"
 #include "mesh.h"
 #include "accel.h"
+#include "beam.h"
+#include "bsp.h"
+#include "bvh.h"
+#include "exercise.h"
+#include "grid.h"
+#include "instance.h"
+#include "kdtree.h"
+#include "lightbuffer.h"
+#include "packet.h"
+#include "parallel.h"
+#include "rayclass.h"
 
 #define SIDX_VERSION_MAJOR 0
 #define SIDX_VERSION_MINOR 1
