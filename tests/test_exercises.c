@@ -300,6 +300,15 @@ static void usage_and_errors(void **state)
     free(out);
 }
 
+/* sidx-step, the sibling of sidx-check in the build's bin/. */
+static void step_path(char *step, size_t size)
+{
+    snprintf(step, size, "%s", checker);
+    char *slash = strrchr(step, '/');
+    assert_non_null(slash);
+    snprintf(slash + 1, size - (size_t)(slash + 1 - step), "sidx-step");
+}
+
 /* sidx-check --trace writes both traces; sidx-step --diff finds the same
  * first divergence (exit 1) and agrees with itself (exit 0). */
 static void traces_and_diff(void **state)
@@ -308,10 +317,7 @@ static void traces_and_diff(void **state)
     char dir[] = "/tmp/sidx-test-ex-XXXXXX";
     assert_non_null(mkdtemp(dir));
     char cmd[4 * PATH_MAX], step[PATH_MAX + 32];
-    snprintf(step, sizeof step, "%s", checker);
-    char *slash = strrchr(step, '/');
-    assert_non_null(slash);
-    snprintf(slash + 1, sizeof step - (size_t)(slash + 1 - step), "sidx-step");
+    step_path(step, sizeof step);
     static mistake ms[64];
     const int n = read_mistakes(ms, 64);
     int k = 0;
@@ -354,10 +360,7 @@ static void kd_walk_bit_exact(void **state)
     char dir[] = "/tmp/sidx-test-ex-XXXXXX";
     assert_non_null(mkdtemp(dir));
     char cmd[4 * PATH_MAX], step[PATH_MAX + 32];
-    snprintf(step, sizeof step, "%s", checker);
-    char *slash = strrchr(step, '/');
-    assert_non_null(slash);
-    snprintf(slash + 1, sizeof step - (size_t)(slash + 1 - step), "sidx-step");
+    step_path(step, sizeof step);
     static const int cases[] = {9, 21};
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) {
         snprintf(cmd, sizeof cmd,

@@ -274,25 +274,13 @@ static void student(size_t i, const sidx_hook *h)
     counting c = {h, 0, 0, 0.0f, 0.0f};
     const sidx_hook ch = {counting_fn, &c, 0};
     sidx_ex ex;
-    memset(&ex, 0, sizeof ex);
-    ex.hook = &ch;
-    ex.structure = "kdtree";
-    ex.ray = ray;
-    ex.mesh = &meshes[s];
-    ex.tri = SIDX_TRI_MOLLER_TRUMBORE;
-    ex.box = SIDX_BOX_ROBUST;
-    sidx_event e = sidx_event_blank(SIDX_EV_RAY_BEGIN);
-    e.structure = "kdtree";
-    e.t_near = ray->tmin;
-    e.t_far = ray->tmax;
-    sidx_hook_emit(h, &e);
-    sidx_hit best = sidx_hit_none();
-    best.t = ray->tmax;
+    sidx_hit best;
+    ex_walk_begin(&ex, &ch, h, "kdtree", ray, &meshes[s], SIDX_TRI_MOLLER_TRUMBORE, SIDX_BOX_ROBUST, &best);
     sidx_ex quiet = ex;
     quiet.hook = NULL;
     const sidx_aabb root = sidx_mesh_bounds(&meshes[s]);
     float tn = 0.0f, tf = 0.0f;
-    e = sidx_event_blank(SIDX_EV_TERMINATE);
+    sidx_event e = sidx_event_blank(SIDX_EV_TERMINATE);
     e.structure = "kdtree";
     if (nr == 0 || !sidx_ex_test_box(&quiet, 0, &root, ray->tmin, best.t, &tn, &tf)) {
         e.reason = SIDX_TERM_MISS_ROOT;
@@ -310,12 +298,7 @@ static void student(size_t i, const sidx_hook *h)
         e.count = c.entered;
     }
     sidx_hook_emit(h, &e);
-    e = sidx_event_blank(SIDX_EV_RAY_END);
-    e.structure = "kdtree";
-    e.prim = best.prim;
-    e.t = best.prim == SIDX_NO_HIT ? INFINITY : best.t;
-    e.result = best.prim != SIDX_NO_HIT;
-    sidx_hook_emit(h, &e);
+    ex_walk_end(h, "kdtree", &best);
 }
 
 const ex_driver ex_driver_this = {
