@@ -345,8 +345,10 @@ static SIDX_INLINE int stack_walk(const sidx_accel *a, const sidx_ray *r, const 
                 return 0;
             }
             --sp;
+            /* result 0: dropped, its entry lies beyond the best hit (docs/events.md) */
             SIDX_EMIT(traced, q->hook, SIDX_EV_STACK_POP, e_.ray_id = q->ray_id; e_.node = stk[sp];
-                      e_.depth = sp + 1; e_.t_near = stk_tn[sp]; e_.t_far = stk_tf[sp]);
+                      e_.depth = sp + 1; e_.t_near = stk_tn[sp]; e_.t_far = stk_tf[sp];
+                      e_.result = stk_tn[sp] < best * scale);
             if (stk_tn[sp] < best * scale) { /* best widened as in bvh_slab */
                 node = stk[sp];
                 tn = stk_tn[sp];

@@ -304,6 +304,7 @@ static void format_event(sink_out *o, const sidx_event *ev, int show_bounds)
             out_printf(o, "  (stack %" PRIu32 " -> %" PRIu32 ")", ev->depth, ev->depth - 1);
         else
             out_printf(o, "  (stack %" PRIu32 ")", ev->depth);
+        if (!push && ev->result == 0) out_puts(o, "  dropped: t_near beyond the best hit");
         break;
     }
     case SIDX_EV_PRIM_TEST:
@@ -598,6 +599,7 @@ static void json_event(sink_out *o, const sidx_event *ev, int unused)
         json_id(o, "depth", ev->depth);
         json_float(o, "t_near", ev->t_near);
         json_float(o, "t_far", ev->t_far);
+        if (ev->type == SIDX_EV_STACK_POP && ev->result != -1) json_i32(o, "result", ev->result);
         break;
     case SIDX_EV_PRIM_TEST:
         json_id(o, "prim", ev->prim);

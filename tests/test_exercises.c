@@ -8,7 +8,9 @@
  *    with one line changed, written to a temporary file) is caught as its
  *    record says: its exit status and every "expect" text in the report
  *    (the case, the step, the hint); crashing and endlessly looping
- *    variants exit 2 naming the case.
+ *    variants exit 2 naming the case;
+ *  - the kd-tree walk of exercise 08, solved, gives the library's traced
+ *    walk bit for bit.
  * sidx-check compiles each file, so this suite runs the compiler: it is
  * found through the build directory's bin/sidx-check (the sibling of this
  * binary's tests/), and it compiles with that build's sanitizer flags.
@@ -287,6 +289,15 @@ static void usage_and_errors(void **state)
     free(out);
 }
 
+/* sidx-step, the sibling of sidx-check in the build's bin/. */
+static void step_path(char *step, size_t size)
+{
+    snprintf(step, size, "%s", checker);
+    char *slash = strrchr(step, '/');
+    assert_non_null(slash);
+    snprintf(slash + 1, size - (size_t)(slash + 1 - step), "sidx-step");
+}
+
 /* sidx-check --trace writes both traces; sidx-step --diff finds the same
  * first divergence (exit 1) and agrees with itself (exit 0). */
 static void traces_and_diff(void **state)
@@ -295,10 +306,7 @@ static void traces_and_diff(void **state)
     char dir[] = "/tmp/sidx-test-ex-XXXXXX";
     assert_non_null(mkdtemp(dir));
     char cmd[4 * PATH_MAX], step[PATH_MAX + 32];
-    snprintf(step, sizeof step, "%s", checker);
-    char *slash = strrchr(step, '/');
-    assert_non_null(slash);
-    snprintf(slash + 1, sizeof step - (size_t)(slash + 1 - step), "sidx-step");
+    step_path(step, sizeof step);
     static mistake ms[64];
     const int n = read_mistakes(ms, 64);
     int k = 0;
@@ -326,6 +334,38 @@ static void traces_and_diff(void **state)
     assert_int_equal(system(cmd), 0);
 }
 
+/* The reference solution of 08_kdtree_traversal retells the library's
+ * traced kd walk bit for bit, not only within the checker's tolerance:
+ * the same t_split, intervals and hits (sidx-step --diff --exact), on a
+ * ray whose first hit lies beyond its cell and on one starting on a split
+ * plane. */
+static void kd_walk_bit_exact(void **state)
+{
+    (void)state;
+    if (access("lessons/exercises/solutions/08_kdtree_traversal.c", R_OK) != 0) {
+        print_message("skipped: no solutions (a handout tree)\n");
+        return;
+    }
+    char dir[] = "/tmp/sidx-test-ex-XXXXXX";
+    assert_non_null(mkdtemp(dir));
+    char cmd[4 * PATH_MAX], step[PATH_MAX + 32];
+    step_path(step, sizeof step);
+    static const int cases[] = {9, 21};
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) {
+        snprintf(cmd, sizeof cmd,
+                 "'%s' 08_kdtree_traversal lessons/exercises/solutions/08_kdtree_traversal.c --case %d --trace %s "
+                 ">/dev/null",
+                 checker, cases[k], dir);
+        int st = system(cmd);
+        assert_int_equal(WEXITSTATUS(st), 0);
+        snprintf(cmd, sizeof cmd, "'%s' --diff --exact %s/reference.jsonl %s/yours.jsonl >/dev/null", step, dir, dir);
+        st = system(cmd);
+        assert_int_equal(WEXITSTATUS(st), 0);
+    }
+    snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
+    assert_int_equal(system(cmd), 0);
+}
+
 int main(void)
 {
     if (find_checker() != 0) {
@@ -338,6 +378,7 @@ int main(void)
         cmocka_unit_test(planted_mistakes_caught),
         cmocka_unit_test(usage_and_errors),
         cmocka_unit_test(traces_and_diff),
+        cmocka_unit_test(kd_walk_bit_exact),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

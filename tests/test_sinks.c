@@ -279,6 +279,8 @@ static void test_format_traversal(void **state)
     expect_format(&e, "  push node 7  t=[0.5, 2]  (stack 1 -> 2)");
     e.type = SIDX_EV_STACK_POP;
     expect_format(&e, "  pop node 7  t=[0.5, 2]  (stack 2 -> 1)");
+    e.result = 0; /* the BVH stack walk drops it: it starts beyond the best hit */
+    expect_format(&e, "  pop node 7  t=[0.5, 2]  (stack 2 -> 1)  dropped: t_near beyond the best hit");
 
     e = ev_prim(42, 1, 0.734f);
     expect_format(&e, "    prim 42 test: hit t=0.734");
@@ -628,6 +630,10 @@ static void test_json_values(void **state)
     sidx_event_to_json(&e, buf, sizeof buf);
     assert_string_equal(buf, "{\"type\":\"stack_pop\",\"structure\":null,\"ray\":0,\"node\":null,\"depth\":0,"
                              "\"t_near\":\"-inf\",\"t_far\":\"nan\"}");
+    e.result = 0; /* a pop the walk drops says so */
+    sidx_event_to_json(&e, buf, sizeof buf);
+    assert_string_equal(buf, "{\"type\":\"stack_pop\",\"structure\":null,\"ray\":0,\"node\":null,\"depth\":0,"
+                             "\"t_near\":\"-inf\",\"t_far\":\"nan\",\"result\":0}");
 
     /* floats: shortest text that reads back as the same float */
     e = ev_prim(42, 1, 0.734f);

@@ -1180,10 +1180,11 @@ static void step_panel_step_break(void **state)
     const char *base = "--accel bvh " TINY_SCENE " --ray " TINY_RAY " --leaf-size 1";
     snprintf(cmd, sizeof cmd, "%s/sidx-step %s --panel </dev/null", bin_dir, base);
     char *out = run_capture(cmd);
-    /* the two pushes, then both on the stack (top first) while leaf 7 is visited */
-    assert_non_null(strstr(out, "push node 2  t=[6, 8]  (stack 0 -> 1)     | 1 [2, 8]             | 2 [6, 8]\n"));
-    assert_non_null(strstr(out, "node 7 enter  depth 3  t=[2, 2]     | 7 leaf [2, 2]        | 6 [4, 4]  2 [6, 8]\n"));
-    assert_non_null(strstr(out, "pop node 2  t=[6, 8]  (stack 1 -> 0)      | 2 [6, 8]             |\n"));
+    /* the two pushes, then both on the stack (top first) while leaf 7 is visited;
+     * both popped and dropped (they start beyond the hit at t = 2): nothing current */
+    assert_non_null(strstr(out, "push node 2  t=[6, 8]  (stack 0 -> 1)                                     | 1 [2, 8]             | 2 [6, 8]\n"));
+    assert_non_null(strstr(out, "node 7 enter  depth 3  t=[2, 2]                                     | 7 leaf [2, 2]        | 6 [4, 4]  2 [6, 8]\n"));
+    assert_non_null(strstr(out, "pop node 2  t=[6, 8]  (stack 1 -> 0)  dropped: t_near beyond the best hit |                      |\n"));
     free(out);
 
     snprintf(cmd, sizeof cmd, "%s/sidx-step %s --step 4 </dev/null", bin_dir, base);
@@ -1196,7 +1197,7 @@ static void step_panel_step_break(void **state)
 
     static const char *const breaks[][2] = {
         {"push", "  push node 2  t=[6, 8]  (stack 0 -> 1)\n"},
-        {"stack_pop", "  pop node 6  t=[4, 4]  (stack 2 -> 1)\n"},
+        {"stack_pop", "  pop node 6  t=[4, 4]  (stack 2 -> 1)  dropped: t_near beyond the best hit\n"},
         {"leaf", "        node 7 enter  depth 3  t=[2, 2]\n"},
         {"prim", "    prim 6 test: hit t=2\n"},
         {"terminate", "terminate: stack_empty  visited 4  best t=2\n"},

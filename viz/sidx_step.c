@@ -215,7 +215,7 @@ static void replay_event(replay *r, const sidx_event *e)
     case SIDX_EV_STACK_POP:
         if (r->n) --r->n;
         r->cur = (entry){e->node, e->t_near, e->t_far};
-        r->has_cur = 1;
+        r->has_cur = e->result != 0; /* 0: dropped (beyond the best hit), nothing current */
         break;
     default:
         break;

@@ -171,20 +171,8 @@ static void student(size_t i, const sidx_hook *h)
     counting c = {h, 0};
     const sidx_hook ch = {counting_fn, &c, 0};
     sidx_ex ex;
-    memset(&ex, 0, sizeof ex);
-    ex.hook = &ch;
-    ex.structure = "bvh";
-    ex.ray = ray;
-    ex.mesh = &meshes[s];
-    ex.tri = SIDX_TRI_WATERTIGHT;
-    ex.box = SIDX_BOX_PLAIN;
-    sidx_event e = sidx_event_blank(SIDX_EV_RAY_BEGIN);
-    e.structure = "bvh";
-    e.t_near = ray->tmin;
-    e.t_far = ray->tmax;
-    sidx_hook_emit(h, &e);
-    sidx_hit best = sidx_hit_none();
-    best.t = ray->tmax;
+    sidx_hit best;
+    ex_walk_begin(&ex, &ch, h, "bvh", ray, &meshes[s], SIDX_TRI_WATERTIGHT, SIDX_BOX_PLAIN, &best);
     int missed_root = 0;
     if (ordered) {
         const sidx_aabb root = sidx_bvh_box(&nodes[0]);
@@ -197,18 +185,13 @@ static void student(size_t i, const sidx_hook *h)
         bvh_hit_naive(&ex, nodes, prims, 0, 0, &best);
         missed_root = c.entered == 0;
     }
-    e = sidx_event_blank(SIDX_EV_TERMINATE);
+    sidx_event e = sidx_event_blank(SIDX_EV_TERMINATE);
     e.structure = "bvh";
     e.reason = missed_root ? SIDX_TERM_MISS_ROOT : SIDX_TERM_STACK_EMPTY;
     e.t = best.t;
     e.count = c.entered;
     sidx_hook_emit(h, &e);
-    e = sidx_event_blank(SIDX_EV_RAY_END);
-    e.structure = "bvh";
-    e.prim = best.prim;
-    e.t = best.prim == SIDX_NO_HIT ? INFINITY : best.t;
-    e.result = best.prim != SIDX_NO_HIT;
-    sidx_hook_emit(h, &e);
+    ex_walk_end(h, "bvh", &best);
 }
 
 const ex_driver ex_driver_this = {

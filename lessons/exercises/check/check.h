@@ -57,4 +57,14 @@ void ex_trace_hook_fn(const sidx_event *ev, void *user);
 /* A small deterministic generator for the random part of a battery. */
 float ex_rand(uint32_t *state);
 
+/* What a library query does around a structure's walk, for a driver whose
+ * student writes the walk.  ex_walk_begin sets *ex up for ray r over mesh
+ * m (events to student_hook, named structure, the tests tri and box),
+ * emits RAY_BEGIN (the ray's [tmin, tmax]) to h and starts *best as "no
+ * hit, t = tmax"; ex_walk_end emits RAY_END of *best (SIDX_NO_HIT and +inf
+ * on a miss). */
+void ex_walk_begin(sidx_ex *ex, const sidx_hook *student_hook, const sidx_hook *h, const char *structure,
+                   const sidx_ray *r, const sidx_mesh *m, sidx_tri_method tri, sidx_box_method box, sidx_hit *best);
+void ex_walk_end(const sidx_hook *h, const char *structure, const sidx_hit *best);
+
 #endif

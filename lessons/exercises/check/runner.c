@@ -49,6 +49,35 @@ float ex_rand(uint32_t *state)
     return (float)(*state >> 8) / 16777216.0f;
 }
 
+void ex_walk_begin(sidx_ex *ex, const sidx_hook *student_hook, const sidx_hook *h, const char *structure,
+                   const sidx_ray *r, const sidx_mesh *m, sidx_tri_method tri, sidx_box_method box, sidx_hit *best)
+{
+    memset(ex, 0, sizeof *ex);
+    ex->hook = student_hook;
+    ex->structure = structure;
+    ex->ray = r;
+    ex->mesh = m;
+    ex->tri = tri;
+    ex->box = box;
+    sidx_event e = sidx_event_blank(SIDX_EV_RAY_BEGIN);
+    e.structure = structure;
+    e.t_near = r->tmin;
+    e.t_far = r->tmax;
+    sidx_hook_emit(h, &e);
+    *best = sidx_hit_none();
+    best->t = r->tmax;
+}
+
+void ex_walk_end(const sidx_hook *h, const char *structure, const sidx_hit *best)
+{
+    sidx_event e = sidx_event_blank(SIDX_EV_RAY_END);
+    e.structure = structure;
+    e.prim = best->prim;
+    e.t = best->prim == SIDX_NO_HIT ? INFINITY : best->t;
+    e.result = best->prim != SIDX_NO_HIT;
+    sidx_hook_emit(h, &e);
+}
+
 /* ---- traces ------------------------------------------------------------------ */
 
 void ex_trace_hook_fn(const sidx_event *ev, void *user)
