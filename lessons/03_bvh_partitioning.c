@@ -10,14 +10,16 @@
  * Cost in Mind" — "Split in the middle", "Split at the Median",
  * "Cost-Optimized Split".
  *
- * What it shows: eleven small triangles on a plane, like the slide's
- * figure, split at the root four ways — in the middle of the centroid
+ * What it shows: the slide's eleven primitives (lesson_partition11, in
+ * lesson.h: triangles whose binned candidates have the slide's numbers),
+ * split at the root four ways — in the middle of the centroid
  * extent (bvh-middle), into equal counts (bvh-median), by the SAH over 4
  * bins per axis as in the slide's example (bvh with bins = 4) and by the
  * SAH at every position (bvh-sweep).  For each candidate plane the build
  * reports (BUILD_CANDIDATE, printed by the printer sink) the lesson prints
  * the slide's line: how many primitives fall on each side and which share
- * of the parent's surface each child box has.  Then the whole SAH build
+ * of the parent's surface each child box has; for the binned build the
+ * six lines next to the slide's, checked to 2 decimals.  Then the whole SAH build
  * traced, and per builder the SAH cost of the root split, of the whole
  * tree, and what random rays actually paid (boxes and triangles tested).
  *
@@ -36,35 +38,21 @@ static void usage(FILE *f)
 {
     fprintf(f, "usage: 03_bvh_partitioning [--help] [SCENE]\n"
                "\n"
-               "The slides' 11-primitive example: split in the middle, into equal counts, and by\n"
-               "the surface area heuristic, with the cost of every candidate the build considers.\n"
+               "The 11 primitives of deck 001 \"Building Partitions Example\", whose binned candidates\n"
+               "have the slide's numbers: split in the middle, into equal counts, and by the surface\n"
+               "area heuristic, with the cost of every candidate the build considers.\n"
                "\n"
                "  SCENE   split this scene instead: built-in name or .obj/.ply\n");
 }
 
-/* Eleven triangles in the plane z = 0: a tight group of three bottom left,
- * six in a cluster up right, two far out bottom right. */
-static sidx_status make_eleven(sidx_mesh *out, sidx_error *err)
-{
-    static const float centre[11][3] = {
-        {1.0f, 1.2f, 0.7f}, {1.7f, 2.0f, 0.6f}, {0.8f, 2.7f, 0.6f}, {4.3f, 6.4f, 0.8f},
-        {4.9f, 7.5f, 0.6f}, {5.5f, 6.6f, 0.7f}, {6.1f, 7.9f, 0.6f}, {6.4f, 6.8f, 0.8f},
-        {7.3f, 7.7f, 0.6f}, {12.1f, 1.0f, 0.6f}, {12.6f, 2.0f, 0.7f},
-    };
-    float xyz[33 * 3];
-    uint32_t idx[33];
-    for (int i = 0; i < 11; ++i) {
-        const float cx = centre[i][0], cy = centre[i][1], s = centre[i][2];
-        const float v[3][2] = {{cx - s, cy - 0.6f * s}, {cx + s, cy - 0.5f * s}, {cx + 0.1f * s, cy + 1.1f * s}};
-        for (int k = 0; k < 3; ++k) {
-            xyz[9 * i + 3 * k] = v[k][0];
-            xyz[9 * i + 3 * k + 1] = v[k][1];
-            xyz[9 * i + 3 * k + 2] = 0.0f;
-            idx[3 * i + k] = (uint32_t)(3 * i + k);
-        }
-    }
-    return sidx_mesh_from_arrays(out, xyz, 33, idx, 11, err);
-}
+/* Deck 001 "Building Partitions Example": per axis, the three planes
+ * between 4 bins, as (left count, right count, left share, right share). */
+static const struct {
+    char axis;
+    unsigned nl, nr;
+    float fl, fr;
+} slide[6] = {{'x', 3, 8, 0.15f, 0.87f}, {'x', 6, 5, 0.38f, 0.43f}, {'x', 9, 2, 0.81f, 0.18f},
+              {'y', 3, 8, 0.19f, 0.91f}, {'y', 6, 5, 0.32f, 0.36f}, {'y', 9, 2, 0.94f, 0.13f}};
 
 typedef struct {
     const char *accel;
@@ -83,7 +71,7 @@ static char axis_name(int a) { return a == 0 ? 'x' : a == 1 ? 'y' : a == 2 ? 'z'
 
 /* Reproduces a root candidate from the primitives: who lies left of the
  * plane, the two child boxes, their share of the parent's area. */
-static int explain(const sidx_mesh *m, const sidx_event *ev, sidx_aabb parent, float c_trav, int verbose)
+static int explain(const sidx_mesh *m, const sidx_event *ev, sidx_aabb parent, float c_trav, float share[2])
 {
     sidx_aabb l = sidx_aabb_empty(), r = sidx_aabb_empty();
     uint32_t nl = 0, nr = 0;
@@ -96,8 +84,9 @@ static int explain(const sidx_mesh *m, const sidx_event *ev, sidx_aabb parent, f
     const float a = sidx_aabb_area(parent), fl = sidx_aabb_area(l) / a, fr = sidx_aabb_area(r) / a;
     const float cost = c_trav + (float)nl * fl + (float)nr * fr;
     const int same = nl == ev->count && nr == ev->aux && fabsf(cost - ev->cost) <= 1e-4f * (1.0f + fabsf(cost));
-    if (verbose)
-        printf("        Cost = C_trav + %u prims * (%.2f) + %u prims * (%.2f) = %g + %.2f + %.2f = %.3f%s\n", nl, fl, nr,
+    share[0] = fl;
+    share[1] = fr;
+    printf("        Cost = C_trav + %u prims * (%.2f) + %u prims * (%.2f) = %g + %.2f + %.2f = %.3f%s\n", nl, fl, nr,
                fr, c_trav, nl * fl, nr * fr, cost, same ? "" : "   (differs from the event!)");
     return same;
 }
@@ -112,7 +101,7 @@ int main(int argc, char **argv)
     sidx_mesh mesh;
     sidx_error err = {0};
     if (args.scene_given) mesh = lesson_open_scene(&args);
-    else if (make_eleven(&mesh, &err) != SIDX_OK) lesson_fail(&args, err.message);
+    else if (lesson_partition11(&mesh, &err) != SIDX_OK) lesson_fail(&args, err.message);
     if (mesh.num_triangles < 2) lesson_fail(&args, "need at least two triangles");
     const int small = mesh.num_triangles <= 16;
     const sidx_aabb box = sidx_mesh_bounds(&mesh);
@@ -136,7 +125,14 @@ int main(int argc, char **argv)
     sidx_recorder rec;
     sidx_recorder_init(&rec);
     const sidx_hook rh = sidx_recorder_hook(&rec);
-    int explained = 1, failed = 0;
+    int explained = 1, failed = 0, slide_ok = 1;
+    /* the binned build's root candidates, as the slide writes them */
+    struct {
+        char axis;
+        unsigned nl, nr;
+        float fl, fr;
+    } got[6];
+    int ngot = 0;
     const float c_trav = 1.0f; /* the library's default C_trav = C_tri = 1 */
 
     for (int b = 0; b < 4 && !failed; ++b) {
@@ -166,8 +162,17 @@ int main(int argc, char **argv)
             if (ev->node != root || root == UINT32_MAX) continue;
             if (ev->type == SIDX_EV_BUILD_CANDIDATE) {
                 if (small || shown < 12) {
+                    float share[2];
                     sidx_hook_emit(&ph, ev);
-                    explained &= explain(&mesh, ev, root_box, c_trav, 1);
+                    explained &= explain(&mesh, ev, root_box, c_trav, share);
+                    if (bs[b].bins == 4 && ngot < 6) {
+                        got[ngot].axis = axis_name(ev->axis);
+                        got[ngot].nl = ev->count;
+                        got[ngot].nr = ev->aux;
+                        got[ngot].fl = share[0];
+                        got[ngot].fr = share[1];
+                        ++ngot;
+                    }
                 } else if (shown == 12) {
                     printf("      ... (more candidates not shown)\n");
                 }
@@ -187,6 +192,28 @@ int main(int argc, char **argv)
             }
         }
         printf("    %d candidate(s) at the root\n", shown);
+        if (bs[b].bins == 4 && !args.scene_given) {
+            /* The slide's six lines, computed from the candidates above,
+             * next to the slide's figures rounded as it prints them. */
+            printf("\n  The slide's lines (\"Building Partitions Example\"), from the build / on the slide:\n");
+            for (int i = 0; i < ngot; ++i) {
+                const int j = i;
+                const int same = got[i].axis == slide[j].axis && got[i].nl == slide[j].nl && got[i].nr == slide[j].nr &&
+                                 lroundf(100 * got[i].fl) == lroundf(100 * slide[j].fl) &&
+                                 lroundf(100 * got[i].fr) == lroundf(100 * slide[j].fr);
+                printf("    %c: Cost = %u prims * (%.2f) + %u prims * (%.2f)   slide: %u * (%.2f) + %u * (%.2f)%s\n",
+                       got[i].axis, got[i].nl, got[i].fl, got[i].nr, got[i].fr, slide[j].nl, slide[j].fl, slide[j].nr,
+                       slide[j].fr, same ? "" : "   DIFFERS");
+                slide_ok &= same;
+            }
+            slide_ok &= ngot == 6;
+            printf("  The slide's cost drops C_trav and C_tri (constants: they do not move the minimum) and\n"
+                   "  weighs each side's count by its share of the parent's area.  Best partition: the lowest,\n"
+                   "  %c %u|%u; the build splits there and recurses with each child (the whole build below).\n"
+                   "  Erratum: the second \"Building Partitions\" loop has cost = a.area() + b.area() + (n - i);\n"
+                   "  the SAH is a.area * i + b.area * (n - i), as in the first loop and as computed here.\n",
+                   axis_name(bs[b].root_axis), bs[b].nl, bs[b].nr);
+        }
 
         /* the whole build of the slide's example, traced */
         if (b == 2 && small) {
@@ -256,6 +283,7 @@ int main(int argc, char **argv)
            "  (boxes + triangles) vs %.2f and %.2f.\n",
            bs[3].root_cost, bs[0].root_cost, bs[1].root_cost, work_sah, work_mid, work_med);
     lesson_check("candidate_costs_reproduced", explained);
+    if (!args.scene_given) lesson_check("slide_candidates_match", slide_ok);
     lesson_check("sah_cost_lower", sah_root);
     lesson_check("sah_tree_cost_lower", sah_tree);
     lesson_check("sah_fewer_tests_per_ray", work_sah <= work_mid && work_sah <= work_med);

@@ -51,6 +51,8 @@
  * lesson_count_rays  the events of closest-hit queries, counted, and their hits
  * lesson_us_per_ray  best-of-N microseconds per untraced query
  * lesson_camera_*    a pinhole camera looking at a box, and its image's rays
+ * lesson_partition11 the eleven triangles of deck 001 "Building Partitions
+ *                    Example" (lessons 03 and 04)
  */
 #ifndef LESSON_H
 #define LESSON_H
@@ -349,6 +351,37 @@ static inline double lesson_us_per_ray(const sidx_accel *a, const sidx_ray *rays
         if (dt < best) best = dt;
     }
     return 1e6 * best / (double)n;
+}
+
+/* ---- the slides' eleven primitives ---- */
+
+/* Deck 001 "Building Partitions Example": eleven triangles in z = 0 whose
+ * binned SAH candidates (4 bins per axis, 3 planes) have the slide's counts
+ * and normalised areas (child box area / parent box area) to 2 decimals:
+ *   x: 3|8 (0.15, 0.87)  6|5 (0.38, 0.43)  9|2 (0.81, 0.18)
+ *   y: 3|8 (0.19, 0.91)  6|5 (0.32, 0.36)  9|2 (0.94, 0.13)
+ * Each row is a triangle's box x0 x1 y0 y1 in tenths (the areas' ratios do
+ * not depend on the unit); the triangle is (x0, y0) (x1, y0) (mid x, y1),
+ * so its bounding box is exactly that box and its centroid the box centre.  The thin ones
+ * stand for the slide's long shapes.  The boxes were found by a search for
+ * the twelve numbers, then snapped to whole tenths.  Lesson 03 recomputes the
+ * numbers from the build's events and checks them against the slide. */
+static inline sidx_status lesson_partition11(sidx_mesh *out, sidx_error *err)
+{
+    static const short box[11][4] = {
+        {78, 176, 198, 262}, {0, 1, 24, 187}, {46, 47, 154, 246}, {5, 29, 49, 66},
+        {148, 219, 256, 262}, {105, 119, 102, 120}, {35, 83, 41, 129}, {163, 265, 156, 203},
+        {54, 84, 96, 184}, {34, 107, 0, 84}, {97, 215, 148, 238},
+    };
+    float xyz[11 * 9];
+    uint32_t idx[33];
+    for (int i = 0; i < 11; ++i) {
+        const float x0 = 0.1f * box[i][0], x1 = 0.1f * box[i][1], y0 = 0.1f * box[i][2], y1 = 0.1f * box[i][3];
+        const float v[9] = {x0, y0, 0.0f, x1, y0, 0.0f, 0.5f * (x0 + x1), y1, 0.0f};
+        for (int k = 0; k < 9; ++k) xyz[9 * i + k] = v[k];
+        for (int k = 0; k < 3; ++k) idx[3 * i + k] = (uint32_t)(3 * i + k);
+    }
+    return sidx_mesh_from_arrays(out, xyz, 33, idx, 11, err);
 }
 
 #endif

@@ -48,7 +48,7 @@ expect() {
                            watertight_leaks=0 moller_leaks_more=1 mesh_watertight_leaks_le_moller=1" ;;
     02_bounding_volumes) echo "conservative=1 area_predicts_hit_rate=1 kdop_within_aabb=1 obb_tighter_on_rod=1
                                sphere_fits_round_object=1" ;;
-    03_bvh_partitioning) echo "candidate_costs_reproduced=1 sah_cost_lower=1 sah_tree_cost_lower=1
+    03_bvh_partitioning) echo "candidate_costs_reproduced=1 slide_candidates_match=1 sah_cost_lower=1 sah_tree_cost_lower=1
                                sah_fewer_tests_per_ray=1" ;;
     04_bvh_build_review) echo "same_hits=1 reindexed_contiguous=1 sweep_cost_lowest=1 binned_fewer_root_candidates=1" ;;
     05_bvh_traversal) echo "same_hit=1 ordered_visits_fewer=1 ordered_fewer_on_average=1" ;;
