@@ -70,7 +70,8 @@ typedef struct {
 static char axis_name(int a) { return a == 0 ? 'x' : a == 1 ? 'y' : a == 2 ? 'z' : '-'; }
 
 /* Reproduces a root candidate from the primitives: who lies left of the
- * plane, the two child boxes, their share of the parent's area. */
+ * plane, the two child boxes, their share of the parent's area (returned
+ * in share[0], share[1]); says whether the event agrees. */
 static int explain(const sidx_mesh *m, const sidx_event *ev, sidx_aabb parent, float c_trav, float share[2])
 {
     sidx_aabb l = sidx_aabb_empty(), r = sidx_aabb_empty();
@@ -197,13 +198,12 @@ int main(int argc, char **argv)
              * next to the slide's figures rounded as it prints them. */
             printf("\n  The slide's lines (\"Building Partitions Example\"), from the build / on the slide:\n");
             for (int i = 0; i < ngot; ++i) {
-                const int j = i;
-                const int same = got[i].axis == slide[j].axis && got[i].nl == slide[j].nl && got[i].nr == slide[j].nr &&
-                                 lroundf(100 * got[i].fl) == lroundf(100 * slide[j].fl) &&
-                                 lroundf(100 * got[i].fr) == lroundf(100 * slide[j].fr);
+                const int same = got[i].axis == slide[i].axis && got[i].nl == slide[i].nl && got[i].nr == slide[i].nr &&
+                                 lroundf(100 * got[i].fl) == lroundf(100 * slide[i].fl) &&
+                                 lroundf(100 * got[i].fr) == lroundf(100 * slide[i].fr);
                 printf("    %c: Cost = %u prims * (%.2f) + %u prims * (%.2f)   slide: %u * (%.2f) + %u * (%.2f)%s\n",
-                       got[i].axis, got[i].nl, got[i].fl, got[i].nr, got[i].fr, slide[j].nl, slide[j].fl, slide[j].nr,
-                       slide[j].fr, same ? "" : "   DIFFERS");
+                       got[i].axis, got[i].nl, got[i].fl, got[i].nr, got[i].fr, slide[i].nl, slide[i].fl, slide[i].nr,
+                       slide[i].fr, same ? "" : "   DIFFERS");
                 slide_ok &= same;
             }
             slide_ok &= ngot == 6;
