@@ -138,6 +138,12 @@ int main(int argc, char **argv)
            "  hit; the ordered walk takes the nearer child, hits the top tile at once, and then every\n"
            "  farther box starts behind that hit and is skipped.  Neither can stop at the first hit:\n"
            "  BVH boxes may overlap, and only boxes entirely behind the hit can be dropped.\n");
+    printf("  Erratum, deck 001 \"Better BVH Traversal\": the slide picks `second` by its own comparison\n"
+           "  (hit2.t <= hit1.t ? child2 : child1), so when child 2 is nearer both `first` and `second`\n"
+           "  are child 2 (on the second version of the slide, when child 1 is nearer, both are child 1),\n"
+           "  and it then tests hit2.t (or an undefined closest.t) whichever child went first.  The walk\n"
+           "  above takes `second` as the child that is not `first` and tests that child's own entry t\n"
+           "  against the best hit so far.\n");
     const int same_one = h_naive.prim == h_ordered.prim && h_naive.t == h_ordered.t;
     const int fewer_one = wo.visits < wn.visits;
     sidx_recorder_free(&rn);
