@@ -379,6 +379,20 @@ static const char *tree_accel(const sidx_mesh *m)
     return NULL;
 }
 
+/* The width attribute of a rendered SVG, in points. */
+static double svg_width_pt(const char *path)
+{
+    FILE *f = fopen(path, "r");
+    assert_non_null(f);
+    char buf[4096];
+    size_t n = fread(buf, 1, sizeof buf - 1, f);
+    buf[n] = '\0';
+    fclose(f);
+    const char *w = strstr(buf, "<svg width=\"");
+    assert_non_null(w);
+    return strtod(w + strlen("<svg width=\""), NULL);
+}
+
 static void dot_real_structure(void **state)
 {
     (void)state;
@@ -439,15 +453,75 @@ static void dot_real_structure(void **state)
     tmp_path(svg, sizeof svg, "svg");
     opt.max_depth = 2;
     assert_int_equal(sidx_dot_write(&m, name, &opt, svg, &err), SIDX_OK);
-    FILE *f = fopen(svg, "r");
-    assert_non_null(f);
-    char buf[4096];
-    size_t n = fread(buf, 1, sizeof buf - 1, f);
-    buf[n] = '\0';
-    fclose(f);
-    assert_non_null(strstr(buf, "<svg"));
+    assert_true(svg_width_pt(svg) > 0.0);
     unlink(svg);
     unlink(path);
+    sidx_mesh_free(&m);
+}
+
+/* Labels say what each structure decided: a BSP plane is scored by balance and cuts, not the
+ * SAH; an octree cuts at the centre (no NaN plane); a BSP region with no piece of its own but a
+ * ray list is not "N prims (empty)"; a value computed as 0 prints as 0, not -2.384e-07. */
+static void dot_labels_say_the_structure(void **state)
+{
+    (void)state;
+    static const char *const cases[][2] = {{"bsp", "flat2d"}, {"bsp", "teapot"}, {"octree", "teapot"}, {"bvh", "teapot"}};
+    for (size_t ci = 0; ci < sizeof cases / sizeof cases[0]; ++ci) {
+        if (!sidx_accel_is_registered(cases[ci][0])) continue;
+        sidx_mesh m;
+        sidx_error err;
+        assert_int_equal(sidx_scene_open(cases[ci][1], &m, &err), SIDX_OK);
+        char path[128];
+        tmp_path(path, sizeof path, "labels.dot");
+        sidx_dot_options opt;
+        memset(&opt, 0, sizeof opt);
+        opt.max_depth = SIDX_DOT_ALL_DEPTHS;
+        assert_int_equal(sidx_dot_write(&m, cases[ci][0], &opt, path, &err), SIDX_OK);
+        Agraph_t *g = read_graph(path);
+        int planes = 0;
+        for (Agnode_t *n = agfstnode(g); n; n = agnxtnode(g, n)) {
+            const char *l = agget(n, (char *)"label");
+            assert_non_null(l);
+            if (!strcmp(cases[ci][0], "bsp")) {
+                assert_null(strstr(l, "SAH"));
+                if (strstr(l, "plane (")) ++planes;
+            }
+            assert_null(strstr(l, "nan"));
+            assert_null(strstr(l, "e-07"));
+            assert_null(strstr(l, "e-08"));
+            const char *e = strstr(l, " prims (empty)");
+            if (e) assert_true(e >= l + 2 && e[-1] == '0' && (e - 1 == l || e[-2] == 'n'));
+        }
+        if (!strcmp(cases[ci][0], "bsp")) assert_true(planes > 0);
+        agclose(g);
+        unlink(path);
+        sidx_mesh_free(&m);
+    }
+}
+
+/* Wide trees fit a page by default: grid2 on the teapot (185 top-level cells) wraps its cells
+ * into rows, the octree (eight children a node) is cut where a level gets too wide. */
+static void dot_wide_trees_fit_a_page(void **state)
+{
+    (void)state;
+    if (getenv("SIDX_FAST_TESTS")) {
+        print_message("gvc layout not run under SIDX_FAST_TESTS: skipped\n");
+        return;
+    }
+    static const char *const names[] = {"grid2", "octree"};
+    sidx_mesh m;
+    sidx_error err;
+    assert_int_equal(sidx_scene_open("teapot", &m, &err), SIDX_OK);
+    for (size_t i = 0; i < 2; ++i) {
+        if (!sidx_accel_is_registered(names[i])) continue;
+        char svg[128];
+        tmp_path(svg, sizeof svg, "svg");
+        assert_int_equal(sidx_dot_write(&m, names[i], NULL, svg, &err), SIDX_OK);
+        const double w = svg_width_pt(svg);
+        print_message("%s on teapot: svg width %.0f pt\n", names[i], w);
+        assert_true(w > 0.0 && w < 2500.0); /* 20,000-1,000,000 pt before rows and the width cut */
+        unlink(svg);
+    }
     sidx_mesh_free(&m);
 }
 
@@ -642,6 +716,8 @@ static void dot_real_leaf_labels(void **state)
 
 #else
 static void dot_real_leaf_labels(void **state) { (void)state; skip_without_graphviz(); }
+static void dot_labels_say_the_structure(void **state) { (void)state; skip_without_graphviz(); }
+static void dot_wide_trees_fit_a_page(void **state) { (void)state; skip_without_graphviz(); }
 #endif /* SIDX_HAVE_GRAPHVIZ */
 
 #if SIDX_HAVE_SDL
@@ -1251,6 +1327,8 @@ int main(int argc, char **argv)
         cmocka_unit_test(view_steps_real_recording),
         cmocka_unit_test(leaf_prims_from_real_builds),
         cmocka_unit_test(dot_real_leaf_labels),
+        cmocka_unit_test(dot_labels_say_the_structure),
+        cmocka_unit_test(dot_wide_trees_fit_a_page),
         cmocka_unit_test(step_matches_expected),
         cmocka_unit_test(build_knobs_fill_options),
         cmocka_unit_test(step_panel_step_break),

@@ -9,6 +9,8 @@
  * whose box test failed are greyed, the hit leaf gets a double red border.
  * Below max_depth each cut subtree becomes one summary node. */
 #include <ctype.h>
+#include <float.h>
+#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -75,7 +77,15 @@ static void gradient(uint32_t order, uint32_t total, char out[16])
 #define DOT_LEAF_IDS 8  /* ids listed in a leaf's label; a bigger leaf ends with "+k" */
 #define DOT_IDS_PER_LINE 4
 
-static void node_label(const sidx_viz_tree *t, const sidx_viz_node *nd, int with_ray, strbuf *b)
+/* A float the build computed as 0 comes out as -2.384e-07 after a subtraction: values within a
+ * few ulps of the scale they were computed at print as 0: the scene's extent for positions, 4 for a
+ * unit normal (a cross product of scene coordinates: its error is a few ulps of its inputs). */
+static double snap0(float v, float scale)
+{
+    return fabsf(v) <= 8.0f * FLT_EPSILON * scale ? 0.0 : (double)v;
+}
+
+static void node_label(const sidx_viz_tree *t, const sidx_viz_node *nd, int with_ray, float scale, strbuf *b)
 {
     if (nd->id == SIDX_VIZ_VIRTUAL_ROOT && t->virtual_root) {
         sb_add(b, "%s\\n%u top-level cells\\n%u prims", t->structure, nd->child_count, nd->count);
@@ -89,17 +99,31 @@ static void node_label(const sidx_viz_tree *t, const sidx_viz_node *nd, int with
     sb_add(b, "  d%u\\n", nd->depth);
     if (!nd->is_leaf) {
         if (nd->has_split && nd->axis >= 0)
-            sb_add(b, "split %s = %.4g\\n", axis_letter(nd->axis), (double)nd->pos);
+            sb_add(b, "split %s = %.4g\\n", axis_letter(nd->axis), snap0(nd->pos, scale));
+        else if (nd->has_split && isnan(nd->pos)) { /* octree / quadtree: cut at the cell's centre */
+            const sidx_vec3 ctr = sidx_aabb_centroid(nd->bounds);
+            sb_add(b, "centre (%.4g,%.4g,%.4g)\\n", snap0(ctr.x, scale), snap0(ctr.y, scale), snap0(ctr.z, scale));
+        }
         else if (nd->has_split)
-            sb_add(b, "plane (%.3g,%.3g,%.3g)·p = %.4g\\n", (double)nd->plane_n.x, (double)nd->plane_n.y,
-                   (double)nd->plane_n.z, (double)nd->pos);
-        if (!isnan(nd->cost)) sb_add(b, "SAH %.4g\\n", (double)nd->cost);
+            sb_add(b, "plane (%.3g,%.3g,%.3g)·p = %.4g\\n", snap0(nd->plane_n.x, 4.0f), snap0(nd->plane_n.y, 4.0f),
+                   snap0(nd->plane_n.z, 4.0f), snap0(nd->pos, scale));
+        /* An arbitrary plane (BSP) is not chosen by the SAH but by the node builders' score
+         * |front - back| + w·cuts (lib/bsp.c); axis-aligned splits carry the SAH cost. */
+        if (!isnan(nd->cost) && nd->has_split && nd->axis < 0)
+            sb_add(b, "balance+cuts score %.4g\\n", (double)nd->cost);
+        else if (!isnan(nd->cost))
+            sb_add(b, "SAH %.4g\\n", (double)nd->cost);
         sb_add(b, "%u prims", nd->count);
-        if (nd->has_split && nd->n_left != SIDX_VIZ_NONE && nd->n_right != SIDX_VIZ_NONE)
+        if (nd->has_split && !isnan(nd->pos) && nd->n_left != SIDX_VIZ_NONE && nd->n_right != SIDX_VIZ_NONE)
             sb_add(b, " (L %u | R %u)", nd->n_left, nd->n_right);
     } else {
         sb_add(b, "%u prims", nd->leaf_count);
-        if (nd->leaf_reason != SIDX_LEAF_NONE) sb_add(b, " (%s)", sidx_leaf_reason_name(nd->leaf_reason));
+        /* A BSP region with no piece of its own is an empty leaf, yet its ray list holds the
+         * triangles of neighbouring regions that come within ε of its planes (lib/bsp.c). */
+        if (nd->leaf_reason == SIDX_LEAF_EMPTY && nd->leaf_count)
+            sb_add(b, " (empty region; near its planes)");
+        else if (nd->leaf_reason != SIDX_LEAF_NONE)
+            sb_add(b, " (%s)", sidx_leaf_reason_name(nd->leaf_reason));
         if (!isnan(nd->cost)) sb_add(b, "\\ncost %.4g", (double)nd->cost);
         if (nd->prims && nd->leaf_count) {
             const uint32_t k = nd->leaf_count < DOT_LEAF_IDS ? nd->leaf_count : DOT_LEAF_IDS;
@@ -122,9 +146,55 @@ typedef struct dot_ctx {
     Agraph_t *g;
     const sidx_viz_tree *t;
     int with_ray;
-    uint32_t cut_depth; /* absolute depth below which subtrees are summarised */
+    uint32_t cut_level; /* levels below the drawn root after which subtrees are summarised */
     uint32_t summaries;
+    float scale;        /* the scene's extent: split values within a few ulps of it print as 0 */
 } dot_ctx;
+
+/* Wide trees (grid2's hundreds of top-level cells, the octree's eight children per node) drawn
+ * level by level make strips tens of thousands of points wide.  Two remedies keep a page:
+ *  - children past DOT_ROW of one parent wrap into further rows (invisible edges stack row k
+ *    under row k-1; the parent's edges to them do not constrain the ranks);
+ *  - without an explicit depth, the cut level is the deepest (up to SIDX_DOT_DEFAULT_DEPTH) at
+ *    which the drawing holds at most DOT_NODE_BUDGET nodes. */
+#define DOT_ROW 8u
+#define DOT_NODE_BUDGET 160u
+#define DOT_WIDTH_BUDGET 32u
+
+/* Nodes drawn when cutting after `level` levels: the nodes of levels 0..level plus one summary
+ * per inner node of the last level. */
+static uint32_t auto_cut_level(const sidx_viz_tree *t, uint32_t max_level)
+{
+    uint32_t *cur = malloc(t->count * sizeof *cur), *next = malloc(t->count * sizeof *next);
+    uint32_t best = 1, drawn = 1, ncur = 1;
+    if (!cur || !next) { free(cur); free(next); return max_level; }
+    cur[0] = t->root;
+    for (uint32_t level = 1; level <= max_level && ncur; ++level) {
+        uint32_t nnext = 0;
+        for (uint32_t i = 0; i < ncur; ++i) {
+            const sidx_viz_node *nd = &t->nodes[cur[i]];
+            for (uint32_t k = 0; k < nd->child_count; ++k) next[nnext++] = t->children[nd->child_base + k];
+        }
+        /* the widest rank of this level: each parent's children wrapped into rows of DOT_ROW */
+        uint32_t width = 0;
+        for (uint32_t i = 0; i < ncur; ++i) {
+            const uint32_t k = t->nodes[cur[i]].child_count;
+            width += k < DOT_ROW ? k : DOT_ROW;
+        }
+        drawn += nnext;
+        uint32_t inner = 0;
+        for (uint32_t i = 0; i < nnext; ++i) inner += t->nodes[next[i]].child_count > 0;
+        if (level > 1 && (drawn + inner > DOT_NODE_BUDGET || width > DOT_WIDTH_BUDGET)) break;
+        best = level;
+        uint32_t *tmp = cur;
+        cur = next;
+        next = tmp;
+        ncur = nnext;
+    }
+    free(cur);
+    free(next);
+    return best;
+}
 
 static Agnode_t *add_node(dot_ctx *c, uint32_t i)
 {
@@ -134,7 +204,7 @@ static Agnode_t *add_node(dot_ctx *c, uint32_t i)
     Agnode_t *n = agnode(c->g, name, 1);
     if (!n) return NULL;
     strbuf lb = {{0}, 0};
-    node_label(c->t, nd, c->with_ray, &lb);
+    node_label(c->t, nd, c->with_ray, c->scale, &lb);
     set(n, "label", lb.s);
     set(n, "fillcolor", nd->is_leaf ? "#e3f1d8" : "#dce7f5");
     if (c->with_ray) {
@@ -209,11 +279,12 @@ static int build_graph(dot_ctx *c)
 {
     const sidx_viz_tree *t = c->t;
     Agnode_t **made = calloc(t->count, sizeof *made);
-    uint32_t *stack = malloc(t->count * sizeof *stack);
+    uint32_t *stack = malloc(t->count * sizeof *stack), *level = malloc(t->count * sizeof *level);
     int rc = 0;
-    if (!made || !stack) { rc = -1; goto out; }
+    if (!made || !stack || !level) { rc = -1; goto out; }
     size_t sp = 0;
     stack[sp++] = t->root;
+    level[t->root] = 0;
     while (sp && rc == 0) {
         uint32_t i = stack[--sp];
         const sidx_viz_node *nd = &t->nodes[i];
@@ -221,24 +292,43 @@ static int build_graph(dot_ctx *c)
         if (!n) { rc = -1; break; }
         made[i] = n;
         if (nd->parent != SIDX_VIZ_NONE && made[nd->parent]) {
-            Agedge_t *e = agedge(c->g, made[nd->parent], n, NULL, 1);
+            /* a wrapped child (past DOT_ROW of its parent's children) hangs from the sibling one
+             * row above by a dotted line, two ranks down (room for that sibling's summary): an
+             * edge from the parent, routed around the rows, would widen the drawing again */
+            const sidx_viz_node *p = &t->nodes[nd->parent];
+            uint32_t k = 0;
+            while (k < p->child_count && t->children[p->child_base + k] != i) ++k;
+            Agnode_t *from = made[nd->parent];
+            if (k >= DOT_ROW && k < p->child_count) from = made[t->children[p->child_base + k - DOT_ROW]];
+            Agedge_t *e = from ? agedge(c->g, from, n, NULL, 1) : NULL;
             if (!e) { rc = -1; break; }
-            if (c->with_ray && nd->visit_order && t->nodes[nd->parent].visit_order) {
+            if (from != made[nd->parent]) {
+                set(e, "style", "dotted");
+                set(e, "color", "#9a9a9a");
+                set(e, "arrowhead", "none");
+                set(e, "weight", "100");
+                set(e, "minlen", level[i] < c->cut_level ? "1" : "2");
+            } else if (c->with_ray && nd->visit_order && p->visit_order) {
                 set(e, "color", "#d04000");
                 set(e, "penwidth", "2");
             }
         }
         if (nd->child_count == 0) continue;
-        if (nd->depth >= c->cut_depth) {
+        if (level[i] >= c->cut_level) {
             rc = add_summary(c, n, i);
             continue;
         }
         /* push in reverse so children are created left to right */
-        for (uint32_t k = nd->child_count; k-- > 0;) stack[sp++] = t->children[nd->child_base + k];
+        for (uint32_t k = nd->child_count; k-- > 0;) {
+            const uint32_t ch = t->children[nd->child_base + k];
+            level[ch] = level[i] + 1;
+            stack[sp++] = ch;
+        }
     }
 out:
     free(made);
     free(stack);
+    free(level);
     return rc;
 }
 
@@ -291,13 +381,17 @@ sidx_status sidx_dot_write_events(const sidx_event *build, size_t nbuild, const 
     const int with_ray = trav && ntrav;
     if (with_ray) sidx_viz_tree_apply_ray(&t, trav, ntrav);
 
-    uint32_t depth = o.max_depth ? o.max_depth : SIDX_DOT_DEFAULT_DEPTH;
-    uint32_t root_depth = t.nodes[t.root].depth;
     dot_ctx c;
     memset(&c, 0, sizeof c);
     c.t = &t;
     c.with_ray = with_ray;
-    c.cut_depth = depth > UINT32_MAX - root_depth ? UINT32_MAX : root_depth + depth;
+    c.cut_level = o.max_depth ? o.max_depth : auto_cut_level(&t, SIDX_DOT_DEFAULT_DEPTH);
+    {
+        const sidx_aabb rb = t.nodes[t.root].bounds;
+        const float m[6] = {rb.min.x, rb.min.y, rb.min.z, rb.max.x, rb.max.y, rb.max.z};
+        for (int k = 0; k < 6; ++k)
+            if (isfinite(m[k]) && fabsf(m[k]) > c.scale) c.scale = fabsf(m[k]);
+    }
 
     Agdesc_t desc = Agdirected;
     c.g = agopen((char *)"sidx", desc, NULL);

@@ -101,8 +101,9 @@ void sidx_viz_tree_subtree(const sidx_viz_tree *t, uint32_t i, uint32_t *nodes, 
 #define SIDX_DOT_ALL_DEPTHS UINT32_MAX
 
 typedef struct sidx_dot_options {
-    uint32_t max_depth;            /* deeper subtrees become one summary node; 0 = SIDX_DOT_DEFAULT_DEPTH,
-                                      SIDX_DOT_ALL_DEPTHS = no cut */
+    uint32_t max_depth;            /* deeper subtrees become one summary node; 0 = up to
+                                      SIDX_DOT_DEFAULT_DEPTH, fewer levels where a level gets too
+                                      wide for a page; SIDX_DOT_ALL_DEPTHS = no cut */
     const sidx_build_options *build; /* passed to the build (its hook is replaced); NULL = defaults */
     int has_ray;                   /* 1: trace ray_org + t·ray_dir and colour what it did */
     sidx_vec3 ray_org, ray_dir;
