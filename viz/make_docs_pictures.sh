@@ -3,7 +3,8 @@
 # registered tree structure over the teapot (cut at depth 5, with one ray),
 # and sidx-view screenshots of every structure on the 2D lecture scene
 # (traversal half-way, and the build with the SAH curve), plus 3D and heat
-# views of the teapot.
+# views of the teapot, and the few further views the tutorial's lessons
+# show (heat maps of the teapot in the stadium, the BVH's first level).
 #
 #   sh viz/make_docs_pictures.sh [BUILD_DIR] [OUT_DIR]     (defaults: build, docs/img)
 #
@@ -72,5 +73,28 @@ for a in bvh kdtree; do
   "$BIN/sidx-view" --accel "$a" --scene teapot --mode heat --screenshot "$OUT/heat-$a-teapot.png" >/dev/null &&
     echo "  $OUT/heat-$a-teapot.png"
 done
+
+# ---- pictures the tutorial's lessons show besides the ones above ----
+# Lesson 08 (and 13): the teapot in the stadium, heat of steps per pixel,
+# zoomed on the teapot: the grid spends thousands of steps in the one cell
+# that holds the teapot, the BVH a few dozen everywhere.
+for a in grid bvh; do
+  echo "$names" | grep -qx "$a" || continue
+  "$BIN/sidx-view" --accel "$a" --scene stadium --mode heat --zoom 3 --size 550x350 \
+      --screenshot "$OUT/heat-$a-stadium.png" >/dev/null &&
+    echo "  $OUT/heat-$a-stadium.png"
+done
+# Lesson 20: the grid's heat on the teapot beside the trees' (above).
+if echo "$names" | grep -qx grid; then
+  "$BIN/sidx-view" --accel grid --scene teapot --mode heat --screenshot "$OUT/heat-grid-teapot.png" >/dev/null &&
+    echo "  $OUT/heat-grid-teapot.png"
+fi
+# Lessons 02 and 19: the two boxes below the BVH's root, around the object.
+if echo "$names" | grep -qx bvh; then
+  "$BIN/sidx-view" --accel bvh --scene teapot --mode 3d --level 1 --size 550x350 \
+      --screenshot "$OUT/view3d-bvh-teapot-level1.png" >/dev/null &&
+    echo "  $OUT/view3d-bvh-teapot-level1.png"
+fi
+# ---- end of the lessons' pictures ----
 rm -f "$OUT/.err"
 exit $failed
