@@ -24,7 +24,7 @@ DEF=lib/accel_registry.def
 needs() {
     case $1 in
     03_*|04_*|05_*) echo "bvh bvh-sweep bvh-everyb bvh-median bvh-middle" ;;
-    06_*) echo "bvh kdtree" ;;
+    06_*) echo "bvh kdtree grid octree" ;;
     07_*|21_*) echo "grid grid-nomailbox" ;;
     08_*) echo "grid grid2 grid-irregular kdtree" ;;
     09_*|22_*) echo "kdtree kdtree-median kdtree-middle" ;;
@@ -52,7 +52,9 @@ expect() {
                                sah_fewer_tests_per_ray=1" ;;
     04_bvh_build_review) echo "same_hits=1 reindexed_contiguous=1 sweep_cost_lowest=1 binned_fewer_root_candidates=1" ;;
     05_bvh_traversal) echo "same_hit=1 ordered_visits_fewer=1 ordered_fewer_on_average=1" ;;
-    06_object_vs_space) echo "same_hits=1 bvh_boxes_overlap=1 kd_cells_disjoint=1 kd_stops_at_first_hit=1" ;;
+    06_object_vs_space) echo "same_hits=1 bvh_boxes_overlap=1 kd_cells_disjoint=1 kd_stops_at_first_hit=1
+                              review_same_hits=1 review_bvh_refs_once=1 review_spatial_duplicates=1
+                              review_grid_tests_more_than_trees=1" ;;
     07_uniform_grid) echo "resolution_formula=1 dda_cells_in_order=1 mailbox_saves_tests=1 middle_lambda_best=1" ;;
     08_teapot_in_stadium) echo "same_hits=1 uniform_grid_worst=1 adaptive_beats_uniform=1 irregular_adapts=1" ;;
     09_kdtree_build) echo "same_hits=1 sah_cost_lower=1 sah_thin_leaves=1 cost_curve_min_is_split=1" ;;
