@@ -42,12 +42,15 @@
 
 static void usage(FILE *f)
 {
-    fprintf(f, "usage: 12_octree_bsp [--help] [SCENE]\n"
+    fprintf(f, "usage: 12_octree_bsp [--help] [build knobs] [SCENE]\n"
                "\n"
                "Quadtree over the 2D board, octree vs grid vs kd-tree (deck and default SAH constants)\n"
                "on a scene, and a BSP tree's back-to-front painter's order checked along rays from the eye.\n"
                "\n"
-               "  SCENE   scene for the octree comparison: built-in name or .obj/.ply (default: teapot)\n");
+               "  SCENE   scene for the octree comparison: built-in name or .obj/.ply (default: teapot)\n"
+               "The knobs below change the quadtree and the octree (--leaf-size: split above N\n"
+               "triangles, default 8; --max-depth) and the uniform grid (--lambda); the kd-trees\n"
+               "keep their two cost settings, the BSP tree its own.  The checks hold for the defaults.\n");
 }
 
 static float lcg(uint32_t *s)
@@ -118,7 +121,9 @@ static int same_hits(const sidx_accel *a, const sidx_accel *ref, const sidx_mesh
 
 int main(int argc, char **argv)
 {
-    lesson_args args = {.name = "12_octree_bsp", .usage = usage, .scene = "teapot"};
+    sidx_build_options knobs = {0};
+    const lesson_option options[] = {LESSON_LEAF_SIZE(knobs), LESSON_MAX_DEPTH(knobs), LESSON_LAMBDA(knobs), {0}};
+    lesson_args args = {.name = "12_octree_bsp", .usage = usage, .scene = "teapot", .options = options};
     lesson_parse(&args, argc, argv);
     static const char *const need[] = {"octree", "quadtree", "bsp", "brute"};
     for (int i = 0; i < 4; ++i) lesson_need(&args, need[i]);
@@ -133,8 +138,10 @@ int main(int argc, char **argv)
     const sidx_hook rh = sidx_recorder_hook(&rec);
     sidx_build_options opt = {0};
     opt.hook = &rh;
+    sidx_build_options qo = knobs;
+    qo.hook = &rh;
     sidx_accel *qt = NULL, *ref = NULL;
-    if (sidx_accel_build("quadtree", &board, &opt, &qt, &err) != SIDX_OK ||
+    if (sidx_accel_build("quadtree", &board, &qo, &qt, &err) != SIDX_OK ||
         sidx_accel_build("brute", &board, NULL, &ref, &err) != SIDX_OK) {
         fprintf(stderr, "12_octree_bsp: %s\n", err.message);
         return 1;
@@ -176,6 +183,7 @@ int main(int argc, char **argv)
     for (int s = 0; s < 4 && ok; ++s) {
         if (!sidx_accel_is_registered(cmp[s])) continue;
         sidx_build_options ko = {0};
+        if (s < 2) ko = knobs; /* grid, octree */
         ko.c_trav = ctrav[s];
         ko.c_tri = ctrav[s] > 0.0f ? 1.0f : 0.0f;
         sidx_accel *a = NULL;
