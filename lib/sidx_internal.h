@@ -85,7 +85,22 @@ struct sidx_accel {
      * which a diffuse ray mostly misses in cache.  Either way the values
      * are bit-identical to finish_hit's (accel.c): same test, same floats. */
     int fills_uv, fills_ng;
+    /* node labels (sidx_accel_set_node_label, labels.c), sorted by node;
+     * display only, no walk reads them */
+    struct sidx__label *labels;
+    size_t num_labels, cap_labels;
 };
+
+/* Builds an accelerator the registry does not name the usual way: the
+ * options are checked and the structure allocated as for
+ * sidx_accel_build, then build(a, arg, err) fills a->impl.  The kd-tree
+ * built from given splits (kdtree_build.c) goes through here. */
+typedef sidx_status (*sidx__build_fn)(sidx_accel *a, void *arg, sidx_error *err);
+sidx_status sidx__accel_build_with(const char *name, const sidx_accel_vtable *vt, int variant, const sidx_mesh *mesh,
+                                   const sidx_build_options *opt, sidx__build_fn build, void *arg, sidx_accel **out,
+                                   sidx_error *err);
+/* Frees the labels (sidx_accel_destroy). */
+void sidx__labels_free(sidx_accel *a);
 
 /* Registry entries live in accel_registry.def as
  *   SIDX_ACCEL("name", vtable_symbol, variant, "one-line description")
