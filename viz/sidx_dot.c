@@ -97,6 +97,7 @@ int main(int argc, char **argv)
         return 2;
     }
     opt.build = &bo;
+    opt.scene = scene; /* kd-slide with kdtree: the slide's tree, its nodes named as the slide names them */
 
     sidx_mesh mesh;
     sidx_error err;
