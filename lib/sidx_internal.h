@@ -74,21 +74,22 @@ struct sidx_accel {
     const sidx_accel_vtable *vt;
     const char *name;          /* registered name (static) */
     int variant;               /* registry entry's variant (builder choice etc.) */
-    const sidx_mesh *mesh;
-    sidx_build_options opt;    /* copy; opt.hook is only valid during build */
-    sidx_allocator alloc;      /* resolved allocator (never NULL fns) */
-    void *impl;
     /* 1 when vt->intersect also sets hit->u, hit->v (when SIDX_QUERY_UV asks)
      * / hit->ng (when SIDX_QUERY_NORMAL asks) itself — u, v kept from its
      * own triangle test, ng from its own copy of the triangle — so the core
      * skips its re-test and the index and vertex look-ups in the mesh,
      * which a diffuse ray mostly misses in cache.  Either way the values
-     * are bit-identical to finish_hit's (accel.c): same test, same floats. */
-    int fills_uv, fills_ng;
-    /* node labels (sidx_accel_set_node_label, labels.c), sorted by node;
-     * display only, no walk reads them */
-    struct sidx__label *labels;
-    size_t num_labels, cap_labels;
+     * are bit-identical to finish_hit's (accel.c): same test, same floats.
+     * Bytes beside `variant`, in what would be padding, so that the labels
+     * below do not make the structure bigger. */
+    unsigned char fills_uv, fills_ng;
+    const sidx_mesh *mesh;
+    sidx_build_options opt;    /* copy; opt.hook is only valid during build */
+    sidx_allocator alloc;      /* resolved allocator (never NULL fns) */
+    void *impl;
+    /* node labels (sidx_accel_set_node_label, labels.c); NULL until one
+     * is set.  Display only: no walk reads them */
+    struct sidx__labels *labels;
 };
 
 /* Builds an accelerator the registry does not name the usual way: the
