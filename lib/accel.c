@@ -39,8 +39,9 @@ int sidx_accel_is_registered(const char *name) { return find_entry(name) != NULL
 static void *default_alloc(size_t size, void *user) { (void)user; return malloc(size); }
 static void default_free(void *p, void *user) { (void)user; free(p); }
 
-static sidx_status build_entry(const registry_entry *e, const sidx_mesh *mesh, const sidx_build_options *opt,
-                               sidx_accel **out, sidx_error *err)
+sidx_status sidx__accel_build_with(const char *name, const sidx_accel_vtable *vt, int variant, const sidx_mesh *mesh,
+                                   const sidx_build_options *opt, sidx__build_fn build, void *arg, sidx_accel **out,
+                                   sidx_error *err)
 {
     sidx_build_options o;
     memset(&o, 0, sizeof o);
@@ -59,24 +60,36 @@ static sidx_status build_entry(const registry_entry *e, const sidx_mesh *mesh, c
         al = *o.alloc;
     }
     sidx_accel *a = al.alloc(sizeof *a, al.user);
-    if (!a) return sidx__fail(err, SIDX_ERR_NOMEM, "out of memory allocating the %s structure", e->name);
+    if (!a) return sidx__fail(err, SIDX_ERR_NOMEM, "out of memory allocating the %s structure", name);
     memset(a, 0, sizeof *a);
-    a->vt = e->vt;
-    a->name = e->name;
-    a->variant = e->variant;
+    a->vt = vt;
+    a->name = name;
+    a->variant = variant;
     a->mesh = mesh;
     a->opt = o;
     a->alloc = al;
-    s = e->vt->build(a, err);
+    s = build(a, arg, err);
     a->opt.hook = NULL; /* the build hook is the caller's; do not keep it */
     a->opt.alloc = NULL;
     if (s != SIDX_OK) {
-        if (err && err->message[0] == '\0') sidx__fail(err, s, "building %s: %s", e->name, sidx_status_str(s));
+        if (err && err->message[0] == '\0') sidx__fail(err, s, "building %s: %s", name, sidx_status_str(s));
         al.free(a, al.user);
         return s;
     }
     *out = a;
     return SIDX_OK;
+}
+
+static sidx_status vtable_build(sidx_accel *a, void *arg, sidx_error *err)
+{
+    (void)arg;
+    return a->vt->build(a, err);
+}
+
+static sidx_status build_entry(const registry_entry *e, const sidx_mesh *mesh, const sidx_build_options *opt,
+                               sidx_accel **out, sidx_error *err)
+{
+    return sidx__accel_build_with(e->name, e->vt, e->variant, mesh, opt, vtable_build, NULL, out, err);
 }
 
 sidx_status sidx_accel_build(const char *name, const sidx_mesh *mesh, const sidx_build_options *opt,
@@ -269,6 +282,7 @@ void sidx_accel_destroy(sidx_accel *a)
 {
     if (!a) return;
     if (a->vt->destroy) a->vt->destroy(a);
+    sidx__labels_free(a);
     sidx_allocator al = a->alloc;
     al.free(a, al.user);
 }

@@ -42,7 +42,7 @@ const char *sidx_event_type_name(sidx_event_type t)
 const char *sidx_leaf_reason_name(int reason)
 {
     static const char *const names[SIDX_LEAF_REASON_COUNT] = {"none", "few_prims", "no_gain", "max_depth",
-                                                              "no_split", "empty"};
+                                                              "no_split", "empty", "given"};
     return (reason >= 0 && reason < SIDX_LEAF_REASON_COUNT) ? names[reason] : "unknown";
 }
 

@@ -17,6 +17,8 @@
  *                   predefined locations (fixed number of bins across bbox axis)").
  *   kdtree-median   the deck's "intuitive" build: largest extent, median of geometry.
  *   kdtree-middle   the same with the middle of the extent.
+ *   (given)         the caller's splits, node by node
+ *                   (sidx_kdtree_build_from_splits: a slide's tree as drawn).
  *
  * All of them use "perfect splits" (Havran 2000; Wald & Havran 2006 §4.3):
  * a triangle that straddles a plane is clipped to each child cell
@@ -35,6 +37,15 @@
 
 /* ---- builder state ------------------------------------------------------ */
 
+/* The caller's tree (sidx_kdtree_build_from_splits): its depth-first list,
+ * the next entry to read, and the node id each entry became. */
+typedef struct kd_given {
+    const sidx_kd_split *splits;
+    uint32_t count, next;
+    uint32_t *ids;
+    char msg[160]; /* why the list was refused */
+} kd_given;
+
 typedef struct kd_builder {
     sidx_accel *a;
     const sidx_hook *hook;
@@ -47,6 +58,7 @@ typedef struct kd_builder {
     size_t prims_cap;
     uint32_t num_refs;
     uint8_t *cls;           /* WH06 per-triangle classification scratch */
+    kd_given *given;        /* KD_VARIANT_GIVEN: the caller's splits */
     float c_trav, c_tri, lambda; /* lambda = 1 − empty bonus */
     uint32_t leaf_size, max_depth, bins;
     int variant;
@@ -629,6 +641,43 @@ static sidx_status binned_choice(kd_builder *b, uint32_t idx, sidx_aabb cell, co
     return SIDX_OK;
 }
 
+/* The given tree's next node: a leaf (reason "given", or "empty" when no
+ * triangle reaches its cell) or a split, checked against the cell. */
+static sidx_status given_choice(kd_given *g, uint32_t idx, uint32_t depth, sidx_aabb cell, uint32_t n, int *reason,
+                                sah_best *best)
+{
+    if (g->next >= g->count) {
+        snprintf(g->msg, sizeof g->msg, "the list of %u nodes ends before the tree does (node %u has none)", g->count,
+                 idx);
+        return SIDX_ERR_INVALID_ARG;
+    }
+    const uint32_t i = g->next++;
+    const sidx_kd_split sp = g->splits[i];
+    g->ids[i] = idx;
+    if (sp.axis == SIDX_KD_LEAF) {
+        *reason = n ? SIDX_LEAF_GIVEN : SIDX_LEAF_EMPTY;
+        return SIDX_OK;
+    }
+    if (sp.axis > 2) {
+        snprintf(g->msg, sizeof g->msg, "entry %u: axis %u (0, 1, 2 split x, y, z; %u is a leaf)", i, sp.axis,
+                 SIDX_KD_LEAF);
+        return SIDX_ERR_INVALID_ARG;
+    }
+    const float lo = axis_of(cell.min, sp.axis), hi = axis_of(cell.max, sp.axis);
+    if (!(sp.pos > lo && sp.pos < hi)) {
+        snprintf(g->msg, sizeof g->msg, "entry %u: split %c = %g is not inside its cell (%g, %g)", i, "xyz"[sp.axis],
+                 (double)sp.pos, (double)lo, (double)hi);
+        return SIDX_ERR_INVALID_ARG;
+    }
+    if (depth + 1u > KD_MAX_DEPTH) {
+        snprintf(g->msg, sizeof g->msg, "entry %u: deeper than %u levels (the traversal stack)", i, KD_MAX_DEPTH);
+        return SIDX_ERR_LIMIT;
+    }
+    best->axis = sp.axis;
+    best->pos = sp.pos;
+    return SIDX_OK;
+}
+
 static sidx_status refs_node(kd_builder *b, uint32_t idx, uint32_t parent, uint32_t depth, sidx_aabb cell,
                              kd_ref *refs, uint32_t n, uint32_t bad)
 {
@@ -640,7 +689,10 @@ static sidx_status refs_node(kd_builder *b, uint32_t idx, uint32_t parent, uint3
     kd_ref *lr = NULL, *rr = NULL;
     uint32_t nl = 0, nr = 0;
 
-    if (n == 0) reason = SIDX_LEAF_EMPTY;
+    if (b->given) {
+        s = given_choice(b->given, idx, depth, cell, n, &reason, &best);
+        if (s != SIDX_OK) goto done;
+    } else if (n == 0) reason = SIDX_LEAF_EMPTY;
     else if (n <= b->leaf_size) reason = SIDX_LEAF_FEW_PRIMS;
     else if (depth >= b->max_depth) reason = SIDX_LEAF_MAX_DEPTH;
     else if (b->variant == KD_VARIANT_BINNED) {
@@ -681,13 +733,13 @@ static sidx_status refs_node(kd_builder *b, uint32_t idx, uint32_t parent, uint3
             nl += lo < p || hi <= p; /* a flat box in the plane goes left */
             nr += hi > p;
         }
-        if (b->variant >= KD_VARIANT_MEDIAN) {
+        if (b->variant >= KD_VARIANT_MEDIAN) { /* intuitive or given: no sweep priced it */
             const float area = sidx_aabb_area(cell);
             best.cost = area > 0.0f ? sah_cost(b, cell, 1.0f / area, k, p, nl, nr) : 0.0f;
             SIDX_EMIT(1, b->hook, SIDX_EV_BUILD_CANDIDATE, e_.structure = b->name; e_.node = idx;
                       e_.axis = (int32_t)k; e_.pos = p; e_.cost = best.cost; e_.count = nl; e_.aux = nr);
-            /* a plane that separates nothing only duplicates: stop */
-            if (nl == n && nr == n) reason = SIDX_LEAF_NO_SPLIT;
+            /* a plane that separates nothing only duplicates: stop (a given tree is kept as given) */
+            if (nl == n && nr == n && !b->given) reason = SIDX_LEAF_NO_SPLIT;
         }
     }
 
@@ -819,7 +871,7 @@ sidx_status sidx__kd_make_blocks(const sidx_accel *a, kd_tree *kd, const sidx_me
     return SIDX_OK;
 }
 
-sidx_status sidx__kd_build(sidx_accel *a, sidx_error *err)
+static sidx_status kd_build(sidx_accel *a, kd_given *given, sidx_error *err)
 {
     const sidx_mesh *m = a->mesh;
     const uint32_t n = m->num_triangles;
@@ -829,6 +881,9 @@ sidx_status sidx__kd_build(sidx_accel *a, sidx_error *err)
                           n);
     const sidx_aabb root = sidx_mesh_bounds(m);
     SIDX_EMIT(1, a->opt.hook, SIDX_EV_BUILD_BEGIN, e_.structure = a->name; e_.count = n; e_.bounds = root);
+    if (given)
+        SIDX_EMIT(1, a->opt.hook, SIDX_EV_NOTE, e_.structure = a->name;
+                  e_.text = "kdtree: the splits are given (sidx_kdtree_build_from_splits), no cost chose them");
 
     kd_tree *kd = sidx__calloc(a, 1, sizeof *kd);
     if (!kd) return sidx__fail(err, SIDX_ERR_NOMEM, "%s: out of memory", a->name);
@@ -850,6 +905,7 @@ sidx_status sidx__kd_build(sidx_accel *a, sidx_error *err)
     b.name = a->name;
     b.tris = tris;
     b.variant = a->variant;
+    b.given = given;
     /* The defaults and why: kdtree_internal.h. */
     b.c_trav = a->opt.c_trav > 0.0f ? a->opt.c_trav : KD_DEFAULT_C_TRAV;
     b.c_tri = a->opt.c_tri > 0.0f ? a->opt.c_tri : KD_DEFAULT_C_TRI;
@@ -872,7 +928,7 @@ sidx_status sidx__kd_build(sidx_accel *a, sidx_error *err)
     s = alloc_pair(&b, &child); /* slot 0 = root; slot 1 is reused as the first child */
     if (s == SIDX_OK) {
         b.num_nodes = 1;
-        if (n == 0) {
+        if (n == 0 && !given) {
             uint32_t off = 0;
             s = leaf_reserve(&b, 0, &off);
             if (s == SIDX_OK) leaf_finish(&b, 0, 0, root, 0, 0, SIDX_LEAF_EMPTY);
@@ -886,8 +942,14 @@ sidx_status sidx__kd_build(sidx_accel *a, sidx_error *err)
     sidx__free(a, tris);
     kd->nodes = kd->nodes_mem = b.nodes;
     kd->prims = b.prims;
+    if (s == SIDX_OK && given && given->next != given->count) {
+        snprintf(given->msg, sizeof given->msg, "the tree ends after %u of the list's %u nodes", given->next,
+                 given->count);
+        s = SIDX_ERR_INVALID_ARG;
+    }
     if (s != SIDX_OK) {
         kd_free(a, kd);
+        if (given && given->msg[0]) return sidx__fail(err, s, "%s: given splits: %s", a->name, given->msg);
         if (s == SIDX_ERR_LIMIT)
             return sidx__fail(err, s, "%s: the tree outgrows the 8-byte node encoding (2^30 nodes/references)",
                               a->name);
@@ -913,6 +975,41 @@ sidx_status sidx__kd_build(sidx_accel *a, sidx_error *err)
     a->fills_uv = a->fills_ng = 1; /* from the leaves' triangle copies (kdtree_traverse.c) */
     SIDX_EMIT(1, a->opt.hook, SIDX_EV_BUILD_END, e_.structure = a->name; e_.node = kd->num_nodes;
               e_.count = kd->num_refs; e_.depth = kd->max_depth);
+    return SIDX_OK;
+}
+
+sidx_status sidx__kd_build(sidx_accel *a, sidx_error *err) { return kd_build(a, NULL, err); }
+
+static sidx_status given_build(sidx_accel *a, void *arg, sidx_error *err) { return kd_build(a, arg, err); }
+
+sidx_status sidx_kdtree_build_from_splits(const sidx_mesh *mesh, const sidx_kd_split *splits, uint32_t count,
+                                          const sidx_build_options *opt, sidx_accel **out, sidx_error *err)
+{
+    if (err) { err->status = SIDX_OK; err->message[0] = '\0'; }
+    if (!out) return sidx__fail(err, SIDX_ERR_INVALID_ARG, "sidx_kdtree_build_from_splits: out is NULL");
+    *out = NULL;
+    if (!mesh || !splits || count == 0)
+        return sidx__fail(err, SIDX_ERR_INVALID_ARG, "sidx_kdtree_build_from_splits: no mesh or no splits");
+    for (uint32_t i = 0; i < count; ++i)
+        if (splits[i].label && strlen(splits[i].label) >= SIDX_LABEL_MAX)
+            return sidx__fail(err, SIDX_ERR_INVALID_ARG, "sidx_kdtree_build_from_splits: entry %u: label too long", i);
+    kd_given g;
+    memset(&g, 0, sizeof g);
+    g.splits = splits;
+    g.count = count;
+    g.ids = malloc((size_t)count * sizeof *g.ids);
+    if (!g.ids) return sidx__fail(err, SIDX_ERR_NOMEM, "sidx_kdtree_build_from_splits: out of memory");
+    sidx_accel *a = NULL;
+    sidx_status s = sidx__accel_build_with("kdtree", &sidx__kdtree_vtable, KD_VARIANT_GIVEN, mesh, opt, given_build,
+                                           &g, &a, err);
+    for (uint32_t i = 0; s == SIDX_OK && i < count; ++i)
+        if (splits[i].label && splits[i].label[0]) s = sidx_accel_set_node_label(a, g.ids[i], splits[i].label, err);
+    free(g.ids);
+    if (s != SIDX_OK) {
+        sidx_accel_destroy(a);
+        return s;
+    }
+    *out = a;
     return SIDX_OK;
 }
 

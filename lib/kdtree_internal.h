@@ -129,7 +129,8 @@ enum {
     KD_VARIANT_SAH = 0,     /* "kdtree": exact SAH, Wald & Havran 2006 event sweep */
     KD_VARIANT_BINNED = 1,  /* "kdtree-binned": binned SAH */
     KD_VARIANT_MEDIAN = 2,  /* "kdtree-median": largest extent, median of geometry */
-    KD_VARIANT_MIDDLE = 3   /* "kdtree-middle": largest extent, middle of the cell */
+    KD_VARIANT_MIDDLE = 3,  /* "kdtree-middle": largest extent, middle of the cell */
+    KD_VARIANT_GIVEN = 4    /* sidx_kdtree_build_from_splits: the caller's splits (named "kdtree") */
 };
 
 /* Defaults.  The SAH's C_trav : C_tri is the cost of a kd step against a

@@ -580,6 +580,71 @@ static void make_flat2d(builder *b, unsigned count)
     }
 }
 
+/* ---- kd-slide -------------------------------------------------------------------------------- */
+
+/* Deck 000, "kD-Tree Example (1)-(7)" and "kD-Tree Traversal (1)-(11)":
+ * eight 2D triangles in the xy plane, seen from +z, placed so that the
+ * slide's tree (kd_slide_tree below) holds them as the figure does and
+ * the ray (0, 4.2, 0) + t·(1, 0.15, 0) (t = x) walks it as the slide's
+ * table says: A, B, L2, C, D, L4 (where it tests △ and ▽ and finds △
+ * beyond L4's cell: "CANNOT terminate"), L5, L3.
+ *
+ *   y 7.5 +------------+--------------+-----------+
+ *         | L2  t2  t3 | L5     t6    |           |
+ *     5   |            +--------------+    L3     |
+ *     4   +------------+ L4           |  △ (hit)  |
+ *         | L1  t0  t1 |   ▽    △     |    t7     |
+ *   y 0.5 +------------+--------------+-----------+
+ *        x 1        A: x = 4      C: x = 7.5     9.5
+ *   (B: y = 4 on the left of A, D: y = 5 between A and C; △ reaches
+ *   over C's plane into L3, where the ray meets it.)
+ *
+ * L1 and L2 hold two triangles each so that L4's references start a
+ * block of four (the leaf layout, kdtree_internal.h): a leaf's SSE pass
+ * also tests its block's neighbouring lanes, and △ in a block of L2
+ * would be found there, before the slide finds it in L4.
+ *
+ * A ray in the plane of a flat triangle never meets it (the test sees an
+ * edge-on triangle), and extruding each one into a prism makes 8
+ * triangles of every shape on the slide.  So each slide triangle is one
+ * triangle tilted about the vertical line through its centroid: vertex z
+ * = 0.05·(x − c_x) / max|x − c_x|.  Seen from +z it is the slide's
+ * triangle, and a ray in the plane z = 0 meets it where it crosses the
+ * line x = c_x; the counts a student reads (8 triangles, 2 tests in L4)
+ * are the figure's. */
+static const float kd_slide_tris[8][6] = {
+    {1.0f, 1.0f, 3.0f, 1.0f, 2.0f, 3.0f},   /* t0, in L1 */
+    {3.2f, 0.8f, 3.8f, 0.8f, 3.5f, 1.6f},   /* t1, in L1 */
+    {1.0f, 6.0f, 3.0f, 6.0f, 2.0f, 7.5f},   /* t2, in L2: above the ray */
+    {3.0f, 5.0f, 3.8f, 5.0f, 3.4f, 5.8f},   /* t3, in L2: above the ray */
+    {6.5f, 3.5f, 9.5f, 3.5f, 9.0f, 6.5f},   /* △, in L4 and L3: the ray meets it in L3 */
+    {4.5f, 3.0f, 6.5f, 3.0f, 5.5f, 1.0f},   /* ▽, in L4: below the ray */
+    {5.0f, 6.5f, 6.5f, 6.5f, 5.75f, 7.5f},  /* t6, in L5: above the ray */
+    {8.0f, 0.5f, 9.5f, 0.5f, 8.75f, 2.0f},  /* t7, in L3: below the ray */
+};
+
+static void make_kd_slide(builder *b)
+{
+    for (int i = 0; i < 8; ++i) {
+        const float *t = kd_slide_tris[i];
+        const float cx = (t[0] + t[2] + t[4]) / 3.0f;
+        const float s = fmaxf(fabsf(t[0] - cx), fmaxf(fabsf(t[2] - cx), fabsf(t[4] - cx)));
+        uint32_t v[3];
+        for (int k = 0; k < 3; ++k) v[k] = vtx(b, t[2 * k], t[2 * k + 1], 0.05f * (t[2 * k] - cx) / s);
+        tri(b, v[0], v[1], v[2]);
+    }
+}
+
+/* The slide's tree, depth first: A splits x (left B, right C), B splits y
+ * (L1 below, L2 above), C splits x (D, L3), D splits y (L4 below, L5
+ * above).  The SAH would not cut eight triangles this way (the lesson says
+ * what it makes of them), so the tree is given (sidx_kdtree_build_from_splits). */
+static const sidx_kd_split kd_slide_tree[] = {
+    {0, 4.0f, "A"},         {1, 4.0f, "B"},         {SIDX_KD_LEAF, 0.0f, "L1"}, {SIDX_KD_LEAF, 0.0f, "L2"},
+    {0, 7.5f, "C"},         {1, 5.0f, "D"},         {SIDX_KD_LEAF, 0.0f, "L4"}, {SIDX_KD_LEAF, 0.0f, "L5"},
+    {SIDX_KD_LEAF, 0.0f, "L3"},
+};
+
 /* ---- grid ---------------------------------------------------------------------------------- */
 
 /* detail x detail quads on y = 0, x and z in [-1, 1], normal +y. */
@@ -607,13 +672,14 @@ typedef struct {
 static const scene_info scenes[] = {
     {"icosphere", 3, 0, 10},    {"teapot", 40, 8, 1024},   {"stadium", 128, 8, 65536}, {"soup", 2000, 1, 1u << 26},
     {"menger", 2, 0, 5},        {"flat2d", 16, 1, 100000}, {"cornell", 1, 0, UINT32_MAX},       {"grid", 64, 1, 4096},
+    {"kd-slide", 1, 0, UINT32_MAX},
 };
 #define NUM_SCENES (sizeof scenes / sizeof scenes[0])
 
 const char *const *sidx_scene_names(void)
 {
-    static const char *const names[NUM_SCENES + 1] = {"icosphere", "teapot", "stadium", "soup",
-                                                      "menger",    "flat2d", "cornell", "grid", NULL};
+    static const char *const names[NUM_SCENES + 1] = {"icosphere", "teapot",  "stadium", "soup",     "menger",
+                                                      "flat2d",    "cornell", "grid",    "kd-slide", NULL};
     return names;
 }
 
@@ -625,7 +691,7 @@ sidx_status sidx_scene_make(const char *name, uint32_t detail, sidx_mesh *out, s
         if (strcmp(scenes[i].name, name) == 0) si = &scenes[i];
     if (!si)
         return sidx__fail(err, SIDX_ERR_INVALID_ARG,
-                          "no built-in scene '%s' (try icosphere, teapot, stadium, soup, menger, flat2d, cornell, grid)",
+                          "no built-in scene '%s' (try icosphere, teapot, stadium, soup, menger, flat2d, cornell, grid, kd-slide)",
                           name);
     const unsigned d = detail ? detail : si->def;
     if (d < si->min || d > si->max)
@@ -640,6 +706,7 @@ sidx_status sidx_scene_make(const char *name, uint32_t detail, sidx_mesh *out, s
     case 4: make_menger(&b, d); break;
     case 5: make_flat2d(&b, d); break;
     case 6: make_cornell(&b); break;
+    case 8: make_kd_slide(&b); break;
     default: make_grid(&b, d); break;
     }
     return builder_finish(&b, name, out, err);
@@ -667,7 +734,7 @@ sidx_status sidx_scene_open(const char *spec, sidx_mesh *out, sidx_error *err)
             return sidx__fail(err, SIDX_ERR_IO, "%s: %s", spec, strerror(open_errno));
         return sidx__fail(err, SIDX_ERR_INVALID_ARG,
                           "'%s' is neither a file nor a built-in scene (icosphere, teapot, stadium, soup, menger, "
-                          "flat2d, cornell, grid; optionally name:detail)",
+                          "flat2d, cornell, grid, kd-slide; optionally name:detail)",
                           spec);
     }
     memcpy(name, spec, n);
@@ -689,4 +756,23 @@ sidx_status sidx_scene_open(const char *spec, sidx_mesh *out, sidx_error *err)
         detail = (uint32_t)v;
     }
     return sidx_scene_make(name, detail, out, err);
+}
+
+/* Is `spec` the built-in scene `name` ("name" or "name:detail", no such file)? */
+static int spec_is_scene(const char *spec, const char *name)
+{
+    const size_t n = strlen(name);
+    if (!spec || strncmp(spec, name, n) != 0 || (spec[n] != '\0' && spec[n] != ':')) return 0;
+    FILE *f = fopen(spec, "rb"); /* sidx_scene_open prefers a file of that name */
+    if (f) fclose(f);
+    return f == NULL;
+}
+
+sidx_status sidx_scene_accel_build(const char *scene, const char *name, const sidx_mesh *mesh,
+                                   const sidx_build_options *opt, sidx_accel **out, sidx_error *err)
+{
+    if (name && !strcmp(name, "kdtree") && spec_is_scene(scene, "kd-slide"))
+        return sidx_kdtree_build_from_splits(mesh, kd_slide_tree, sizeof kd_slide_tree / sizeof kd_slide_tree[0],
+                                             opt, out, err);
+    return sidx_accel_build(name, mesh, opt, out, err);
 }

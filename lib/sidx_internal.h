@@ -74,18 +74,34 @@ struct sidx_accel {
     const sidx_accel_vtable *vt;
     const char *name;          /* registered name (static) */
     int variant;               /* registry entry's variant (builder choice etc.) */
-    const sidx_mesh *mesh;
-    sidx_build_options opt;    /* copy; opt.hook is only valid during build */
-    sidx_allocator alloc;      /* resolved allocator (never NULL fns) */
-    void *impl;
     /* 1 when vt->intersect also sets hit->u, hit->v (when SIDX_QUERY_UV asks)
      * / hit->ng (when SIDX_QUERY_NORMAL asks) itself — u, v kept from its
      * own triangle test, ng from its own copy of the triangle — so the core
      * skips its re-test and the index and vertex look-ups in the mesh,
      * which a diffuse ray mostly misses in cache.  Either way the values
-     * are bit-identical to finish_hit's (accel.c): same test, same floats. */
-    int fills_uv, fills_ng;
+     * are bit-identical to finish_hit's (accel.c): same test, same floats.
+     * Bytes beside `variant`, in what would be padding, so that the labels
+     * below do not make the structure bigger. */
+    unsigned char fills_uv, fills_ng;
+    const sidx_mesh *mesh;
+    sidx_build_options opt;    /* copy; opt.hook is only valid during build */
+    sidx_allocator alloc;      /* resolved allocator (never NULL fns) */
+    void *impl;
+    /* node labels (sidx_accel_set_node_label, labels.c); NULL until one
+     * is set.  Display only: no walk reads them */
+    struct sidx__labels *labels;
 };
+
+/* Builds an accelerator the registry does not name the usual way: the
+ * options are checked and the structure allocated as for
+ * sidx_accel_build, then build(a, arg, err) fills a->impl.  The kd-tree
+ * built from given splits (kdtree_build.c) goes through here. */
+typedef sidx_status (*sidx__build_fn)(sidx_accel *a, void *arg, sidx_error *err);
+sidx_status sidx__accel_build_with(const char *name, const sidx_accel_vtable *vt, int variant, const sidx_mesh *mesh,
+                                   const sidx_build_options *opt, sidx__build_fn build, void *arg, sidx_accel **out,
+                                   sidx_error *err);
+/* Frees the labels (sidx_accel_destroy). */
+void sidx__labels_free(sidx_accel *a);
 
 /* Registry entries live in accel_registry.def as
  *   SIDX_ACCEL("name", vtable_symbol, variant, "one-line description")

@@ -28,7 +28,7 @@ needs() {
     07_*|21_*) echo "grid grid-nomailbox" ;;
     08_*) echo "grid grid2 grid-irregular kdtree" ;;
     09_*|22_*) echo "kdtree kdtree-median kdtree-middle" ;;
-    10_*|11_*) echo "kdtree" ;;
+    10_*|11_*|25_*) echo "kdtree" ;;
     12_*) echo "octree quadtree bsp" ;;
     13_*) echo "bvh kdtree grid octree" ;;
     14_*) echo "bvh bvh4 bvh8" ;;
@@ -78,6 +78,7 @@ expect() {
                         sharing_loses_skips=1 sharing_moves_lines=1" ;;
     22_kd_round_robin) echo "same_hits=1 round_robin_scale_invariant=1 largest_extent_cheaper=1
                              gap_grows_when_stretched=1" ;;
+    25_kd_slide_example) echo "slide_tree=1 rows_match_slide=1 cannot_terminate_rows=2 ends_in_L3=1 same_hit=1" ;;
     *) echo "" ;;
     esac
 }

@@ -1246,6 +1246,121 @@ static void test_empty_mesh(void **state)
     }
 }
 
+/* sidx_kdtree_build_from_splits: the kd-slide tree node by node, its
+ * labels, leaves with reason "given", and the lists it refuses. */
+static void build_events_leaf_reasons(const sidx_event *ev, void *user)
+{
+    if (ev->type == SIDX_EV_BUILD_LEAF) {
+        int *given = user;
+        if (ev->reason == SIDX_LEAF_GIVEN) ++*given;
+    }
+}
+
+static void test_build_from_splits(void **state)
+{
+    (void)state;
+    sidx_mesh m;
+    sidx_error err;
+    assert_int_equal(sidx_scene_make("kd-slide", 0, &m, &err), SIDX_OK);
+    assert_int_equal(m.num_triangles, 8);
+    int given = 0;
+    sidx_hook h = {build_events_leaf_reasons, &given, 0};
+    sidx_build_options bo;
+    memset(&bo, 0, sizeof bo);
+    bo.hook = &h;
+    sidx_accel *a = NULL;
+    assert_int_equal(sidx_scene_accel_build("kd-slide", "kdtree", &m, &bo, &a, &err), SIDX_OK);
+    assert_string_equal(sidx_accel_name(a), "kdtree");
+    assert_int_equal(given, 5);
+    const sidx_kd_node *nodes;
+    uint32_t count;
+    assert_int_equal(sidx_kdtree_nodes(a, &nodes, &count, &err), SIDX_OK);
+    assert_int_equal(count, 9);
+    /* node ids: depth first with sibling pairs (A 0; B, C 1, 2; L1, L2 3, 4; D, L3 5, 6; L4, L5 7, 8) */
+    static const char *const names[9] = {"A", "B", "C", "L1", "L2", "D", "L3", "L4", "L5"};
+    for (uint32_t i = 0; i < 9; ++i) assert_string_equal(sidx_accel_node_label(a, i), names[i]);
+    assert_int_equal(nodes[0].bits & 3u, 0);
+    assert_true(nodes[0].u.split == 4.0f);
+    assert_int_equal(nodes[5].bits & 3u, 1);
+    assert_true(nodes[5].u.split == 5.0f);
+    /* the same hit as brute force on the slide's ray and a few others */
+    sidx_accel *b = NULL;
+    assert_int_equal(sidx_accel_build("brute", &m, NULL, &b, &err), SIDX_OK);
+    for (int k = 0; k < 40; ++k) {
+        sidx_ray r;
+        sidx_ray_init(&r, sidx_v3(0.0f, 0.5f + 0.18f * (float)k, 0.0f), sidx_v3(1.0f, 0.15f - 0.01f * (float)k, 0.0f),
+                      0.0f, INFINITY);
+        sidx_hit ha, hb;
+        sidx_accel_intersect(a, &r, NULL, &ha);
+        sidx_accel_intersect(b, &r, NULL, &hb);
+        assert_int_equal(ha.prim, hb.prim);
+        if (ha.prim != SIDX_NO_HIT) assert_true(ha.t == hb.t);
+    }
+    sidx_accel_destroy(b);
+    sidx_accel_destroy(a);
+    /* any other structure, or another scene, is sidx_accel_build's */
+    assert_int_equal(sidx_scene_accel_build("kd-slide", "kdtree-binned", &m, NULL, &a, &err), SIDX_OK);
+    assert_null(sidx_accel_node_label(a, 0));
+    sidx_accel_destroy(a);
+
+    /* refused lists */
+    const sidx_kd_split leaf = {SIDX_KD_LEAF, 0.0f, NULL};
+    const sidx_kd_split short_list[] = {{0, 4.0f, "A"}, leaf};
+    const sidx_kd_split long_list[] = {leaf, leaf};
+    const sidx_kd_split bad_axis[] = {{5, 4.0f, NULL}, leaf, leaf};
+    const sidx_kd_split outside[] = {{0, 12.0f, NULL}, leaf, leaf};
+    const sidx_kd_split long_label[] = {{SIDX_KD_LEAF, 0.0f, "a label far longer than thirty-one bytes"}};
+    const struct { const sidx_kd_split *s; uint32_t n; } bad[] = {
+        {short_list, 2}, {long_list, 2}, {bad_axis, 3}, {outside, 3}, {long_label, 1}, {short_list, 0},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
+        a = (sidx_accel *)&m; /* must come back NULL */
+        assert_int_equal(sidx_kdtree_build_from_splits(&m, bad[i].s, bad[i].n, NULL, &a, &err), SIDX_ERR_INVALID_ARG);
+        assert_null(a);
+        assert_true(err.message[0] != '\0');
+    }
+    /* one leaf is a whole tree */
+    assert_int_equal(sidx_kdtree_build_from_splits(&m, &leaf, 1, NULL, &a, &err), SIDX_OK);
+    sidx_accel_destroy(a);
+    sidx_mesh_free(&m);
+}
+
+/* sidx_accel_set_node_label / sidx_accel_node_label: copies, removal, bad ids. */
+static void test_node_labels(void **state)
+{
+    (void)state;
+    sidx_mesh m;
+    sidx_error err;
+    assert_int_equal(sidx_scene_make("icosphere", 1, &m, &err), SIDX_OK);
+    sidx_accel *a = NULL;
+    assert_int_equal(sidx_accel_build("kdtree", &m, NULL, &a, &err), SIDX_OK);
+    sidx_accel_stats st;
+    sidx_accel_stats_get(a, &st);
+    assert_true(st.nodes > 3);
+    char text[8] = "first";
+    assert_int_equal(sidx_accel_set_node_label(a, 2, text, &err), SIDX_OK);
+    assert_int_equal(sidx_accel_set_node_label(a, 0, "root", &err), SIDX_OK);
+    assert_int_equal(sidx_accel_set_node_label(a, st.nodes - 1, "last", &err), SIDX_OK);
+    text[0] = 'F'; /* the structure keeps its own copy */
+    assert_string_equal(sidx_accel_node_label(a, 2), "first");
+    assert_string_equal(sidx_accel_node_label(a, 0), "root");
+    assert_string_equal(sidx_accel_node_label(a, st.nodes - 1), "last");
+    assert_null(sidx_accel_node_label(a, 1));
+    assert_int_equal(sidx_accel_set_node_label(a, 2, "again", &err), SIDX_OK);
+    assert_string_equal(sidx_accel_node_label(a, 2), "again");
+    assert_int_equal(sidx_accel_set_node_label(a, 2, NULL, &err), SIDX_OK);
+    assert_null(sidx_accel_node_label(a, 2));
+    assert_string_equal(sidx_accel_node_label(a, 0), "root");
+    assert_int_equal(sidx_accel_set_node_label(a, st.nodes, "out", &err), SIDX_ERR_INVALID_ARG);
+    assert_int_equal(sidx_accel_set_node_label(a, 1, "a label far longer than thirty-one bytes", &err),
+                     SIDX_ERR_INVALID_ARG);
+    assert_null(sidx_accel_node_label(a, 1));
+    assert_int_equal(sidx_accel_set_node_label(NULL, 0, "x", &err), SIDX_ERR_INVALID_ARG);
+    assert_null(sidx_accel_node_label(NULL, 0));
+    sidx_accel_destroy(a);
+    sidx_mesh_free(&m);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1265,6 +1380,8 @@ int main(void)
         cmocka_unit_test(test_slide_walk_equals_fast_walk),
         cmocka_unit_test(test_alloc_failures),
         cmocka_unit_test(test_empty_mesh),
+        cmocka_unit_test(test_build_from_splits),
+        cmocka_unit_test(test_node_labels),
     };
     /* KD_TEST=pattern runs only the matching tests (cmocka's filter) */
     if (getenv("KD_TEST")) cmocka_set_test_filter(getenv("KD_TEST"));

@@ -797,7 +797,7 @@ static void scenes_build_and_validate(void **state)
         sidx_mesh_free(&a);
         sidx_mesh_free(&b);
     }
-    assert_int_equal(count, 8);
+    assert_int_equal(count, 9);
 }
 
 static uint32_t tri_count(const char *name, uint32_t detail)
@@ -816,6 +816,7 @@ static void scene_counts(void **state)
 {
     (void)state;
     assert_int_equal(tri_count("icosphere", 0), 1280);
+    assert_int_equal(tri_count("kd-slide", 0), 8); /* deck 000 "kD-Tree Example": one triangle per shape */
     assert_int_equal(tri_count("icosphere", 3), 1280);
     assert_int_equal(tri_count("icosphere", 1), 80);
     assert_int_equal(tri_count("icosphere", 5), 20480);

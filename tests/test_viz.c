@@ -1311,6 +1311,50 @@ static void step_panel_step_break(void **state)
     }
 }
 
+/* kd-slide with kdtree is deck 000's tree, and the programs name its nodes
+ * as the slide does ("kD-Tree Traversal (1)-(11)": Current L4, Stack L5 L3). */
+static void kd_slide_programs_show_labels(void **state)
+{
+    (void)state;
+    if (!sidx_accel_is_registered("kdtree")) skip();
+    char cmd[1024];
+    snprintf(cmd, sizeof cmd, "%s/sidx-step --accel kdtree kd-slide --ray 0,4.2,0,1,0.15,0 --panel </dev/null",
+             bin_dir);
+    char *out = run_capture(cmd);
+    assert_non_null(strstr(out, "  node 0 enter  depth 0  t=[1, 9.5]  [A]"));
+    assert_non_null(strstr(out, "| B [1, 4]             | C [4, 9.5]\n"));
+    assert_non_null(strstr(out, "| L4 leaf [4, 5.33333] | L5 [5.33333, 7.5]  L3 [7.5, 9.5]\n"));
+    assert_non_null(strstr(out, "terminate: hit_in_cell  visited 8  best t=8.33333  [L3]"));
+    free(out);
+    /* the build: the note, and the leaves' reason */
+    snprintf(cmd, sizeof cmd, "%s/sidx-step --accel kdtree kd-slide --build </dev/null", bin_dir);
+    out = run_capture(cmd);
+    assert_non_null(strstr(out, "note: kdtree: the splits are given"));
+    assert_non_null(strstr(out, "leaf node 7  prims 2: 4 5  cost 2  (given)  [L4]"));
+    free(out);
+#if SIDX_HAVE_GRAPHVIZ
+    char path[128];
+    tmp_path(path, sizeof path, "kdslide.dot");
+    snprintf(cmd, sizeof cmd, "%s/sidx-dot --accel kdtree kd-slide --ray 0,4.2,0,1,0.15,0 -o %s >/dev/null", bin_dir,
+             path);
+    assert_int_equal(system(cmd), 0);
+    char *dot = read_text(path);
+    assert_non_null(dot);
+    assert_non_null(strstr(dot, "A (node 0)"));
+    assert_non_null(strstr(dot, "L4 (leaf 7)"));
+    assert_non_null(strstr(dot, "L3 (leaf 6)"));
+    free(dot);
+    remove(path);
+#endif
+#if SIDX_HAVE_SDL
+    view_state v;
+    sidx_error err;
+    assert_int_equal(view_open(&v, "kd-slide", "kdtree", &err), SIDX_OK);
+    assert_string_equal(sidx_accel_node_label(v.accel, 7), "L4");
+    view_close(&v);
+#endif
+}
+
 int main(int argc, char **argv)
 {
     (void)argc;
@@ -1340,6 +1384,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(step_matches_expected),
         cmocka_unit_test(build_knobs_fill_options),
         cmocka_unit_test(step_panel_step_break),
+        cmocka_unit_test(kd_slide_programs_show_labels),
     };
     return cmocka_run_group_tests_name("viz", tests, NULL, NULL);
 }

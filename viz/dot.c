@@ -85,14 +85,18 @@ static double snap0(float v, float scale)
     return fabsf(v) <= 8.0f * FLT_EPSILON * scale ? 0.0 : (double)v;
 }
 
-static void node_label(const sidx_viz_tree *t, const sidx_viz_node *nd, int with_ray, float scale, strbuf *b)
+static void node_label(const sidx_viz_tree *t, const sidx_viz_node *nd, int with_ray, float scale,
+                       const sidx_accel *labels, strbuf *b)
 {
     if (nd->id == SIDX_VIZ_VIRTUAL_ROOT && t->virtual_root) {
         sb_add(b, "%s\\n%u top-level cells\\n%u prims", t->structure, nd->child_count, nd->count);
         return;
     }
     if (with_ray && nd->visit_order) sb_add(b, "#%u  ", nd->visit_order);
-    if (nd->cell[0] >= 0)
+    const char *name = sidx_accel_node_label(labels, nd->id); /* the slide's name first: "L4 (leaf 7)" */
+    if (name && nd->cell[0] < 0)
+        sb_add(b, "%s (%s %u)", name, nd->is_leaf ? "leaf" : "node", nd->id);
+    else if (nd->cell[0] >= 0)
         sb_add(b, "cell (%d,%d,%d)", (int)nd->cell[0], (int)nd->cell[1], (int)nd->cell[2]);
     else
         sb_add(b, "%s %u", nd->is_leaf ? "leaf" : "node", nd->id);
@@ -149,6 +153,7 @@ typedef struct dot_ctx {
     uint32_t cut_level; /* levels below the drawn root after which subtrees are summarised */
     uint32_t summaries;
     float scale;        /* the scene's extent: split values within a few ulps of it print as 0 */
+    const sidx_accel *labels; /* node labels, or NULL */
 } dot_ctx;
 
 /* Wide trees (grid2's hundreds of top-level cells, the octree's eight children per node) drawn
@@ -204,7 +209,7 @@ static Agnode_t *add_node(dot_ctx *c, uint32_t i)
     Agnode_t *n = agnode(c->g, name, 1);
     if (!n) return NULL;
     strbuf lb = {{0}, 0};
-    node_label(c->t, nd, c->with_ray, c->scale, &lb);
+    node_label(c->t, nd, c->with_ray, c->scale, c->labels, &lb);
     set(n, "label", lb.s);
     set(n, "fillcolor", nd->is_leaf ? "#e3f1d8" : "#dce7f5");
     if (c->with_ray) {
@@ -385,6 +390,7 @@ sidx_status sidx_dot_write_events(const sidx_event *build, size_t nbuild, const 
     memset(&c, 0, sizeof c);
     c.t = &t;
     c.with_ray = with_ray;
+    c.labels = o.labels;
     c.cut_level = o.max_depth ? o.max_depth : auto_cut_level(&t, SIDX_DOT_DEFAULT_DEPTH);
     {
         const sidx_aabb rb = t.nodes[t.root].bounds;
@@ -473,7 +479,7 @@ sidx_status sidx_dot_write(const sidx_mesh *mesh, const char *accel_name, const 
     if (opt && opt->build) bo = *opt->build;
     bo.hook = &bh;
     sidx_accel *a = NULL;
-    sidx_status st = sidx_accel_build(accel_name, mesh, &bo, &a, err);
+    sidx_status st = sidx_scene_accel_build(opt ? opt->scene : NULL, accel_name, mesh, &bo, &a, err);
     if (st == SIDX_OK && brec.overflow) st = fail(err, SIDX_ERR_NOMEM, "out of memory recording the build");
     if (st == SIDX_OK && opt && opt->has_ray) {
         sidx_hook th = sidx_recorder_hook(&trec);
@@ -486,8 +492,12 @@ sidx_status sidx_dot_write(const sidx_mesh *mesh, const char *accel_name, const 
         sidx_accel_intersect(a, &ray, &q, &hit);
         if (trec.overflow) st = fail(err, SIDX_ERR_NOMEM, "out of memory recording the traversal");
     }
+    sidx_dot_options o;
+    memset(&o, 0, sizeof o);
+    if (opt) o = *opt;
+    o.labels = a;
     if (st == SIDX_OK)
-        st = sidx_dot_write_events(brec.events, brec.count, opt && opt->has_ray ? trec.events : NULL, trec.count, opt,
+        st = sidx_dot_write_events(brec.events, brec.count, opt && opt->has_ray ? trec.events : NULL, trec.count, &o,
                                    path, err);
     sidx_accel_destroy(a);
     sidx_recorder_free(&brec);

@@ -96,5 +96,14 @@ if echo "$names" | grep -qx bvh; then
     echo "  $OUT/view3d-bvh-teapot-level1.png"
 fi
 # ---- end of the lessons' pictures ----
+# deck 000 "kD-Tree Example" / "Traversal (1)-(11)": the slide's tree and ray, its nodes named
+# as the slide names them (lesson 25)
+if echo "$names" | grep -qx kdtree; then
+  KD_SLIDE_RAY=0,4.2,0,1,0.15,0
+  "$BIN/sidx-dot" --accel kdtree kd-slide --ray "$KD_SLIDE_RAY" -o "$OUT/tree-kdtree-kd-slide.svg" >/dev/null &&
+    echo "  $OUT/tree-kdtree-kd-slide.svg"
+  "$BIN/sidx-view" --accel kdtree --scene kd-slide --ray "$KD_SLIDE_RAY" --step 14 --size 1100x700 \
+    --screenshot "$OUT/view2d-kdtree-kd-slide.png" >/dev/null && echo "  $OUT/view2d-kdtree-kd-slide.png"
+fi
 rm -f "$OUT/.err"
 exit $failed

@@ -17,7 +17,8 @@ static void usage(FILE *f)
             "Builds structure NAME over SCENE (a .obj/.ply file or a built-in scene such as\n"
             "teapot, flat2d, icosphere:2), rebuilds its tree from the build events and writes it\n"
             "with Graphviz.  The format follows OUT's extension: .dot/.gv (text, no layout),\n"
-            ".svg, .png, .pdf; OUT '-' writes dot text to stdout.\n"
+            ".svg, .png, .pdf; OUT '-' writes dot text to stdout.  kd-slide with --accel kdtree\n"
+            "is the tree of deck 000 \"kD-Tree Example\", its nodes named A-D, L1-L5 as there.\n"
             "\n"
             "  --accel NAME     structure (see --list)\n"
             "  --depth K        cut the tree K levels below the root; each cut subtree becomes\n"
@@ -97,6 +98,7 @@ int main(int argc, char **argv)
         return 2;
     }
     opt.build = &bo;
+    opt.scene = scene; /* kd-slide with kdtree: the slide's tree, its nodes named as the slide names them */
 
     sidx_mesh mesh;
     sidx_error err;

@@ -46,7 +46,9 @@ static void usage(FILE *f)
             "  l / L                next / previous leaf entered\n"
             "  a                    run to the end     q                 quit\n"
             "with a Current / Stack column for trees: the node visited and the stack of\n"
-            "subtrees still to traverse, top first, each with its t range.\n"
+            "subtrees still to traverse, top first, each with its t range.  Labelled nodes go by\n"
+            "their label: kd-slide with --accel kdtree is deck 000's \"kD-Tree Traversal\" (A, B,\n"
+            "L2, ...; try --ray 0,4.2,0,1,0.15,0).\n"
             "\n"
             "  --accel NAME       structure (see --list)\n"
             "  --ray R            the ray: origin ox,oy,oz and direction dx,dy,dz\n"
@@ -85,7 +87,29 @@ typedef struct steps {
     size_t nleaves;
     int json, bounds, panel;
     int width;             /* of the event column beside the panel: the longest traversal line */
+    const sidx_accel *accel; /* its node labels name the nodes (sidx_accel_node_label) */
 } steps;
+
+/* A node as the panel names it: its label (the slide's "A", "L4") or its id. */
+static const char *node_name(const steps *s, uint32_t node, char buf[16])
+{
+    const char *label = sidx_accel_node_label(s->accel, node);
+    if (label) return label;
+    snprintf(buf, 16, "%u", node);
+    return buf;
+}
+
+/* Events whose node id a label names (the lines get "  [label]"). */
+static int names_node(const sidx_event *e)
+{
+    switch (e->type) {
+    case SIDX_EV_BUILD_NODE: case SIDX_EV_BUILD_SPLIT: case SIDX_EV_BUILD_LEAF: case SIDX_EV_NODE_ENTER:
+    case SIDX_EV_BOX_TEST: case SIDX_EV_STACK_PUSH: case SIDX_EV_STACK_POP: case SIDX_EV_TERMINATE:
+        return e->node != UINT32_MAX;
+    default:
+        return 0;
+    }
+}
 
 static int cmp_u32(const void *a, const void *b)
 {
@@ -157,6 +181,11 @@ static char *step_text(const steps *s, size_t i, char *buf, size_t size)
         return out;
     }
     if ((size_t)n >= size) n = (int)size - 1;
+    const char *label = !s->json && names_node(ev) ? sidx_accel_node_label(s->accel, ev->node) : NULL;
+    if (label) {
+        const int k = snprintf(out + n, size - (size_t)n, "  [%s]", label);
+        if (k > 0) n = (size_t)(n + k) < size ? n + k : (int)size - 1;
+    }
     if (!s->json && s->bounds &&
         (ev->type == SIDX_EV_NODE_ENTER || ev->type == SIDX_EV_BUILD_NODE || ev->type == SIDX_EV_BOX_TEST) &&
         !sidx_aabb_is_empty(ev->bounds))
@@ -232,14 +261,15 @@ static int has_panel(const steps *s)
 
 static void panel_text(const steps *s, const replay *r, char *cur, size_t csize, char *stk, size_t ssize)
 {
+    char id[16];
     cur[0] = stk[0] = '\0';
     if (r->has_cur)
-        snprintf(cur, csize, "%u%s [%g, %g]", r->cur.node, is_leaf(s, r->cur.node) ? " leaf" : "",
+        snprintf(cur, csize, "%s%s [%g, %g]", node_name(s, r->cur.node, id), is_leaf(s, r->cur.node) ? " leaf" : "",
                  (double)r->cur.t_near, (double)r->cur.t_far);
     size_t off = 0;
     for (size_t k = r->n; k-- > 0 && off < ssize;) {
         const entry *e = &r->stack[k];
-        const int w = snprintf(stk + off, ssize - off, "%s%u [%g, %g]", off ? "  " : "", e->node,
+        const int w = snprintf(stk + off, ssize - off, "%s%s [%g, %g]", off ? "  " : "", node_name(s, e->node, id),
                                (double)e->t_near, (double)e->t_far);
         if (w < 0) break;
         off += (size_t)w;
@@ -842,7 +872,8 @@ int main(int argc, char **argv)
     steps s;
     memset(&s, 0, sizeof s);
     int rc = 0;
-    if (sidx_accel_build(accel, &mesh, &bo, &acc, &err) != SIDX_OK) {
+    /* the scene's own tree where it has one (kd-slide: the slide's, labelled) */
+    if (sidx_scene_accel_build(scene, accel, &mesh, &bo, &acc, &err) != SIDX_OK) {
         fprintf(stderr, "sidx-step: building %s: %s\n", accel, err.message);
         rc = 1;
         goto done;
@@ -881,6 +912,7 @@ int main(int argc, char **argv)
     s.json = json;
     s.bounds = bounds;
     s.panel = panel;
+    s.accel = acc;
     if (s.n == 0) goto done;
     for (size_t i = s.nbuild; i < s.n; ++i) {
         char buf[512], *line = step_text(&s, i, buf, sizeof buf);

@@ -221,8 +221,18 @@ static void tree_summary(const view_state *v, panel *p)
     }
 }
 
+/* " (L4)" for a node the structure labels (sidx_accel_node_label: a slide's names), else "". */
+static const char *node_tag(const view_state *v, uint32_t id, char tag[48])
+{
+    const char *label = sidx_accel_node_label(v->accel, id);
+    tag[0] = '\0';
+    if (label) snprintf(tag, 48, " (%s)", label);
+    return tag;
+}
+
 static void traversal_panel(const view_state *v, panel *p, const view_replay *r)
 {
+    char tag[48];
     if (!v->has_ray) {
         pline(p, PANEL_DIM, "no ray: drag with the mouse to shoot one");
         return;
@@ -238,13 +248,13 @@ static void traversal_panel(const view_state *v, panel *p, const view_replay *r)
     pline(p, PANEL_FG, "entered %u  boxes %u  prims %u  mailbox %u", r->nodes_entered, r->box_tests, r->prim_tests,
           r->mailbox_hits);
     if (r->current_id != SIDX_VIZ_NONE)
-        pline(p, PANEL_FG, "current node %u  t=[%.3g, %.3g]", r->current_id, (double)r->cur_t_near,
-              (double)r->cur_t_far);
+        pline(p, PANEL_FG, "current node %u%s  t=[%.3g, %.3g]", r->current_id, node_tag(v, r->current_id, tag),
+              (double)r->cur_t_near, (double)r->cur_t_far);
     pgap(p);
     pline(p, PANEL_HI, "stack (top first): %d", r->stack_n + r->stack_more);
     for (int i = r->stack_n - 1, shown = 0; i >= 0 && shown < 8; --i, ++shown)
-        pline(p, PANEL_FG, "  node %u  t=[%.3g, %.3g]", r->stack[i].node, (double)r->stack[i].t_near,
-              (double)r->stack[i].t_far);
+        pline(p, PANEL_FG, "  node %u%s  t=[%.3g, %.3g]", r->stack[i].node, node_tag(v, r->stack[i].node, tag),
+              (double)r->stack[i].t_near, (double)r->stack[i].t_far);
     if (r->stack_n > 8) pline(p, PANEL_DIM, "  ... %d more", r->stack_n - 8 + r->stack_more);
     pgap(p);
     pline(p, PANEL_HI, "events");
@@ -293,6 +303,25 @@ static void draw_structure_2d(const view_state *v, viz_canvas *cv, const map2d *
         if (e->type != SIDX_EV_BUILD_NODE) continue;
         uint32_t d = e->depth == UINT32_MAX ? 0 : e->depth;
         box2d(cv, m, e->bounds, viz_depth_color(d, d == 0 ? 200 : 150), 0);
+    }
+}
+
+/* The labels of labelled nodes, as the slide writes them: a leaf's in the
+ * middle of its cell, an inner node's at the top or left end of its split
+ * line; only nodes the build has made by `limit` events. */
+static void labels_2d(const view_state *v, viz_canvas *cv, const map2d *m, size_t limit)
+{
+    if (!v->has_tree || !v->accel) return;
+    for (size_t i = 0; i < v->tree.count; ++i) {
+        const sidx_viz_node *nd = &v->tree.nodes[i];
+        const char *label = sidx_accel_node_label(v->accel, nd->id);
+        if (!label || nd->build_event >= limit || sidx_aabb_is_empty(nd->bounds)) continue;
+        const sidx_aabb b = nd->bounds;
+        float x = 0.5f * (b.min.x + b.max.x), y = 0.5f * (b.min.y + b.max.y);
+        if (nd->has_split && nd->axis == 0) x = nd->pos, y = b.max.y;
+        else if (nd->has_split && nd->axis == 1) x = b.min.x, y = nd->pos;
+        const int sx = (int)mx(m, x) + (nd->has_split ? 4 : -8), sy = (int)my(m, y) + (nd->has_split ? 4 : -8);
+        viz_text(cv, sx, sy, 2, nd->is_leaf ? 0xff206020u : 0xff202080u, label);
     }
 }
 
@@ -425,6 +454,7 @@ static void render_2d(view_state *v, viz_canvas *cv, int build_mode)
             viz_textf(cv, (int)mx(&m, hp.x) + 9, (int)my(&m, hp.y) - 14, 1, 0xff000000u, "t=%.3g", (double)r.best_t);
         }
     }
+    labels_2d(v, cv, &m, limit); /* on top of cells, triangles and the ray */
     viz_textf(cv, 8, 8, 2, 0xff333333u, "%s: %s", build_mode ? "build" : "2D", v->accel_name);
 
     /* panel */

@@ -42,7 +42,8 @@ static sidx_status build(view_state *v, const char *accel, sidx_error *err)
     h.mask = SIDX_EVMASK_BUILD;
     sidx_build_options bo = v->knobs;
     bo.hook = &h;
-    sidx_status s = sidx_accel_build(accel, &v->mesh, &bo, &v->accel, err);
+    /* the scene's own tree where it has one (kd-slide: the slide's, labelled) */
+    sidx_status s = sidx_scene_accel_build(v->scene, accel, &v->mesh, &bo, &v->accel, err);
     if (s != SIDX_OK) return s;
     snprintf(v->accel_name, sizeof v->accel_name, "%s", accel);
     sidx_error terr;

@@ -113,6 +113,36 @@ sidx_status sidx_accel_stats_get(const sidx_accel *a, sidx_accel_stats *s);
 sidx_status sidx_accel_refit(sidx_accel *a, sidx_error *err);
 void sidx_accel_destroy(sidx_accel *a);            /* NULL is fine */
 
+/* ---- node labels -------------------------------------------------------
+ * A built structure's nodes may carry short names, so that a lesson,
+ * sidx-step, sidx-dot and sidx-view can call a node what a slide calls it
+ * ("A", "L4": deck 000, "kD-Tree Example").  Labels are for display only:
+ * no query reads them, traced or not.
+ *
+ * `node` is a node id as the events give it (BUILD_NODE, NODE_ENTER), below
+ * sidx_accel_stats.nodes.  The structure keeps its own copy of `label`
+ * (at most SIDX_LABEL_MAX - 1 bytes), allocated with the build's
+ * allocator and freed by sidx_accel_destroy; NULL or "" removes the label.
+ * Errors: SIDX_ERR_INVALID_ARG (a NULL structure, a node id out of range
+ * or a structure without nodes, a label too long), SIDX_ERR_NOMEM; the
+ * labels are unchanged then.  Set labels before the structure is shared
+ * between threads: setting is not synchronised with reading them. */
+#define SIDX_LABEL_MAX 32
+sidx_status sidx_accel_set_node_label(sidx_accel *a, uint32_t node, const char *label, sidx_error *err);
+/* The label of `node`, or NULL (no label, NULL structure).  Valid until
+ * that label is set again or the structure is destroyed. */
+const char *sidx_accel_node_label(const sidx_accel *a, uint32_t node);
+
+/* sidx_accel_build for a mesh opened from `scene` (a built-in scene name,
+ * "name:detail" or a file; NULL = none): built-in scenes that come with
+ * their own tree get it, every other pairing is sidx_accel_build(name,
+ * mesh, opt).  The one such scene today: "kd-slide" with "kdtree" gets the
+ * tree of deck 000 "kD-Tree Example", split by split, its nodes labelled
+ * A, B, C, D and L1..L5 as the slide labels them
+ * (sidx_kdtree_build_from_splits).  Same errors as sidx_accel_build. */
+sidx_status sidx_scene_accel_build(const char *scene, const char *name, const sidx_mesh *mesh,
+                                   const sidx_build_options *opt, sidx_accel **out, sidx_error *err);
+
 const char *sidx_accel_name(const sidx_accel *a);
 const sidx_mesh *sidx_accel_mesh(const sidx_accel *a);
 const sidx_build_options *sidx_accel_options(const sidx_accel *a);

@@ -62,6 +62,7 @@ typedef enum sidx_leaf_reason {
     SIDX_LEAF_MAX_DEPTH,       /* depth limit reached */
     SIDX_LEAF_NO_SPLIT,        /* all centroids equal / no valid plane */
     SIDX_LEAF_EMPTY,           /* empty cell (space partitioning) */
+    SIDX_LEAF_GIVEN,           /* the caller's tree says leaf (sidx_kdtree_build_from_splits) */
     SIDX_LEAF_REASON_COUNT
 } sidx_leaf_reason;
 

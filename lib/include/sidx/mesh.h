@@ -100,6 +100,10 @@ static inline sidx_vec3 sidx_mesh_vertex(const sidx_mesh *m, uint32_t tri, int k
  *                measurements in mm scaled by 0.01; walls face into the room; detail ignored
  *   "grid"       tessellated plane y = 0, x,z in [-1,1], facing +y, detail x detail quads
  *                (default 64)
+ *   "kd-slide"   deck 000 "kD-Tree Example": 8 triangles in the xy plane (x in [1, 9.5],
+ *                y in [0.5, 7.5]), each tilted about the vertical line through its centroid
+ *                (z within ±0.05) so a ray in z = 0 meets it; viewed from +z; with "kdtree",
+ *                sidx_scene_accel_build gives the slide's tree; detail ignored
  * Unknown names fail with SIDX_ERR_INVALID_ARG, a detail above the scene's
  * maximum (e.g. icosphere 10, menger 5, grid 4096) with SIDX_ERR_LIMIT. */
 sidx_status sidx_scene_make(const char *name, uint32_t detail, sidx_mesh *out, sidx_error *err);

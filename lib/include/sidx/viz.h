@@ -110,6 +110,10 @@ typedef struct sidx_dot_options {
     sidx_traversal traversal;      /* for the traced ray */
     const char *format;            /* NULL = from the path's extension: dot, gv, svg, png, pdf */
     const char *title;             /* graph label; NULL = "<structure>: <n> nodes" */
+    const char *scene;             /* sidx_dot_write: the SCENE the mesh was opened from, so a scene
+                                      with its own tree gets it (sidx_scene_accel_build); NULL = none */
+    const sidx_accel *labels;      /* node labels (sidx_accel_node_label) shown before the node ids;
+                                      NULL = none.  sidx_dot_write uses the structure it builds */
 } sidx_dot_options;
 
 /* Builds `accel_name` over mesh with a recording hook, rebuilds the tree
