@@ -67,8 +67,10 @@ wait_for() { until_ok shows "$1" "$2"; }
 # current NAME: the row of the current step (marked '>'); step_of NAME: its number
 current() { screen "$1" | grep '^>'; }
 # lands NAME TEXT ROW WHAT: the screen shows TEXT with ROW in the current row
+# (both waited for: the title may be drawn before the rows below it)
+shows_row() { shows "$1" "$2" && current "$1" | grep -qF -- "$3"; }
 lands() {
-    if wait_for "$1" "$2" && current "$1" | grep -qF -- "$3"; then
+    if until_ok shows_row "$1" "$2" "$3"; then
         ok "$4: $(current "$1" | cut -c1-60)"
     else
         bad "$4: wanted '$3' in the current row, got '$(current "$1")'"
