@@ -1,0 +1,368 @@
+/* test_html.c — sidx-view --html in a real browser.
+ *
+ * Writes pages with the built sidx-view and opens them in headless
+ * Chromium (Debian's chromium): --dump-dom reads the page's #state (status,
+ * step count, current node, stack, script errors), --screenshot takes
+ * pictures at two steps.  The step count is checked against sidx-step
+ * --json's trace of the same ray, the stack against view_replay_run.
+ * Without chromium or without SDL2 (no sidx-view) the browser tests are
+ * skipped with a message.  Runs from the repository root. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+#include <cmocka.h>
+#include "sidx/sidx.h"
+#include "sidx/viz.h"
+#if SIDX_HAVE_SDL
+#include "../viz/page.h"
+#include "../viz/view.h"
+#endif
+
+static char bin_dir[512] = "build/bin";
+static char tmp_dir[256];
+static const char *chromium;
+
+#define RAY "0,3.1,0,1,0.3,0"
+#define MISS_RAY "0,3.1,0,-1,0,0"
+
+/* ---- helpers ------------------------------------------------------------------------------ */
+
+/* Runs cmd through the shell; returns its exit status (-1 if it did not exit). */
+static int run(const char *cmd)
+{
+    int st = system(cmd);
+    return st != -1 && WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+}
+
+#if SIDX_HAVE_SDL
+/* The whole output of cmd (malloc'd, NUL-terminated), or NULL. */
+static char *output_of(const char *cmd)
+{
+    FILE *p = popen(cmd, "r");
+    if (!p) return NULL;
+    size_t n = 0, cap = 1 << 16;
+    char *s = malloc(cap);
+    size_t got;
+    while (s && (got = fread(s + n, 1, cap - n - 1, p)) > 0) {
+        n += got;
+        if (cap - n < 4096) {
+            char *t = realloc(s, cap * 2);
+            if (!t) {
+                free(s);
+                s = NULL;
+                break;
+            }
+            s = t;
+            cap *= 2;
+        }
+    }
+    pclose(p);
+    if (s) s[n] = '\0';
+    return s;
+}
+
+static long file_size(const char *path)
+{
+    struct stat st;
+    return stat(path, &st) == 0 ? (long)st.st_size : -1;
+}
+
+/* Chromium, headless, with the flags a closed machine needs (no network
+ * look-ups, no sandbox as root, a fresh profile). */
+static void browser_cmd(char *buf, size_t size, const char *args)
+{
+    snprintf(buf, size,
+             "%s --headless --no-sandbox --disable-gpu --disable-quic --no-first-run --disable-background-networking "
+             "--disable-component-update --disable-sync --hide-scrollbars --user-data-dir=%s/profile %s 2>/dev/null",
+             chromium, tmp_dir, args);
+}
+
+/* The page's <pre id="state"> at url as the browser left it (malloc'd). */
+static char *page_state(const char *url)
+{
+    char args[1024], cmd[2048];
+    snprintf(args, sizeof args, "--dump-dom '%s'", url);
+    browser_cmd(cmd, sizeof cmd, args);
+    char *dom = output_of(cmd);
+    if (!dom) return NULL;
+    char *a = strstr(dom, "<pre id=\"state\">");
+    char *b = a ? strstr(a, "</pre>") : NULL;
+    if (!a || !b) {
+        print_message("no #state in the page's DOM:\n%.400s\n", dom);
+        free(dom);
+        return NULL;
+    }
+    a += strlen("<pre id=\"state\">");
+    memmove(dom, a, (size_t)(b - a));
+    dom[b - a] = '\0';
+    return dom;
+}
+
+/* The value of "key=" in a state text, copied to out ("" if absent). */
+static void state_get(const char *state, const char *key, char *out, size_t size)
+{
+    char k[64];
+    snprintf(k, sizeof k, "%s=", key);
+    out[0] = '\0';
+    for (const char *p = state; p && *p; p = strchr(p, '\n') ? strchr(p, '\n') + 1 : NULL)
+        if (!strncmp(p, k, strlen(k))) {
+            const char *v = p + strlen(k);
+            size_t n = strcspn(v, "\n");
+            if (n >= size) n = size - 1;
+            memcpy(out, v, n);
+            out[n] = '\0';
+            return;
+        }
+}
+
+static int have_browser(void)
+{
+    if (!chromium) {
+        print_message("chromium is not installed (apt-get install chromium): the browser tests are skipped\n");
+        return 0;
+    }
+    return 1;
+}
+
+static int have_viewer(void)
+{
+    char path[600];
+    snprintf(path, sizeof path, "%s/sidx-view", bin_dir);
+    if (access(path, X_OK) != 0) {
+        print_message("built without SDL2: no sidx-view, skipped\n");
+        return 0;
+    }
+    return 1;
+}
+
+/* ---- tests -------------------------------------------------------------------------------- */
+
+/* The page at step k shows what the recorder's replay says; it has as many
+ * steps as sidx-step's JSON Lines trace has lines; its pictures at k and
+ * k + 1 differ; no script error. */
+static void page_steps_like_the_recorder(void **state)
+{
+    (void)state;
+    if (!have_viewer() || !have_browser()) skip();
+    char page[400], cmd[4096];
+    snprintf(page, sizeof page, "%s/flat2d.html", tmp_dir);
+    snprintf(cmd, sizeof cmd, "%s/sidx-view --accel bvh --ray %s --html %s >/dev/null", bin_dir, RAY, page);
+    assert_int_equal(run(cmd), 0);
+    long size = file_size(page);
+    print_message("flat2d bvh page: %ld bytes\n", size);
+    assert_true(size > 0 && size < 300 * 1024);
+
+    /* the same ray in-process: the replay the SDL viewer draws */
+    view_state v;
+    sidx_error err;
+    assert_int_equal(view_open(&v, "flat2d", "bvh", &err), SIDX_OK);
+    sidx_vec3 org, dir;
+    assert_int_equal(sidx_viz_parse_ray(RAY, &org, &dir), 0);
+    assert_int_equal(view_set_ray(&v, org, dir, SIZE_MAX), SIDX_OK);
+    /* a step with at least two entries on the stack */
+    size_t k = 0;
+    view_replay r;
+    for (size_t s = 1; s <= v.trav.count && !k; ++s) {
+        view_replay_run(&v, s, &r);
+        if (r.stack_n >= 2) k = s;
+    }
+    assert_true(k > 0 && k < v.trav.count);
+    view_replay_run(&v, k, &r);
+    char want_stack[512] = "", want_cur[32];
+    for (int i = r.stack_n - 1; i >= 0; --i)
+        snprintf(want_stack + strlen(want_stack), sizeof want_stack - strlen(want_stack), "%s%u",
+                 i == r.stack_n - 1 ? "" : ",", r.stack[i].node);
+    snprintf(want_cur, sizeof want_cur, "%u", r.current_id);
+
+    /* sidx-step's trace of the same ray */
+    snprintf(cmd, sizeof cmd, "%s/sidx-step --accel bvh flat2d --ray %s --json --all </dev/null | wc -l", bin_dir, RAY);
+    char *lines = output_of(cmd);
+    assert_non_null(lines);
+    const long jsonl = strtol(lines, NULL, 10);
+    free(lines);
+    assert_int_equal(jsonl, (long)v.trav.count);
+
+    char url[600], val[512];
+    snprintf(url, sizeof url, "file://%s#step=%zu", page, k);
+    char *st = page_state(url);
+    assert_non_null(st);
+    state_get(st, "status", val, sizeof val);
+    assert_string_equal(val, "ready");
+    state_get(st, "errors", val, sizeof val);
+    assert_string_equal(val, "0");
+    state_get(st, "steps", val, sizeof val);
+    assert_int_equal(strtol(val, NULL, 10), jsonl);
+    state_get(st, "step", val, sizeof val);
+    assert_int_equal(strtol(val, NULL, 10), (long)k);
+    state_get(st, "current", val, sizeof val);
+    assert_string_equal(val, want_cur);
+    state_get(st, "stack", val, sizeof val);
+    print_message("step %zu: current %s, stack (top first) %s\n", k, want_cur, want_stack);
+    assert_string_equal(val, want_stack);
+    free(st);
+    view_close(&v);
+
+    /* two pictures one step apart differ */
+    char shot[2][400], args[2048];
+    for (int i = 0; i < 2; ++i) {
+        snprintf(shot[i], sizeof shot[i], "%s/step%d.png", tmp_dir, i);
+        snprintf(args, sizeof args, "--window-size=1100,700 --screenshot=%s 'file://%s#step=%zu' >/dev/null", shot[i],
+                 page, k + (size_t)i);
+        browser_cmd(cmd, sizeof cmd, args);
+        assert_int_equal(run(cmd), 0);
+        assert_true(file_size(shot[i]) > 1000);
+    }
+    snprintf(cmd, sizeof cmd, "cmp -s %s %s", shot[0], shot[1]);
+    assert_int_not_equal(run(cmd), 0);
+}
+
+/* A ray that hits nothing: the page says so. */
+static void page_says_the_ray_misses(void **state)
+{
+    (void)state;
+    if (!have_viewer() || !have_browser()) skip();
+    char page[400], cmd[4096], url[600], val[64];
+    snprintf(page, sizeof page, "%s/miss.html", tmp_dir);
+    snprintf(cmd, sizeof cmd, "%s/sidx-view --accel kdtree --ray %s --html %s >/dev/null", bin_dir, MISS_RAY, page);
+    assert_int_equal(run(cmd), 0);
+    snprintf(url, sizeof url, "file://%s", page);
+    char args[1024];
+    snprintf(args, sizeof args, "--dump-dom '%s'", url);
+    browser_cmd(cmd, sizeof cmd, args);
+    char *dom = output_of(cmd);
+    assert_non_null(dom);
+    assert_non_null(strstr(dom, "The ray misses"));
+    free(dom);
+    char *st = page_state(url);
+    assert_non_null(st);
+    state_get(st, "miss", val, sizeof val);
+    assert_string_equal(val, "1");
+    state_get(st, "errors", val, sizeof val);
+    assert_string_equal(val, "0");
+    free(st);
+}
+
+/* The teapot's traversal and build in one page under 2 MB, opening in 3D
+ * without a script error. */
+static void teapot_page_is_small(void **state)
+{
+    (void)state;
+    if (!have_viewer()) skip();
+    char page[400], cmd[4096];
+    snprintf(page, sizeof page, "%s/teapot.html", tmp_dir);
+    snprintf(cmd, sizeof cmd, "%s/sidx-view --accel bvh --scene teapot --ray 0,0.6,4,0,-0.05,-1 --mode 3d --level 3 --html %s >/dev/null",
+             bin_dir, page);
+    assert_int_equal(run(cmd), 0);
+    long size = file_size(page);
+    print_message("teapot bvh page: %ld bytes\n", size);
+    assert_true(size > 0 && size < 2 * 1024 * 1024);
+    if (!have_browser()) return;
+    char url[600], val[64];
+    snprintf(url, sizeof url, "file://%s#step=20", page);
+    char *st = page_state(url);
+    assert_non_null(st);
+    state_get(st, "status", val, sizeof val);
+    assert_string_equal(val, "ready");
+    state_get(st, "mode", val, sizeof val);
+    assert_string_equal(val, "3d");
+    state_get(st, "errors", val, sizeof val);
+    assert_string_equal(val, "0");
+    free(st);
+}
+
+/* An unwritable path and a scene too large for a page: exit 1 and a
+ * message that says why (the limit, for the scene). */
+static void bad_input(void **state)
+{
+    (void)state;
+    if (!have_viewer()) skip();
+    char cmd[2048], out[400];
+    snprintf(out, sizeof out, "%s/err.txt", tmp_dir);
+    snprintf(cmd, sizeof cmd, "%s/sidx-view --html /nonexistent-dir/page.html 2>%s >/dev/null", bin_dir, out);
+    assert_int_equal(run(cmd), 1);
+    snprintf(cmd, sizeof cmd, "grep -q 'cannot write /nonexistent-dir/page.html' %s", out);
+    assert_int_equal(run(cmd), 0);
+
+    /* a 160 x 160 grid of quads: 50562 triangles, over VIEW_HTML_MAX_TRIANGLES */
+    char obj[400];
+    snprintf(obj, sizeof obj, "%s/big.obj", tmp_dir);
+    FILE *f = fopen(obj, "w");
+    assert_non_null(f);
+    const int n = 160;
+    for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x) fprintf(f, "v %d %d 0\n", x, y);
+    for (int y = 0; y + 1 < n; ++y)
+        for (int x = 0; x + 1 < n; ++x) {
+            int a = y * n + x + 1;
+            fprintf(f, "f %d %d %d\nf %d %d %d\n", a, a + 1, a + n, a + 1, a + n + 1, a + n);
+        }
+    fclose(f);
+    char page[400];
+    snprintf(page, sizeof page, "%s/big.html", tmp_dir);
+    snprintf(cmd, sizeof cmd, "%s/sidx-view --scene %s --html %s 2>%s >/dev/null", bin_dir, obj, page, out);
+    assert_int_equal(run(cmd), 1);
+    snprintf(cmd, sizeof cmd, "grep -q 'has 50562 triangles; a page holds at most %u' %s", VIEW_HTML_MAX_TRIANGLES, out);
+    assert_int_equal(run(cmd), 0);
+    assert_int_equal(file_size(page), -1);
+}
+#else
+static void skip_without_sdl(void **state)
+{
+    (void)state;
+    print_message("built without SDL2: no sidx-view, skipped\n");
+    skip();
+}
+#endif
+
+int main(int argc, char **argv)
+{
+    (void)argc;
+    /* build/tests/test_html -> build/bin (also build/san/...) */
+    if (argv[0] && strchr(argv[0], '/')) {
+        snprintf(bin_dir, sizeof bin_dir, "%s", argv[0]);
+        char *slash = strrchr(bin_dir, '/');
+        *slash = '\0';
+        slash = strrchr(bin_dir, '/');
+        if (slash)
+            snprintf(slash + 1, sizeof bin_dir - (size_t)(slash + 1 - bin_dir), "bin");
+        else
+            snprintf(bin_dir, sizeof bin_dir, "bin");
+    }
+    char cwd[200];
+    if (bin_dir[0] != '/' && getcwd(cwd, sizeof cwd)) { /* file:// URLs need absolute paths */
+        char rel[512];
+        snprintf(rel, sizeof rel, "%s", bin_dir);
+        snprintf(bin_dir, sizeof bin_dir, "%.200s/%.300s", cwd, rel);
+    }
+    if (run("command -v chromium >/dev/null 2>&1") == 0)
+        chromium = "chromium";
+    else if (run("command -v chromium-browser >/dev/null 2>&1") == 0)
+        chromium = "chromium-browser";
+    snprintf(tmp_dir, sizeof tmp_dir, "/tmp/sidx_html_XXXXXX");
+    if (!mkdtemp(tmp_dir)) {
+        perror("mkdtemp");
+        return 1;
+    }
+    const struct CMUnitTest tests[] = {
+#if SIDX_HAVE_SDL
+        cmocka_unit_test(page_steps_like_the_recorder),
+        cmocka_unit_test(page_says_the_ray_misses),
+        cmocka_unit_test(teapot_page_is_small),
+        cmocka_unit_test(bad_input),
+#else
+        cmocka_unit_test(skip_without_sdl),
+#endif
+    };
+    int rc = cmocka_run_group_tests_name("html", tests, NULL, NULL);
+    char cmd[400];
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", tmp_dir);
+    if (run(cmd) != 0) fprintf(stderr, "test_html: could not remove %s\n", tmp_dir);
+    return rc;
+}
