@@ -122,6 +122,24 @@ static void state_get(const char *state, const char *key, char *out, size_t size
         }
 }
 
+/* Asserts that the state text has key=want. */
+static void expect_state(const char *state, const char *key, const char *want)
+{
+    char val[512];
+    state_get(state, key, val, sizeof val);
+    if (strcmp(val, want) != 0) print_message("#state %s=%s, expected %s\n", key, val, want);
+    assert_string_equal(val, want);
+}
+
+/* Writes tmp_dir/NAME.html with sidx-view ARGS --html; its path in page. */
+static void write_page(const char *name, const char *args, char *page, size_t size)
+{
+    char cmd[2048];
+    snprintf(page, size, "%s/%s.html", tmp_dir, name);
+    snprintf(cmd, sizeof cmd, "%s/sidx-view %s --html %s >/dev/null", bin_dir, args, page);
+    assert_int_equal(run(cmd), 0);
+}
+
 static int have_browser(void)
 {
     if (!chromium) {
@@ -152,9 +170,7 @@ static void page_steps_like_the_recorder(void **state)
     (void)state;
     if (!have_viewer() || !have_browser()) skip();
     char page[400], cmd[4096];
-    snprintf(page, sizeof page, "%s/flat2d.html", tmp_dir);
-    snprintf(cmd, sizeof cmd, "%s/sidx-view --accel bvh --ray %s --html %s >/dev/null", bin_dir, RAY, page);
-    assert_int_equal(run(cmd), 0);
+    write_page("flat2d", "--accel bvh --ray " RAY, page, sizeof page);
     long size = file_size(page);
     print_message("flat2d bvh page: %ld bytes\n", size);
     assert_true(size > 0 && size < 300 * 1024);
@@ -189,23 +205,19 @@ static void page_steps_like_the_recorder(void **state)
     free(lines);
     assert_int_equal(jsonl, (long)v.trav.count);
 
-    char url[600], val[512];
+    char url[600], val[64];
     snprintf(url, sizeof url, "file://%s#step=%zu", page, k);
     char *st = page_state(url);
     assert_non_null(st);
-    state_get(st, "status", val, sizeof val);
-    assert_string_equal(val, "ready");
-    state_get(st, "errors", val, sizeof val);
-    assert_string_equal(val, "0");
-    state_get(st, "steps", val, sizeof val);
-    assert_int_equal(strtol(val, NULL, 10), jsonl);
-    state_get(st, "step", val, sizeof val);
-    assert_int_equal(strtol(val, NULL, 10), (long)k);
-    state_get(st, "current", val, sizeof val);
-    assert_string_equal(val, want_cur);
-    state_get(st, "stack", val, sizeof val);
+    expect_state(st, "status", "ready");
+    expect_state(st, "errors", "0");
+    snprintf(val, sizeof val, "%ld", jsonl);
+    expect_state(st, "steps", val);
+    snprintf(val, sizeof val, "%zu", k);
+    expect_state(st, "step", val);
+    expect_state(st, "current", want_cur);
     print_message("step %zu: current %s, stack (top first) %s\n", k, want_cur, want_stack);
-    assert_string_equal(val, want_stack);
+    expect_state(st, "stack", want_stack);
     free(st);
     view_close(&v);
 
@@ -228,10 +240,8 @@ static void page_says_the_ray_misses(void **state)
 {
     (void)state;
     if (!have_viewer() || !have_browser()) skip();
-    char page[400], cmd[4096], url[600], val[64];
-    snprintf(page, sizeof page, "%s/miss.html", tmp_dir);
-    snprintf(cmd, sizeof cmd, "%s/sidx-view --accel kdtree --ray %s --html %s >/dev/null", bin_dir, MISS_RAY, page);
-    assert_int_equal(run(cmd), 0);
+    char page[400], cmd[4096], url[600];
+    write_page("miss", "--accel kdtree --ray " MISS_RAY, page, sizeof page);
     snprintf(url, sizeof url, "file://%s", page);
     char args[1024];
     snprintf(args, sizeof args, "--dump-dom '%s'", url);
@@ -242,10 +252,8 @@ static void page_says_the_ray_misses(void **state)
     free(dom);
     char *st = page_state(url);
     assert_non_null(st);
-    state_get(st, "miss", val, sizeof val);
-    assert_string_equal(val, "1");
-    state_get(st, "errors", val, sizeof val);
-    assert_string_equal(val, "0");
+    expect_state(st, "miss", "1");
+    expect_state(st, "errors", "0");
     free(st);
 }
 
@@ -255,25 +263,19 @@ static void teapot_page_is_small(void **state)
 {
     (void)state;
     if (!have_viewer()) skip();
-    char page[400], cmd[4096];
-    snprintf(page, sizeof page, "%s/teapot.html", tmp_dir);
-    snprintf(cmd, sizeof cmd, "%s/sidx-view --accel bvh --scene teapot --ray 0,0.6,4,0,-0.05,-1 --mode 3d --level 3 --html %s >/dev/null",
-             bin_dir, page);
-    assert_int_equal(run(cmd), 0);
+    char page[400];
+    write_page("teapot", "--accel bvh --scene teapot --ray 0,0.6,4,0,-0.05,-1 --mode 3d --level 3", page, sizeof page);
     long size = file_size(page);
     print_message("teapot bvh page: %ld bytes\n", size);
     assert_true(size > 0 && size < 2 * 1024 * 1024);
     if (!have_browser()) return;
-    char url[600], val[64];
+    char url[600];
     snprintf(url, sizeof url, "file://%s#step=20", page);
     char *st = page_state(url);
     assert_non_null(st);
-    state_get(st, "status", val, sizeof val);
-    assert_string_equal(val, "ready");
-    state_get(st, "mode", val, sizeof val);
-    assert_string_equal(val, "3d");
-    state_get(st, "errors", val, sizeof val);
-    assert_string_equal(val, "0");
+    expect_state(st, "status", "ready");
+    expect_state(st, "mode", "3d");
+    expect_state(st, "errors", "0");
     free(st);
 }
 
@@ -324,22 +326,17 @@ static void skip_without_sdl(void **state)
 int main(int argc, char **argv)
 {
     (void)argc;
-    /* build/tests/test_html -> build/bin (also build/san/...) */
-    if (argv[0] && strchr(argv[0], '/')) {
-        snprintf(bin_dir, sizeof bin_dir, "%s", argv[0]);
-        char *slash = strrchr(bin_dir, '/');
-        *slash = '\0';
-        slash = strrchr(bin_dir, '/');
-        if (slash)
-            snprintf(slash + 1, sizeof bin_dir - (size_t)(slash + 1 - bin_dir), "bin");
-        else
-            snprintf(bin_dir, sizeof bin_dir, "bin");
-    }
-    char cwd[200];
-    if (bin_dir[0] != '/' && getcwd(cwd, sizeof cwd)) { /* file:// URLs need absolute paths */
-        char rel[512];
-        snprintf(rel, sizeof rel, "%s", bin_dir);
-        snprintf(bin_dir, sizeof bin_dir, "%.200s/%.300s", cwd, rel);
+    (void)argv;
+    /* this program is BUILD/tests/test_html; the programs are in BUILD/bin */
+    char self[400];
+    ssize_t n = readlink("/proc/self/exe", self, sizeof self - 1);
+    if (n > 0) {
+        self[n] = '\0';
+        char *tests = strstr(self, "/tests/test_html");
+        if (tests) {
+            *tests = '\0';
+            snprintf(bin_dir, sizeof bin_dir, "%s/bin", self);
+        }
     }
     if (run("command -v chromium >/dev/null 2>&1") == 0)
         chromium = "chromium";

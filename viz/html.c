@@ -91,6 +91,15 @@ static void sb_float(sbuf *b, float f)
         sb_put(b, isnan(f) ? "null" : f > 0 ? "1e999" : "-1e999");
 }
 
+static void sb_xyz(sbuf *b, sidx_vec3 p)
+{
+    sb_float(b, p.x);
+    sb_put(b, ",");
+    sb_float(b, p.y);
+    sb_put(b, ",");
+    sb_float(b, p.z);
+}
+
 static void sb_id(sbuf *b, uint32_t id)
 {
     if (id == UINT32_MAX)
@@ -101,11 +110,10 @@ static void sb_id(sbuf *b, uint32_t id)
 
 static void sb_box(sbuf *b, sidx_aabb box)
 {
-    const float f[6] = {box.min.x, box.min.y, box.min.z, box.max.x, box.max.y, box.max.z};
-    for (int i = 0; i < 6; ++i) {
-        sb_put(b, ",");
-        sb_float(b, f[i]);
-    }
+    sb_put(b, ",");
+    sb_xyz(b, box.min);
+    sb_put(b, ",");
+    sb_xyz(b, box.max);
 }
 
 /* ---- the data ------------------------------------------------------------------------ */
@@ -143,12 +151,9 @@ static void build_event(sbuf *b, const sidx_event *e)
         sb_put(b, ",");
         sb_float(b, e->cost);
         sb_printf(b, ",%u,%u", e->count, e->aux);
-        if (e->axis < 0) {
-            const float n[3] = {e->bounds.min.x, e->bounds.min.y, e->bounds.min.z};
-            for (int i = 0; i < 3; ++i) {
-                sb_put(b, ",");
-                sb_float(b, n[i]);
-            }
+        if (e->axis < 0) { /* BSP: the plane's normal */
+            sb_put(b, ",");
+            sb_xyz(b, e->bounds.min);
         }
         break;
     case SIDX_EV_BUILD_LEAF:
@@ -238,13 +243,8 @@ static void page_data(const view_state *v, sbuf *b, view_mode mode, size_t step,
     /* vertices and triangles */
     sb_put(b, ",\"pos\":[");
     for (uint32_t i = 0; i < v->mesh.num_vertices; ++i) {
-        const sidx_vec3 p = v->mesh.positions[i];
         if (i) sb_put(b, ",");
-        sb_float(b, p.x);
-        sb_put(b, ",");
-        sb_float(b, p.y);
-        sb_put(b, ",");
-        sb_float(b, p.z);
+        sb_xyz(b, v->mesh.positions[i]);
     }
     sb_put(b, "],\"idx\":[");
     for (uint32_t i = 0; i < 3u * v->mesh.num_triangles; ++i) sb_printf(b, i ? ",%u" : "%u", v->mesh.indices[i]);
@@ -253,17 +253,9 @@ static void page_data(const view_state *v, sbuf *b, view_mode mode, size_t step,
     /* the ray */
     if (v->has_ray) {
         sb_put(b, ",\"ray\":{\"o\":[");
-        sb_float(b, v->org.x);
-        sb_put(b, ",");
-        sb_float(b, v->org.y);
-        sb_put(b, ",");
-        sb_float(b, v->org.z);
+        sb_xyz(b, v->org);
         sb_put(b, "],\"d\":[");
-        sb_float(b, v->dir.x);
-        sb_put(b, ",");
-        sb_float(b, v->dir.y);
-        sb_put(b, ",");
-        sb_float(b, v->dir.z);
+        sb_xyz(b, v->dir);
         sb_put(b, "]}");
     } else {
         sb_put(b, ",\"ray\":null");
