@@ -84,25 +84,39 @@ static void browser_cmd(char *buf, size_t size, const char *args)
              chromium, tmp_dir, args);
 }
 
-/* The page's <pre id="state"> at url as the browser left it (malloc'd). */
-static char *page_state(const char *url)
+/* The page's DOM at url as the browser left it after its scripts ran (malloc'd). */
+static char *page_dom(const char *url)
 {
     char args[1024], cmd[2048];
     snprintf(args, sizeof args, "--dump-dom '%s'", url);
     browser_cmd(cmd, sizeof cmd, args);
-    char *dom = output_of(cmd);
-    if (!dom) return NULL;
-    char *a = strstr(dom, "<pre id=\"state\">");
-    char *b = a ? strstr(a, "</pre>") : NULL;
+    return output_of(cmd);
+}
+
+/* A copy of what stands between open and close in s (malloc'd), or NULL. */
+static char *between(const char *s, const char *open, const char *close)
+{
+    const char *a = s ? strstr(s, open) : NULL;
+    const char *b = a ? strstr(a + strlen(open), close) : NULL;
     if (!a || !b) {
-        print_message("no #state in the page's DOM:\n%.400s\n", dom);
-        free(dom);
+        print_message("no %s...%s in the page's DOM:\n%.400s\n", open, close, s ? s : "(none)");
         return NULL;
     }
-    a += strlen("<pre id=\"state\">");
-    memmove(dom, a, (size_t)(b - a));
-    dom[b - a] = '\0';
-    return dom;
+    a += strlen(open);
+    char *out = malloc((size_t)(b - a) + 1);
+    if (!out) return NULL;
+    memcpy(out, a, (size_t)(b - a));
+    out[b - a] = '\0';
+    return out;
+}
+
+/* The page's <pre id="state"> at url (malloc'd). */
+static char *page_state(const char *url)
+{
+    char *dom = page_dom(url);
+    char *st = between(dom, "<pre id=\"state\">", "</pre>");
+    free(dom);
+    return st;
 }
 
 /* The value of "key=" in a state text, copied to out ("" if absent). */
@@ -191,10 +205,15 @@ static void page_steps_like_the_recorder(void **state)
     }
     assert_true(k > 0 && k < v.trav.count);
     view_replay_run(&v, k, &r);
-    char want_stack[512] = "", want_cur[32];
-    for (int i = r.stack_n - 1; i >= 0; --i)
+    /* the state's id list and the panel's lines, top first, as the viewer prints them */
+    char want_stack[512] = "", want_cur[32], want_panel[2048] = "";
+    for (int i = r.stack_n - 1; i >= 0; --i) {
         snprintf(want_stack + strlen(want_stack), sizeof want_stack - strlen(want_stack), "%s%u",
                  i == r.stack_n - 1 ? "" : ",", r.stack[i].node);
+        snprintf(want_panel + strlen(want_panel), sizeof want_panel - strlen(want_panel),
+                 "<li data-node=\"%u\">node %u  t=[%.3g, %.3g]</li>", r.stack[i].node, r.stack[i].node,
+                 (double)r.stack[i].t_near, (double)r.stack[i].t_far);
+    }
     snprintf(want_cur, sizeof want_cur, "%u", r.current_id);
 
     /* sidx-step's trace of the same ray */
@@ -207,8 +226,15 @@ static void page_steps_like_the_recorder(void **state)
 
     char url[600], val[64];
     snprintf(url, sizeof url, "file://%s#step=%zu", page, k);
-    char *st = page_state(url);
+    char *dom = page_dom(url);
+    char *st = between(dom, "<pre id=\"state\">", "</pre>");
+    char *panel = between(dom, "<ol id=\"stack\">", "</ol>");
+    free(dom);
     assert_non_null(st);
+    assert_non_null(panel);
+    print_message("stack panel: %s\n", panel);
+    assert_string_equal(panel, want_panel);
+    free(panel);
     expect_state(st, "status", "ready");
     expect_state(st, "errors", "0");
     snprintf(val, sizeof val, "%ld", jsonl);
@@ -235,22 +261,90 @@ static void page_steps_like_the_recorder(void **state)
     assert_int_not_equal(run(cmd), 0);
 }
 
+/* Keys and buttons: a script added after the page's own presses them and
+ * writes the steps it sees into <pre id="keys">. */
+static void page_keys_and_buttons(void **state)
+{
+    (void)state;
+    if (!have_viewer() || !have_browser()) skip();
+    char page[400], pressed[400];
+    write_page("keys", "--accel kdtree --ray " RAY, page, sizeof page);
+    snprintf(pressed, sizeof pressed, "%s/keys-pressed.html", tmp_dir);
+    static const char script[] =
+        "<script>(function () {\n"
+        "  var out = [];\n"
+        "  function key(k) { document.dispatchEvent(new KeyboardEvent('keydown', { key: k, bubbles: true })); }\n"
+        "  function st(name) { var m = new RegExp('\\n' + name + '=([^\\n]*)').exec(document.getElementById('state').textContent);\n"
+        "                      return m ? m[1] : '?'; }\n"
+        "  key('Home'); out.push(st('step'));\n"
+        "  key('ArrowRight'); key('ArrowRight'); out.push(st('step'));\n"
+        "  key('End'); out.push(st('step'));\n"
+        "  key('ArrowLeft'); out.push(st('step'));\n"
+        "  document.getElementById('b-first').click(); out.push(st('step'));\n"
+        "  document.getElementById('evtype').value = 'stack_push';\n"
+        "  document.getElementById('b-nexttype').click(); out.push(st('step'));\n"
+        "  key('t'); out.push(st('step'));\n"
+        "  key('T'); out.push(st('step')); out.push(location.hash);\n"
+        "  key('2'); out.push(st('mode')); key('Home'); out.push(st('build_step')); out.push(location.hash);\n"
+        "  key(' '); out.push(document.getElementById('b-play').textContent);\n"
+        "  key(' '); out.push(document.getElementById('b-play').textContent);\n"
+        "  document.body.insertAdjacentHTML('beforeend', '<pre id=\"' + 'keys\">' + out.join(' ') + '</pre>');\n"
+        "})();</script>\n";
+    /* the page with the script before </body> */
+    FILE *in = fopen(page, "rb"), *out = fopen(pressed, "wb");
+    assert_non_null(in);
+    assert_non_null(out);
+    char line[4096];
+    while (fgets(line, sizeof line, in)) {
+        if (!strcmp(line, "</body>\n")) fputs(script, out);
+        fputs(line, out);
+    }
+    fclose(in);
+    fclose(out);
+
+    view_state v;
+    sidx_error err;
+    sidx_vec3 org, dir;
+    assert_int_equal(view_open(&v, "flat2d", "kdtree", &err), SIDX_OK);
+    assert_int_equal(sidx_viz_parse_ray(RAY, &org, &dir), 0);
+    assert_int_equal(view_set_ray(&v, org, dir, SIZE_MAX), SIDX_OK);
+    size_t push[2] = {0, 0}, np = 0;
+    for (size_t i = 0; i < v.trav.count && np < 2; ++i)
+        if (v.trav.events[i].type == SIDX_EV_STACK_PUSH) push[np++] = i + 1;
+    assert_int_equal(np, 2);
+    char want[512];
+    snprintf(want, sizeof want, "0 2 %zu %zu 0 %zu %zu %zu #step=%zu build 0 #mode=build&amp;step=0 pause play",
+             v.trav.count, v.trav.count - 1, push[0], push[1], push[0], push[0]);
+    view_close(&v);
+
+    char url[600];
+    snprintf(url, sizeof url, "file://%s", pressed);
+    char *dom = page_dom(url);
+    char *got = between(dom, "<pre id=\"keys\">", "</pre>");
+    char *st = between(dom, "<pre id=\"state\">", "</pre>");
+    free(dom);
+    assert_non_null(got);
+    assert_non_null(st);
+    print_message("keys: %s\n", got);
+    assert_string_equal(got, want);
+    expect_state(st, "errors", "0");
+    free(got);
+    free(st);
+}
+
 /* A ray that hits nothing: the page says so. */
 static void page_says_the_ray_misses(void **state)
 {
     (void)state;
     if (!have_viewer() || !have_browser()) skip();
-    char page[400], cmd[4096], url[600];
+    char page[400], url[600];
     write_page("miss", "--accel kdtree --ray " MISS_RAY, page, sizeof page);
     snprintf(url, sizeof url, "file://%s", page);
-    char args[1024];
-    snprintf(args, sizeof args, "--dump-dom '%s'", url);
-    browser_cmd(cmd, sizeof cmd, args);
-    char *dom = output_of(cmd);
+    char *dom = page_dom(url);
     assert_non_null(dom);
     assert_non_null(strstr(dom, "The ray misses"));
+    char *st = between(dom, "<pre id=\"state\">", "</pre>");
     free(dom);
-    char *st = page_state(url);
     assert_non_null(st);
     expect_state(st, "miss", "1");
     expect_state(st, "errors", "0");
@@ -350,6 +444,7 @@ int main(int argc, char **argv)
     const struct CMUnitTest tests[] = {
 #if SIDX_HAVE_SDL
         cmocka_unit_test(page_steps_like_the_recorder),
+        cmocka_unit_test(page_keys_and_buttons),
         cmocka_unit_test(page_says_the_ray_misses),
         cmocka_unit_test(teapot_page_is_small),
         cmocka_unit_test(bad_input),
