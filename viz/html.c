@@ -230,7 +230,9 @@ static void page_data(const view_state *v, sbuf *b, view_mode mode, size_t step,
         sb_put(b, "-1");
     else
         sb_printf(b, "%zu", step);
-    sb_printf(b, ",\"level\":%d,\"has_tree\":%s", level, v->has_tree ? "true" : "false");
+    sb_printf(b, ",\"level\":%d,\"has_tree\":%s,\"camera\":[", level, v->has_tree ? "true" : "false");
+    sb_xyz(b, sidx_v3(v->yaw, v->pitch, v->zoom)); /* 3D: --yaw, --pitch, --zoom */
+    sb_put(b, "]");
     if (v->has_tree)
         sb_printf(b, ",\"tree\":{\"nodes\":%zu,\"leaves\":%u,\"depth\":%u}", v->tree.count, v->tree.leaves,
                   v->tree.max_depth);

@@ -7,8 +7,8 @@
  * With --screenshot it renders one frame into an offscreen surface and
  * writes a PNG: no window, no display, no video driver.  With --html it
  * writes one web page stepping through the same build and traversal
- * (viz/html.c), without SDL at all.  F1 / h in the
- * window lists the keys.  Exit status: 0 ok, 1 failure, 2 usage. */
+ * (viz/html.c), without SDL at all.  F1 / h in the window lists the keys.
+ * Exit status: 0 ok, 1 failure, 2 usage. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -241,7 +241,8 @@ int main(int argc, char **argv)
     if (isfinite(pitch)) v.pitch = pitch;
     if (isfinite(zoom)) v.zoom = zoom;
     if (!has_ray) view_default_ray(&v, &org, &dir);
-    /* in 3D without an explicit ray, show none (click a pixel for one) */
+    /* in the 3D window without an explicit ray, show none (click a pixel for
+     * one); a page always gets one */
     if (has_ray || html || mode == VIEW_2D || mode == VIEW_BUILD)
         view_set_ray(&v, org, dir, has_step && mode != VIEW_BUILD ? (size_t)step : SIZE_MAX);
     if (mode == VIEW_BUILD) v.build_step = has_step && (size_t)step < v.build.count ? (size_t)step : v.build.count;
