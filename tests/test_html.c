@@ -75,11 +75,12 @@ static long file_size(const char *path)
 }
 
 /* Chromium, headless, with the flags a closed machine needs (no network
- * look-ups, no sandbox as root, a fresh profile). */
+ * look-ups, no sandbox as root, a fresh profile), stopped after 60 s if it
+ * hangs. */
 static void browser_cmd(char *buf, size_t size, const char *args)
 {
     snprintf(buf, size,
-             "%s --headless --no-sandbox --disable-gpu --disable-quic --no-first-run --disable-background-networking "
+             "timeout 60 %s --headless --no-sandbox --disable-gpu --disable-quic --no-first-run --disable-background-networking "
              "--disable-component-update --disable-sync --hide-scrollbars --user-data-dir=%s/profile %s 2>/dev/null",
              chromium, tmp_dir, args);
 }
