@@ -111,12 +111,15 @@ static char *between(const char *s, const char *open, const char *close)
     return out;
 }
 
-/* The page's <pre id="state"> at url (malloc'd). */
-static char *page_state(const char *url)
+static void expect_state(const char *state, const char *key, const char *want);
+
+/* The #state of a page whose script ran to the end without an error (malloc'd). */
+static char *ready_state(const char *dom)
 {
-    char *dom = page_dom(url);
     char *st = between(dom, "<pre id=\"state\">", "</pre>");
-    free(dom);
+    assert_non_null(st);
+    expect_state(st, "status", "ready");
+    expect_state(st, "errors", "0");
     return st;
 }
 
@@ -228,16 +231,13 @@ static void page_steps_like_the_recorder(void **state)
     char url[600], val[64];
     snprintf(url, sizeof url, "file://%s#step=%zu", page, k);
     char *dom = page_dom(url);
-    char *st = between(dom, "<pre id=\"state\">", "</pre>");
+    char *st = ready_state(dom);
     char *panel = between(dom, "<ol id=\"stack\">", "</ol>");
     free(dom);
-    assert_non_null(st);
     assert_non_null(panel);
     print_message("stack panel: %s\n", panel);
     assert_string_equal(panel, want_panel);
     free(panel);
-    expect_state(st, "status", "ready");
-    expect_state(st, "errors", "0");
     snprintf(val, sizeof val, "%ld", jsonl);
     expect_state(st, "steps", val);
     snprintf(val, sizeof val, "%zu", k);
@@ -322,15 +322,12 @@ static void page_keys_and_buttons(void **state)
     snprintf(url, sizeof url, "file://%s", pressed);
     char *dom = page_dom(url);
     char *got = between(dom, "<pre id=\"keys\">", "</pre>");
-    char *st = between(dom, "<pre id=\"state\">", "</pre>");
+    free(ready_state(dom));
     free(dom);
     assert_non_null(got);
-    assert_non_null(st);
     print_message("keys: %s\n", got);
     assert_string_equal(got, want);
-    expect_state(st, "errors", "0");
     free(got);
-    free(st);
 }
 
 /* A ray that hits nothing: the page says so. */
@@ -344,11 +341,9 @@ static void page_says_the_ray_misses(void **state)
     char *dom = page_dom(url);
     assert_non_null(dom);
     assert_non_null(strstr(dom, "The ray misses"));
-    char *st = between(dom, "<pre id=\"state\">", "</pre>");
+    char *st = ready_state(dom);
     free(dom);
-    assert_non_null(st);
     expect_state(st, "miss", "1");
-    expect_state(st, "errors", "0");
     free(st);
 }
 
@@ -366,11 +361,10 @@ static void teapot_page_is_small(void **state)
     if (!have_browser()) return;
     char url[600];
     snprintf(url, sizeof url, "file://%s#step=20", page);
-    char *st = page_state(url);
-    assert_non_null(st);
-    expect_state(st, "status", "ready");
+    char *dom = page_dom(url);
+    char *st = ready_state(dom);
+    free(dom);
     expect_state(st, "mode", "3d");
-    expect_state(st, "errors", "0");
     free(st);
 }
 
