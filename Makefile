@@ -26,10 +26,12 @@
 #   Embree 3 (libembree-dev)            sidx-bench, the peer of the benchmark
 #   tmux                                the test of sidx-step's stepper in a terminal
 #                                       (tests/run_step_tmux.sh; skipped without)
+#   chromium                            the headless-browser test of those pages (tests/test_html.c;
+#                                       skipped without)
 # HAVE_GRAPHVIZ=0, HAVE_SDL=0, HAVE_EMBREE=0 (or MINIMAL=1 for all three)
 # build without one even where it is installed.
 
-DEBS := pkg-config libcmocka-dev libgraphviz-dev libsdl2-dev libsdl2-image-dev libembree-dev gnuplot-nox valgrind tmux
+DEBS := pkg-config libcmocka-dev libgraphviz-dev libsdl2-dev libsdl2-image-dev libembree-dev gnuplot-nox valgrind tmux chromium
 # More packages for one call, e.g. `make deps EXTRA_DEBS="clang cppcheck"` (.ci/run).
 EXTRA_DEBS ?=
 
@@ -88,11 +90,15 @@ LIB_OBJ := $(LIB_SRC:%.c=$(BUILD)/obj/%.o)
 # The viewer's pieces need SDL2; sidx-dot needs Graphviz (viz/dot.c itself
 # builds either way: without Graphviz sidx_dot_write answers
 # SIDX_ERR_UNSUPPORTED); sidx-bench needs Embree; the suites need cmocka.
-VIZ_SDL_SRC := viz/font.c viz/sidx_view.c $(wildcard viz/view_*.c)
+VIZ_SDL_SRC := viz/font.c viz/html.c viz/sidx_view.c $(wildcard viz/view_*.c)
 VIZ_PROG_SRC := $(filter-out $(if $(filter 1,$(HAVE_SDL)),,viz/sidx_view.c) \
                   $(if $(filter 1,$(HAVE_GRAPHVIZ)),,viz/sidx_dot.c),$(wildcard viz/sidx_*.c))
 VIZ_LIB_SRC := $(filter-out $(wildcard viz/sidx_*.c) $(if $(filter 1,$(HAVE_SDL)),,$(VIZ_SDL_SRC)),$(wildcard viz/*.c))
-VIZ_OBJ := $(VIZ_LIB_SRC:%.c=$(BUILD)/obj/%.o)
+# sidx-view --html's page template, viz/page.html, becomes a C array
+# (sidx_page_html) so the installed program needs no file beside it; od
+# and sed (coreutils) write the bytes.
+PAGE_OBJ := $(if $(filter 1,$(HAVE_SDL)),$(BUILD)/obj/gen/page_html.o)
+VIZ_OBJ := $(VIZ_LIB_SRC:%.c=$(BUILD)/obj/%.o) $(PAGE_OBJ)
 TEST_SRC := $(if $(filter 1,$(HAVE_CMOCKA)),$(wildcard tests/test_*.c))
 TEST_COMMON_SRC := $(wildcard tests/common/*.c)
 TEST_COMMON_OBJ := $(TEST_COMMON_SRC:%.c=$(BUILD)/obj/%.o)
@@ -142,6 +148,17 @@ deps:
 $(BUILD)/obj/%.o: %.c
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS) $(PKG_CFLAGS) $(CMOCKA_CFLAGS) -MMD -MP -c $< -o $@
+
+$(BUILD)/gen/page_html.c: viz/page.html
+	@mkdir -p $(dir $@)
+	{ echo '/* generated from viz/page.html by the Makefile: do not edit */'; echo '#include <stddef.h>'; \
+	  echo 'const unsigned char sidx_page_html[] = {'; \
+	  od -An -v -tx1 < $< | sed -e 's/\([0-9a-f][0-9a-f]\)/0x\1,/g'; echo '0x00};'; \
+	  echo 'const size_t sidx_page_html_len = sizeof sidx_page_html - 1;'; } > $@.tmp && mv $@.tmp $@
+
+$(BUILD)/obj/gen/page_html.o: $(BUILD)/gen/page_html.c
+	@mkdir -p $(dir $@)
+	$(CC) $(CFLAGS) -c $< -o $@
 
 $(LIBA): $(LIB_OBJ)
 	@mkdir -p $(dir $@)
@@ -272,7 +289,7 @@ fuzz: $(FUZZ_BINS)
 	done
 
 # Pictures for docs/: Graphviz trees and viewer screenshots (headless),
-# then the API reference.
+# the web pages of docs/web/ (sidx-view --html), then the API reference.
 docs: deps
 	@$(MAKE) --no-print-directory build
 	sh viz/make_docs_pictures.sh $(BUILD) docs/img

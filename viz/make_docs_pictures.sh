@@ -3,10 +3,13 @@
 # registered tree structure over the teapot (cut at depth 5, with one ray),
 # and sidx-view screenshots of every structure on the 2D lecture scene
 # (traversal half-way, and the build with the SAH curve), plus 3D and heat
-# views of the teapot, and the few further views the tutorial's lessons
-# show (heat maps of the teapot in the stadium, the BVH's first level).
+# views of the teapot, the few further views the tutorial's lessons show
+# (heat maps of the teapot in the stadium, the BVH's first level); and the
+# web pages of the tutorial's main examples (sidx-view --html) into WEB_DIR,
+# with a headless Chromium screenshot of one of them when chromium is installed.
 #
-#   sh viz/make_docs_pictures.sh [BUILD_DIR] [OUT_DIR]     (defaults: build, docs/img)
+#   sh viz/make_docs_pictures.sh [BUILD_DIR] [OUT_DIR] [WEB_DIR]
+#                                          (defaults: build, docs/img, docs/web)
 #
 # Run from the repository root after `make`.  Needs no display: sidx-view
 # renders headless.  Structures that do not emit a tree (brute, the uniform
@@ -15,6 +18,7 @@ set -u
 
 BUILD=${1:-build}
 OUT=${2:-docs/img}
+WEB=${3:-docs/web}
 BIN=$BUILD/bin
 for p in sidx-dot sidx-view; do
   if [ ! -x "$BIN/$p" ]; then
@@ -104,6 +108,38 @@ if echo "$names" | grep -qx kdtree; then
     echo "  $OUT/tree-kdtree-kd-slide.svg"
   "$BIN/sidx-view" --accel kdtree --scene kd-slide --ray "$KD_SLIDE_RAY" --step 14 --size 1100x700 \
     --screenshot "$OUT/view2d-kdtree-kd-slide.png" >/dev/null && echo "  $OUT/view2d-kdtree-kd-slide.png"
+fi
+
+# Web pages: one self-contained HTML file each (build and traversal in one
+# page), for the structures the tutorial steps through.
+mkdir -p "$WEB" || exit 1
+page() { # NAME ACCEL SCENE [sidx-view options...]
+  name=$1 a=$2 scene=$3
+  shift 3
+  echo "$names" | grep -qx "$a" || return 0
+  if "$BIN/sidx-view" --accel "$a" --scene "$scene" "$@" --html "$WEB/$name.html" >/dev/null; then
+    echo "  $WEB/$name.html ($(wc -c < "$WEB/$name.html") bytes)"
+  else
+    echo "  sidx-view --html failed for $name" >&2
+    failed=1
+  fi
+}
+page bvh-flat2d bvh flat2d
+page kdtree-flat2d kdtree flat2d
+page grid-flat2d grid flat2d
+page quadtree-flat2d quadtree flat2d
+page bsp-flat2d bsp flat2d
+page bvh-teapot bvh teapot --ray "$TEAPOT_RAY" --mode 3d --level 3
+page kdtree-teapot kdtree teapot --ray "$TEAPOT_RAY" --mode 3d --level 3
+if command -v chromium >/dev/null 2>&1 && [ -f "$WEB/kdtree-flat2d.html" ]; then
+  profile=$(mktemp -d)
+  chromium --headless --no-sandbox --disable-gpu --disable-quic --no-first-run --disable-background-networking \
+    --disable-component-update --disable-sync --hide-scrollbars --user-data-dir="$profile" --window-size=1100,700 \
+    --screenshot="$OUT/web-kdtree-flat2d.png" "file://$(cd "$WEB" && pwd)/kdtree-flat2d.html#step=20" >/dev/null 2>&1 &&
+    echo "  $OUT/web-kdtree-flat2d.png (headless Chromium, step 20)"
+  rm -rf "$profile"
+else
+  echo "  (no screenshot of a page: chromium is not installed)"
 fi
 rm -f "$OUT/.err"
 exit $failed

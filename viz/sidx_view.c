@@ -2,15 +2,19 @@
  *
  *   sidx-view [--accel NAME] [--scene S] [--mode 2d|build|3d|heat] [--ray R] [build knobs]
  *   sidx-view --screenshot out.png [--step N] [--mode ...] [--size WxH] ...
+ *   sidx-view --html out.html [--step N] [--mode ...] ...
  *
  * With --screenshot it renders one frame into an offscreen surface and
- * writes a PNG: no window, no display, no video driver.  F1 / h in the
- * window lists the keys.  Exit status: 0 ok, 1 failure, 2 usage. */
+ * writes a PNG: no window, no display, no video driver.  With --html it
+ * writes one web page stepping through the same build and traversal
+ * (viz/html.c), without SDL at all.  F1 / h in the window lists the keys.
+ * Exit status: 0 ok, 1 failure, 2 usage. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <SDL.h>
 #include <SDL_image.h>
+#include "page.h"
 #include "view.h"
 
 static void usage(FILE *f)
@@ -33,6 +37,8 @@ static void usage(FILE *f)
             "  --yaw A --pitch A   3D camera angles in radians; --zoom Z\n"
             "  --size WxH          window / screenshot size (default 1100x700)\n"
             "  --screenshot F.png  render one frame headless to F.png and exit\n"
+            "  --html F.html       write one self-contained web page stepping through the\n"
+            "                      build and the ray's traversal, and exit (no display)\n"
             "  --list              list the registered structures\n"
             "  -h, --help          this help\n"
             "\n%s",
@@ -130,7 +136,7 @@ static int run_window(view_state *v, int w, int h)
 
 int main(int argc, char **argv)
 {
-    const char *accel = NULL, *scene = "flat2d", *shot = NULL;
+    const char *accel = NULL, *scene = "flat2d", *shot = NULL, *html = NULL;
     int w = 1100, h = 700, has_ray = 0, has_step = 0, level = -1;
     long step = 0;
     float yaw = NAN, pitch = NAN, zoom = NAN;
@@ -161,6 +167,8 @@ int main(int argc, char **argv)
             scene = argv[++i];
         } else if (!strcmp(a, "--screenshot") && has_val) {
             shot = argv[++i];
+        } else if (!strcmp(a, "--html") && has_val) {
+            html = argv[++i];
         } else if (!strcmp(a, "--mode") && has_val) {
             if (view_mode_parse(argv[++i], &mode) != 0) {
                 fprintf(stderr, "sidx-view: --mode wants 2d, build, 3d or heat, not '%s'\n", argv[i]);
@@ -215,6 +223,11 @@ int main(int argc, char **argv)
         return 2;
     }
 
+    char html_msg[300];
+    if (html && view_html_check_scene(scene, html_msg, sizeof html_msg) != 0) {
+        fprintf(stderr, "sidx-view: %s\n", html_msg);
+        return 1;
+    }
     view_state v;
     sidx_error err;
     if (view_open_knobs(&v, scene, accel, &knobs, &err) != SIDX_OK) {
@@ -228,13 +241,22 @@ int main(int argc, char **argv)
     if (isfinite(pitch)) v.pitch = pitch;
     if (isfinite(zoom)) v.zoom = zoom;
     if (!has_ray) view_default_ray(&v, &org, &dir);
-    /* in 3D without an explicit ray, show none (click a pixel for one) */
-    if (has_ray || mode == VIEW_2D || mode == VIEW_BUILD)
+    /* in the 3D window without an explicit ray, show none (click a pixel for
+     * one); a page always gets one */
+    if (has_ray || html || mode == VIEW_2D || mode == VIEW_BUILD)
         view_set_ray(&v, org, dir, has_step && mode != VIEW_BUILD ? (size_t)step : SIZE_MAX);
     if (mode == VIEW_BUILD) v.build_step = has_step && (size_t)step < v.build.count ? (size_t)step : v.build.count;
 
     int rc;
-    if (shot) {
+    if (html) {
+        rc = view_write_html(&v, html, mode, has_step ? (size_t)step : SIZE_MAX, level, html_msg, sizeof html_msg);
+        if (rc)
+            fprintf(stderr, "sidx-view: %s\n", html_msg);
+        else
+            printf("wrote %s (%s, %s, %zu build events, %zu traversal events)\n", html, v.scene, v.accel_name,
+                   v.build.count, v.trav.count);
+        rc = rc ? 1 : 0;
+    } else if (shot) {
         char msg[300];
         rc = view_screenshot(&v, shot, w, h, msg, sizeof msg) == 0 ? 0 : 1;
         if (rc)
