@@ -1152,9 +1152,8 @@ static sidx_event json_round_trip(const sidx_event *e, char *store, size_t store
     const int n = sidx_event_to_json(e, a, sizeof a);
     assert_true(n > 0 && (size_t)n < sizeof a);
     sidx_event back;
-    sidx_error err;
+    sidx_error err = {SIDX_OK, ""};
     size_t used = 0;
-    err.message[0] = '\0';
     const sidx_status s = sidx_event_from_json(a, &back, store, store_size, &used, &err);
     if (s != SIDX_OK) fail_msg("%s: %s", a, err.message);
     assert_true(used <= 2 * (size_t)n + 16);
@@ -1307,7 +1306,7 @@ static void test_json_read_errors(void **state)
         "{\"type\":\"node_enter\",\"structure\":\"grid\",\"ray\":0,\"node\":1,\"depth\":0,\"t_near\":0,"
         "\"t_far\":1,\"cell\":[1,2]}",
     };
-    sidx_error err;
+    sidx_error err = {SIDX_OK, ""};
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
         const sidx_status s = read_line(bad[i], &err);
         if (s == SIDX_OK) fail_msg("accepted: %s", bad[i]);

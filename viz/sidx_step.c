@@ -564,8 +564,7 @@ static int read_trace(const char *path, diff_trace *t, int notes)
         e->line = strdup(line);
         e->store = malloc(store_size);
         e->lineno = lineno;
-        sidx_error err;
-        snprintf(err.message, sizeof err.message, "out of memory");
+        sidx_error err = {SIDX_OK, "out of memory"};
         if (!e->line || !e->store ||
             sidx_event_from_json(line, &e->ev, e->store, store_size, NULL, &err) != SIDX_OK) {
             fprintf(stderr, "sidx-step: %s:%zu: not a sidx event: %s\n", path, lineno, err.message);
@@ -747,7 +746,7 @@ static int diff_main(int argc, char **argv)
     }
     /* events of each type on both sides, in the order types first appear */
     int types[SIDX_EV_COUNT];
-    size_t ca[SIDX_EV_COUNT], cb[SIDX_EV_COUNT], nt = 0;
+    size_t ca[SIDX_EV_COUNT] = {0}, cb[SIDX_EV_COUNT] = {0}, nt = 0;
     for (int side = 0; side < 2; ++side) {
         const diff_trace *t = side ? &b : &a;
         for (size_t k = 0; k < t->n; ++k) {

@@ -235,7 +235,7 @@ sidx_status view_load_events(view_state *v, const char *path, size_t step, sidx_
         if (len) {
             size_t taken = 0;
             char why[240];
-            sidx_error e2;
+            sidx_error e2 = {SIDX_OK, ""};
             s = sidx_event_from_json(line, &evs[n], store + used, store_size - used, &taken, &e2);
             if (s != SIDX_OK) {
                 if (err) snprintf(err->message, sizeof err->message, "%.80s:%zu: not a sidx event: %.140s", path, lineno,
