@@ -712,24 +712,42 @@ typedef struct json_in {
     sidx_status status;
 } json_in;
 
+static void jin_vfail(json_in *in, sidx_status st, const char *fmt, va_list ap)
+{
+    if (in->status != SIDX_OK) return; /* keep the first message */
+    in->status = st;
+    if (!in->err) return;
+    int n = snprintf(in->err->message, sizeof in->err->message, "column %zu: ", (size_t)(in->p - in->line) + 1);
+    if (n < 0) n = 0;
+    if ((size_t)n < sizeof in->err->message)
+        vsnprintf(in->err->message + n, sizeof in->err->message - (size_t)n, fmt, ap);
+    in->err->status = st;
+}
+
+/* Notes the first error (status, and "column N: what" in err); -1. */
 #if defined(__GNUC__)
 __attribute__((format(printf, 3, 4)))
 #endif
 static int jin_fail(json_in *in, sidx_status st, const char *fmt, ...)
 {
-    if (in->status != SIDX_OK) return -1; /* keep the first message */
-    in->status = st;
-    if (in->err) {
-        va_list ap;
-        int n = snprintf(in->err->message, sizeof in->err->message, "column %zu: ", (size_t)(in->p - in->line) + 1);
-        if (n < 0) n = 0;
-        va_start(ap, fmt);
-        if ((size_t)n < sizeof in->err->message)
-            vsnprintf(in->err->message + n, sizeof in->err->message - (size_t)n, fmt, ap);
-        va_end(ap);
-        in->err->status = st;
-    }
+    va_list ap;
+    va_start(ap, fmt);
+    jin_vfail(in, st, fmt, ap);
+    va_end(ap);
     return -1;
+}
+
+/* The same, returning the status: for the last word on a line. */
+#if defined(__GNUC__)
+__attribute__((format(printf, 3, 4)))
+#endif
+static sidx_status jin_stop(json_in *in, sidx_status st, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    jin_vfail(in, st, fmt, ap);
+    va_end(ap);
+    return in->status;
 }
 
 static void jin_ws(json_in *in)
@@ -1089,7 +1107,7 @@ sidx_status sidx_event_from_json(const char *line, sidx_event *ev, char *store, 
     uint32_t seen = 0, nulls = 0, nprims = 0;
     if (jin_char(&in, '{') != 0) return in.status;
     jin_ws(&in);
-    if (*in.p == '}') return jin_fail(&in, SIDX_ERR_PARSE, "empty object: an event needs \"type\""), in.status;
+    if (*in.p == '}') return jin_stop(&in, SIDX_ERR_PARSE, "empty object: an event needs \"type\"");
     for (;;) {
         char key[16];
         const char *at = in.p;
@@ -1097,11 +1115,11 @@ sidx_status sidx_event_from_json(const char *line, sidx_event *ev, char *store, 
         const int k = json_key_index(key);
         if (k < 0) {
             in.p = at;
-            return jin_fail(&in, SIDX_ERR_PARSE, "unknown field \"%s\"", key), in.status;
+            return jin_stop(&in, SIDX_ERR_PARSE, "unknown field \"%s\"", key);
         }
         if (seen & (1u << k)) {
             in.p = at;
-            return jin_fail(&in, SIDX_ERR_PARSE, "field \"%s\" given twice", key), in.status;
+            return jin_stop(&in, SIDX_ERR_PARSE, "field \"%s\" given twice", key);
         }
         seen |= 1u << k;
         if (jin_char(&in, ':') != 0 || jin_field(&in, k, &e, reason, sizeof reason, &nulls, &nprims) != 0)
@@ -1112,22 +1130,21 @@ sidx_status sidx_event_from_json(const char *line, sidx_event *ev, char *store, 
     }
     ++in.p;
     jin_ws(&in);
-    if (*in.p) return jin_fail(&in, SIDX_ERR_PARSE, "text after the object"), in.status;
+    if (*in.p) return jin_stop(&in, SIDX_ERR_PARSE, "text after the object");
 
     in.p = line; /* what follows is about the whole line */
-    if (!(seen & (1u << JK_TYPE))) return jin_fail(&in, SIDX_ERR_PARSE, "no \"type\""), in.status;
+    if (!(seen & (1u << JK_TYPE))) return jin_stop(&in, SIDX_ERR_PARSE, "no \"type\"");
     const char *tname = sidx_event_type_name(e.type);
     if (seen & (1u << JK_REASON)) {
         const int leaf = e.type == SIDX_EV_BUILD_LEAF;
         const int r = leaf ? name_index(reason, leaf_name_int, SIDX_LEAF_REASON_COUNT)
                            : name_index(reason, term_name_int, SIDX_TERM_REASON_COUNT);
-        if (r < 0) return jin_fail(&in, SIDX_ERR_PARSE, "unknown %s reason \"%s\"", tname, reason), in.status;
+        if (r < 0) return jin_stop(&in, SIDX_ERR_PARSE, "unknown %s reason \"%s\"", tname, reason);
         e.reason = r;
     }
     if ((seen & (1u << JK_PRIMS)) && (e.count == UINT32_MAX || nprims != e.count))
-        return jin_fail(&in, SIDX_ERR_PARSE, "\"prims\" lists %" PRIu32 " ids, \"count\" says %" PRIu32, nprims,
-                        e.count),
-               in.status;
+        return jin_stop(&in, SIDX_ERR_PARSE, "\"prims\" lists %" PRIu32 " ids, \"count\" says %" PRIu32, nprims,
+                        e.count);
     if (!(seen & (1u << JK_PRIMS))) e.prims = NULL;
 
     /* The keys the writer would write for this event must be the keys read. */
@@ -1138,15 +1155,13 @@ sidx_status sidx_event_from_json(const char *line, sidx_event *ev, char *store, 
     for (int k = 0; k < JSON_NKEYS; ++k) {
         const uint32_t bit = 1u << k;
         if ((want & bit) && !(seen & bit))
-            return jin_fail(&in, SIDX_ERR_PARSE, "a %s event needs \"%s\"", tname, json_key_names[k]), in.status;
+            return jin_stop(&in, SIDX_ERR_PARSE, "a %s event needs \"%s\"", tname, json_key_names[k]);
         if (!(want & bit) && (seen & bit))
-            return jin_fail(&in, SIDX_ERR_PARSE, "a %s event has no \"%s\" here (docs/events.md)", tname,
-                            json_key_names[k]),
-                   in.status;
+            return jin_stop(&in, SIDX_ERR_PARSE, "a %s event has no \"%s\" here (docs/events.md)", tname,
+                            json_key_names[k]);
         if ((nulls & bit) && !(keys.nullable & bit))
-            return jin_fail(&in, SIDX_ERR_PARSE, "\"%s\" of a %s event is a number, not null", json_key_names[k],
-                            tname),
-                   in.status;
+            return jin_stop(&in, SIDX_ERR_PARSE, "\"%s\" of a %s event is a number, not null", json_key_names[k],
+                            tname);
     }
     *ev = e;
     if (store_used) *store_used = in.used;
