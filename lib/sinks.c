@@ -712,42 +712,24 @@ typedef struct json_in {
     sidx_status status;
 } json_in;
 
-static void jin_vfail(json_in *in, sidx_status st, const char *fmt, va_list ap)
-{
-    if (in->status != SIDX_OK) return; /* keep the first message */
-    in->status = st;
-    if (!in->err) return;
-    int n = snprintf(in->err->message, sizeof in->err->message, "column %zu: ", (size_t)(in->p - in->line) + 1);
-    if (n < 0) n = 0;
-    if ((size_t)n < sizeof in->err->message)
-        vsnprintf(in->err->message + n, sizeof in->err->message - (size_t)n, fmt, ap);
-    in->err->status = st;
-}
-
 /* Notes the first error (status, and "column N: what" in err); -1. */
 #if defined(__GNUC__)
 __attribute__((format(printf, 3, 4)))
 #endif
 static int jin_fail(json_in *in, sidx_status st, const char *fmt, ...)
 {
+    if (in->status != SIDX_OK) return -1; /* keep the first message */
+    in->status = st;
+    if (!in->err) return -1;
     va_list ap;
+    int n = snprintf(in->err->message, sizeof in->err->message, "column %zu: ", (size_t)(in->p - in->line) + 1);
+    if (n < 0) n = 0;
     va_start(ap, fmt);
-    jin_vfail(in, st, fmt, ap);
+    if ((size_t)n < sizeof in->err->message)
+        vsnprintf(in->err->message + n, sizeof in->err->message - (size_t)n, fmt, ap);
     va_end(ap);
+    in->err->status = st;
     return -1;
-}
-
-/* The same, returning the status: for the last word on a line. */
-#if defined(__GNUC__)
-__attribute__((format(printf, 3, 4)))
-#endif
-static sidx_status jin_stop(json_in *in, sidx_status st, const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
-    jin_vfail(in, st, fmt, ap);
-    va_end(ap);
-    return in->status;
 }
 
 static void jin_ws(json_in *in)
@@ -1090,6 +1072,74 @@ static int jin_field(json_in *in, int k, sidx_event *e, char *reason, size_t rea
 static const char *leaf_name_int(int r) { return sidx_leaf_reason_name(r); }
 static const char *term_name_int(int r) { return sidx_term_reason_name(r); }
 
+/* One event from in->line into *out; -1 (in->status, in->err) if the line is not one. */
+static int jin_event(json_in *in, sidx_event *out)
+{
+    sidx_event e = sidx_event_blank(SIDX_EV_COUNT);
+    char reason[24] = "";
+    uint32_t seen = 0, nulls = 0, nprims = 0;
+    if (jin_char(in, '{') != 0) return -1;
+    jin_ws(in);
+    if (*in->p == '}') return jin_fail(in, SIDX_ERR_PARSE, "empty object: an event needs \"type\"");
+    for (;;) {
+        char key[16];
+        const char *at = in->p;
+        if (jin_string(in, key, sizeof key, SIDX_ERR_PARSE) != 0) return -1;
+        const int k = json_key_index(key);
+        if (k < 0) {
+            in->p = at;
+            return jin_fail(in, SIDX_ERR_PARSE, "unknown field \"%s\"", key);
+        }
+        if (seen & (1u << k)) {
+            in->p = at;
+            return jin_fail(in, SIDX_ERR_PARSE, "field \"%s\" given twice", key);
+        }
+        seen |= 1u << k;
+        if (jin_char(in, ':') != 0 || jin_field(in, k, &e, reason, sizeof reason, &nulls, &nprims) != 0)
+            return -1;
+        jin_ws(in);
+        if (*in->p == '}') break;
+        if (jin_char(in, ',') != 0) return -1;
+    }
+    ++in->p;
+    jin_ws(in);
+    if (*in->p) return jin_fail(in, SIDX_ERR_PARSE, "text after the object");
+
+    in->p = in->line; /* what follows is about the whole line */
+    if (!(seen & (1u << JK_TYPE))) return jin_fail(in, SIDX_ERR_PARSE, "no \"type\"");
+    const char *tname = sidx_event_type_name(e.type);
+    if (seen & (1u << JK_REASON)) {
+        const int leaf = e.type == SIDX_EV_BUILD_LEAF;
+        const int r = leaf ? name_index(reason, leaf_name_int, SIDX_LEAF_REASON_COUNT)
+                           : name_index(reason, term_name_int, SIDX_TERM_REASON_COUNT);
+        if (r < 0) return jin_fail(in, SIDX_ERR_PARSE, "unknown %s reason \"%s\"", tname, reason);
+        e.reason = r;
+    }
+    if ((seen & (1u << JK_PRIMS)) && (e.count == UINT32_MAX || nprims != e.count))
+        return jin_fail(in, SIDX_ERR_PARSE, "\"prims\" lists %" PRIu32 " ids, \"count\" says %" PRIu32, nprims,
+                        e.count);
+    if (!(seen & (1u << JK_PRIMS))) e.prims = NULL;
+
+    /* The keys the writer would write for this event must be the keys read. */
+    sink_out keys = out_to_buffer(NULL, 0);
+    keys.record = 1;
+    json_event(&keys, &e, 0);
+    const uint32_t want = keys.keys | (1u << JK_TYPE) | (1u << JK_STRUCTURE);
+    for (int k = 0; k < JSON_NKEYS; ++k) {
+        const uint32_t bit = 1u << k;
+        if ((want & bit) && !(seen & bit))
+            return jin_fail(in, SIDX_ERR_PARSE, "a %s event needs \"%s\"", tname, json_key_names[k]);
+        if (!(want & bit) && (seen & bit))
+            return jin_fail(in, SIDX_ERR_PARSE, "a %s event has no \"%s\" here (docs/events.md)", tname,
+                            json_key_names[k]);
+        if ((nulls & bit) && !(keys.nullable & bit))
+            return jin_fail(in, SIDX_ERR_PARSE, "\"%s\" of a %s event is a number, not null", json_key_names[k],
+                            tname);
+    }
+    *out = e;
+    return 0;
+}
+
 sidx_status sidx_event_from_json(const char *line, sidx_event *ev, char *store, size_t store_size, size_t *store_used,
                                  sidx_error *err)
 {
@@ -1102,67 +1152,8 @@ sidx_status sidx_event_from_json(const char *line, sidx_event *ev, char *store, 
         }
         return SIDX_ERR_INVALID_ARG;
     }
-    sidx_event e = sidx_event_blank(SIDX_EV_COUNT);
-    char reason[24] = "";
-    uint32_t seen = 0, nulls = 0, nprims = 0;
-    if (jin_char(&in, '{') != 0) return in.status;
-    jin_ws(&in);
-    if (*in.p == '}') return jin_stop(&in, SIDX_ERR_PARSE, "empty object: an event needs \"type\"");
-    for (;;) {
-        char key[16];
-        const char *at = in.p;
-        if (jin_string(&in, key, sizeof key, SIDX_ERR_PARSE) != 0) return in.status;
-        const int k = json_key_index(key);
-        if (k < 0) {
-            in.p = at;
-            return jin_stop(&in, SIDX_ERR_PARSE, "unknown field \"%s\"", key);
-        }
-        if (seen & (1u << k)) {
-            in.p = at;
-            return jin_stop(&in, SIDX_ERR_PARSE, "field \"%s\" given twice", key);
-        }
-        seen |= 1u << k;
-        if (jin_char(&in, ':') != 0 || jin_field(&in, k, &e, reason, sizeof reason, &nulls, &nprims) != 0)
-            return in.status;
-        jin_ws(&in);
-        if (*in.p == '}') break;
-        if (jin_char(&in, ',') != 0) return in.status;
-    }
-    ++in.p;
-    jin_ws(&in);
-    if (*in.p) return jin_stop(&in, SIDX_ERR_PARSE, "text after the object");
-
-    in.p = line; /* what follows is about the whole line */
-    if (!(seen & (1u << JK_TYPE))) return jin_stop(&in, SIDX_ERR_PARSE, "no \"type\"");
-    const char *tname = sidx_event_type_name(e.type);
-    if (seen & (1u << JK_REASON)) {
-        const int leaf = e.type == SIDX_EV_BUILD_LEAF;
-        const int r = leaf ? name_index(reason, leaf_name_int, SIDX_LEAF_REASON_COUNT)
-                           : name_index(reason, term_name_int, SIDX_TERM_REASON_COUNT);
-        if (r < 0) return jin_stop(&in, SIDX_ERR_PARSE, "unknown %s reason \"%s\"", tname, reason);
-        e.reason = r;
-    }
-    if ((seen & (1u << JK_PRIMS)) && (e.count == UINT32_MAX || nprims != e.count))
-        return jin_stop(&in, SIDX_ERR_PARSE, "\"prims\" lists %" PRIu32 " ids, \"count\" says %" PRIu32, nprims,
-                        e.count);
-    if (!(seen & (1u << JK_PRIMS))) e.prims = NULL;
-
-    /* The keys the writer would write for this event must be the keys read. */
-    sink_out keys = out_to_buffer(NULL, 0);
-    keys.record = 1;
-    json_event(&keys, &e, 0);
-    const uint32_t want = keys.keys | (1u << JK_TYPE) | (1u << JK_STRUCTURE);
-    for (int k = 0; k < JSON_NKEYS; ++k) {
-        const uint32_t bit = 1u << k;
-        if ((want & bit) && !(seen & bit))
-            return jin_stop(&in, SIDX_ERR_PARSE, "a %s event needs \"%s\"", tname, json_key_names[k]);
-        if (!(want & bit) && (seen & bit))
-            return jin_stop(&in, SIDX_ERR_PARSE, "a %s event has no \"%s\" here (docs/events.md)", tname,
-                            json_key_names[k]);
-        if ((nulls & bit) && !(keys.nullable & bit))
-            return jin_stop(&in, SIDX_ERR_PARSE, "\"%s\" of a %s event is a number, not null", json_key_names[k],
-                            tname);
-    }
+    sidx_event e;
+    if (jin_event(&in, &e) != 0) return in.status;
     *ev = e;
     if (store_used) *store_used = in.used;
     return SIDX_OK;
