@@ -6,6 +6,7 @@
 #   make demo       deps, build, run the guided tour
 #   make test       deps, build, run every cmocka suite and the lessons' checks
 #   make test SAN=1 the same under AddressSanitizer + UndefinedBehaviorSanitizer (build/san)
+#   make test-tsan  the threaded suites under ThreadSanitizer (build/tsan)
 #   make valgrind   the suites under valgrind memcheck
 #   make cppcheck   static analysis of every C file (cppcheck, warning + portability)
 #   make bench      the benchmark table (build/bench/); refreshes the figures in
@@ -38,12 +39,16 @@ EXTRA_DEBS ?=
 PREFIX ?= /usr/local
 OPT ?= -O2
 SAN ?= 0
+TSAN ?= 0
 
 # BUILDDIR=build/NAME gives a separate tree (parallel work in one checkout).
 BUILDDIR ?= build
 ifeq ($(SAN),1)
 BUILD := $(BUILDDIR)/san
 SANFLAGS := -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
+else ifeq ($(TSAN),1)
+BUILD := $(BUILDDIR)/tsan
+SANFLAGS := -fsanitize=thread -fno-omit-frame-pointer
 else
 BUILD := $(BUILDDIR)
 SANFLAGS :=
@@ -119,7 +124,7 @@ PROGS := $(VIZ_PROGS) $(if $(wildcard lessons/tour.c),$(BUILD)/bin/sidx-tour) \
 NOHOOKS_OBJ := $(LIB_SRC:%.c=$(BUILD)/nohooks/obj/%.o)
 ALL_LIBS = $(VIZA) $(LIBA) $(PKG_LIBS) $(LDLIBS)
 
-.PHONY: all deps build optional-parts demo test test-run valgrind bench install clean docs apidocs fuzz cppcheck
+.PHONY: all deps build optional-parts demo test test-run test-tsan valgrind bench install clean docs apidocs fuzz cppcheck
 
 all: build
 
@@ -222,6 +227,21 @@ test-run:
 	fi; \
 	if [ $$failed -ne 0 ]; then echo "$$failed suite(s) failed"; exit 1; fi; \
 	echo "all suites passed"
+
+# ThreadSanitizer over the suites that run threads: the parallel build, the
+# parallel trace and the worker pool (test_parallel), concurrent queries on
+# every structure (test_threads).  Only these are built, in build/tsan
+# (TSAN=1).  die_after_fork=0: test_pool_after_fork forks while the pool's
+# threads run, on purpose (the child must not inherit them); its child only
+# queries serially.  Any report fails the run (exitcode).
+TSAN_TESTS := test_parallel test_threads
+test-tsan:
+	@$(MAKE) --no-print-directory TSAN=1 $(TSAN_TESTS:%=$(BUILDDIR)/tsan/tests/%)
+	@for t in $(TSAN_TESTS); do \
+	  echo "== tsan $$t"; \
+	  TSAN_OPTIONS="halt_on_error=1 exitcode=66 die_after_fork=0 second_deadlock_stack=1" $(BUILDDIR)/tsan/tests/$$t \
+	    || { echo "!! FAILED under ThreadSanitizer: $$t"; exit 1; }; \
+	done; echo "test-tsan: the threaded suites ran with no ThreadSanitizer report"
 
 valgrind: deps
 	@$(MAKE) --no-print-directory build

@@ -9,6 +9,7 @@
  *
  * docs/events.md is the reference for what each event carries and for the
  * exact printer and JSON layout; keep the two in step. */
+#include <errno.h>
 #include <inttypes.h>
 #include <limits.h>
 #include <math.h>
@@ -26,11 +27,15 @@ typedef struct sink_out {
     size_t size;
     size_t len;   /* characters produced so far, truncated or not (what snprintf returns) */
     int error;    /* an encoding / stream error occurred */
+    /* Set by the JSON reader: json_key and json_id note which keys the
+     * writer would write (bits of json_key_names) and which may be null. */
+    int record;
+    uint32_t keys, nullable;
 } sink_out;
 
 static sink_out out_to_buffer(char *buf, size_t size)
 {
-    sink_out o = {NULL, buf, size, 0, 0};
+    sink_out o = {NULL, buf, size, 0, 0, 0, 0, 0};
     if (buf && size > 0) buf[0] = '\0';
     if (!buf) o.size = 0; /* count only, like snprintf(NULL, 0, ...) */
     return o;
@@ -38,7 +43,7 @@ static sink_out out_to_buffer(char *buf, size_t size)
 
 static sink_out out_to_file(FILE *f)
 {
-    sink_out o = {f, NULL, 0, 0, 0};
+    sink_out o = {f, NULL, 0, 0, 0, 0, 0, 0};
     return o;
 }
 
@@ -463,12 +468,33 @@ static void out_json_float(sink_out *o, float f)
     out_puts(o, tmp);
 }
 
-static void json_key(sink_out *o, const char *key) { out_printf(o, ",\"%s\":", key); }
+/* Every key an event's JSON object may hold; the reader keeps them as bits. */
+static const char *const json_key_names[] = {"type", "structure", "ray", "node", "parent", "depth", "prim",
+                                             "count", "aux", "axis", "result", "reason", "cell", "pos",
+                                             "cost", "t_near", "t_far", "t", "bounds", "text", "prims"};
+#define JSON_NKEYS ((int)(sizeof json_key_names / sizeof json_key_names[0]))
+
+static int json_key_index(const char *key)
+{
+    for (int k = 0; k < JSON_NKEYS; ++k)
+        if (!strcmp(json_key_names[k], key)) return k;
+    return -1;
+}
+
+static void json_key(sink_out *o, const char *key)
+{
+    if (o->record) {
+        const int k = json_key_index(key);
+        if (k >= 0) o->keys |= 1u << k;
+    }
+    out_printf(o, ",\"%s\":", key);
+}
 
 /* An id field; the blank value UINT32_MAX ("none") is null. */
 static void json_id(sink_out *o, const char *key, uint32_t v)
 {
     json_key(o, key);
+    if (o->record) o->nullable |= 1u << json_key_index(key);
     if (v == UINT32_MAX)
         out_puts(o, "null");
     else
@@ -668,6 +694,469 @@ sidx_hook sidx_jsonl_hook(sidx_jsonl *j)
 {
     sidx_hook h = {jsonl_fn, j, 0};
     return h;
+}
+
+/* ---- reading JSON Lines back ---------------------------------------------- */
+
+/* sidx_event_from_json reads any JSON object (keys in any order, blanks
+ * between tokens), then asks json_event which keys it would write for the
+ * event read, and accepts the line only if those are exactly the keys
+ * given: the writer stays the one description of the format, and a line
+ * that is accepted is written back as the same object. */
+
+typedef struct json_in {
+    const char *line, *p;  /* the line and the read position */
+    char *store;           /* strings and the prims list go here */
+    size_t size, used;
+    sidx_error *err;
+    sidx_status status;
+} json_in;
+
+/* Notes the first error (status, and "column N: what" in err); -1. */
+#if defined(__GNUC__)
+__attribute__((format(printf, 3, 4)))
+#endif
+static int jin_fail(json_in *in, sidx_status st, const char *fmt, ...)
+{
+    if (in->status != SIDX_OK) return -1; /* keep the first message */
+    in->status = st;
+    if (!in->err) return -1;
+    va_list ap;
+    int n = snprintf(in->err->message, sizeof in->err->message, "column %zu: ", (size_t)(in->p - in->line) + 1);
+    if (n < 0) n = 0;
+    va_start(ap, fmt);
+    if ((size_t)n < sizeof in->err->message)
+        vsnprintf(in->err->message + n, sizeof in->err->message - (size_t)n, fmt, ap);
+    va_end(ap);
+    in->err->status = st;
+    return -1;
+}
+
+static void jin_ws(json_in *in)
+{
+    while (*in->p == ' ' || *in->p == '\t' || *in->p == '\r' || *in->p == '\n') ++in->p;
+}
+
+static int jin_char(json_in *in, char c)
+{
+    jin_ws(in);
+    if (*in->p != c) return jin_fail(in, SIDX_ERR_PARSE, "expected '%c'", c);
+    ++in->p;
+    return 0;
+}
+
+/* The literal null (1), or not (0). */
+static int jin_null(json_in *in)
+{
+    jin_ws(in);
+    if (strncmp(in->p, "null", 4) != 0) return 0;
+    in->p += 4;
+    return 1;
+}
+
+static void utf8_put(char *dst, size_t *n, uint32_t c)
+{
+    if (c < 0x80) {
+        dst[(*n)++] = (char)c;
+    } else if (c < 0x800) {
+        dst[(*n)++] = (char)(0xc0 | (c >> 6));
+        dst[(*n)++] = (char)(0x80 | (c & 0x3f));
+    } else if (c < 0x10000) {
+        dst[(*n)++] = (char)(0xe0 | (c >> 12));
+        dst[(*n)++] = (char)(0x80 | ((c >> 6) & 0x3f));
+        dst[(*n)++] = (char)(0x80 | (c & 0x3f));
+    } else {
+        dst[(*n)++] = (char)(0xf0 | (c >> 18));
+        dst[(*n)++] = (char)(0x80 | ((c >> 12) & 0x3f));
+        dst[(*n)++] = (char)(0x80 | ((c >> 6) & 0x3f));
+        dst[(*n)++] = (char)(0x80 | (c & 0x3f));
+    }
+}
+
+static int hex4(const char *s, uint32_t *out)
+{
+    uint32_t v = 0;
+    for (int i = 0; i < 4; ++i) {
+        const char c = s[i];
+        v <<= 4;
+        if (c >= '0' && c <= '9') v |= (uint32_t)(c - '0');
+        else if (c >= 'a' && c <= 'f') v |= (uint32_t)(c - 'a' + 10);
+        else if (c >= 'A' && c <= 'F') v |= (uint32_t)(c - 'A' + 10);
+        else return -1;
+    }
+    *out = v;
+    return 0;
+}
+
+/* A JSON string into dst (cap bytes, NUL-terminated; the decoded text is
+ * never longer than the literal).  -1 on bad syntax, or when it does not
+ * fit: then status too_long (a store too small, or a name too long to be
+ * one of ours). */
+static int jin_string(json_in *in, char *dst, size_t cap, sidx_status too_long)
+{
+    jin_ws(in);
+    if (*in->p != '"') return jin_fail(in, SIDX_ERR_PARSE, "expected a string");
+    const char *s = ++in->p;
+    size_t n = 0;
+    for (;;) {
+        if (cap - n < 5) { /* room for a 4-byte character and the NUL */
+            in->p = s;
+            return jin_fail(in, too_long, too_long == SIDX_ERR_LIMIT ? "no room for the string" : "unexpected string");
+        }
+        unsigned char c = (unsigned char)*s;
+        if (c == '"') break;
+        if (c == '\0') {
+            in->p = s;
+            return jin_fail(in, SIDX_ERR_PARSE, "string not closed");
+        }
+        if (c < 0x20) {
+            in->p = s;
+            return jin_fail(in, SIDX_ERR_PARSE, "raw control character in a string");
+        }
+        if (c != '\\') {
+            dst[n++] = (char)c;
+            ++s;
+            continue;
+        }
+        uint32_t u;
+        switch (s[1]) {
+        case '"': dst[n++] = '"'; s += 2; continue;
+        case '\\': dst[n++] = '\\'; s += 2; continue;
+        case '/': dst[n++] = '/'; s += 2; continue;
+        case 'b': dst[n++] = '\b'; s += 2; continue;
+        case 'f': dst[n++] = '\f'; s += 2; continue;
+        case 'n': dst[n++] = '\n'; s += 2; continue;
+        case 'r': dst[n++] = '\r'; s += 2; continue;
+        case 't': dst[n++] = '\t'; s += 2; continue;
+        case 'u':
+            if (hex4(s + 2, &u) != 0) break;
+            s += 6;
+            if (u >= 0xd800 && u < 0xdc00) { /* a surrogate pair: \ud83d\ude00 */
+                uint32_t lo;
+                if (s[0] != '\\' || s[1] != 'u' || hex4(s + 2, &lo) != 0 || lo < 0xdc00 || lo > 0xdfff) break;
+                s += 6;
+                u = 0x10000 + ((u - 0xd800) << 10) + (lo - 0xdc00);
+            } else if (u >= 0xdc00 && u < 0xe000) {
+                break;
+            }
+            if (u == 0) break; /* would end the C string early */
+            utf8_put(dst, &n, u);
+            continue;
+        default:
+            break;
+        }
+        in->p = s;
+        return jin_fail(in, SIDX_ERR_PARSE, "bad escape in a string");
+    }
+    dst[n] = '\0';
+    in->p = s + 1;
+    return 0;
+}
+
+/* A string value copied into the store; *out points at it. */
+static int jin_store_string(json_in *in, const char **out)
+{
+    char *dst = in->store ? in->store + in->used : NULL;
+    const size_t before = in->used;
+    if (jin_string(in, dst, in->store ? in->size - in->used : 0, SIDX_ERR_LIMIT) != 0) return -1;
+    in->used = before + strlen(dst) + 1;
+    *out = dst;
+    return 0;
+}
+
+/* A JSON number's text (RFC 8259 grammar, at most 63 characters) into tok;
+ * *integer says whether it had no fraction and no exponent. */
+static int jin_number(json_in *in, char tok[64], int *integer)
+{
+    jin_ws(in);
+    const char *s = in->p, *q = s;
+    if (*q == '-') ++q;
+    if (*q == '0') ++q;
+    else if (*q >= '1' && *q <= '9') while (*q >= '0' && *q <= '9') ++q;
+    else return jin_fail(in, SIDX_ERR_PARSE, "expected a number");
+    *integer = 1;
+    if (*q == '.') {
+        ++q;
+        if (*q < '0' || *q > '9') return jin_fail(in, SIDX_ERR_PARSE, "bad number");
+        while (*q >= '0' && *q <= '9') ++q;
+        *integer = 0;
+    }
+    if (*q == 'e' || *q == 'E') {
+        ++q;
+        if (*q == '+' || *q == '-') ++q;
+        if (*q < '0' || *q > '9') return jin_fail(in, SIDX_ERR_PARSE, "bad number");
+        while (*q >= '0' && *q <= '9') ++q;
+        *integer = 0;
+    }
+    if (q - s > 63) return jin_fail(in, SIDX_ERR_PARSE, "number too long");
+    memcpy(tok, s, (size_t)(q - s));
+    tok[q - s] = '\0';
+    in->p = q;
+    return 0;
+}
+
+static int jin_i64(json_in *in, long long lo, long long hi, long long *out)
+{
+    char tok[64];
+    int integer;
+    if (jin_number(in, tok, &integer) != 0) return -1;
+    if (!integer) return jin_fail(in, SIDX_ERR_PARSE, "expected a whole number, not %s", tok);
+    errno = 0;
+    const long long v = strtoll(tok, NULL, 10);
+    if (errno == ERANGE || v < lo || v > hi)
+        return jin_fail(in, SIDX_ERR_PARSE, "%s is out of range [%lld, %lld]", tok, lo, hi);
+    *out = v;
+    return 0;
+}
+
+static int jin_i32(json_in *in, int32_t *out)
+{
+    long long v;
+    if (jin_i64(in, INT32_MIN, INT32_MAX, &v) != 0) return -1;
+    *out = (int32_t)v;
+    return 0;
+}
+
+static int jin_u32(json_in *in, uint32_t *out)
+{
+    long long v;
+    if (jin_i64(in, 0, UINT32_MAX, &v) != 0) return -1;
+    *out = (uint32_t)v;
+    return 0;
+}
+
+/* A float: a number within float range, or "inf", "-inf", "nan" (the
+ * writer's spelling of the values JSON lacks). */
+static int jin_float(json_in *in, float *out)
+{
+    jin_ws(in);
+    if (*in->p == '"') {
+        char s[16];
+        if (jin_string(in, s, sizeof s, SIDX_ERR_PARSE) != 0) return -1;
+        if (!strcmp(s, "inf")) *out = INFINITY;
+        else if (!strcmp(s, "-inf")) *out = -INFINITY;
+        else if (!strcmp(s, "nan")) *out = NAN;
+        else return jin_fail(in, SIDX_ERR_PARSE, "expected a number, \"inf\", \"-inf\" or \"nan\"");
+        return 0;
+    }
+    char tok[64];
+    int integer;
+    if (jin_number(in, tok, &integer) != 0) return -1;
+    errno = 0;
+    const float f = strtof(tok, NULL);
+    if (isinf(f)) return jin_fail(in, SIDX_ERR_PARSE, "%s is beyond the float range", tok);
+    *out = f;
+    return 0;
+}
+
+static int jin_vec3(json_in *in, sidx_vec3 *v)
+{
+    if (jin_char(in, '[') || jin_float(in, &v->x) || jin_char(in, ',') || jin_float(in, &v->y) ||
+        jin_char(in, ',') || jin_float(in, &v->z) || jin_char(in, ']'))
+        return -1;
+    return 0;
+}
+
+static int jin_bounds(json_in *in, sidx_aabb *b)
+{
+    int have = 0;
+    if (jin_char(in, '{') != 0) return -1;
+    for (int i = 0; i < 2; ++i) {
+        char key[8];
+        if (i && jin_char(in, ',') != 0) return -1;
+        if (jin_string(in, key, sizeof key, SIDX_ERR_PARSE) != 0 || jin_char(in, ':') != 0) return -1;
+        const int k = !strcmp(key, "min") ? 1 : !strcmp(key, "max") ? 2 : 0;
+        if (!k || (have & k)) return jin_fail(in, SIDX_ERR_PARSE, "bounds wants \"min\" and \"max\" once each");
+        have |= k;
+        if (jin_vec3(in, k == 1 ? &b->min : &b->max) != 0) return -1;
+    }
+    return jin_char(in, '}');
+}
+
+/* The prims list, copied into the store (4-byte aligned). */
+static int jin_prims(json_in *in, const uint32_t **out, uint32_t *n)
+{
+    if (jin_char(in, '[') != 0) return -1;
+    if (!in->store) return jin_fail(in, SIDX_ERR_LIMIT, "no room for the prims list");
+    const uintptr_t at = (uintptr_t)(in->store + in->used);
+    const size_t pad = (size_t)((4u - at % 4u) % 4u);
+    if (in->size - in->used < pad) return jin_fail(in, SIDX_ERR_LIMIT, "no room for the prims list");
+    in->used += pad;
+    uint32_t *ids = (uint32_t *)(void *)(in->store + in->used);
+    *n = 0;
+    jin_ws(in);
+    if (*in->p == ']') {
+        ++in->p;
+        *out = ids;
+        return 0;
+    }
+    for (;;) {
+        uint32_t v;
+        if (jin_u32(in, &v) != 0) return -1;
+        if (in->size - in->used < sizeof v) return jin_fail(in, SIDX_ERR_LIMIT, "no room for the prims list");
+        memcpy(in->store + in->used, &v, sizeof v);
+        in->used += sizeof v;
+        ++*n;
+        jin_ws(in);
+        if (*in->p == ']') break;
+        if (jin_char(in, ',') != 0) return -1;
+    }
+    ++in->p;
+    *out = ids;
+    return 0;
+}
+
+enum { JK_TYPE = 0, JK_STRUCTURE, JK_RAY, JK_NODE, JK_PARENT, JK_DEPTH, JK_PRIM, JK_COUNT, JK_AUX, JK_AXIS,
+       JK_RESULT, JK_REASON, JK_CELL, JK_POS, JK_COST, JK_T_NEAR, JK_T_FAR, JK_T, JK_BOUNDS, JK_TEXT, JK_PRIMS };
+
+/* A name of names[0..n) to its index, or -1. */
+static int name_index(const char *s, const char *(*name)(int), int n)
+{
+    for (int i = 0; i < n; ++i)
+        if (!strcmp(name(i), s)) return i;
+    return -1;
+}
+
+static const char *type_name_int(int t) { return sidx_event_type_name((sidx_event_type)t); }
+
+/* One value of key k into e (ids: null notes the key in *nulls). */
+static int jin_field(json_in *in, int k, sidx_event *e, char *reason, size_t reason_size, uint32_t *nulls,
+                     uint32_t *nprims)
+{
+    uint32_t *ids[] = {[JK_RAY] = &e->ray_id, [JK_NODE] = &e->node,   [JK_PARENT] = &e->parent,
+                       [JK_DEPTH] = &e->depth, [JK_PRIM] = &e->prim,  [JK_COUNT] = &e->count,
+                       [JK_AUX] = &e->aux};
+    float *floats[] = {[JK_POS] = &e->pos,       [JK_COST] = &e->cost, [JK_T_NEAR] = &e->t_near,
+                       [JK_T_FAR] = &e->t_far,   [JK_T] = &e->t};
+    char name[24];
+    switch (k) {
+    case JK_TYPE: {
+        if (jin_string(in, name, sizeof name, SIDX_ERR_PARSE) != 0) return jin_fail(in, SIDX_ERR_PARSE, "\"type\" wants an event name");
+        const int t = name_index(name, type_name_int, SIDX_EV_COUNT);
+        if (t < 0) return jin_fail(in, SIDX_ERR_PARSE, "unknown event type \"%s\"", name);
+        e->type = (sidx_event_type)t;
+        return 0;
+    }
+    case JK_STRUCTURE:
+    case JK_TEXT:
+        if (jin_null(in)) {
+            *(k == JK_TEXT ? &e->text : &e->structure) = NULL;
+            return 0;
+        }
+        return jin_store_string(in, k == JK_TEXT ? &e->text : &e->structure);
+    case JK_RAY: case JK_NODE: case JK_PARENT: case JK_DEPTH: case JK_PRIM: case JK_COUNT: case JK_AUX:
+        if (jin_null(in)) {
+            *ids[k] = UINT32_MAX;
+            *nulls |= 1u << k;
+            return 0;
+        }
+        return jin_u32(in, ids[k]);
+    case JK_AXIS: return jin_i32(in, &e->axis);
+    case JK_RESULT: return jin_i32(in, &e->result);
+    case JK_REASON:
+        if (jin_string(in, reason, reason_size, SIDX_ERR_PARSE) != 0) return jin_fail(in, SIDX_ERR_PARSE, "\"reason\" wants a name");
+        return 0;
+    case JK_CELL:
+        if (jin_char(in, '[') || jin_i32(in, &e->cell[0]) || jin_char(in, ',') || jin_i32(in, &e->cell[1]) ||
+            jin_char(in, ',') || jin_i32(in, &e->cell[2]) || jin_char(in, ']'))
+            return -1;
+        return 0;
+    case JK_POS: case JK_COST: case JK_T_NEAR: case JK_T_FAR: case JK_T:
+        return jin_float(in, floats[k]);
+    case JK_BOUNDS: return jin_bounds(in, &e->bounds);
+    case JK_PRIMS: return jin_prims(in, &e->prims, nprims);
+    default: return jin_fail(in, SIDX_ERR_PARSE, "unknown field");
+    }
+}
+
+static const char *leaf_name_int(int r) { return sidx_leaf_reason_name(r); }
+static const char *term_name_int(int r) { return sidx_term_reason_name(r); }
+
+/* One event from in->line into *out; -1 (in->status, in->err) if the line is not one. */
+static int jin_event(json_in *in, sidx_event *out)
+{
+    sidx_event e = sidx_event_blank(SIDX_EV_COUNT);
+    char reason[24] = "";
+    uint32_t seen = 0, nulls = 0, nprims = 0;
+    if (jin_char(in, '{') != 0) return -1;
+    jin_ws(in);
+    if (*in->p == '}') return jin_fail(in, SIDX_ERR_PARSE, "empty object: an event needs \"type\"");
+    for (;;) {
+        char key[16];
+        const char *at = in->p;
+        if (jin_string(in, key, sizeof key, SIDX_ERR_PARSE) != 0) return -1;
+        const int k = json_key_index(key);
+        if (k < 0) {
+            in->p = at;
+            return jin_fail(in, SIDX_ERR_PARSE, "unknown field \"%s\"", key);
+        }
+        if (seen & (1u << k)) {
+            in->p = at;
+            return jin_fail(in, SIDX_ERR_PARSE, "field \"%s\" given twice", key);
+        }
+        seen |= 1u << k;
+        if (jin_char(in, ':') != 0 || jin_field(in, k, &e, reason, sizeof reason, &nulls, &nprims) != 0)
+            return -1;
+        jin_ws(in);
+        if (*in->p == '}') break;
+        if (jin_char(in, ',') != 0) return -1;
+    }
+    ++in->p;
+    jin_ws(in);
+    if (*in->p) return jin_fail(in, SIDX_ERR_PARSE, "text after the object");
+
+    in->p = in->line; /* what follows is about the whole line */
+    if (!(seen & (1u << JK_TYPE))) return jin_fail(in, SIDX_ERR_PARSE, "no \"type\"");
+    const char *tname = sidx_event_type_name(e.type);
+    if (seen & (1u << JK_REASON)) {
+        const int leaf = e.type == SIDX_EV_BUILD_LEAF;
+        const int r = leaf ? name_index(reason, leaf_name_int, SIDX_LEAF_REASON_COUNT)
+                           : name_index(reason, term_name_int, SIDX_TERM_REASON_COUNT);
+        if (r < 0) return jin_fail(in, SIDX_ERR_PARSE, "unknown %s reason \"%s\"", tname, reason);
+        e.reason = r;
+    }
+    if ((seen & (1u << JK_PRIMS)) && (e.count == UINT32_MAX || nprims != e.count))
+        return jin_fail(in, SIDX_ERR_PARSE, "\"prims\" lists %" PRIu32 " ids, \"count\" says %" PRIu32, nprims,
+                        e.count);
+    if (!(seen & (1u << JK_PRIMS))) e.prims = NULL;
+
+    /* The keys the writer would write for this event must be the keys read. */
+    sink_out keys = out_to_buffer(NULL, 0);
+    keys.record = 1;
+    json_event(&keys, &e, 0);
+    const uint32_t want = keys.keys | (1u << JK_TYPE) | (1u << JK_STRUCTURE);
+    for (int k = 0; k < JSON_NKEYS; ++k) {
+        const uint32_t bit = 1u << k;
+        if ((want & bit) && !(seen & bit))
+            return jin_fail(in, SIDX_ERR_PARSE, "a %s event needs \"%s\"", tname, json_key_names[k]);
+        if (!(want & bit) && (seen & bit))
+            return jin_fail(in, SIDX_ERR_PARSE, "a %s event has no \"%s\" here (docs/events.md)", tname,
+                            json_key_names[k]);
+        if ((nulls & bit) && !(keys.nullable & bit))
+            return jin_fail(in, SIDX_ERR_PARSE, "\"%s\" of a %s event is a number, not null", json_key_names[k],
+                            tname);
+    }
+    *out = e;
+    return 0;
+}
+
+sidx_status sidx_event_from_json(const char *line, sidx_event *ev, char *store, size_t store_size, size_t *store_used,
+                                 sidx_error *err)
+{
+    json_in in = {line, line, store, store ? store_size : 0, 0, err, SIDX_OK};
+    if (store_used) *store_used = 0;
+    if (!line || !ev) {
+        if (err) {
+            err->status = SIDX_ERR_INVALID_ARG;
+            snprintf(err->message, sizeof err->message, "sidx_event_from_json: line and ev must not be NULL");
+        }
+        return SIDX_ERR_INVALID_ARG;
+    }
+    sidx_event e;
+    if (jin_event(&in, &e) != 0) return in.status;
+    *ev = e;
+    if (store_used) *store_used = in.used;
+    return SIDX_OK;
 }
 
 /* ---- recorder ------------------------------------------------------------- */

@@ -298,8 +298,9 @@ static void step_path(char *step, size_t size)
     snprintf(slash + 1, size - (size_t)(slash + 1 - step), "sidx-step");
 }
 
-/* sidx-check --trace writes both traces; sidx-step --diff finds the same
- * first divergence (exit 1) and agrees with itself (exit 0). */
+/* sidx-check --trace writes both traces and the sidx-view commands that
+ * open them; sidx-step --diff finds the same first divergence (exit 1) and
+ * agrees with itself (exit 0). */
 static void traces_and_diff(void **state)
 {
     (void)state;
@@ -318,9 +319,33 @@ static void traces_and_diff(void **state)
         return;
     }
     assert_int_equal(plant(&ms[k], dir, file, sizeof file), 0);
-    snprintf(cmd, sizeof cmd, "'%s' 05_bvh_traversal %s --trace %s >/dev/null", checker, file, dir);
-    int st = system(cmd);
-    assert_int_equal(WEXITSTATUS(st), 1);
+    snprintf(cmd, sizeof cmd, "'%s' 05_bvh_traversal %s --trace %s", checker, file, dir);
+    FILE *p = popen(cmd, "r");
+    assert_non_null(p);
+    char *out;
+    assert_int_equal(drain(p, &out), 1);
+    /* with SDL2 the report names the two sidx-view commands, and each opens its trace */
+    char viewer[PATH_MAX + 32];
+    snprintf(viewer, sizeof viewer, "%s", step);
+    snprintf(strrchr(viewer, '/') + 1, 16, "sidx-view");
+    if (access(viewer, X_OK) == 0) {
+        const char *const which[] = {"reference.jsonl\n", "yours.jsonl\n"};
+        for (int w = 0; w < 2; ++w) {
+            const char *end = strstr(out, which[w]), *start = end;
+            assert_non_null(end);
+            while (start > out && start[-1] != '\n') --start;
+            while (*start == ' ' || (start[0] == 'v' && !strncmp(start, "view ", 5))) start += *start == ' ' ? 1 : 5;
+            assert_true(!strncmp(start, viewer, strlen(viewer)));
+            assert_non_null(strstr(start, " --accel bvh --scene flat2d --ray "));
+            snprintf(cmd, sizeof cmd, "%.*s --screenshot %s/view.png --size 320x200 >/dev/null",
+                     (int)(end + strlen(which[w]) - 1 - start), start, dir);
+            if (system(cmd) != 0) fail_msg("failed: %s", cmd);
+        }
+    } else {
+        print_message("no sidx-view (built without SDL2): the view commands are not checked\n");
+    }
+    free(out);
+    int st;
     snprintf(cmd, sizeof cmd, "'%s' --diff %s/reference.jsonl %s/yours.jsonl >/dev/null", step, dir, dir);
     st = system(cmd);
     assert_int_equal(WEXITSTATUS(st), 1);

@@ -1143,6 +1143,209 @@ static void test_traced_tests_through_printer(void **state)
     fclose(f);
 }
 
+/* ---- reading JSON back (sidx_event_from_json) ----------------------------- */
+
+/* json -> event -> json gives the same line; returns the event read. */
+static sidx_event json_round_trip(const sidx_event *e, char *store, size_t store_size)
+{
+    char a[4096], b[4096];
+    const int n = sidx_event_to_json(e, a, sizeof a);
+    assert_true(n > 0 && (size_t)n < sizeof a);
+    sidx_event back;
+    sidx_error err = {SIDX_OK, ""};
+    size_t used = 0;
+    const sidx_status s = sidx_event_from_json(a, &back, store, store_size, &used, &err);
+    if (s != SIDX_OK) fail_msg("%s: %s", a, err.message);
+    assert_true(used <= 2 * (size_t)n + 16);
+    sidx_event_to_json(&back, b, sizeof b);
+    assert_string_equal(a, b);
+    assert_int_equal(back.type, e->type);
+    return back;
+}
+
+/* Every event type, with the awkward values each field can hold. */
+static void test_json_read_round_trip(void **state)
+{
+    (void)state;
+    char store[8192];
+    static const uint32_t ids[] = {0, 7, 4294967294u, 12};
+    static const float floats[] = {0.0f, -0.0f, 0.734f, 1.0f / 3.0f, 1e-30f, 1.4e-45f /* subnormal */,
+                                   3.4028235e38f, -2.5f, INFINITY, -INFINITY, NAN};
+    const size_t nf = sizeof floats / sizeof floats[0];
+    for (int t = 0; t < SIDX_EV_COUNT; ++t) {
+        for (size_t v = 0; v < nf; ++v) {
+            sidx_event e = sidx_event_blank((sidx_event_type)t);
+            e.structure = v % 3 == 0 ? "bvh" : v % 3 == 1 ? "" : NULL;
+            e.ray_id = v == 2 ? UINT32_MAX : (uint32_t)v;
+            e.node = v % 2 ? UINT32_MAX : (uint32_t)(v * 3);
+            e.parent = v % 4 ? (uint32_t)v : UINT32_MAX;
+            e.depth = v % 5 ? (uint32_t)v : UINT32_MAX;
+            e.prim = v % 2 ? (uint32_t)v + 100u : UINT32_MAX;
+            e.count = (uint32_t)(sizeof ids / sizeof ids[0]);
+            e.aux = v == 3 ? UINT32_MAX : (uint32_t)v;
+            e.axis = (int32_t)(v % 4) - 1; /* -1 (a BSP plane) .. 2 */
+            e.result = v % 3 == 0 ? 1 : v % 3 == 1 ? 0 : -1;
+            e.reason = (int32_t)(v % (t == SIDX_EV_BUILD_LEAF ? SIDX_LEAF_REASON_COUNT : SIDX_TERM_REASON_COUNT));
+            if (v % 2) {
+                e.cell[0] = (int32_t)v;
+                e.cell[1] = INT32_MAX;
+                e.cell[2] = 0;
+            }
+            e.pos = floats[v];
+            e.cost = floats[(v + 1) % nf];
+            e.t_near = floats[(v + 2) % nf];
+            e.t_far = floats[(v + 3) % nf];
+            e.t = floats[(v + 4) % nf];
+            e.bounds = box(floats[v], -1, 2, floats[(v + 5) % nf], 3, 4);
+            e.text = v % 2 ? "a \"quoted\" tab\there, a back\\slash, a line\nbreak, \x01, caf\xc3\xa9" : NULL;
+            e.prims = v % 2 ? ids : NULL;
+            const sidx_event back = json_round_trip(&e, store, sizeof store);
+            if (t == SIDX_EV_NOTE && e.text) assert_string_equal(back.text, e.text);
+            if (t == SIDX_EV_BUILD_LEAF && e.prims) assert_memory_equal(back.prims, ids, sizeof ids);
+            if (e.structure) assert_string_equal(back.structure, e.structure);
+            else assert_null(back.structure);
+        }
+    }
+    /* a leaf with an empty prims list, and a real traversal */
+    sidx_event leaf = sidx_event_blank(SIDX_EV_BUILD_LEAF);
+    leaf.count = 0;
+    leaf.prims = ids;
+    json_round_trip(&leaf, store, sizeof store);
+    sidx_mesh m;
+    sidx_accel *a = NULL;
+    assert_int_equal(sidx_scene_open("flat2d", &m, NULL), SIDX_OK);
+    sidx_recorder rec;
+    sidx_recorder_init(&rec);
+    sidx_hook h = sidx_recorder_hook(&rec);
+    sidx_build_options bo;
+    memset(&bo, 0, sizeof bo);
+    bo.hook = &h;
+    assert_int_equal(sidx_accel_build("kdtree", &m, &bo, &a, NULL), SIDX_OK);
+    sidx_ray r;
+    assert_int_equal(sidx_ray_init(&r, sidx_v3(-1, 0.5f, 0.05f), sidx_v3(1, 0.2f, 0), 0, INFINITY), SIDX_OK);
+    sidx_query q;
+    memset(&q, 0, sizeof q);
+    q.hook = &h;
+    sidx_hit hit;
+    sidx_accel_intersect(a, &r, &q, &hit);
+    assert_true(rec.count > 10);
+    for (size_t i = 0; i < rec.count; ++i) json_round_trip(&rec.events[i], store, sizeof store);
+    sidx_recorder_free(&rec);
+    sidx_accel_destroy(a);
+    sidx_mesh_free(&m);
+}
+
+static sidx_status read_line(const char *line, sidx_error *err)
+{
+    char store[256];
+    sidx_event e = sidx_event_blank(SIDX_EV_NOTE);
+    e.node = 77;
+    err->message[0] = '\0';
+    const sidx_status s = sidx_event_from_json(line, &e, store, sizeof store, NULL, err);
+    if (s != SIDX_OK) assert_int_equal(e.node, 77); /* untouched on error */
+    return s;
+}
+
+/* Malformed lines are errors with a message, never a crash. */
+static void test_json_read_errors(void **state)
+{
+    (void)state;
+    static const char *const bad[] = {
+        "",
+        "   ",
+        "[]",
+        "{}",
+        "null",
+        "{\"type\":\"node_enter\"",                                                 /* truncated */
+        "{\"type\":\"nodes_enter\",\"structure\":\"bvh\",\"ray\":0}",               /* unknown event name */
+        "{\"type\":7,\"structure\":\"bvh\",\"ray\":0}",                             /* type not a string */
+        "{\"type\":\"mailbox_hit\",\"structure\":\"bvh\",\"ray\":0}",               /* prim missing */
+        "{\"type\":\"mailbox_hit\",\"structure\":\"bvh\",\"ray\":0,\"prim\":\"3\"}", /* wrong type */
+        "{\"type\":\"mailbox_hit\",\"structure\":\"bvh\",\"ray\":0,\"prim\":-3}",
+        "{\"type\":\"mailbox_hit\",\"structure\":\"bvh\",\"ray\":0,\"prim\":3.5}",
+        "{\"type\":\"mailbox_hit\",\"structure\":\"bvh\",\"ray\":0,\"prim\":4294967296}", /* huge */
+        "{\"type\":\"mailbox_hit\",\"structure\":\"bvh\",\"ray\":0,\"prim\":99999999999999999999999}",
+        "{\"type\":\"mailbox_hit\",\"structure\":\"bvh\",\"ray\":0,\"prim\":03}",
+        "{\"type\":\"mailbox_hit\",\"structure\":\"bvh\",\"ray\":0,\"prim\":3,\"t\":1}", /* extra field */
+        "{\"type\":\"mailbox_hit\",\"structure\":\"bvh\",\"ray\":0,\"prim\":3,\"prim\":3}",
+        "{\"type\":\"mailbox_hit\",\"structure\":\"bvh\",\"ray\":0,\"prim\":3,\"colour\":1}",
+        "{\"type\":\"mailbox_hit\",\"structure\":\"bvh\",\"ray\":0,\"prim\":3} x",
+        "{\"type\":\"mailbox_hit\",\"structure\":\"bvh\",\"ray\":0,\"prim\":3,}",
+        "{\"type\":\"mailbox_hit\",\"structure\":\"bvh\",\"ray\":null,\"prim\":3}", /* ray is never null */
+        "{\"type\":\"hit_update\",\"structure\":\"bvh\",\"ray\":0,\"prim\":3,\"t\":NaN}",
+        "{\"type\":\"hit_update\",\"structure\":\"bvh\",\"ray\":0,\"prim\":3,\"t\":nan}",
+        "{\"type\":\"hit_update\",\"structure\":\"bvh\",\"ray\":0,\"prim\":3,\"t\":\"NaN\"}",
+        "{\"type\":\"hit_update\",\"structure\":\"bvh\",\"ray\":0,\"prim\":3,\"t\":Infinity}",
+        "{\"type\":\"hit_update\",\"structure\":\"bvh\",\"ray\":0,\"prim\":3,\"t\":1e39}", /* beyond float */
+        "{\"type\":\"hit_update\",\"structure\":\"bvh\",\"ray\":0,\"prim\":3,\"t\":-1e999}",
+        "{\"type\":\"hit_update\",\"structure\":\"bvh\",\"ray\":0,\"prim\":3,\"t\":0x10}",
+        "{\"type\":\"hit_update\",\"structure\":\"bvh\",\"ray\":0,\"prim\":3,\"t\":1.}",
+        "{\"type\":\"hit_update\",\"structure\":\"bvh\",\"ray\":0,\"prim\":3,\"t\":.5}",
+        "{\"type\":\"hit_update\",\"structure\":\"bvh\",\"ray\":0,\"prim\":3,\"t\":1e}",
+        "{\"type\":\"hit_update\",\"structure\":\"bvh\",\"ray\":0,\"prim\":3,\"t\":null}",
+        "{\"type\":\"terminate\",\"structure\":\"bvh\",\"ray\":0,\"reason\":\"bored\",\"t\":1,\"count\":2}",
+        "{\"type\":\"terminate\",\"structure\":\"bvh\",\"ray\":0,\"reason\":2,\"t\":1,\"count\":2}",
+        "{\"type\":\"build_end\",\"structure\":\"bvh\",\"ray\":0,\"node\":null,\"count\":1,\"depth\":0}",
+        "{\"type\":\"box_test\",\"structure\":\"bvh\",\"ray\":0,\"node\":1,\"result\":0,"
+        "\"bounds\":{\"min\":[0,0,0],\"max\":[1,1,1]},\"t_near\":0,\"t_far\":1}", /* a miss has no interval */
+        "{\"type\":\"box_test\",\"structure\":\"bvh\",\"ray\":0,\"node\":1,\"result\":1,"
+        "\"bounds\":{\"min\":[0,0,0],\"max\":[1,1,1]}}", /* a hit needs one */
+        "{\"type\":\"box_test\",\"structure\":\"bvh\",\"ray\":0,\"node\":1,\"result\":0,"
+        "\"bounds\":{\"min\":[0,0],\"max\":[1,1,1]}}",
+        "{\"type\":\"box_test\",\"structure\":\"bvh\",\"ray\":0,\"node\":1,\"result\":0,"
+        "\"bounds\":{\"min\":[0,0,0],\"min\":[1,1,1]}}",
+        "{\"type\":\"build_leaf\",\"structure\":\"bvh\",\"ray\":0,\"node\":1,\"depth\":0,\"count\":3,"
+        "\"cost\":1,\"reason\":\"few_prims\",\"prims\":[1,2]}", /* fewer ids than count */
+        "{\"type\":\"build_leaf\",\"structure\":\"bvh\",\"ray\":0,\"node\":1,\"depth\":0,\"count\":1,"
+        "\"cost\":1,\"reason\":\"few_prims\",\"prims\":[1,-2]}",
+        "{\"type\":\"note\",\"structure\":\"bvh\",\"ray\":0,\"text\":\"unterminated}",
+        "{\"type\":\"note\",\"structure\":\"bvh\",\"ray\":0,\"text\":\"bad \\q escape\"}",
+        "{\"type\":\"note\",\"structure\":\"bvh\",\"ray\":0,\"text\":\"nul \\u0000 inside\"}",
+        "{\"type\":\"note\",\"structure\":\"bvh\",\"ray\":0,\"text\":\"lone \\udc00 surrogate\"}",
+        "{\"type\":\"note\",\"structure\":\"bvh\",\"ray\":0,\"text\":\"raw\ttab\"}",
+        "{\"type\":\"node_enter\",\"structure\":\"grid\",\"ray\":0,\"node\":1,\"depth\":0,\"t_near\":0,"
+        "\"t_far\":1,\"cell\":[1,2]}",
+    };
+    sidx_error err = {SIDX_OK, ""};
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
+        const sidx_status s = read_line(bad[i], &err);
+        if (s == SIDX_OK) fail_msg("accepted: %s", bad[i]);
+        assert_int_equal(s, SIDX_ERR_PARSE);
+        assert_int_equal(err.status, SIDX_ERR_PARSE);
+        assert_true(strlen(err.message) > 0);
+    }
+    /* blanks between tokens, another key order and a trailing newline are fine */
+    assert_int_equal(read_line(" { \"prim\" : 3 , \"ray\":0, \"type\":\"mailbox_hit\",\"structure\":\"bvh\" }\n", &err),
+                     SIDX_OK);
+    /* every truncation of a good line is an error */
+    sidx_event e = ev_prim(42, 1, 0.734f);
+    e.cell[0] = 1;
+    e.cell[1] = 2;
+    e.cell[2] = 3;
+    char line[256], cut[256];
+    const int n = sidx_event_to_json(&e, line, sizeof line);
+    for (int k = 0; k < n; ++k) {
+        memcpy(cut, line, (size_t)k);
+        cut[k] = '\0';
+        assert_int_equal(read_line(cut, &err), SIDX_ERR_PARSE);
+    }
+    assert_int_equal(read_line(line, &err), SIDX_OK);
+    /* every single-byte change either reads back to a valid line or fails cleanly */
+    for (int k = 0; k < n; ++k)
+        for (int c = 1; c < 256; c += 7) {
+            memcpy(cut, line, (size_t)n + 1);
+            cut[k] = (char)c;
+            read_line(cut, &err);
+        }
+    /* a store too small, NULL arguments */
+    char tiny[4];
+    sidx_event back;
+    assert_int_equal(sidx_event_from_json(line, &back, tiny, sizeof tiny, NULL, &err), SIDX_ERR_LIMIT);
+    assert_int_equal(sidx_event_from_json(line, &back, NULL, 0, NULL, NULL), SIDX_ERR_LIMIT);
+    assert_int_equal(sidx_event_from_json(NULL, &back, tiny, sizeof tiny, NULL, &err), SIDX_ERR_INVALID_ARG);
+    assert_int_equal(sidx_event_from_json(line, NULL, tiny, sizeof tiny, NULL, NULL), SIDX_ERR_INVALID_ARG);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1154,6 +1357,8 @@ int main(void)
         cmocka_unit_test(test_printer_long_line),
         cmocka_unit_test(test_json_fields_per_type),
         cmocka_unit_test(test_json_values),
+        cmocka_unit_test(test_json_read_round_trip),
+        cmocka_unit_test(test_json_read_errors),
         cmocka_unit_test(test_jsonl_sink),
         cmocka_unit_test(test_recorder),
         cmocka_unit_test(test_recorder_copies_leaf_prims),

@@ -1120,6 +1120,105 @@ static char *read_text(const char *path)
     return buf;
 }
 
+#if SIDX_HAVE_SDL
+/* sidx-view --events: a JSON Lines trace read back steps as the recording
+ * it was written from (one step per line); a trace that does not fit the
+ * structure is refused with the line and the reason, in the library call
+ * and in the program (exit 1). */
+static void view_events_from_file(void **state)
+{
+    (void)state;
+    view_state v;
+    sidx_error err;
+    assert_int_equal(view_open(&v, "flat2d", "kdtree", &err), SIDX_OK);
+    sidx_vec3 o, d;
+    view_default_ray(&v, &o, &d);
+    assert_int_equal(view_set_ray(&v, o, d, SIZE_MAX), SIDX_OK);
+    const size_t n = v.trav.count;
+    assert_true(n > 10);
+    char path[128], bad[128], png[128], line[2048], again[2048], cmd[1024];
+    snprintf(path, sizeof path, "/tmp/sidx_test_view_events_%ld.jsonl", (long)getpid());
+    snprintf(bad, sizeof bad, "/tmp/sidx_test_view_events_%ld_bad.jsonl", (long)getpid());
+    snprintf(png, sizeof png, "/tmp/sidx_test_view_events_%ld.png", (long)getpid());
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    for (size_t i = 0; i < n; ++i) {
+        sidx_event_to_json(&v.trav.events[i], line, sizeof line);
+        fprintf(f, "%s\n", line);
+    }
+    assert_int_equal(fclose(f), 0);
+    char *want = read_text(path);
+    assert_non_null(want);
+
+    /* read back: the same events, one step per line, the trace named */
+    view_state w;
+    assert_int_equal(view_open(&w, "flat2d", "kdtree", &err), SIDX_OK);
+    assert_int_equal(view_load_events(&w, path, 4, &err), SIDX_OK);
+    assert_int_equal(w.trav.count, n);
+    assert_int_equal(w.step, 4);
+    assert_string_equal(w.trace_path, path);
+    for (size_t i = 0; i < n; ++i) {
+        sidx_event_to_json(&v.trav.events[i], line, sizeof line);
+        sidx_event_to_json(&w.trav.events[i], again, sizeof again);
+        assert_string_equal(line, again);
+    }
+    view_replay r;
+    view_replay_run(&w, n, &r);
+    assert_true(r.nodes_entered > 0);
+    SDL_Surface *s = view_render_surface(&w, 480, 300);
+    assert_non_null(s);
+    SDL_FreeSurface(s);
+
+    /* a node the structure does not have, a build event, not JSON: refused, the trace kept */
+    static const char *const bad_lines[] = {
+        "{\"type\":\"node_enter\",\"structure\":\"kdtree\",\"ray\":0,\"node\":99999,\"depth\":0,\"t_near\":0,\"t_far\":1}",
+        "{\"type\":\"build_end\",\"structure\":\"kdtree\",\"ray\":0,\"node\":3,\"count\":1,\"depth\":1}",
+        "{\"type\":\"prim_test\",\"structure\":\"kdtree\",\"ray\":0,\"prim\":128,\"result\":0}",
+        "{\"type\":\"prim_test\",\"structure\":\"bvh\",\"ray\":0,\"prim\":1,\"result\":0}",
+        "{\"type\":\"prim_test\",\"structure\":\"kdtree\",\"ray\":0,\"prim\":1,\"result\":0",
+    };
+    static const char *const why[] = {"node 99999 is out of range", "build_end", "triangle 128 is out of range",
+                                      "a trace of bvh", "not a sidx event"};
+    for (size_t k = 0; k < sizeof bad_lines / sizeof bad_lines[0]; ++k) {
+        f = fopen(bad, "w");
+        assert_non_null(f);
+        fprintf(f, "%s%s\n", want, bad_lines[k]);
+        assert_int_equal(fclose(f), 0);
+        assert_int_not_equal(view_load_events(&w, bad, 0, &err), SIDX_OK);
+        if (!strstr(err.message, why[k])) fail_msg("'%s' does not say '%s'", err.message, why[k]);
+        char at[32];
+        snprintf(at, sizeof at, ":%zu:", n + 1);
+        assert_non_null(strstr(err.message, at)); /* the line */
+        assert_int_equal(w.trav.count, n);
+    }
+
+    /* the program: step N / N with N the number of lines; exit 1 with the message */
+    snprintf(cmd, sizeof cmd, "%s/sidx-view --accel kdtree --scene flat2d --events %s --size 480x300 --screenshot %s",
+             bin_dir, path, png);
+    char *out = run_capture(cmd);
+    snprintf(line, sizeof line, "step %zu/%zu)", n, n);
+    if (!strstr(out, line)) fail_msg("'%s' does not say '%s'", out, line);
+    free(out);
+    snprintf(cmd, sizeof cmd, "%s/sidx-view --accel kdtree --scene flat2d --events %s --screenshot %s 2>&1", bin_dir,
+             bad, png);
+    FILE *p = popen(cmd, "r");
+    assert_non_null(p);
+    out = tk_read_all(p);
+    const int rc = pclose(p);
+    assert_true(WIFEXITED(rc) && WEXITSTATUS(rc) == 1);
+    assert_non_null(strstr(out, "not a sidx event"));
+    free(out);
+    free(want);
+    unlink(path);
+    unlink(bad);
+    unlink(png);
+    view_close(&w);
+    view_close(&v);
+}
+#else
+static void view_events_from_file(void **state) { (void)state; skip(); }
+#endif
+
 static void step_matches_expected(void **state)
 {
     (void)state;
@@ -1377,6 +1476,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(view_screenshots_differ_between_steps),
         cmocka_unit_test(view_keys_and_mouse),
         cmocka_unit_test(view_steps_real_recording),
+        cmocka_unit_test(view_events_from_file),
         cmocka_unit_test(leaf_prims_from_real_builds),
         cmocka_unit_test(dot_real_leaf_labels),
         cmocka_unit_test(dot_labels_say_the_structure),

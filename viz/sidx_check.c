@@ -46,7 +46,9 @@ static void usage(FILE *f)
             "\n"
             "  --list          the exercises\n"
             "  --trace DIR     write DIR/reference.jsonl and DIR/yours.jsonl for the failing case\n"
-            "                  (read them with sidx-step --diff)\n"
+            "                  (or for case K) as JSON Lines: compare them with sidx-step --diff; for\n"
+            "                  a walk the report also prints the two sidx-view --events commands\n"
+            "                  that step through each over its scene and structure\n"
             "  --timeout S     time limit per case, seconds (default 2)\n"
             "  --case K        run only case K\n"
             "  --verbose       one line per case\n"
@@ -100,7 +102,7 @@ static int add_words(char **argv, int n, char *words)
 int main(int argc, char **argv)
 {
     const char *name = NULL, *file = NULL;
-    char *pass[16];
+    char *pass[20];
     int npass = 0;
     for (int i = 1; i < argc; ++i) {
         const char *a = argv[i];
@@ -206,10 +208,15 @@ int main(int argc, char **argv)
         }
     }
     {
-        char *rv[20];
+        char *rv[24], viewer[PATH_MAX + 32];
         int n = 0;
         rv[n++] = exe;
         for (int j = 0; j < npass; ++j) rv[n++] = pass[j];
+        snprintf(viewer, sizeof viewer, "%s/bin/sidx-view", bdir); /* built only with SDL2 */
+        if (access(viewer, X_OK) == 0) {
+            rv[n++] = "--viewer";
+            rv[n++] = viewer;
+        }
         rv[n] = NULL;
         const int st = run(rv);
         rc = (st >= 0 && st <= 2) ? st : 2;

@@ -21,6 +21,7 @@
 #include <math.h>
 #include <poll.h>
 #include <signal.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -509,15 +510,13 @@ static void run_stepper(const steps *s, size_t pos, int brk, const char *title)
 }
 /* ---- --diff: two JSON Lines traces side by side ------------------------------- */
 
-/* One trace line: its top-level "key":value pairs, values kept as text
- * (numbers, "strings", null, [arrays], {objects}).  The lines are sidx's
- * own (sidx_event_to_json), so a flat scanner is enough. */
-#define DIFF_MAX_FIELDS 32
+/* One trace line, read back into an event (sidx_event_from_json), with
+ * the line kept for printing and the keys its JSON object holds. */
 typedef struct diff_ev {
-    char *line;                     /* the line as read (kept for printing) */
-    char *copy;                     /* scanned copy the fields point into */
-    int n;
-    const char *key[DIFF_MAX_FIELDS], *val[DIFF_MAX_FIELDS];
+    sidx_event ev;
+    char *line;     /* the line as read */
+    char *store;    /* the event's strings and prims */
+    uint32_t keys;  /* bit k: diff_keys[k] is in the line */
     size_t lineno;
 } diff_ev;
 
@@ -526,62 +525,43 @@ typedef struct diff_trace {
     size_t n, cap;
 } diff_trace;
 
-static char *scan_value(char *p)
-{
-    if (*p == '"') {
-        for (++p; *p && *p != '"'; ++p)
-            if (*p == '\\' && p[1]) ++p;
-        return *p ? p + 1 : p;
-    }
-    if (*p == '[' || *p == '{') {
-        int depth = 0;
-        for (; *p; ++p) {
-            if (*p == '"') {
-                p = scan_value(p) - 1;
-                continue;
-            }
-            if (*p == '[' || *p == '{') ++depth;
-            if ((*p == ']' || *p == '}') && --depth == 0) return p + 1;
-        }
-        return p;
-    }
-    while (*p && *p != ',' && *p != '}') ++p;
-    return p;
-}
+/* The fields compared, as the JSON names them ("structure" and "ray" name
+ * the producer, not the step, and are left out). */
+typedef enum { DK_ID, DK_I32, DK_FLOAT, DK_REASON, DK_CELL, DK_BOUNDS, DK_TEXT, DK_PRIMS, DK_TYPE } diff_kind;
+typedef struct diff_key {
+    const char *name;
+    diff_kind kind;
+    size_t off;
+} diff_key;
+#define DKEY(name, kind, field) {name, kind, offsetof(sidx_event, field)}
+static const diff_key diff_keys[] = {
+    DKEY("type", DK_TYPE, type),       DKEY("node", DK_ID, node),         DKEY("parent", DK_ID, parent),
+    DKEY("depth", DK_ID, depth),       DKEY("prim", DK_ID, prim),         DKEY("count", DK_ID, count),
+    DKEY("aux", DK_ID, aux),           DKEY("axis", DK_I32, axis),        DKEY("result", DK_I32, result),
+    DKEY("reason", DK_REASON, reason), DKEY("cell", DK_CELL, cell),       DKEY("pos", DK_FLOAT, pos),
+    DKEY("cost", DK_FLOAT, cost),      DKEY("t_near", DK_FLOAT, t_near), DKEY("t_far", DK_FLOAT, t_far),
+    DKEY("t", DK_FLOAT, t),            DKEY("bounds", DK_BOUNDS, bounds), DKEY("text", DK_TEXT, text),
+    DKEY("prims", DK_PRIMS, prims),
+};
+#define NDIFF_KEYS ((int)(sizeof diff_keys / sizeof diff_keys[0]))
 
-static int parse_line(diff_ev *e)
+/* Which of diff_keys the event's JSON holds: the writer decides, so the
+ * diff compares exactly the fields the two lines carry. */
+static uint32_t event_keys(const sidx_event *ev)
 {
-    char *p = e->copy;
-    while (*p == ' ') ++p;
-    if (*p != '{') return -1;
-    ++p;
-    e->n = 0;
-    while (*p && *p != '}') {
-        if (*p == ',' || *p == ' ') {
-            ++p;
-            continue;
-        }
-        if (*p != '"' || e->n == DIFF_MAX_FIELDS) return -1;
-        char *k = p + 1, *ke = strchr(k, '"');
-        if (!ke || ke[1] != ':') return -1;
-        *ke = '\0';
-        char *v = ke + 2, *ve = scan_value(v);
-        const char c = *ve;
-        *ve = '\0';
-        e->key[e->n] = k;
-        e->val[e->n] = v;
-        ++e->n;
-        p = c ? ve + 1 : ve;
-        if (c == '}') break;
+    char small[512];
+    const int n = sidx_event_to_json(ev, small, sizeof small);
+    char *json = n >= 0 && (size_t)n < sizeof small ? small : malloc(n > 0 ? (size_t)n + 1 : 1);
+    if (!json) return 0;
+    if (json != small) sidx_event_to_json(ev, json, (size_t)n + 1);
+    uint32_t keys = 1u; /* type */
+    for (int k = 1; k < NDIFF_KEYS; ++k) {
+        char pat[32];
+        snprintf(pat, sizeof pat, ",\"%s\":", diff_keys[k].name); /* a quote inside a string is escaped */
+        if (strstr(json, pat)) keys |= 1u << k;
     }
-    return 0;
-}
-
-static const char *ev_get(const diff_ev *e, const char *key)
-{
-    for (int i = 0; i < e->n; ++i)
-        if (!strcmp(e->key[i], key)) return e->val[i];
-    return NULL;
+    if (json != small) free(json);
+    return keys;
 }
 
 static int read_trace(const char *path, diff_trace *t, int notes)
@@ -610,21 +590,25 @@ static int read_trace(const char *path, diff_trace *t, int notes)
             t->cap = nc;
         }
         diff_ev *e = &t->ev[t->n];
+        const size_t store_size = 2 * (size_t)len + 16;
         e->line = strdup(line);
-        e->copy = strdup(line);
+        e->store = malloc(store_size);
         e->lineno = lineno;
-        if (!e->line || !e->copy || parse_line(e) != 0 || !ev_get(e, "type")) {
-            fprintf(stderr, "sidx-step: %s:%zu: not a sidx event (JSON object with a \"type\")\n", path, lineno);
+        sidx_error err = {SIDX_OK, "out of memory"};
+        if (!e->line || !e->store ||
+            sidx_event_from_json(line, &e->ev, e->store, store_size, NULL, &err) != SIDX_OK) {
+            fprintf(stderr, "sidx-step: %s:%zu: not a sidx event: %s\n", path, lineno, err.message);
             free(e->line);
-            free(e->copy);
+            free(e->store);
             rc = -1;
             break;
         }
-        if (!notes && !strcmp(ev_get(e, "type"), "\"note\"")) {
+        if (!notes && e->ev.type == SIDX_EV_NOTE) {
             free(e->line);
-            free(e->copy);
+            free(e->store);
             continue;
         }
+        e->keys = event_keys(&e->ev);
         ++t->n;
     }
     free(line);
@@ -636,56 +620,113 @@ static void free_trace(diff_trace *t)
 {
     for (size_t i = 0; i < t->n; ++i) {
         free(t->ev[i].line);
-        free(t->ev[i].copy);
+        free(t->ev[i].store);
     }
     free(t->ev);
 }
 
-/* A float as sidx writes it: a number or "inf", "-inf", "nan". */
-static int as_float(const char *v, double *out)
+static int same_float(float x, float y, int exact)
 {
-    if (!strcmp(v, "\"inf\"")) *out = INFINITY;
-    else if (!strcmp(v, "\"-inf\"")) *out = -INFINITY;
-    else if (!strcmp(v, "\"nan\"")) *out = NAN;
-    else {
-        char *end;
-        *out = strtod(v, &end);
-        return end != v && *end == '\0';
+    if (exact || isnan(x) || isnan(y) || isinf(x) || isinf(y))
+        return (isnan(x) && isnan(y)) || (x == y && signbit(x) == signbit(y));
+    const double m = fabs((double)x) > fabs((double)y) ? fabs((double)x) : fabs((double)y);
+    return fabs((double)x - (double)y) <= 1e-5 * m + 1e-7;
+}
+
+static int same_field(const diff_key *k, const sidx_event *a, const sidx_event *b, int exact)
+{
+    const char *pa = (const char *)a + k->off, *pb = (const char *)b + k->off;
+    switch (k->kind) {
+    case DK_FLOAT: {
+        float x, y;
+        memcpy(&x, pa, sizeof x);
+        memcpy(&y, pb, sizeof y);
+        return same_float(x, y, exact);
     }
-    return 1;
+    case DK_BOUNDS:
+        return same_float(a->bounds.min.x, b->bounds.min.x, exact) &&
+               same_float(a->bounds.min.y, b->bounds.min.y, exact) &&
+               same_float(a->bounds.min.z, b->bounds.min.z, exact) &&
+               same_float(a->bounds.max.x, b->bounds.max.x, exact) &&
+               same_float(a->bounds.max.y, b->bounds.max.y, exact) && same_float(a->bounds.max.z, b->bounds.max.z, exact);
+    case DK_CELL: return !memcmp(a->cell, b->cell, sizeof a->cell);
+    case DK_TEXT: return a->text && b->text ? !strcmp(a->text, b->text) : a->text == b->text;
+    case DK_PRIMS:
+        return a->count == b->count && (!a->count || !memcmp(a->prims, b->prims, a->count * sizeof *a->prims));
+    case DK_TYPE: return a->type == b->type;
+    default: return !memcmp(pa, pb, sizeof(uint32_t)); /* ids, axis, result, reason */
+    }
 }
 
-static int same_value(const char *a, const char *b, int exact)
+/* A float as the JSON writer spells it: the shortest text that reads back. */
+static void put_float(char *buf, size_t size, float f)
 {
-    if (!strcmp(a, b)) return 1;
-    double x, y;
-    if (exact || !as_float(a, &x) || !as_float(b, &y)) return 0;
-    if (isnan(x) || isnan(y)) return isnan(x) && isnan(y);
-    if (isinf(x) || isinf(y)) return x == y;
-    const double m = fabs(x) > fabs(y) ? fabs(x) : fabs(y);
-    return fabs(x - y) <= 1e-5 * m + 1e-7;
+    if (isnan(f) || isinf(f)) {
+        snprintf(buf, size, "%s", isnan(f) ? "\"nan\"" : f > 0 ? "\"inf\"" : "\"-inf\"");
+        return;
+    }
+    for (int prec = 6; prec <= 9; ++prec) {
+        snprintf(buf, size, "%.*g", prec, (double)f);
+        if (strtof(buf, NULL) == f) break;
+    }
 }
 
-/* The fields of a and b that differ ("structure" and "ray" name the
- * producer, not the step, and are not compared); 0 if none. */
+static void field_text(const diff_key *k, const sidx_event *e, char *buf, size_t size)
+{
+    const char *p = (const char *)e + k->off;
+    uint32_t u;
+    int32_t i;
+    float f;
+    char x[6][32];
+    switch (k->kind) {
+    case DK_ID:
+        memcpy(&u, p, sizeof u);
+        if (u == UINT32_MAX) snprintf(buf, size, "null");
+        else snprintf(buf, size, "%u", (unsigned)u);
+        break;
+    case DK_I32:
+        memcpy(&i, p, sizeof i);
+        snprintf(buf, size, "%d", (int)i);
+        break;
+    case DK_FLOAT:
+        memcpy(&f, p, sizeof f);
+        put_float(buf, size, f);
+        break;
+    case DK_REASON:
+        snprintf(buf, size, "\"%s\"", e->type == SIDX_EV_BUILD_LEAF ? sidx_leaf_reason_name(e->reason)
+                                                                     : sidx_term_reason_name(e->reason));
+        break;
+    case DK_CELL: snprintf(buf, size, "[%d,%d,%d]", (int)e->cell[0], (int)e->cell[1], (int)e->cell[2]); break;
+    case DK_BOUNDS: {
+        const float v[6] = {e->bounds.min.x, e->bounds.min.y, e->bounds.min.z,
+                            e->bounds.max.x, e->bounds.max.y, e->bounds.max.z};
+        for (int j = 0; j < 6; ++j) put_float(x[j], sizeof x[j], v[j]);
+        snprintf(buf, size, "{\"min\":[%s,%s,%s],\"max\":[%s,%s,%s]}", x[0], x[1], x[2], x[3], x[4], x[5]);
+        break;
+    }
+    case DK_TEXT: snprintf(buf, size, e->text ? "\"%s\"" : "null", e->text ? e->text : ""); break;
+    case DK_PRIMS: snprintf(buf, size, "[%u ids]", (unsigned)e->count); break;
+    case DK_TYPE: snprintf(buf, size, "\"%s\"", sidx_event_type_name(e->type)); break;
+    }
+}
+
+/* The fields of a and b that differ, named as in the JSON; 0 if none. */
 static int diff_fields(const diff_ev *a, const diff_ev *b, int exact, char *why, size_t size)
 {
     int n = 0;
     size_t off = 0;
     why[0] = '\0';
-    for (int pass = 0; pass < 2; ++pass) {
-        const diff_ev *x = pass ? b : a, *y = pass ? a : b;
-        for (int i = 0; i < x->n; ++i) {
-            const char *k = x->key[i];
-            if (!strcmp(k, "structure") || !strcmp(k, "ray")) continue;
-            const char *other = ev_get(y, k);
-            if (pass && other) continue; /* both have it: compared in the first pass */
-            if (other && same_value(x->val[i], other, exact)) continue;
-            const char *va = pass ? (other ? other : "absent") : x->val[i];
-            const char *vb = pass ? x->val[i] : (other ? other : "absent");
-            if (off < size) off += (size_t)snprintf(why + off, size - off, "%s%s: %s vs %s", n ? ", " : "", k, va, vb);
-            ++n;
-        }
+    for (int k = 0; k < NDIFF_KEYS; ++k) {
+        const uint32_t bit = 1u << k;
+        const int in_a = (a->keys & bit) != 0, in_b = (b->keys & bit) != 0;
+        if (!in_a && !in_b) continue;
+        if (in_a && in_b && same_field(&diff_keys[k], &a->ev, &b->ev, exact)) continue;
+        char va[256] = "absent", vb[256] = "absent";
+        if (in_a) field_text(&diff_keys[k], &a->ev, va, sizeof va);
+        if (in_b) field_text(&diff_keys[k], &b->ev, vb, sizeof vb);
+        if (off < size)
+            off += (size_t)snprintf(why + off, size - off, "%s%s: %s vs %s", n ? ", " : "", diff_keys[k].name, va, vb);
+        ++n;
     }
     return n;
 }
@@ -734,16 +775,15 @@ static int diff_main(int argc, char **argv)
         rc = 1;
     }
     /* events of each type on both sides, in the order types first appear */
-    const char *types[64];
-    size_t ca[64], cb[64], nt = 0;
+    int types[SIDX_EV_COUNT];
+    size_t ca[SIDX_EV_COUNT] = {0}, cb[SIDX_EV_COUNT] = {0}, nt = 0;
     for (int side = 0; side < 2; ++side) {
         const diff_trace *t = side ? &b : &a;
         for (size_t k = 0; k < t->n; ++k) {
-            const char *ty = ev_get(&t->ev[k], "type");
+            const int ty = (int)t->ev[k].ev.type;
             size_t j = 0;
-            while (j < nt && strcmp(types[j], ty)) ++j;
+            while (j < nt && types[j] != ty) ++j;
             if (j == nt) {
-                if (nt == 64) continue;
                 types[nt] = ty;
                 ca[nt] = cb[nt] = 0;
                 ++nt;
@@ -752,11 +792,9 @@ static int diff_main(int argc, char **argv)
         }
     }
     printf("%-20s %8s %8s\n", "events", "A", "B");
-    for (size_t j = 0; j < nt; ++j) {
-        char name[64];
-        snprintf(name, sizeof name, "%.*s", (int)strlen(types[j]) - 2, types[j] + 1);
-        printf("  %-18s %8zu %8zu%s\n", name, ca[j], cb[j], ca[j] != cb[j] ? "  *" : "");
-    }
+    for (size_t j = 0; j < nt; ++j)
+        printf("  %-18s %8zu %8zu%s\n", sidx_event_type_name((sidx_event_type)types[j]), ca[j], cb[j],
+               ca[j] != cb[j] ? "  *" : "");
     printf("  %-18s %8zu %8zu\n", "total", a.n, b.n);
 out:
     free_trace(&a);

@@ -3,6 +3,7 @@
  *   sidx-view [--accel NAME] [--scene S] [--mode 2d|build|3d|heat] [--ray R] [build knobs]
  *   sidx-view --screenshot out.png [--step N] [--mode ...] [--size WxH] ...
  *   sidx-view --html out.html [--step N] [--mode ...] ...
+ *   sidx-view --events TRACE.jsonl [--scene S --accel NAME --ray R knobs] ...
  *
  * With --screenshot it renders one frame into an offscreen surface and
  * writes a PNG: no window, no display, no video driver.  With --html it
@@ -33,6 +34,9 @@ static void usage(FILE *f)
             "  --mode M            2d, build, 3d or heat (default 2d)\n"
             "  --ray R             ray ox,oy,oz,dx,dy,dz (default: across the scene, in z = 0)\n"
             "  --step N            show the first N events (default: all)\n"
+            "  --events F.jsonl    step through the traversal trace in F (sidx-step --json,\n"
+            "                      sidx-check --trace) instead of tracing the ray here; give the\n"
+            "                      --scene, --accel, knobs and --ray it was recorded with\n"
             "  --level K           3D: draw the boxes of tree level K\n"
             "  --yaw A --pitch A   3D camera angles in radians; --zoom Z\n"
             "  --size WxH          window / screenshot size (default 1100x700)\n"
@@ -136,7 +140,7 @@ static int run_window(view_state *v, int w, int h)
 
 int main(int argc, char **argv)
 {
-    const char *accel = NULL, *scene = "flat2d", *shot = NULL, *html = NULL;
+    const char *accel = NULL, *scene = "flat2d", *shot = NULL, *html = NULL, *events = NULL;
     int w = 1100, h = 700, has_ray = 0, has_step = 0, level = -1;
     long step = 0;
     float yaw = NAN, pitch = NAN, zoom = NAN;
@@ -165,6 +169,8 @@ int main(int argc, char **argv)
             accel = argv[++i];
         } else if (!strcmp(a, "--scene") && has_val) {
             scene = argv[++i];
+        } else if (!strcmp(a, "--events") && has_val) {
+            events = argv[++i];
         } else if (!strcmp(a, "--screenshot") && has_val) {
             shot = argv[++i];
         } else if (!strcmp(a, "--html") && has_val) {
@@ -242,9 +248,15 @@ int main(int argc, char **argv)
     if (isfinite(zoom)) v.zoom = zoom;
     if (!has_ray) view_default_ray(&v, &org, &dir);
     /* in the 3D window without an explicit ray, show none (click a pixel for
-     * one); a page always gets one */
-    if (has_ray || html || mode == VIEW_2D || mode == VIEW_BUILD)
+     * one); a page always gets one; a trace read from a file has no ray but
+     * the one given */
+    if (has_ray || (!events && (html || mode == VIEW_2D || mode == VIEW_BUILD)))
         view_set_ray(&v, org, dir, has_step && mode != VIEW_BUILD ? (size_t)step : SIZE_MAX);
+    if (events && view_load_events(&v, events, has_step && mode != VIEW_BUILD ? (size_t)step : SIZE_MAX, &err) != SIDX_OK) {
+        fprintf(stderr, "sidx-view: %s\n", err.message);
+        view_close(&v);
+        return 1;
+    }
     if (mode == VIEW_BUILD) v.build_step = has_step && (size_t)step < v.build.count ? (size_t)step : v.build.count;
 
     int rc;

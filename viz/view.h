@@ -87,6 +87,8 @@ typedef struct view_state {
     int has_ray;
     sidx_vec3 org, dir;
     sidx_recorder trav;        /* the ray's traversal events */
+    char trace_path[256];      /* the file trav was read from (view_load_events); "" = recorded here */
+    char *trace_store;         /* the strings of the events read from it */
     size_t step;               /* traversal events shown: 0..trav.count */
     size_t build_step;         /* build events shown (VIEW_BUILD): 0..build.count */
 
@@ -122,6 +124,14 @@ void view_close(view_state *v);
 sidx_status view_set_accel(view_state *v, const char *accel, sidx_error *err);
 /* Traces org + t·dir with a recorder; step is set to `step` (clamped). */
 sidx_status view_set_ray(view_state *v, sidx_vec3 org, sidx_vec3 dir, size_t step);
+/* Replaces the traversal with the events of a JSON Lines trace (sidx-step
+ * --json, sidx-check --trace): one event per non-blank line, read with
+ * sidx_event_from_json, checked against the structure built here (only
+ * traversal events; node ids below its node count, primitive ids below the
+ * mesh's triangle count).  step is set to `step` (clamped).  On an error
+ * err names the file, the line and what does not fit; trav is unchanged.
+ * The trace stands until the next view_set_ray. */
+sidx_status view_load_events(view_state *v, const char *path, size_t step, sidx_error *err);
 /* The default 2D ray across the scene. */
 void view_default_ray(const view_state *v, sidx_vec3 *org, sidx_vec3 *dir);
 /* Replays the first `step` traversal events. */

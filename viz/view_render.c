@@ -233,12 +233,17 @@ static const char *node_tag(const view_state *v, uint32_t id, char tag[48])
 static void traversal_panel(const view_state *v, panel *p, const view_replay *r)
 {
     char tag[48];
-    if (!v->has_ray) {
+    if (!v->has_ray && !v->trace_path[0]) {
         pline(p, PANEL_DIM, "no ray: drag with the mouse to shoot one");
         return;
     }
-    pline(p, PANEL_FG, "ray o=(%.3g, %.3g, %.3g)", (double)v->org.x, (double)v->org.y, (double)v->org.z);
-    pline(p, PANEL_FG, "    d=(%.3g, %.3g, %.3g)", (double)v->dir.x, (double)v->dir.y, (double)v->dir.z);
+    if (v->trace_path[0]) pline(p, PANEL_FG, "events of %s", v->trace_path);
+    if (v->has_ray) {
+        pline(p, PANEL_FG, "ray o=(%.3g, %.3g, %.3g)", (double)v->org.x, (double)v->org.y, (double)v->org.z);
+        pline(p, PANEL_FG, "    d=(%.3g, %.3g, %.3g)", (double)v->dir.x, (double)v->dir.y, (double)v->dir.z);
+    } else {
+        pline(p, PANEL_DIM, "ray not given (--ray draws it)");
+    }
     pline(p, PANEL_HI, "step %zu / %zu%s", v->step, v->trav.count, v->playing ? "  (playing)" : "");
     pgap(p);
     if (r->best_prim != SIDX_NO_HIT)

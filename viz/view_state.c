@@ -120,6 +120,7 @@ void view_close(view_state *v)
     sidx_viz_tree_free(&v->tree);
     sidx_recorder_free(&v->build);
     sidx_recorder_free(&v->trav);
+    free(v->trace_store);
     sidx_mesh_free(&v->mesh);
     free(v->image);
     free(v->prim_mark);
@@ -134,6 +135,7 @@ sidx_status view_set_ray(view_state *v, sidx_vec3 org, sidx_vec3 dir, size_t ste
     v->has_ray = 1;
     v->org = org;
     v->dir = dir;
+    v->trace_path[0] = '\0';
     sidx_recorder_clear(&v->trav);
     if (!v->accel) return SIDX_OK;
     sidx_hook h = sidx_recorder_hook(&v->trav);
@@ -144,6 +146,129 @@ sidx_status view_set_ray(view_state *v, sidx_vec3 org, sidx_vec3 dir, size_t ste
     sidx_hit hit;
     sidx_accel_intersect(v->accel, &r, &q, &hit);
     v->step = step > v->trav.count ? v->trav.count : step;
+    return SIDX_OK;
+}
+
+/* Whether event e of a trace fits the structure built here; if not, why. */
+static int event_fits(const view_state *v, const sidx_event *e, uint32_t nodes, char *why, size_t size)
+{
+    if (!(SIDX_EVMASK_TRAVERSAL & SIDX_EVMASK(e->type))) {
+        snprintf(why, size, "a %s event: --events takes a traversal trace (sidx-step --json, sidx-check --trace)",
+                 sidx_event_type_name(e->type));
+        return 0;
+    }
+    /* kdtree-binned's walk names itself "kdtree": a name that begins the
+     * other is the same family */
+    const char *st = e->structure;
+    const size_t sl = st ? strlen(st) : 0, al = strlen(v->accel_name);
+    if (sl && strncmp(st, v->accel_name, sl < al ? sl : al) != 0) {
+        snprintf(why, size, "a trace of %.40s, but the structure built here is %.40s (--accel)", st, v->accel_name);
+        return 0;
+    }
+    const int has_node = e->type == SIDX_EV_NODE_ENTER || e->type == SIDX_EV_BOX_TEST ||
+                         e->type == SIDX_EV_STACK_PUSH || e->type == SIDX_EV_STACK_POP;
+    if (has_node && e->node != UINT32_MAX && nodes != UINT32_MAX && e->node >= nodes) {
+        snprintf(why, size, "node %u is out of range: the %s built here has %u nodes (give the --scene, --accel "
+                 "and build knobs the trace was recorded with)", (unsigned)e->node, v->accel_name, (unsigned)nodes);
+        return 0;
+    }
+    const int has_prim = e->type == SIDX_EV_PRIM_TEST || e->type == SIDX_EV_HIT_UPDATE ||
+                         e->type == SIDX_EV_MAILBOX_HIT || e->type == SIDX_EV_RAY_END;
+    if (has_prim && e->prim != UINT32_MAX && e->prim >= v->mesh.num_triangles) {
+        snprintf(why, size, "triangle %u is out of range: scene %.60s has %u triangles (give the --scene the trace "
+                 "was recorded with)", (unsigned)e->prim, v->scene, (unsigned)v->mesh.num_triangles);
+        return 0;
+    }
+    return 1;
+}
+
+sidx_status view_load_events(view_state *v, const char *path, size_t step, sidx_error *err)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) {
+        if (err) {
+            err->status = SIDX_ERR_IO;
+            snprintf(err->message, sizeof err->message, "cannot open %.200s", path);
+        }
+        return SIDX_ERR_IO;
+    }
+    /* the whole file, then one store for every line's strings: a line
+     * needs at most 2 * its length + 16 bytes (sidx_event_from_json) */
+    size_t size = 0, cap = 0;
+    char *text = NULL;
+    for (;;) {
+        if (size + 4096 + 1 > cap) {
+            cap = cap ? 2 * cap : 65536;
+            char *grown = realloc(text, cap);
+            if (!grown) break;
+            text = grown;
+        }
+        const size_t got = fread(text + size, 1, cap - size - 1, f);
+        size += got;
+        if (got == 0) break;
+    }
+    const int read_error = ferror(f) || !text;
+    fclose(f);
+    size_t lines = 1;
+    for (size_t i = 0; text && i < size; ++i) lines += text[i] == '\n';
+    const size_t store_size = 2 * size + 16 * lines;
+    char *store = read_error ? NULL : malloc(store_size);
+    sidx_event *evs = read_error ? NULL : malloc(lines * sizeof *evs);
+    sidx_status s = SIDX_OK;
+    if (!store || !evs) {
+        s = read_error ? SIDX_ERR_IO : SIDX_ERR_NOMEM;
+        if (err) snprintf(err->message, sizeof err->message, "%.200s: %s", path,
+                          read_error ? "cannot read" : "out of memory");
+    }
+    uint32_t nodes = UINT32_MAX; /* the node count the build reported, if it did */
+    for (size_t k = 0; k < v->build.count; ++k)
+        if (v->build.events[k].type == SIDX_EV_BUILD_END) nodes = v->build.events[k].node;
+    size_t n = 0, used = 0, lineno = 0;
+    char *line = text;
+    if (text) text[size] = '\0';
+    while (s == SIDX_OK && line && line < text + size) {
+        ++lineno;
+        char *end = strchr(line, '\n');
+        if (end) *end = '\0';
+        char *next = end ? end + 1 : NULL;
+        size_t len = strlen(line);
+        while (len && (line[len - 1] == '\r' || line[len - 1] == ' ' || line[len - 1] == '\t')) line[--len] = '\0';
+        if (len) {
+            size_t taken = 0;
+            char why[240];
+            sidx_error e2 = {SIDX_OK, ""};
+            s = sidx_event_from_json(line, &evs[n], store + used, store_size - used, &taken, &e2);
+            if (s != SIDX_OK) {
+                if (err) snprintf(err->message, sizeof err->message, "%.80s:%zu: not a sidx event: %.140s", path, lineno,
+                                  e2.message);
+            } else if (!event_fits(v, &evs[n], nodes, why, sizeof why)) {
+                s = SIDX_ERR_INVALID_ARG;
+                if (err) snprintf(err->message, sizeof err->message, "%.60s:%zu: %.180s", path, lineno, why);
+            }
+            used += taken;
+            ++n;
+        }
+        line = next;
+    }
+    if (s == SIDX_OK && n == 0) {
+        s = SIDX_ERR_PARSE;
+        if (err) snprintf(err->message, sizeof err->message, "%.200s: no events in the file", path);
+    }
+    free(text);
+    if (s != SIDX_OK) {
+        if (err) err->status = s;
+        free(store);
+        free(evs);
+        return s;
+    }
+    sidx_recorder_free(&v->trav);
+    free(v->trace_store);
+    v->trace_store = store;
+    v->trav.events = evs;
+    v->trav.count = n;
+    v->trav.capacity = lines;
+    snprintf(v->trace_path, sizeof v->trace_path, "%s", path);
+    v->step = step > n ? n : step;
     return SIDX_OK;
 }
 

@@ -126,6 +126,7 @@ static void describe(size_t i, ex_case_info *out)
              g->res[0], g->res[1], g->res[2], r + 1, grid_ray_kind[s][r]);
     ex_format_ray(out->what, sizeof out->what, &grid_rays[s][r]);
     out->hint = NULL;
+    grid_view_case(s, r, "grid-nomailbox", out);
 }
 
 static void reference(size_t i, const sidx_hook *h)

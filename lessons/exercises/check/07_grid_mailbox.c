@@ -44,6 +44,7 @@ static void describe(size_t i, ex_case_info *out)
         n += snprintf(out->what + n, sizeof out->what - (size_t)n, "%s%s", k ? "\n             " : "", buf);
     }
     out->hint = NULL;
+    grid_view_case(s, r, "grid", out);
 }
 
 static void reference(size_t i, const sidx_hook *h)

@@ -179,6 +179,11 @@ static void describe(size_t i, ex_case_info *out)
     const int s = (int)(i / RAYS), r = (int)(i % RAYS);
     snprintf(out->name, sizeof out->name, "scene %s, ray %d (%s)", scene_names[s], r + 1, ray_kind[s][r]);
     ex_format_ray(out->what, sizeof out->what, &rays[s][r]);
+    out->view_accel = "kdtree";
+    out->view_knobs = "--no-mailbox";
+    out->view_scene = scene_names[s];
+    out->view_mesh = &meshes[s];
+    out->view_ray = &rays[s][r];
     out->hint = NULL;
 }
 

@@ -19,6 +19,14 @@ typedef struct ex_case_info {
     char name[160];      /* what the case is about: "ray parallel to the plane (N·d = 0)" */
     char what[512];      /* the input: the ray, the node, ... */
     const char *hint;    /* the case's hint in the slide's words, or NULL */
+    /* For sidx-view --events (the runner prints the command with the
+     * traces): the structure and its build knobs as sidx-view options
+     * ("kdtree", "--no-mailbox" or NULL), the scene (a built-in name, or
+     * NULL: the runner writes view_mesh to DIR/scene.obj) and the ray.
+     * view_accel NULL: the case is no walk sidx-view can show. */
+    const char *view_accel, *view_knobs, *view_scene;
+    const sidx_mesh *view_mesh;
+    const sidx_ray *view_ray;
 } ex_case_info;
 
 typedef struct ex_driver {

@@ -54,6 +54,17 @@ static const struct { float o[3], d[3]; const char *kind; } grid_fixed[GRID_FIXE
     {{0.25f, 0.5f, -1}, {0.5f, 0.25f, 1}, "upwards, slowly across x and y"},
 };
 
+/* sidx-view --events of ray r of scene s over `structure` (check.h):
+ * scene "slanted" is no built-in, the runner writes it out. */
+static void grid_view_case(int s, int r, const char *structure, ex_case_info *out)
+{
+    out->view_accel = structure;
+    out->view_knobs = s == 0 ? "--lambda 16" : NULL;
+    out->view_scene = s == 0 ? NULL : grid_scene_names[s];
+    out->view_mesh = &grid_meshes[s];
+    out->view_ray = &grid_rays[s][r];
+}
+
 static int grid_setup(const char *structure)
 {
     sidx_build_options bo;

@@ -1,6 +1,6 @@
 /* runner.c — the checker program sidx-check builds around a student's file.
  *
- *   run [--case K] [--trace DIR] [--timeout SECONDS] [--verbose]
+ *   run [--case K] [--trace DIR] [--viewer PATH] [--timeout SECONDS] [--verbose]
  *
  * For each case of the driver's battery: the reference trace is recorded
  * here, the student's function runs in a child process (fork) under a
@@ -271,13 +271,38 @@ static int write_jsonl(const char *dir, const char *name, const ex_trace *t)
     return fclose(f) == 0 ? 0 : -1;
 }
 
+/* The sidx-view commands that step through the two traces of DIR. */
+static void print_view_commands(const char *viewer, const char *dir, const ex_case_info *info)
+{
+    char scene[4096];
+    if (info->view_scene) {
+        snprintf(scene, sizeof scene, "%s", info->view_scene);
+    } else {
+        snprintf(scene, sizeof scene, "%s/scene.obj", dir);
+        sidx_error err;
+        if (sidx_mesh_save_obj(info->view_mesh, scene, &err) != SIDX_OK) {
+            printf("  view       (cannot write %s: %s)\n", scene, err.message);
+            return;
+        }
+    }
+    const sidx_ray *r = info->view_ray;
+    for (int k = 0; k < 2; ++k)
+        printf("  %-10s %s --accel %s%s%s --scene %s --ray %.9g,%.9g,%.9g,%.9g,%.9g,%.9g --events %s/%s\n",
+               k ? "" : "view", viewer, info->view_accel, info->view_knobs ? " " : "",
+               info->view_knobs ? info->view_knobs : "", scene, (double)r->org.x, (double)r->org.y,
+               (double)r->org.z, (double)r->dir.x, (double)r->dir.y, (double)r->dir.z, dir,
+               k ? "yours.jsonl" : "reference.jsonl");
+}
+
 static void usage(FILE *f)
 {
     fprintf(f,
-            "usage: (built by sidx-check) run [--case K] [--trace DIR] [--timeout SECONDS] [--verbose]\n"
+            "usage: (built by sidx-check) run [--case K] [--trace DIR] [--viewer PATH] [--timeout SECONDS]\n"
+            "                                 [--verbose]\n"
             "  --case K        run only case K (1-based)\n"
             "  --trace DIR     write DIR/reference.jsonl and DIR/yours.jsonl for the first failing case\n"
             "                  (or for case K)\n"
+            "  --viewer PATH   sidx-view, to print the commands that step through the traces\n"
             "  --timeout S     time limit per case (default 2 s)\n"
             "  --verbose       one line per case\n");
 }
@@ -285,13 +310,15 @@ static void usage(FILE *f)
 int main(int argc, char **argv)
 {
     const ex_driver *d = &ex_driver_this;
-    const char *trace_dir = NULL;
+    const char *trace_dir = NULL, *viewer = NULL;
     unsigned timeout = 2;
     long only = 0;
     int verbose = 0;
     for (int i = 1; i < argc; ++i) {
         if (!strcmp(argv[i], "--trace") && i + 1 < argc) {
             trace_dir = argv[++i];
+        } else if (!strcmp(argv[i], "--viewer") && i + 1 < argc) {
+            viewer = argv[++i];
         } else if (!strcmp(argv[i], "--timeout") && i + 1 < argc) {
             timeout = (unsigned)strtoul(argv[++i], NULL, 10);
             if (timeout == 0) timeout = 1;
@@ -379,10 +406,13 @@ int main(int argc, char **argv)
         print_event(stdout, "yours", se);
         if (hint) printf("  %-10s %s\n", "hint", hint);
         printf("  %-10s %s\n", "slide", d->slide);
-        if (trace_dir)
+        if (trace_dir) {
             printf("  traces     %s/reference.jsonl and %s/yours.jsonl (sidx-step --diff A B)\n", trace_dir, trace_dir);
-        else
-            printf("  traces     add --trace DIR to write both as JSON Lines (sidx-step --diff A B)\n");
+            if (viewer && info.view_accel) print_view_commands(viewer, trace_dir, &info);
+        } else {
+            printf("  traces     add --trace DIR to write both as JSON Lines (sidx-step --diff A B%s)\n",
+                   viewer && info.view_accel ? ", sidx-view --events" : "");
+        }
         printf("FAIL (exit 1)\n");
         rc = 1;
         break;

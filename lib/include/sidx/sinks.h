@@ -7,6 +7,7 @@
 
 #include <stdio.h>
 #include "hook.h"
+#include "status.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -35,6 +36,23 @@ typedef struct sidx_jsonl {
 void sidx_jsonl_init(sidx_jsonl *j, FILE *out);
 sidx_hook sidx_jsonl_hook(sidx_jsonl *j);
 int sidx_event_to_json(const sidx_event *ev, char *buf, size_t size);
+/* The inverse of sidx_event_to_json: reads one JSON Lines line (a trailing
+ * newline is allowed) back into *ev, so that writing *ev again gives the
+ * same object.  Fields the type does not carry are blank (sidx_event_blank).
+ * The line must hold exactly the keys sidx_event_to_json writes for the
+ * event it describes, in any order; floats are JSON numbers within float
+ * range or "inf", "-inf", "nan"; ids fit in 32 bits.
+ * The strings (structure, text) and a build_leaf's prims list are copied
+ * into store (store_size bytes) and *ev points into it, so ev stays valid
+ * while store does; 2 * strlen(line) + 16 bytes always suffice.  If
+ * store_used is not NULL it receives the bytes taken.
+ * Returns SIDX_OK; SIDX_ERR_PARSE for a line that is not such an event
+ * (err->message names the column and what is wrong: bad JSON, an unknown
+ * event type or reason, a missing, extra or repeated field, a value of
+ * the wrong type or out of range); SIDX_ERR_LIMIT when store is too small;
+ * SIDX_ERR_INVALID_ARG for a NULL line or ev.  *ev is untouched on error. */
+sidx_status sidx_event_from_json(const char *line, sidx_event *ev, char *store, size_t store_size, size_t *store_used,
+                                 sidx_error *err);
 
 /* Keeps every event in memory, for stepping forward and back.  If an
  * allocation fails the recorder stops recording and sets overflow.  A
