@@ -125,6 +125,15 @@ static sidx_mesh mb_mesh(const mbuild *b)
     return m;
 }
 
+/* The floor y = 0 (4 x 4) and a box [lo, hi] over it. */
+static sidx_mesh box_over_floor(mbuild *b, sidx_vec3 lo, sidx_vec3 hi)
+{
+    memset(b, 0, sizeof *b);
+    mb_floor(b, 0.0f, 2.0f);
+    mb_box(b, lo, hi);
+    return mb_mesh(b);
+}
+
 /* m plus more triangles from b (b's indices are its own). */
 static sidx_mesh mesh_concat(const sidx_mesh *m, const mbuild *b)
 {
@@ -164,10 +173,7 @@ static size_t make_base_scenes(scene_case *out)
     out[n].light = sidx_v3(0.3f, 2.5f, 0.6f);
     out[n++].name = "menger";
     /* a box resting on a plane (its bottom face lies in the plane) */
-    memset(&b, 0, sizeof b);
-    mb_floor(&b, 0.0f, 2.0f);
-    mb_box(&b, sidx_v3(-0.5f, 0.0f, -0.5f), sidx_v3(0.5f, 1.0f, 0.5f));
-    out[n].mesh = mb_mesh(&b);
+    out[n].mesh = box_over_floor(&b, sidx_v3(-0.5f, 0.0f, -0.5f), sidx_v3(0.5f, 1.0f, 0.5f));
     out[n].light = sidx_v3(1.2f, 1.6f, 0.9f);
     out[n++].name = "box-on-plane";
     /* a sphere touching a wall: the wall plane through the sphere's
@@ -186,10 +192,7 @@ static size_t make_base_scenes(scene_case *out)
     out[n].light = sidx_v3(0.9f, 1.7f, 1.1f);
     out[n++].name = "sphere-wall";
     /* a thin slab, 1e-4 thick, over a floor */
-    memset(&b, 0, sizeof b);
-    mb_floor(&b, 0.0f, 2.0f);
-    mb_box(&b, sidx_v3(-1.0f, 0.5f, -1.0f), sidx_v3(1.0f, 0.5001f, 1.0f));
-    out[n].mesh = mb_mesh(&b);
+    out[n].mesh = box_over_floor(&b, sidx_v3(-1.0f, 0.5f, -1.0f), sidx_v3(1.0f, 0.5001f, 1.0f));
     out[n].light = sidx_v3(0.2f, 1.5f, 0.3f);
     out[n++].name = "thin-slab";
     /* coincident faces: every triangle twice, plus overlapping quads in
