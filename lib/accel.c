@@ -190,15 +190,27 @@ void sidx__hit_attrs_from_mesh(const sidx_accel *a, const sidx_ray *r, uint32_t 
 static SIDX_INLINE void finish_hit(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
 {
     if (hit->prim == SIDX_NO_HIT) {
-        *hit = sidx_hit_none();
+        /* The query set *hit = sidx_hit_none() with t = tmax, and a walk
+         * writes only t and prim when it accepts a hit, and u, v, ng for its
+         * final one: on a miss only t differs from sidx_hit_none(). */
+        hit->t = INFINITY;
         return;
     }
     /* Aggregates (instance.c) set the instance and fill u, v, ng in world
      * space themselves: their a->mesh is not where the hit lies. */
-    if (hit->instance != SIDX_NO_HIT || !(q->flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL))) return;
-    const uint32_t own = (a->fills_uv ? SIDX_QUERY_UV : 0u) | (a->fills_ng ? SIDX_QUERY_NORMAL : 0u);
-    const uint32_t need = q->flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL) & ~own;
-    if (need) sidx__hit_attrs_from_mesh(a, r, need, hit);
+    if (hit->instance != SIDX_NO_HIT || !(q->flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL | SIDX_QUERY_POINT))) return;
+    if (SIDX_LIKELY(!(q->flags & SIDX_QUERY_POINT))) {
+        const uint32_t own = (a->fills_uv ? SIDX_QUERY_UV : 0u) | (a->fills_ng ? SIDX_QUERY_NORMAL : 0u);
+        const uint32_t need = q->flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL) & ~own;
+        if (need) sidx__hit_attrs_from_mesh(a, r, need, hit);
+        return;
+    }
+    /* SIDX_QUERY_POINT (spawn.c): the point is made from u, v and ng, so
+     * asking for it asks for them; what the structure filled itself counts
+     * only when the query asked it to.  Instanced hits (returned above) get
+     * no point: their mesh is not a->mesh. */
+    const uint32_t own = ((a->fills_uv ? SIDX_QUERY_UV : 0u) | (a->fills_ng ? SIDX_QUERY_NORMAL : 0u)) & q->flags;
+    sidx__hit_point(a, r, (SIDX_QUERY_UV | SIDX_QUERY_NORMAL) & ~own, hit);
 }
 
 /* A traced query: the same steps between its RAY_BEGIN and RAY_END

@@ -370,6 +370,9 @@ static SIDX_INLINE sidx_vec3 sidx__tri_normal(sidx_vec3 p0, sidx_vec3 p1, sidx_v
  * of a hit on a->mesh, recomputed from the mesh — the core's finish of a
  * query, and the packet walks'.  hit->prim and hit->t must be set. */
 void sidx__hit_attrs_from_mesh(const sidx_accel *a, const sidx_ray *r, uint32_t need, sidx_hit *hit);
+/* spawn.c: u, v and ng as `need` asks (sidx__hit_attrs_from_mesh), then
+ * hit->p, hit->p_err of a hit on a->mesh (SIDX_QUERY_POINT). */
+void sidx__hit_point(const sidx_accel *a, const sidx_ray *r, uint32_t need, sidx_hit *hit);
 
 /* Triangle `tri` of mesh m, tested with method m (t only). */
 static SIDX_INLINE int sidx__mesh_tri_test(const sidx_mesh *mesh, sidx_tri_method m, uint32_t tri,

@@ -68,6 +68,7 @@ sidx_status sidx_traversal_parse(const char *name, sidx_traversal *out);
 
 #define SIDX_QUERY_UV     1u  /* fill hit.u, hit.v */
 #define SIDX_QUERY_NORMAL 2u  /* fill hit.ng */
+#define SIDX_QUERY_POINT  4u  /* fill hit.p, hit.p_err (and u, v, ng): for sidx_ray_spawn, sidx/spawn.h */
 
 typedef struct sidx_query {
     uint32_t flags;               /* SIDX_QUERY_* */

@@ -150,11 +150,16 @@ typedef struct sidx_hit {
     float u, v;
     sidx_vec3 ng;
     uint32_t instance; /* instanced scenes: which instance; SIDX_NO_HIT otherwise */
+    /* SIDX_QUERY_POINT (sidx/spawn.h): the hit point p, rebuilt from u, v
+     * as (1-u-v)·p0 + u·p1 + v·p2, and p_err, a conservative bound on
+     * |p - exact point| per component (zero when not asked). */
+    sidx_vec3 p, p_err;
 } sidx_hit;
 
 static inline sidx_hit sidx_hit_none(void)
 {
-    sidx_hit h = {INFINITY, SIDX_NO_HIT, 0.0f, 0.0f, {0.0f, 0.0f, 0.0f}, SIDX_NO_HIT};
+    sidx_hit h = {INFINITY, SIDX_NO_HIT, 0.0f, 0.0f, {0.0f, 0.0f, 0.0f}, SIDX_NO_HIT, {0.0f, 0.0f, 0.0f},
+                  {0.0f, 0.0f, 0.0f}};
     return h;
 }
 

@@ -23,6 +23,7 @@
 #include "packet.h"
 #include "parallel.h"
 #include "rayclass.h"
+#include "spawn.h"
 
 #define SIDX_VERSION_MAJOR 0
 #define SIDX_VERSION_MINOR 1
