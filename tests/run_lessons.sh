@@ -37,6 +37,7 @@ needs() {
     17_*) echo "bvh bvh-obb" ;;
     18_*|19_*) echo "bvh" ;;
     20_*) echo "bvh kdtree grid" ;;
+    23_*) echo "grid grid-irregular" ;;
     *) echo "" ;;
     esac
 }
@@ -76,6 +77,9 @@ expect() {
                         sharing_loses_skips=1 sharing_moves_lines=1" ;;
     22_kd_round_robin) echo "same_hits=1 round_robin_scale_invariant=1 largest_extent_cheaper=1
                              gap_grows_when_stretched=1" ;;
+    23_irregular_grid) echo "base_within_finest_level=1 merged_cells_are_boxes=1 expanded_over_subsets=1
+                             finest_level_12_steps=1 irregular_fewer_steps=1 same_hit=1 same_hits=1
+                             fewer_cells_visited=1" ;;
     *) echo "" ;;
     esac
 }
