@@ -420,6 +420,7 @@ int main(int argc, char **argv)
     printf("  The irregular grid visits %.1fx fewer cells per ray and tests %.1fx fewer triangles; it\n"
            "  uses %.1fx the memory of the uniform grid.  Same closest hits: %s\n",
            cells[0] / cells[1], tests[0] / tests[1], (double)st[1].bytes / (double)st[0].bytes, same ? "yes" : "NO");
+    const int mem_more = st[1].bytes > st[0].bytes; /* the slide: "Approach needs more memory" */
     free(rays);
     free(hits_u);
     free(hits_i);
@@ -433,5 +434,6 @@ int main(int argc, char **argv)
     lesson_check("same_hit", same_hit);
     lesson_check("same_hits", same);
     lesson_check("fewer_cells_visited", cells[1] < cells[0]);
+    lesson_check("needs_more_memory", mem_more);
     return 0;
 }
