@@ -197,18 +197,6 @@ static int prims_subset(const sidx_event *sub, const sidx_event *of)
     return 1;
 }
 
-/* The cells a ray enters, as NODE_ENTER events. */
-typedef struct walk {
-    sidx_event ev[64];
-    int n;
-} walk;
-
-static void walk_fn(const sidx_event *ev, void *user)
-{
-    walk *w = user;
-    if (ev->type == SIDX_EV_NODE_ENTER && w->n < 64) w->ev[w->n++] = *ev;
-}
-
 static sidx_accel *build_or_fail(const lesson_args *args, const char *name, const sidx_mesh *m,
                                  const sidx_build_options *opt)
 {
@@ -347,28 +335,32 @@ int main(int argc, char **argv)
     sidx_accel *ug = build_or_fail(&args, "grid", &m2, &og);
     sidx_accel_stats stu;
     sidx_accel_stats_get(ug, &stu);
-    walk wu = {.n = 0}, wi = {.n = 0};
-    const sidx_hook hu = {walk_fn, &wu, SIDX_EVMASK(SIDX_EV_NODE_ENTER)};
-    const sidx_hook hi = {walk_fn, &wi, SIDX_EVMASK(SIDX_EV_NODE_ENTER)};
+    /* the cells each walk enters */
+    sidx_recorder wu, wi;
+    sidx_recorder_init(&wu);
+    sidx_recorder_init(&wi);
+    sidx_hook hu = sidx_recorder_hook(&wu), hi = sidx_recorder_hook(&wi);
+    hu.mask = hi.mask = SIDX_EVMASK(SIDX_EV_NODE_ENTER);
     sidx_query qu = {0, SIDX_TRAVERSE_DEFAULT, &hu, 0}, qi = {0, SIDX_TRAVERSE_DEFAULT, &hi, 0};
     sidx_hit hit_u, hit_i;
     sidx_accel_intersect(ug, &ray, &qu, &hit_u);
     sidx_accel_intersect(ig, &ray, &qi, &hit_i);
-    printf("  uniform grid at the finest level (%u x %u), %d steps:\n   ", stu.res[0], stu.res[1], wu.n);
-    for (int i = 0; i < wu.n; ++i) printf(" (%d,%d)", (int)wu.ev[i].cell[0], (int)wu.ev[i].cell[1]);
-    printf("\n  irregular grid, %d steps, each across a cell's expanded box:\n", wi.n);
-    for (int i = 0; i < wi.n; ++i) print_event(&wi.ev[i]);
+    const int steps_u = (int)wu.count, steps_i = (int)wi.count;
+    printf("  uniform grid at the finest level (%u x %u), %d steps:\n   ", stu.res[0], stu.res[1], steps_u);
+    for (int i = 0; i < steps_u; ++i) printf(" (%d,%d)", (int)wu.events[i].cell[0], (int)wu.events[i].cell[1]);
+    printf("\n  irregular grid, %d steps, each across a cell's expanded box:\n", steps_i);
+    for (int i = 0; i < steps_i; ++i) print_event(&wi.events[i]);
     /* The map: the merged cells' walls; inside, the uniform grid's step
      * number and the letter of the irregular grid's step covering it. */
     map2d path = merged;
     for (int y = 0; y < FINE; ++y)
         for (int x = 0; x < FINE; ++x) text_set(path.text[y][x], NULL);
-    for (int i = 0; i < wu.n; ++i) {
-        const sidx_event *u = &wu.ev[i];
+    for (int i = 0; i < steps_u; ++i) {
+        const sidx_event *u = &wu.events[i];
         const float tm = 0.5f * (u->t_near + u->t_far);
         char letter = '?';
-        for (int j = 0; j < wi.n; ++j)
-            if (tm >= wi.ev[j].t_near && tm <= wi.ev[j].t_far) letter = (char)('A' + j);
+        for (int j = 0; j < steps_i; ++j)
+            if (tm >= wi.events[j].t_near && tm <= wi.events[j].t_far) letter = (char)('A' + j);
         char t[16];
         snprintf(t, sizeof t, "%2d%c", (i + 1) % 100, letter);
         if (u->cell[0] >= 0 && u->cell[0] < FINE && u->cell[1] >= 0 && u->cell[1] < FINE)
@@ -381,7 +373,9 @@ int main(int argc, char **argv)
         printf("  both hit triangle %u at t = %g: %s\n", hit_i.prim, (double)hit_i.t, same_hit ? "yes" : "NO");
     else
         printf("  both miss: %s\n", same_hit ? "yes" : "NO");
-    printf("  %d steps at the finest level, %d on the irregular grid.\n", wu.n, wi.n);
+    printf("  %d steps at the finest level, %d on the irregular grid.\n", steps_u, steps_i);
+    sidx_recorder_free(&wu);
+    sidx_recorder_free(&wi);
     sidx_accel_destroy(ug);
     sidx_accel_destroy(ig);
     sidx_recorder_free(&rec);
@@ -429,8 +423,8 @@ int main(int argc, char **argv)
     lesson_check("base_within_finest_level", fine_ok && n_leaf > 4);
     lesson_check("merged_cells_are_boxes", boxes_ok && n_merge > 0);
     lesson_check("expanded_over_subsets", subset_ok && n_grow > 0);
-    lesson_check("finest_level_12_steps", wu.n == 12 && stu.res[0] == FINE && stu.res[1] == FINE);
-    lesson_check("irregular_fewer_steps", wi.n < wu.n);
+    lesson_check("finest_level_12_steps", steps_u == 12 && stu.res[0] == FINE && stu.res[1] == FINE);
+    lesson_check("irregular_fewer_steps", steps_i < steps_u);
     lesson_check("same_hit", same_hit);
     lesson_check("same_hits", same);
     lesson_check("fewer_cells_visited", cells[1] < cells[0]);
