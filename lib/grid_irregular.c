@@ -53,6 +53,13 @@
  * most IRR_MAX_EXPAND steps per direction and gives up a step whose slab
  * needs more than IRR_SLAB_CELLS cell look-ups (only a shorter jump).
  *
+ * Trace (deck 000 "Construction (merge & expand)"): a build whose hook
+ * asks for them reports each base cell (build_leaf), each merge
+ * (build_merge) and each expansion step (build_expand), after merging so
+ * that they carry the final cell ids; boxes are given in cells of the
+ * finest level used, not in virtual voxels (docs/events.md).  Without such
+ * a hook no log is kept and the untraced copy of expand_cell runs.
+ *
  * Memory: 4 bytes per base node (top cells and octants: the look-up tree,
  * which replaces the paper's per-voxel map of the virtual grid — that one
  * would be 2^40 entries here), 32 bytes per merged cell (expanded box and
