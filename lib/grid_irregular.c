@@ -418,7 +418,8 @@ static SIDX_INLINE void expand_cell(const sidx_accel *a, const ibuild *B, uint32
             slab_scan S = {B, c, c, 0, ax, b, c2, up, face, up ? face : face - 1u, UINT32_MAX};
             if (!scan_rect(&S, ic->elo[b], ic->ehi[b], ic->elo[c2], ic->ehi[c2])) {
                 SIDX_EMIT(traced, hook, SIDX_EV_BUILD_EXPAND, e_.node = c; e_.axis = (int32_t)ax; e_.aux = up;
-                          e_.result = 0; e_.count = 0; fine_box(B->G, ic->elo, ic->ehi, e_.cell, e_.extent);
+                          e_.result = 0; e_.count = 0; e_.reason = S.seen > IRR_SLAB_CELLS;
+                          fine_box(B->G, ic->elo, ic->ehi, e_.cell, e_.extent);
                           e_.bounds = vbox(B->G, ic->elo, ic->ehi));
                 break;
             }

@@ -174,6 +174,8 @@ static void out_expand(sink_out *o, const sidx_event *ev)
     out_printf(o, " %c%s ", ev->aux == 1 ? '+' : '-', axis_name(ev->axis));
     if (ev->result == 1)
         out_printf(o, "by %" PRIu32 " -> ", ev->count);
+    else if (ev->reason == 1)
+        out_puts(o, "stopped: too many cells in the slab to check  ");
     else
         out_puts(o, "stopped: a neighbour holds other triangles  ");
     out_cell(o, ev);
@@ -698,7 +700,10 @@ static void json_event(sink_out *o, const sidx_event *ev, int unused)
         json_id(o, "node", ev->node);
         json_i32(o, "axis", ev->axis);
         json_u32(o, "aux", ev->aux);
-        if (ev->type == SIDX_EV_BUILD_EXPAND) json_i32(o, "result", ev->result);
+        if (ev->type == SIDX_EV_BUILD_EXPAND) {
+            json_i32(o, "result", ev->result);
+            if (ev->result == 0) json_i32(o, "reason", ev->reason); /* 1: the slab look-up limit */
+        }
         json_u32(o, "count", ev->count);
         json_bounds(o, &ev->bounds);
         break;

@@ -48,9 +48,10 @@ typedef enum sidx_event_type {
     SIDX_EV_BUILD_MERGE,     /* two neighbouring cells with the same triangles became one: node = the
                                 final cell, axis, aux = the face they met at, count, cell[]/extent[] =
                                 the merged box, bounds */
-    SIDX_EV_BUILD_EXPAND,    /* a cell's expanded box grew by one step (result 1) or stopped (result 0):
-                                node, axis, aux = 1 towards +axis / 0 towards -axis, count = cells
-                                grown, cell[]/extent[] = the expanded box, bounds */
+    SIDX_EV_BUILD_EXPAND,    /* a cell's expanded box grew by one step (result 1) or stopped (result 0;
+                                reason 1 = too many cells to check): node, axis, aux = 1 towards
+                                +axis / 0 towards -axis, count = cells grown, cell[]/extent[] = the
+                                expanded box, bounds */
     SIDX_EV_COUNT
 } sidx_event_type;
 
