@@ -53,6 +53,13 @@
  * most IRR_MAX_EXPAND steps per direction and gives up a step whose slab
  * needs more than IRR_SLAB_CELLS cell look-ups (only a shorter jump).
  *
+ * Trace (deck 000 "Construction (merge & expand)"): a build whose hook
+ * asks for them reports each base cell (build_leaf), each merge
+ * (build_merge) and each expansion step (build_expand), after merging so
+ * that they carry the final cell ids; boxes are given in cells of the
+ * finest level used, not in virtual voxels (docs/events.md).  Without such
+ * a hook no log is kept and the untraced copy of expand_cell runs.
+ *
  * Memory: 4 bytes per base node (top cells and octants: the look-up tree,
  * which replaces the paper's per-voxel map of the virtual grid — that one
  * would be 2^40 entries here), 32 bytes per merged cell (expanded box and
@@ -77,6 +84,14 @@
 #define IRR_SLAB_CELLS 1024u
 
 #define IRR_LEAF 0x80000000u
+
+/* Does the build's hook want events of this type?  (Never when hooks are
+ * compiled out: a traced build's extra arrays are then not made.) */
+#ifdef SIDX_NO_HOOKS
+#define IRR_WANTS(hook, type) ((void)(hook), 0)
+#else
+#define IRR_WANTS(hook, type) sidx__hook_wants((hook), (type))
+#endif
 
 /* A cell as traversal sees it: its expanded box and its triangles. */
 typedef struct icell {
@@ -134,6 +149,20 @@ static sidx_aabb vbox(const igrid *G, const uint32_t lo[3], const uint32_t hi[3]
     }
     const sidx_aabb b = {sidx_v3_from_array(mn), sidx_v3_from_array(mx)};
     return b;
+}
+
+/* What the trace shows of a box of virtual voxels [lo, hi): its corner and
+ * its size in cells of the finest level the build used (depth_seen), not
+ * of the virtual grid (2^IRR_MAX_DEPTH per top cell, numbers in the
+ * hundred thousands).  Every cell face lies on that level, so the division
+ * is exact. */
+static void fine_box(const igrid *G, const uint32_t lo[3], const uint32_t hi[3], int32_t cell[3], uint32_t ext[3])
+{
+    for (int i = 0; i < 3; ++i) {
+        const uint32_t s = G->shift[i] ? G->shift[i] - G->depth_seen : 0u;
+        cell[i] = (int32_t)(lo[i] >> s);
+        ext[i] = (hi[i] - lo[i]) >> s;
+    }
 }
 
 /* The base cell holding virtual voxel v: top cell, then one octant bit per
@@ -272,10 +301,22 @@ static int is_subset(const uint32_t *b, uint32_t nb, const uint32_t *a, uint32_t
     return 1;
 }
 
+/* A traced build's record of the merges, emitted once the cells have
+ * their final ids (BUILD_MERGE names the cell a merge ends up in). */
+typedef struct merge_rec {
+    uint32_t cell, axis, face, n;
+    uint32_t lo[3], hi[3]; /* the box after this merge */
+} merge_rec;
+typedef struct merge_log {
+    merge_rec *rec;
+    size_t n, cap;
+    int failed;
+} merge_log;
+
 /* Merge sweeps (see the file comment).  A live cell c (find(c) == c) tries
  * its neighbour across its upper face on each axis: the cell holding the
- * voxel just past hi[ax] at c's lower corner. */
-static void merge_cells(ibuild *B, uint32_t *parent)
+ * voxel just past hi[ax] at c's lower corner.  log is NULL unless traced. */
+static void merge_cells(sidx_accel *a, ibuild *B, uint32_t *parent, merge_log *log)
 {
     igrid *G = B->G;
     for (int changed = 1; changed;) {
@@ -292,8 +333,22 @@ static void merge_cells(ibuild *B, uint32_t *parent)
                         B->hi[nb][c2] != B->hi[c][c2] || !same_set(&G->cells[c], &G->cells[nb], G->refs))
                         break;
                     parent[nb] = c;
+                    const uint32_t face = B->hi[c][ax];
                     B->hi[c][ax] = B->hi[nb][ax];
                     changed = 1;
+                    if (log && !log->failed) {
+                        if (!sidx__grow(a, (void **)&log->rec, &log->cap, log->n + 1u, sizeof *log->rec)) {
+                            log->failed = 1;
+                            continue;
+                        }
+                        merge_rec *m = &log->rec[log->n++];
+                        m->cell = c;
+                        m->axis = (uint32_t)ax;
+                        m->face = face;
+                        m->n = G->cells[c].n;
+                        memcpy(m->lo, B->lo[c], sizeof m->lo);
+                        memcpy(m->hi, B->hi[c], sizeof m->hi);
+                    }
                 }
             }
         }
@@ -341,9 +396,13 @@ static int scan_rect(slab_scan *S, uint32_t u0, uint32_t u1, uint32_t w0, uint32
     return 1;
 }
 
-/* Grows cell c's expanded box, direction by direction. */
-static void expand_cell(const ibuild *B, uint32_t c)
+/* Grows cell c's expanded box, direction by direction.  A traced build
+ * (a constant: two copies) reports each step and each refusal; the edge of
+ * the grid and the step limit end a direction without an event. */
+static SIDX_INLINE void expand_cell(const sidx_accel *a, const ibuild *B, uint32_t c, const sidx_hook *hook,
+                                    const int traced)
 {
+    (void)a; /* SIDX_STRUCTURE_NAME */
     icell *ic = &B->G->cells[c];
     const uint32_t *vres = B->G->vres;
     for (int i = 0; i < 3; ++i) {
@@ -357,12 +416,49 @@ static void expand_cell(const ibuild *B, uint32_t c)
             const uint32_t face = up ? ic->ehi[ax] : ic->elo[ax];
             const uint32_t b = (ax + 1u) % 3u, c2 = (ax + 2u) % 3u;
             slab_scan S = {B, c, c, 0, ax, b, c2, up, face, up ? face : face - 1u, UINT32_MAX};
-            if (!scan_rect(&S, ic->elo[b], ic->ehi[b], ic->elo[c2], ic->ehi[c2]) || S.reach == 0 ||
-                S.reach == UINT32_MAX)
+            if (!scan_rect(&S, ic->elo[b], ic->ehi[b], ic->elo[c2], ic->ehi[c2])) {
+                SIDX_EMIT(traced, hook, SIDX_EV_BUILD_EXPAND, e_.node = c; e_.axis = (int32_t)ax; e_.aux = up;
+                          e_.result = 0; e_.count = 0; e_.reason = S.seen > IRR_SLAB_CELLS;
+                          fine_box(B->G, ic->elo, ic->ehi, e_.cell, e_.extent);
+                          e_.bounds = vbox(B->G, ic->elo, ic->ehi));
                 break;
+            }
+            if (S.reach == 0 || S.reach == UINT32_MAX) break;
             if (up) ic->ehi[ax] += S.reach;
             else ic->elo[ax] -= S.reach;
+            SIDX_EMIT(traced, hook, SIDX_EV_BUILD_EXPAND, e_.node = c; e_.axis = (int32_t)ax; e_.aux = up;
+                      e_.result = 1; fine_box(B->G, ic->elo, ic->ehi, e_.cell, e_.extent);
+                      e_.count = S.reach >> (B->G->shift[ax] ? B->G->shift[ax] - B->G->depth_seen : 0u);
+                      e_.bounds = vbox(B->G, ic->elo, ic->ehi));
         }
+    }
+}
+
+/* A traced build's base cells, as BUILD_LEAF events (a base cell is a leaf
+ * of the octant hierarchy), once merging has given them their final ids:
+ * node = the cell the base cell became part of, prims = its triangles (the
+ * same set: only equal sets merge), depth = its octant level. */
+static void emit_base_cells(const sidx_accel *a, const ibuild *B, uint32_t (*lo)[3], uint32_t (*hi)[3],
+                            uint32_t *parent, const uint32_t *newid)
+{
+    const igrid *G = B->G;
+    const sidx_hook *hook = a->opt.hook;
+    for (uint32_t c = 0; c < G->base_cells; ++c) {
+        const uint32_t d = newid[find(parent, c)];
+        const icell *ic = &G->cells[d];
+        uint32_t level = 0;
+        if (G->nsplit) {
+            const uint32_t ax = G->axes[0];
+            level = G->shift[ax];
+            for (uint32_t sz = hi[c][ax] - lo[c][ax]; sz > 1u; sz >>= 1) --level;
+        }
+        const int reason = ic->n == 0              ? SIDX_LEAF_EMPTY
+                           : ic->n <= B->leaf_max  ? SIDX_LEAF_FEW_PRIMS
+                           : level >= B->depth_max ? SIDX_LEAF_MAX_DEPTH
+                                                   : SIDX_LEAF_NO_SPLIT; /* no cut separates them */
+        SIDX_EMIT(1, hook, SIDX_EV_BUILD_LEAF, e_.node = d; e_.depth = level; e_.count = ic->n;
+                  e_.prims = ic->n ? G->refs + ic->begin : NULL; e_.reason = reason;
+                  fine_box(G, lo[c], hi[c], e_.cell, e_.extent); e_.bounds = vbox(G, lo[c], hi[c]));
     }
 }
 
@@ -383,6 +479,8 @@ static sidx_status igrid_build(sidx_accel *a, sidx_error *err)
     sidx_aabb *boxes = NULL;
     uint32_t *toff = NULL, *parent = NULL, *newid = NULL, *nrefs = NULL;
     icell *ncells = NULL;
+    uint32_t (*base_lo)[3] = NULL, (*base_hi)[3] = NULL;
+    merge_log mlog = {NULL, 0, 0, 0};
     sidx_status st = SIDX_ERR_NOMEM;
     if (!G) return sidx__fail(err, SIDX_ERR_NOMEM, "grid-irregular: out of memory");
     B.G = G;
@@ -474,16 +572,28 @@ static sidx_status igrid_build(sidx_accel *a, sidx_error *err)
     sidx__free(a, boxes);
     boxes = NULL;
     G->base_cells = G->n_cells;
-    SIDX_EMIT(1, hook, SIDX_EV_NOTE, e_.text = "irregular grid: base cells (count), octant levels (depth)";
-              e_.count = G->base_cells; e_.depth = G->depth_seen; e_.cell[0] = (int32_t)G->vres[0];
-              e_.cell[1] = (int32_t)G->vres[1]; e_.cell[2] = (int32_t)G->vres[2]);
+    SIDX_EMIT(1, hook, SIDX_EV_NOTE,
+              e_.text = "irregular grid: base cells (count), octant levels (depth), finest-level resolution (cell[])";
+              e_.count = G->base_cells; e_.depth = G->depth_seen; const uint32_t zero[3] = {0, 0, 0};
+              fine_box(G, zero, G->vres, e_.cell, e_.extent); memcpy(e_.cell, e_.extent, sizeof e_.cell);
+              memset(e_.extent, 0, sizeof e_.extent));
 
-    /* 2. Merge, then compact: live cells get consecutive ids. */
+    /* 2. Merge, then compact: live cells get consecutive ids.  A traced
+     *    build keeps the base boxes and a log of the merges to report them
+     *    with the final ids. */
     parent = sidx__alloc(a, G->n_cells, sizeof *parent);
     newid = sidx__alloc(a, G->n_cells, sizeof *newid);
     if (!parent || !newid) goto fail;
+    if (IRR_WANTS(hook, SIDX_EV_BUILD_LEAF)) {
+        base_lo = sidx__alloc(a, G->n_cells, sizeof *base_lo);
+        base_hi = sidx__alloc(a, G->n_cells, sizeof *base_hi);
+        if (!base_lo || !base_hi) goto fail;
+        memcpy(base_lo, B.lo, (size_t)G->n_cells * sizeof *base_lo);
+        memcpy(base_hi, B.hi, (size_t)G->n_cells * sizeof *base_hi);
+    }
     for (uint32_t c = 0; c < G->n_cells; ++c) parent[c] = c;
-    merge_cells(&B, parent);
+    merge_cells(a, &B, parent, IRR_WANTS(hook, SIDX_EV_BUILD_MERGE) ? &mlog : NULL);
+    if (mlog.failed) goto fail;
     uint32_t live = 0;
     uint64_t live_refs = 0;
     for (uint32_t c = 0; c < G->n_cells; ++c)
@@ -518,27 +628,46 @@ static sidx_status igrid_build(sidx_accel *a, sidx_error *err)
     nrefs = NULL;
     G->n_cells = live;
     G->n_refs = w;
+    if (base_lo) emit_base_cells(a, &B, base_lo, base_hi, parent, newid);
+    for (size_t i = 0; i < mlog.n; ++i) {
+        const merge_rec *mr = &mlog.rec[i];
+        SIDX_EMIT(1, hook, SIDX_EV_BUILD_MERGE, e_.node = newid[find(parent, mr->cell)]; e_.axis = (int32_t)mr->axis;
+                  e_.count = mr->n; fine_box(G, mr->lo, mr->hi, e_.cell, e_.extent);
+                  e_.aux = mr->face >> (G->shift[mr->axis] ? G->shift[mr->axis] - G->depth_seen : 0u);
+                  e_.bounds = vbox(G, mr->lo, mr->hi));
+    }
+    sidx__free(a, mlog.rec);
+    sidx__free(a, base_lo);
+    sidx__free(a, base_hi);
+    mlog.rec = NULL;
+    base_lo = base_hi = NULL;
     sidx__free(a, parent);
     sidx__free(a, newid);
     parent = newid = NULL;
 
-    /* 3. Expand. */
-    for (uint32_t c = 0; c < G->n_cells; ++c) expand_cell(&B, c);
-
+    /* The merged cells that hold triangles, in their own boxes. */
     if (sidx__hook_wants(hook, SIDX_EV_BUILD_NODE)) {
         for (uint32_t c = 0; c < G->n_cells; ++c) {
             if (!G->cells[c].n) continue;
             SIDX_EMIT(1, hook, SIDX_EV_BUILD_NODE, e_.node = c; e_.depth = 0; e_.count = G->cells[c].n;
-                      e_.bounds = vbox(G, B.lo[c], B.hi[c]); e_.cell[0] = (int32_t)B.lo[c][0];
-                      e_.cell[1] = (int32_t)B.lo[c][1]; e_.cell[2] = (int32_t)B.lo[c][2]);
+                      e_.bounds = vbox(G, B.lo[c], B.hi[c]); fine_box(G, B.lo[c], B.hi[c], e_.cell, e_.extent));
         }
     }
+
+    /* 3. Expand. */
+    if (IRR_WANTS(hook, SIDX_EV_BUILD_EXPAND))
+        for (uint32_t c = 0; c < G->n_cells; ++c) expand_cell(a, &B, c, hook, 1);
+    else
+        for (uint32_t c = 0; c < G->n_cells; ++c) expand_cell(a, &B, c, NULL, 0);
     sidx__free(a, B.lo);
     sidx__free(a, B.hi);
     SIDX_EMIT(1, hook, SIDX_EV_BUILD_END, e_.node = G->n_cells; e_.count = G->n_refs; e_.depth = G->depth_seen);
     a->impl = G;
     return SIDX_OK;
 fail:
+    sidx__free(a, mlog.rec);
+    sidx__free(a, base_lo);
+    sidx__free(a, base_hi);
     sidx__free(a, boxes);
     sidx__free(a, toff);
     sidx__free(a, parent);
@@ -591,9 +720,11 @@ static SIDX_INLINE int igrid_walk(const sidx_accel *a, const sidx_ray *r, const 
             if (ti < t_exit) { t_exit = ti; exit_axis = i; }
         }
         ++visited;
+        /* The trace names the step by the expanded box it jumps across,
+         * in finest-level cells (fine_box). */
         SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id; e_.node = cell_index; e_.depth = 0;
-                  e_.t_near = t; e_.t_far = t_exit; e_.cell[0] = (int32_t)voxel[0]; e_.cell[1] = (int32_t)voxel[1];
-                  e_.cell[2] = (int32_t)voxel[2]);
+                  e_.t_near = t; e_.t_far = t_exit; fine_box(G, cell->elo, cell->ehi, e_.cell, e_.extent);
+                  e_.bounds = vbox(G, cell->elo, cell->ehi));
         if (sidx__cell_prims(a, r, q, hit, G->refs + cell->begin, cell->n, cell_index, 0, &mb, use_mb, traced, any)) {
             SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = SIDX_TERM_ANY_HIT;
                       e_.count = visited);

@@ -31,7 +31,7 @@ sidx_event sidx_event_blank(sidx_event_type type)
 static const char *const event_names[SIDX_EV_COUNT] = {
     "build_begin", "build_node", "build_candidate", "build_split", "build_leaf", "build_end",
     "ray_begin", "node_enter", "box_test", "stack_push", "stack_pop", "prim_test",
-    "hit_update", "mailbox_hit", "terminate", "ray_end", "note",
+    "hit_update", "mailbox_hit", "terminate", "ray_end", "note", "build_merge", "build_expand",
 };
 
 const char *sidx_event_type_name(sidx_event_type t)

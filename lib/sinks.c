@@ -132,9 +132,58 @@ static void out_leaf_prims(sink_out *o, const sidx_event *ev)
     if (ev->count > shown) out_printf(o, " ... +%" PRIu32 " more", ev->count - shown);
 }
 
+static int has_extent(const sidx_event *ev) { return ev->extent[0] > 0; }
+
+/* "(4,2,0)", then " 2x2x1" when the event gives the box's extent. */
+static void out_coords(sink_out *o, const int32_t c[3], const uint32_t e[3])
+{
+    out_printf(o, "(%" PRId32 ",%" PRId32 ",%" PRId32 ")", c[0], c[1], c[2]);
+    if (e[0] > 0) out_printf(o, " %" PRIu32 "x%" PRIu32 "x%" PRIu32, e[0], e[1], e[2]);
+}
+
 static void out_cell(sink_out *o, const sidx_event *ev)
 {
-    out_printf(o, "cell (%" PRId32 ",%" PRId32 ",%" PRId32 ")", ev->cell[0], ev->cell[1], ev->cell[2]);
+    out_puts(o, "cell ");
+    out_coords(o, ev->cell, ev->extent);
+}
+
+/* A merge: the two boxes that met at finest-level coordinate aux along
+ * axis, and the box they became. */
+static void out_merge(sink_out *o, const sidx_event *ev)
+{
+    const int ax = ev->axis >= 0 && ev->axis <= 2 ? ev->axis : 0;
+    int32_t c2[3] = {ev->cell[0], ev->cell[1], ev->cell[2]};
+    uint32_t e1[3] = {ev->extent[0], ev->extent[1], ev->extent[2]}, e2[3] = {e1[0], e1[1], e1[2]};
+    const uint32_t face = ev->aux;
+    if (has_cell(ev) && face != UINT32_MAX && face > (uint32_t)ev->cell[ax] && face - (uint32_t)ev->cell[ax] < e1[ax]) {
+        e1[ax] = face - (uint32_t)ev->cell[ax];
+        e2[ax] = ev->extent[ax] - e1[ax];
+        c2[ax] = (int32_t)face;
+        out_puts(o, "merge ");
+        out_coords(o, ev->cell, e1);
+        out_puts(o, " + ");
+        out_coords(o, c2, e2);
+        out_printf(o, " along %s -> ", axis_name(ev->axis));
+    } else {
+        out_printf(o, "merge along %s -> ", axis_name(ev->axis));
+    }
+    out_cell(o, ev);
+    out_printf(o, "  prims %" PRIu32, ev->count);
+    if (ev->node != UINT32_MAX) out_printf(o, "  (cell %" PRIu32 ")", ev->node);
+}
+
+static void out_expand(sink_out *o, const sidx_event *ev)
+{
+    out_puts(o, "expand cell ");
+    out_id(o, ev->node);
+    out_printf(o, " %c%s ", ev->aux == 1 ? '+' : '-', axis_name(ev->axis));
+    if (ev->result == 1)
+        out_printf(o, "by %" PRIu32 " -> ", ev->count);
+    else if (ev->reason == 1)
+        out_puts(o, "stopped: too many cells in the slab to check  ");
+    else
+        out_puts(o, "stopped: a neighbour holds other triangles  ");
+    out_cell(o, ev);
 }
 
 /* Free text on one line: control characters (a stray newline) would break
@@ -196,6 +245,8 @@ static unsigned indent_level(const sidx_event *ev)
     case SIDX_EV_STACK_POP:
         return 1;
     case SIDX_EV_BUILD_NODE:
+    case SIDX_EV_BUILD_MERGE:
+    case SIDX_EV_BUILD_EXPAND:
     case SIDX_EV_NODE_ENTER:
     case SIDX_EV_BOX_TEST:
     case SIDX_EV_NOTE:
@@ -272,8 +323,14 @@ static void format_event(sink_out *o, const sidx_event *ev, int show_bounds)
         break;
     case SIDX_EV_NODE_ENTER:
         if (has_cell(ev)) {
-            /* grids: the coordinates say more than the linear cell id */
-            out_cell(o, ev);
+            /* grids: the coordinates say more than the linear cell id; an
+             * irregular grid's cells are numbered, and sized (extent) */
+            if (has_extent(ev) && ev->node != UINT32_MAX) {
+                out_printf(o, "cell %" PRIu32 " ", ev->node);
+                out_coords(o, ev->cell, ev->extent);
+            } else {
+                out_cell(o, ev);
+            }
             out_puts(o, " enter  ");
         } else {
             out_puts(o, "node ");
@@ -346,6 +403,14 @@ static void format_event(sink_out *o, const sidx_event *ev, int show_bounds)
     case SIDX_EV_NOTE:
         out_puts(o, "note: ");
         if (ev->text) out_text_line(o, ev->text);
+        break;
+    case SIDX_EV_BUILD_MERGE:
+        out_merge(o, ev);
+        if (show_bounds) { out_puts(o, "  "); out_box(o, &ev->bounds); }
+        break;
+    case SIDX_EV_BUILD_EXPAND:
+        out_expand(o, ev);
+        if (show_bounds) { out_puts(o, "  "); out_box(o, &ev->bounds); }
         break;
     default:
         out_printf(o, "unknown event %d", (int)ev->type);
@@ -656,6 +721,18 @@ static void json_event(sink_out *o, const sidx_event *ev, int unused)
         else
             out_puts(o, "null");
         break;
+    case SIDX_EV_BUILD_MERGE:
+    case SIDX_EV_BUILD_EXPAND:
+        json_id(o, "node", ev->node);
+        json_i32(o, "axis", ev->axis);
+        json_u32(o, "aux", ev->aux);
+        if (ev->type == SIDX_EV_BUILD_EXPAND) {
+            json_i32(o, "result", ev->result);
+            if (ev->result == 0) json_i32(o, "reason", ev->reason); /* 1: the slab look-up limit */
+        }
+        json_u32(o, "count", ev->count);
+        json_bounds(o, &ev->bounds);
+        break;
     default:
         break;
     }
@@ -663,6 +740,10 @@ static void json_event(sink_out *o, const sidx_event *ev, int unused)
     if (has_cell(ev)) {
         json_key(o, "cell");
         out_printf(o, "[%" PRId32 ",%" PRId32 ",%" PRId32 "]", ev->cell[0], ev->cell[1], ev->cell[2]);
+    }
+    if (has_extent(ev)) {
+        json_key(o, "extent");
+        out_printf(o, "[%" PRIu32 ",%" PRIu32 ",%" PRIu32 "]", ev->extent[0], ev->extent[1], ev->extent[2]);
     }
     out_puts(o, "}");
 }

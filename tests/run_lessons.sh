@@ -37,6 +37,7 @@ needs() {
     17_*) echo "bvh bvh-obb" ;;
     18_*|19_*) echo "bvh" ;;
     20_*) echo "bvh kdtree grid" ;;
+    23_*) echo "grid grid-irregular" ;;
     24_*) echo "bvh" ;;
     *) echo "" ;;
     esac
@@ -79,9 +80,12 @@ expect() {
                         sharing_loses_skips=1 sharing_moves_lines=1" ;;
     22_kd_round_robin) echo "same_hits=1 round_robin_scale_invariant=1 largest_extent_cheaper=1
                              gap_grows_when_stretched=1" ;;
-    25_kd_slide_example) echo "slide_tree=1 rows_match_slide=1 cannot_terminate_rows=2 ends_in_L3=1 same_hit=1" ;;
+    23_irregular_grid) echo "base_within_finest_level=1 merged_cells_are_boxes=1 expanded_over_subsets=1
+                             finest_level_12_steps=1 irregular_fewer_steps=1 same_hit=1 same_hits=1
+                             fewer_cells_visited=1 needs_more_memory=1" ;;
     24_spawning_rays) echo "spawn_self_intersections=0 spawn_missed_occluders=0 hack_hits_itself_far_away=1
                             hack_misses_when_small=1" ;;
+    25_kd_slide_example) echo "slide_tree=1 rows_match_slide=1 cannot_terminate_rows=2 ends_in_L3=1 same_hit=1" ;;
     *) echo "" ;;
     esac
 }

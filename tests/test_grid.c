@@ -548,6 +548,96 @@ static void test_irregular_merges(void **state)
     }
 }
 
+/* The irregular grid's construction events (deck 000 "Construction
+ * (merge & expand)"): one build_leaf per base cell, one build_merge per
+ * merge (so base cells - merges = final cells), boxes in finest-level
+ * cells with the faces inside them; a traced build makes the same grid
+ * as an untraced one; a walk names the expanded box it jumps across. */
+static void test_irregular_construction_events(void **state)
+{
+    (void)state;
+    if (!have("grid-irregular")) return;
+    const char *const sc[] = {"flat2d", "cornell", "teapot"};
+    for (size_t s = 0; s < 3; ++s) {
+        sidx_mesh m;
+        make_scene(sc[s], &m);
+        sidx_recorder rec;
+        sidx_recorder_init(&rec);
+        sidx_hook h = sidx_recorder_hook(&rec);
+        h.mask = SIDX_EVMASK_BUILD | SIDX_EVMASK(SIDX_EV_NOTE);
+        sidx_build_options o;
+        memset(&o, 0, sizeof o);
+        o.hook = &h;
+        sidx_accel *a = build("grid-irregular", &m, &o), *plain = build("grid-irregular", &m, NULL);
+        assert_false(rec.overflow);
+        sidx_accel_stats st, sp;
+        sidx_accel_stats_get(a, &st);
+        sidx_accel_stats_get(plain, &sp);
+        assert_int_equal(st.nodes, sp.nodes);
+        assert_int_equal(st.prim_refs, sp.prim_refs);
+        assert_int_equal(st.bytes, sp.bytes);
+        uint32_t base = 0, leaves = 0, merges = 0, grown = 0;
+        int32_t fine[3] = {0, 0, 0};
+        for (size_t i = 0; i < rec.count; ++i) {
+            const sidx_event *e = &rec.events[i];
+            if (e->type == SIDX_EV_NOTE && e->text && strstr(e->text, "base cells")) {
+                base = e->count;
+                memcpy(fine, e->cell, sizeof fine);
+            }
+            if (e->type != SIDX_EV_BUILD_LEAF && e->type != SIDX_EV_BUILD_MERGE && e->type != SIDX_EV_BUILD_EXPAND)
+                continue;
+            assert_true(e->node < st.nodes);
+            for (int k = 0; k < 3; ++k) {
+                assert_true(e->extent[k] >= 1);
+                assert_true(e->cell[k] >= 0 && e->cell[k] + (int32_t)e->extent[k] <= fine[k]);
+            }
+            assert_false(sidx_aabb_is_empty(e->bounds));
+            if (e->type == SIDX_EV_BUILD_LEAF) ++leaves;
+            if (e->type == SIDX_EV_BUILD_MERGE) {
+                ++merges;
+                assert_true(e->axis >= 0 && e->axis < 3);
+                assert_true(e->aux > (uint32_t)e->cell[e->axis] &&
+                            e->aux < (uint32_t)e->cell[e->axis] + e->extent[e->axis]);
+            }
+            if (e->type == SIDX_EV_BUILD_EXPAND && e->result == 1) {
+                ++grown;
+                assert_true(e->count >= 1);
+            }
+        }
+        fprintf(stderr, "grid-irregular on %s: %u base cells, %u merges, %u cells, %u expansion steps\n", sc[s],
+                leaves, merges, st.nodes, grown);
+        assert_int_equal(leaves, base);
+        assert_int_equal(leaves - merges, st.nodes);
+        assert_true(merges > 0 && grown > 0);
+        /* a traced walk: every cell entered comes with its expanded box */
+        sidx_recorder tr;
+        sidx_recorder_init(&tr);
+        const sidx_hook th = sidx_recorder_hook(&tr);
+        const sidx_aabb box = sidx_mesh_bounds(&m);
+        sidx_ray r;
+        sidx_ray_init(&r, sidx_v3_add(box.max, sidx_v3(1.0f, 1.0f, 1.0f)),
+                      sidx_v3_sub(sidx_aabb_centroid(box), sidx_v3_add(box.max, sidx_v3(1.0f, 1.0f, 1.0f))), 0.0f,
+                      INFINITY);
+        sidx_query q;
+        memset(&q, 0, sizeof q);
+        q.hook = &th;
+        sidx_hit hit;
+        sidx_accel_intersect(a, &r, &q, &hit);
+        size_t entered = 0;
+        for (size_t i = 0; i < tr.count; ++i)
+            if (tr.events[i].type == SIDX_EV_NODE_ENTER) {
+                ++entered;
+                assert_true(tr.events[i].extent[0] >= 1 && tr.events[i].cell[0] >= 0);
+            }
+        assert_true(entered > 0);
+        sidx_recorder_free(&tr);
+        sidx_recorder_free(&rec);
+        sidx_accel_destroy(a);
+        sidx_accel_destroy(plain);
+        sidx_mesh_free(&m);
+    }
+}
+
 /* The irregular grid fixes the teapot in a stadium as the nested grid does. */
 static void test_irregular_stadium(void **state)
 {
@@ -718,6 +808,7 @@ int main(void)
         cmocka_unit_test(test_exact_vs_boxonly),
         cmocka_unit_test(test_grid2_stadium),
         cmocka_unit_test(test_irregular_merges),
+        cmocka_unit_test(test_irregular_construction_events),
         cmocka_unit_test(test_irregular_stadium),
         cmocka_unit_test(test_octree_quadtree),
         cmocka_unit_test(test_build_events),

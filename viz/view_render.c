@@ -305,6 +305,10 @@ static void draw_structure_2d(const view_state *v, viz_canvas *cv, const map2d *
     /* every BUILD_NODE box, also when the events do not form a tree (grid cells) */
     for (size_t i = 0; i < limit && i < v->build.count; ++i) {
         const sidx_event *e = &v->build.events[i];
+        /* the irregular grid's construction as it goes: base cells (thin),
+         * then each merged box (a box given with its extent) */
+        if ((e->type == SIDX_EV_BUILD_LEAF || e->type == SIDX_EV_BUILD_MERGE) && e->extent[0] > 0)
+            box2d(cv, m, e->bounds, e->type == SIDX_EV_BUILD_LEAF ? 0x60a0a0a0u : 0xff40a0ffu, 0);
         if (e->type != SIDX_EV_BUILD_NODE) continue;
         uint32_t d = e->depth == UINT32_MAX ? 0 : e->depth;
         box2d(cv, m, e->bounds, viz_depth_color(d, d == 0 ? 200 : 150), 0);

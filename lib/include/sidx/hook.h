@@ -44,6 +44,14 @@ typedef enum sidx_event_type {
     SIDX_EV_RAY_END,         /* prim, t of the final hit (SIDX_NO_HIT / inf on a miss); result = 1 if
                                 hit / occluded (occlusion queries fill only result) */
     SIDX_EV_NOTE,            /* free text: a decision that is not one of the above (text) */
+    /* build, irregular grid (after NOTE so the older types keep their numbers) */
+    SIDX_EV_BUILD_MERGE,     /* two neighbouring cells with the same triangles became one: node = the
+                                final cell, axis, aux = the face they met at, count, cell[]/extent[] =
+                                the merged box, bounds */
+    SIDX_EV_BUILD_EXPAND,    /* a cell's expanded box grew by one step (result 1) or stopped (result 0;
+                                reason 1 = too many cells to check): node, axis, aux = 1 towards
+                                +axis / 0 towards -axis, count = cells grown, cell[]/extent[] = the
+                                expanded box, bounds */
     SIDX_EV_COUNT
 } sidx_event_type;
 
@@ -51,7 +59,8 @@ typedef enum sidx_event_type {
 #define SIDX_EVMASK_BUILD                                                                           \
     (SIDX_EVMASK(SIDX_EV_BUILD_BEGIN) | SIDX_EVMASK(SIDX_EV_BUILD_NODE) |                          \
      SIDX_EVMASK(SIDX_EV_BUILD_CANDIDATE) | SIDX_EVMASK(SIDX_EV_BUILD_SPLIT) |                     \
-     SIDX_EVMASK(SIDX_EV_BUILD_LEAF) | SIDX_EVMASK(SIDX_EV_BUILD_END))
+     SIDX_EVMASK(SIDX_EV_BUILD_LEAF) | SIDX_EVMASK(SIDX_EV_BUILD_END) |                           \
+     SIDX_EVMASK(SIDX_EV_BUILD_MERGE) | SIDX_EVMASK(SIDX_EV_BUILD_EXPAND))
 #define SIDX_EVMASK_ALL ((1u << SIDX_EV_COUNT) - 1u)
 #define SIDX_EVMASK_TRAVERSAL (SIDX_EVMASK_ALL & ~SIDX_EVMASK_BUILD)
 
@@ -91,7 +100,9 @@ typedef struct sidx_event {
     int32_t axis;          /* split axis 0..2, -1 when none; BSP: -1 and plane in bounds.min/pos */
     int32_t result;        /* 1 = hit / accepted, 0 = miss / rejected */
     int32_t reason;        /* sidx_leaf_reason or sidx_term_reason */
-    int32_t cell[3];       /* grid cell coordinates */
+    int32_t cell[3];       /* grid cell coordinates (irregular grid: its finest level) */
+    uint32_t extent[3];    /* irregular grid: finest-level cells the box at cell[] spans per axis;
+                              0, 0, 0 when the event is about one cell of a regular grid or none */
     float pos;             /* split position */
     float cost;            /* SAH cost of a candidate / split / leaf */
     float t_near, t_far;   /* parametric interval */
