@@ -536,7 +536,7 @@ static void out_json_float(sink_out *o, float f)
 /* Every key an event's JSON object may hold; the reader keeps them as bits. */
 static const char *const json_key_names[] = {"type", "structure", "ray", "node", "parent", "depth", "prim",
                                              "count", "aux", "axis", "result", "reason", "cell", "pos",
-                                             "cost", "t_near", "t_far", "t", "bounds", "text", "prims"};
+                                             "cost", "t_near", "t_far", "t", "bounds", "text", "prims", "extent"};
 #define JSON_NKEYS ((int)(sizeof json_key_names / sizeof json_key_names[0]))
 
 static int json_key_index(const char *key)
@@ -1088,7 +1088,8 @@ static int jin_prims(json_in *in, const uint32_t **out, uint32_t *n)
 }
 
 enum { JK_TYPE = 0, JK_STRUCTURE, JK_RAY, JK_NODE, JK_PARENT, JK_DEPTH, JK_PRIM, JK_COUNT, JK_AUX, JK_AXIS,
-       JK_RESULT, JK_REASON, JK_CELL, JK_POS, JK_COST, JK_T_NEAR, JK_T_FAR, JK_T, JK_BOUNDS, JK_TEXT, JK_PRIMS };
+       JK_RESULT, JK_REASON, JK_CELL, JK_POS, JK_COST, JK_T_NEAR, JK_T_FAR, JK_T, JK_BOUNDS, JK_TEXT, JK_PRIMS,
+       JK_EXTENT };
 
 /* A name of names[0..n) to its index, or -1. */
 static int name_index(const char *s, const char *(*name)(int), int n)
@@ -1135,7 +1136,19 @@ static int jin_field(json_in *in, int k, sidx_event *e, char *reason, size_t rea
     case JK_AXIS: return jin_i32(in, &e->axis);
     case JK_RESULT: return jin_i32(in, &e->result);
     case JK_REASON:
+        /* a name (leaf and terminate reasons), or build_expand's number */
+        jin_ws(in);
+        if (*in->p != '"') {
+            if (jin_i32(in, &e->reason) != 0) return -1;
+            snprintf(reason, reason_size, "#");
+            return 0;
+        }
         if (jin_string(in, reason, reason_size, SIDX_ERR_PARSE) != 0) return jin_fail(in, SIDX_ERR_PARSE, "\"reason\" wants a name");
+        return 0;
+    case JK_EXTENT:
+        if (jin_char(in, '[') || jin_u32(in, &e->extent[0]) || jin_char(in, ',') || jin_u32(in, &e->extent[1]) ||
+            jin_char(in, ',') || jin_u32(in, &e->extent[2]) || jin_char(in, ']'))
+            return -1;
         return 0;
     case JK_CELL:
         if (jin_char(in, '[') || jin_i32(in, &e->cell[0]) || jin_char(in, ',') || jin_i32(in, &e->cell[1]) ||
@@ -1189,7 +1202,10 @@ static int jin_event(json_in *in, sidx_event *out)
     in->p = in->line; /* what follows is about the whole line */
     if (!(seen & (1u << JK_TYPE))) return jin_fail(in, SIDX_ERR_PARSE, "no \"type\"");
     const char *tname = sidx_event_type_name(e.type);
-    if (seen & (1u << JK_REASON)) {
+    if ((seen & (1u << JK_REASON)) && e.type == SIDX_EV_BUILD_EXPAND) {
+        if (strcmp(reason, "#") != 0) return jin_fail(in, SIDX_ERR_PARSE, "a build_expand \"reason\" is a number");
+    } else if (seen & (1u << JK_REASON)) {
+        if (!strcmp(reason, "#")) return jin_fail(in, SIDX_ERR_PARSE, "\"reason\" wants a name");
         const int leaf = e.type == SIDX_EV_BUILD_LEAF;
         const int r = leaf ? name_index(reason, leaf_name_int, SIDX_LEAF_REASON_COUNT)
                            : name_index(reason, term_name_int, SIDX_TERM_REASON_COUNT);
