@@ -248,7 +248,10 @@ static int mesh_leaks(const sidx_mesh *mesh, long rays, long leaks[SIDX_TRI_METH
 
 int main(int argc, char **argv)
 {
-    lesson_args args = {.name = "01_ray_triangle", .usage = usage, .scene = "icosphere"};
+    lesson_args args = {.name = "01_ray_triangle",
+                        .usage = usage,
+                        .scene = "icosphere",
+                        .refused = "the lesson compares triangle tests over every triangle; it builds no tree"};
     lesson_parse(&args, argc, argv);
 
     sidx_printer printer;

@@ -285,7 +285,10 @@ static int study(const char *name, const sidx_mesh *mesh, result *res, int trace
 
 int main(int argc, char **argv)
 {
-    lesson_args args = {.name = "02_bounding_volumes", .usage = usage, .scene = "teapot"};
+    lesson_args args = {.name = "02_bounding_volumes",
+                        .usage = usage,
+                        .scene = "teapot",
+                        .refused = "the lesson compares bounding volumes of whole objects; it builds no tree"};
     lesson_parse(&args, argc, argv);
     sidx_mesh objs[3] = {lesson_open_scene(&args), lesson_open(&args, "icosphere:2")};
     const char *names[3] = {args.scene, "icosphere:2", "rod"};

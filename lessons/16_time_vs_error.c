@@ -125,7 +125,10 @@ static sidx_ray mrays[NR];
 
 int main(int argc, char **argv)
 {
-    lesson_args args = {.name = "16_time_vs_error", .usage = usage, .scene = "icosphere:4"};
+    lesson_args args = {.name = "16_time_vs_error",
+                        .usage = usage,
+                        .scene = "icosphere:4",
+                        .refused = "the lesson compares triangle and box tests; its BVH only carries them"};
     lesson_parse(&args, argc, argv);
     lesson_need(&args, "bvh");
 

@@ -203,7 +203,10 @@ static void run_scene(const lesson_args *args, const sidx_mesh *m, int nx, int n
 
 int main(int argc, char **argv)
 {
-    lesson_args args = {.name = "24_spawning_rays", .usage = usage, .scene = "cornell"};
+    lesson_args args = {.name = "24_spawning_rays",
+                        .usage = usage,
+                        .scene = "cornell",
+                        .refused = "the lesson compares ways to start secondary rays; its BVH only finds hits"};
     lesson_parse(&args, argc, argv);
     lesson_need(&args, "bvh");
     sidx_mesh base = lesson_open_scene(&args);

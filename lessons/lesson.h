@@ -40,7 +40,8 @@
  * as sidx-step, sidx-dot and sidx-view).  Every lesson knows all eight:
  * --help ends with the lines of those its table takes, and a knob it does
  * not take is refused (exit 2) with a line saying the lesson builds with
- * the defaults, rather than reported as an unknown option.  The lesson's
+ * the defaults (or args.refused: why, in one line), rather than reported
+ * as an unknown option.  The lesson's
  * usage text says what a knob changes in what the lesson builds; its CHECK
  * lines are only asserted with the defaults.
  *
@@ -85,6 +86,10 @@ typedef struct lesson_option {
 #define LESSON_LAMBDA(b) {"--lambda", .build = &(b)}
 #define LESSON_NO_MAILBOX(b) {"--no-mailbox", .build = &(b)}
 #define LESSON_EMPTY_BONUS(b) {"--empty-bonus", .build = &(b)}
+/* The five a BVH reads (the lessons that build only BVHs take these). */
+#define LESSON_BVH_KNOBS(b)                                                                                  \
+    LESSON_BINS(b), LESSON_C_TRAV(b), LESSON_C_TRI(b), LESSON_LEAF_SIZE(b), LESSON_MAX_DEPTH(b)
+#define LESSON_BVH_ONLY "no grid or kd-tree is built here, only BVHs" /* their args.refused */
 #define LESSON_KNOBS(b)                                                                                      \
     LESSON_BINS(b), LESSON_C_TRAV(b), LESSON_C_TRI(b), LESSON_LEAF_SIZE(b), LESSON_MAX_DEPTH(b),             \
         LESSON_LAMBDA(b), LESSON_NO_MAILBOX(b), LESSON_EMPTY_BONUS(b)
@@ -95,6 +100,7 @@ typedef struct lesson_args {
     const char *scene;            /* the default scene (NULL: the lesson makes its own), then the one to use */
     const char *scene_flag;       /* NULL: SCENE is a plain argument; else the option that takes it */
     const lesson_option *options; /* NULL, or a table ended by {0} */
+    const char *refused;          /* NULL, or one line: why the knobs not in options are refused */
     int scene_given;              /* set by lesson_parse: SCENE was on the command line */
 } lesson_args;
 
@@ -183,10 +189,15 @@ static inline void lesson__knobs_help(const lesson_args *a, FILE *f)
         if (!taken++) fprintf(f, "\nbuild knobs (left out = the structure's default):\n");
         fprintf(f, "%.*s\n", (int)strcspn(line + 1, "\n"), line + 1);
     }
-    if (!taken)
+    if (!taken && a->refused)
+        fprintf(f, "\nThe build knobs of sidx-step (--bins, --c-trav, --c-tri, --leaf-size, --max-depth,\n"
+                   "--lambda, --no-mailbox, --empty-bonus) are refused:\n  %s.\n", a->refused);
+    else if (!taken)
         fprintf(f, "\nThe build knobs of sidx-step (--bins, --c-trav, --c-tri, --leaf-size, --max-depth,\n"
                    "--lambda, --no-mailbox, --empty-bonus) are refused: this lesson builds with the\n"
                    "defaults its figures are about.\n");
+    else if (a->refused)
+        fprintf(f, "The other build knobs are refused:\n  %s.\n", a->refused);
 }
 
 static inline void lesson_parse(lesson_args *a, int argc, char **argv)
@@ -210,10 +221,12 @@ static inline void lesson_parse(lesson_args *a, int argc, char **argv)
             if (sidx_viz_build_knob(arg, NULL, &scratch, NULL, 0) != 0) {
                 int takes = 0;
                 for (const lesson_option *k = a->options; k && k->flag; ++k) takes |= k->build != NULL;
-                fprintf(stderr,
-                        takes ? "%s: this lesson takes no %s (--help lists the knobs it takes)\n"
-                              : "%s: this lesson builds with the default knobs and takes no %s\n",
-                        a->name, arg);
+                if (a->refused) fprintf(stderr, "%s: this lesson takes no %s: %s\n", a->name, arg, a->refused);
+                else
+                    fprintf(stderr,
+                            takes ? "%s: this lesson takes no %s (--help lists the knobs it takes)\n"
+                                  : "%s: this lesson builds with the default knobs and takes no %s\n",
+                            a->name, arg);
                 exit(2);
             }
             lesson__usage_error(a, "unexpected argument", arg);
