@@ -42,13 +42,15 @@
 
 static void usage(FILE *f)
 {
-    fprintf(f, "usage: 18_beams_and_cones [--help] [SCENE]\n"
+    fprintf(f, "usage: 18_beams_and_cones [--help] [build knobs] [SCENE]\n"
                "\n"
                "Beam and cone tracing of a camera image in 8x8-pixel tiles: the candidates a bundle\n"
                "finds, what one bundle per tile saves against one per pixel, and what subdividing\n"
                "beams and cones buys and costs; every ray's hit must be among its tile's candidates.\n"
                "\n"
-               "  SCENE   built-in scene name or .obj/.ply (default: teapot)\n");
+               "  SCENE   built-in scene name or .obj/.ply (default: teapot)\n"
+               "--leaf-size changes the leaves of the box tree the beams and cones walk (default 4).\n"
+               "The checks hold for the default.\n");
 }
 
 #define W 64
@@ -196,14 +198,20 @@ static void split_trace(split_walk *w, const sidx_beam *b, const sidx_cone *c, u
 
 int main(int argc, char **argv)
 {
-    lesson_args args = {.name = "18_beams_and_cones", .usage = usage, .scene = "teapot"};
+    sidx_build_options knobs = {0};
+    const lesson_option options[] = {LESSON_LEAF_SIZE(knobs), {0}};
+    lesson_args args = {.name = "18_beams_and_cones",
+                        .usage = usage,
+                        .scene = "teapot",
+                        .options = options,
+                        .refused = "the bundle tree has no other knob; the BVH only gives each pixel's true hit"};
     lesson_parse(&args, argc, argv);
     lesson_need(&args, "bvh");
     sidx_mesh mesh = lesson_open_scene(&args);
     sidx_error err = {0};
     sidx_bundle_tree *tree = NULL;
     sidx_accel *bvh = NULL;
-    if (sidx_bundle_tree_build(&mesh, NULL, &tree, &err) != SIDX_OK ||
+    if (sidx_bundle_tree_build(&mesh, &knobs, &tree, &err) != SIDX_OK ||
         sidx_accel_build("bvh", &mesh, NULL, &bvh, &err) != SIDX_OK)
         lesson_fail(&args, err.message);
 

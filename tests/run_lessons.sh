@@ -101,6 +101,11 @@ knob_args() {
     07_*) echo "--lambda 0.25" ;;
     09_*) echo "--c-trav 4" ;;
     12_*) echo "--leaf-size 2" ;;
+    14_*) echo "--leaf-size 1" ;;
+    15_*) echo "--leaf-size 1" ;;
+    17_*) echo "--leaf-size 1" ;;
+    18_*) echo "--leaf-size 1" ;;
+    19_*) echo "--leaf-size 1" ;;
     *) echo "" ;;
     esac
 }
@@ -112,6 +117,11 @@ knob_lines() {
     07_*) grep 'One ray through' ;;
     09_*) grep -m1 'candidate axis' ;;
     12_*) grep 'leaves per depth' ;;
+    14_*) grep '^  bvh ' | awk '{print $4, $5, $6}' ;;         # nodes, boxes, triangles per ray
+    15_*) grep 'BVH closest hit' | awk '{print $4, $5}' ;;     # triangle tests, boxes per query
+    17_*) grep ' bvh  ' | awk '{print $(NF-4), $(NF-3), $(NF-2)}' ;;
+    18_*) grep 'tests more' ;;                                  # the bundle tree's box tests
+    19_*) grep '^  instanced ' | head -1 | awk '{print $2}' ;;  # the object BVH's memory
     esac
 }
 
