@@ -44,14 +44,30 @@
 
 static void usage(FILE *f)
 {
-    fprintf(f, "usage: 06_object_vs_space [--help] [SCENE]\n"
+    fprintf(f, "usage: 06_object_vs_space [--help] [build knobs] [SCENE]\n"
                "\n"
                "The same scene in a BVH (object partitioning) and a kd-tree (space partitioning):\n"
                "overlapping boxes vs disjoint cells, and which can stop at the first hit.  Then\n"
                "deck 001's review table (BVH, kd-tree, uniform grid, octree) measured on one scene.\n"
                "\n"
                "  SCENE   built-in scene name or .obj/.ply (default: soup:600; the review table:\n"
-               "          teapot)\n");
+               "          teapot)\n"
+               "The knobs below change every structure built (BVH and kd-tree in parts 1-3, all four\n"
+               "in the review); the kd-tree's C_trav and C_tri stay 4 and 1 where --c-trav or --c-tri\n"
+               "is not given.  The checks hold for the defaults.\n");
+}
+
+/* The build knobs of the command line (all zero: every structure's default). */
+static sidx_build_options knobs;
+
+/* The options for structure s of a part (kd = it is the kd-tree): the
+ * knobs, and for the kd-tree the 4 : 1 costs where no cost knob is set. */
+static sidx_build_options build_options(int kd)
+{
+    sidx_build_options opt = knobs;
+    if (kd && !knobs.c_trav) opt.c_trav = 4.0f;
+    if (kd && !knobs.c_tri) opt.c_tri = 1.0f;
+    return opt;
 }
 
 static double volume(sidx_aabb b)
@@ -191,11 +207,7 @@ static int review_table(const lesson_args *args, long checks[4])
         double best = INFINITY;
         /* the kd-tree with the 4 : 1 costs of parts 1-3 (leaves of a few
          * triangles), not its SIMD-tuned 16 : 1 default */
-        sidx_build_options opt = {0};
-        if (s == 1) {
-            opt.c_trav = 4.0f;
-            opt.c_tri = 1.0f;
-        }
+        sidx_build_options opt = build_options(s == 1);
         for (int pass = 0; pass < 3; ++pass) { /* best of 3: the build time on a busy machine */
             sidx_accel_destroy(acc);
             acc = NULL;
@@ -282,7 +294,8 @@ static int review_table(const lesson_args *args, long checks[4])
 
 int main(int argc, char **argv)
 {
-    lesson_args args = {.name = "06_object_vs_space", .usage = usage, .scene = "soup:600"};
+    const lesson_option options[] = {LESSON_KNOBS(knobs), {0}};
+    lesson_args args = {.name = "06_object_vs_space", .usage = usage, .scene = "soup:600", .options = options};
     lesson_parse(&args, argc, argv);
     static const char *const names[2] = {"bvh", "kdtree"};
     for (int s = 0; s < 4; ++s) lesson_need(&args, review_rows[s].accel);
@@ -298,16 +311,12 @@ int main(int argc, char **argv)
     printf("== '%s': %u triangles\n", args.scene, mesh.num_triangles);
     for (int s = 0; s < 2; ++s) {
         sidx_recorder_clear(&rec);
-        sidx_build_options opt = {0};
+        sidx_build_options opt = build_options(s == 1);
         opt.hook = &rh;
         /* The kd-tree's default C_trav : C_tri = 16 : 1 makes leaves of
          * ~20 references, tested four at a time by SIMD; here leaves of a
          * few triangles like the BVH's (4 : 1), so that "steps after the
          * closest hit" compares the two walks, not two leaf sizes. */
-        if (s == 1) {
-            opt.c_trav = 4.0f;
-            opt.c_tri = 1.0f;
-        }
         if (sidx_accel_build(names[s], &mesh, &opt, &acc[s], &err) != SIDX_OK) {
             fprintf(stderr, "06_object_vs_space: %s\n", err.message);
             sidx_accel_destroy(acc[0]);

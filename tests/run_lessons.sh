@@ -98,14 +98,18 @@ knob_args() {
     03_*) echo "--bins 8" ;;
     04_*) echo "--bins 8" ;;
     05_*) echo "--leaf-size 1" ;;
+    06_*) echo "--leaf-size 1" ;;
     07_*) echo "--lambda 0.25" ;;
+    08_*) echo "--lambda 0.25" ;;
     09_*) echo "--c-trav 4" ;;
     12_*) echo "--leaf-size 2" ;;
+    13_*) echo "--leaf-size 1" ;;
     14_*) echo "--leaf-size 1" ;;
     15_*) echo "--leaf-size 1" ;;
     17_*) echo "--leaf-size 1" ;;
     18_*) echo "--leaf-size 1" ;;
     19_*) echo "--leaf-size 1" ;;
+    20_*) echo "--max-depth 4" ;;
     *) echo "" ;;
     esac
 }
@@ -114,14 +118,18 @@ knob_lines() {
     03_*) grep -c 'candidate axis' ;;                          # the SAH candidates printed
     04_*) grep '^  bvh  ' | awk '{print $(NF-7), $(NF-6)}' ;;  # SAH candidates: all, at the root
     05_*) grep '^  ordered ' | awk '{print $2, $3, $4}' ;;     # visits, box and triangle tests per ray
+    06_*) grep 'sibling pairs' ;;                               # BVH and kd-tree node pairs
     07_*) grep 'One ray through' ;;
+    08_*) grep 'The middle pixel through' ;;                    # the uniform grid's resolution
     09_*) grep -m1 'candidate axis' ;;
     12_*) grep 'leaves per depth' ;;
+    13_*) grep -m1 ' speck ' ;;                                 # BVH triangle tests per ray
     14_*) grep '^  bvh ' | awk '{print $4, $5, $6}' ;;         # nodes, boxes, triangles per ray
     15_*) grep 'BVH closest hit' | awk '{print $4, $5}' ;;     # triangle tests, boxes per query
     17_*) grep ' bvh  ' | awk '{print $(NF-4), $(NF-3), $(NF-2)}' ;;
     18_*) grep 'tests more' ;;                                  # the bundle tree's box tests
     19_*) grep '^  instanced ' | head -1 | awk '{print $2}' ;;  # the object BVH's memory
+    20_*) grep '^  icosphere:2 ' ;;
     esac
 }
 
