@@ -46,17 +46,21 @@
 
 static void usage(FILE *f)
 {
-    fprintf(f, "usage: 22_kd_round_robin [--help] [SCENE]\n"
+    fprintf(f, "usage: 22_kd_round_robin [--help] [build knobs] [SCENE]\n"
                "\n"
                "The deck's intuitive kd-tree build with a round-robin split axis against the largest\n"
                "extent (both: middle of the cell, 4 triangles per leaf), on SCENE and on SCENE\n"
                "stretched 6x along x: tree size, SAH cost, node visits and triangle tests per ray.\n"
                "\n"
-               "  SCENE   built-in scene name or .obj/.ply (default: teapot)\n");
+               "  SCENE   built-in scene name or .obj/.ply (default: teapot)\n"
+               "--leaf-size and --max-depth change both intuitive builds alike (default: 4 triangles,\n"
+               "depth 8 + 1.3 log2 n, at most 126) and the library's kd-trees below them.  The checks\n"
+               "hold for the defaults.\n");
 }
 
 #define NRAYS 20000
 #define LEAF 4
+static sidx_build_options knobs; /* the command line's build knobs (0: the defaults above) */
 #define STACK 128
 static sidx_ray rays[NRAYS];
 static sidx_hit ref_hits[NRAYS];
@@ -177,7 +181,7 @@ static void build_node(kd *t, uint32_t idx, uint32_t depth, sidx_aabb cell, ref 
         nl += a < p || b <= p; /* a flat box in the plane goes left */
         nr += b > p;
     }
-    if (n <= LEAF || depth >= t->depth_limit || !(p > lo && p < hi) || (nl == n && nr == n)) {
+    if (n <= (knobs.leaf_size ? knobs.leaf_size : LEAF) || depth >= t->depth_limit || !(p > lo && p < hi) || (nl == n && nr == n)) {
         make_leaf(t, idx, r, n, cell);
         return;
     }
@@ -222,7 +226,8 @@ static int kd_build(kd *t, const sidx_mesh *m, int round_robin)
     t->m = m;
     t->round_robin = round_robin;
     t->root = sidx_mesh_bounds(m);
-    t->depth_limit = (uint32_t)lrint(8.0 + 1.3 * log2((double)m->num_triangles));
+    t->depth_limit = knobs.max_depth ? knobs.max_depth : (uint32_t)lrint(8.0 + 1.3 * log2((double)m->num_triangles));
+    if (t->depth_limit > STACK - 2) t->depth_limit = STACK - 2; /* the walk's stack holds the deepest path */
     ref *r = malloc(m->num_triangles * sizeof *r);
     if (!r) return 0;
     for (uint32_t i = 0; i < m->num_triangles; ++i) r[i] = (ref){i, sidx_mesh_triangle_bounds(m, i)};
@@ -390,7 +395,7 @@ static void compare(const lesson_args *args, const sidx_mesh *m, const char *lab
     static const char *const libs[3] = {"kdtree-middle", "kdtree-median", "kdtree"};
     for (int s = 0; s < 3; ++s) {
         sidx_accel *a = NULL;
-        if (sidx_accel_build(libs[s], m, NULL, &a, &err) != SIDX_OK) lesson_fail(args, err.message);
+        if (sidx_accel_build(libs[s], m, &knobs, &a, &err) != SIDX_OK) lesson_fail(args, err.message);
         sidx_accel_stats st;
         sidx_accel_stats_get(a, &st);
         sidx_counters c;
@@ -408,7 +413,12 @@ static void compare(const lesson_args *args, const sidx_mesh *m, const char *lab
 
 int main(int argc, char **argv)
 {
-    lesson_args args = {.name = "22_kd_round_robin", .usage = usage, .scene = "teapot"};
+    const lesson_option options[] = {LESSON_LEAF_SIZE(knobs), LESSON_MAX_DEPTH(knobs), {0}};
+    lesson_args args = {.name = "22_kd_round_robin",
+                        .usage = usage,
+                        .scene = "teapot",
+                        .options = options,
+                        .refused = "the intuitive builds split at the cell's middle: no SAH cost, bins or bonus"};
     lesson_parse(&args, argc, argv);
     lesson_need(&args, "kdtree");
     lesson_need(&args, "kdtree-middle");

@@ -110,6 +110,10 @@ knob_args() {
     18_*) echo "--leaf-size 1" ;;
     19_*) echo "--leaf-size 1" ;;
     20_*) echo "--max-depth 4" ;;
+    21_*) echo "--lambda 1" ;;
+    22_*) echo "--leaf-size 8" ;;
+    23_*) echo "--lambda 0.5" ;;
+    25_*) echo "--max-depth 1" ;;
     *) echo "" ;;
     esac
 }
@@ -130,6 +134,10 @@ knob_lines() {
     18_*) grep 'tests more' ;;                                  # the bundle tree's box tests
     19_*) grep '^  instanced ' | head -1 | awk '{print $2}' ;;  # the object BVH's memory
     20_*) grep '^  icosphere:2 ' ;;
+    21_*) grep -m1 'lambda = ' ;;
+    22_*) grep 'round-robin, middle ' ;;
+    23_*) grep '^  grid-irregular ' | awk '{print $2, $3, $4}' ;;
+    25_*) grep "SAH, the deck's" ;;
     esac
 }
 
