@@ -319,10 +319,22 @@ static void traces_and_diff(void **state)
         return;
     }
     assert_int_equal(plant(&ms[k], dir, file, sizeof file), 0);
-    snprintf(cmd, sizeof cmd, "'%s' 05_bvh_traversal %s --trace %s", checker, file, dir);
+    /* a directory that cannot be made: the report says the traces were not written */
+    snprintf(cmd, sizeof cmd, "'%s' 05_bvh_traversal %s --trace /proc/sidx-no-such/dir 2>&1", checker, file);
     FILE *p = popen(cmd, "r");
     assert_non_null(p);
     char *out;
+    assert_int_equal(drain(p, &out), 1);
+    assert_non_null(strstr(out, "cannot make the directory /proc/sidx-no-such/dir"));
+    assert_non_null(strstr(out, "traces     not written"));
+    assert_null(strstr(out, "reference.jsonl and"));
+    free(out);
+    /* a directory that does not exist yet is made */
+    char tdir[sizeof dir + 8];
+    snprintf(tdir, sizeof tdir, "%s/traces", dir);
+    snprintf(cmd, sizeof cmd, "'%s' 05_bvh_traversal %s --trace %s", checker, file, tdir);
+    p = popen(cmd, "r");
+    assert_non_null(p);
     assert_int_equal(drain(p, &out), 1);
     /* with SDL2 the report names the two sidx-view commands, and each opens its trace */
     char viewer[PATH_MAX + 32];
@@ -346,13 +358,13 @@ static void traces_and_diff(void **state)
     }
     free(out);
     int st;
-    snprintf(cmd, sizeof cmd, "'%s' --diff %s/reference.jsonl %s/yours.jsonl >/dev/null", step, dir, dir);
+    snprintf(cmd, sizeof cmd, "'%s' --diff %s/reference.jsonl %s/yours.jsonl >/dev/null", step, tdir, tdir);
     st = system(cmd);
     assert_int_equal(WEXITSTATUS(st), 1);
-    snprintf(cmd, sizeof cmd, "'%s' --diff %s/reference.jsonl %s/reference.jsonl >/dev/null", step, dir, dir);
+    snprintf(cmd, sizeof cmd, "'%s' --diff %s/reference.jsonl %s/reference.jsonl >/dev/null", step, tdir, tdir);
     st = system(cmd);
     assert_int_equal(WEXITSTATUS(st), 0);
-    snprintf(cmd, sizeof cmd, "'%s' --diff %s/reference.jsonl >/dev/null 2>&1", step, dir);
+    snprintf(cmd, sizeof cmd, "'%s' --diff %s/reference.jsonl >/dev/null 2>&1", step, tdir);
     st = system(cmd);
     assert_int_equal(WEXITSTATUS(st), 2);
     snprintf(cmd, sizeof cmd, "rm -rf %s", dir);

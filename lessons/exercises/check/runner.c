@@ -258,6 +258,11 @@ static int write_jsonl(const char *dir, const char *name, const ex_trace *t)
 {
     char path[4096];
     snprintf(path, sizeof path, "%s/%s", dir, name);
+    /* --trace /tmp/tr should just work: make the directory (one level) */
+    if (mkdir(dir, 0777) != 0 && errno != EEXIST) {
+        fprintf(stderr, "sidx-check: cannot make the directory %s: %s\n", dir, strerror(errno));
+        return -1;
+    }
     FILE *f = fopen(path, "w");
     if (!f) {
         fprintf(stderr, "sidx-check: cannot write %s: %s\n", path, strerror(errno));
@@ -386,9 +391,12 @@ int main(int argc, char **argv)
         while (k < ref.n && k < stu.n && same_event(&ref.ev[k], &stu.ev[k])) ++k;
         steps += k;
         const int agree = k == ref.n && k == stu.n;
+        int traces_written = 0;
         if (trace_dir && (!agree || only)) {
             if (write_jsonl(trace_dir, "reference.jsonl", &ref) != 0 || write_jsonl(trace_dir, "yours.jsonl", &stu) != 0)
                 rc = 2;
+            else
+                traces_written = 1;
         }
         if (verbose) printf("case %3zu %-5s %s\n", i + 1, agree ? "ok" : "FAIL", info.name);
         if (agree) continue;
@@ -406,9 +414,11 @@ int main(int argc, char **argv)
         print_event(stdout, "yours", se);
         if (hint) printf("  %-10s %s\n", "hint", hint);
         printf("  %-10s %s\n", "slide", d->slide);
-        if (trace_dir) {
+        if (traces_written) {
             printf("  traces     %s/reference.jsonl and %s/yours.jsonl (sidx-step --diff A B)\n", trace_dir, trace_dir);
             if (viewer && info.view_accel) print_view_commands(viewer, trace_dir, &info);
+        } else if (trace_dir) {
+            printf("  traces     not written (the message above says why)\n");
         } else {
             printf("  traces     add --trace DIR to write both as JSON Lines (sidx-step --diff A B%s)\n",
                    viewer && info.view_accel ? ", sidx-view --events" : "");
