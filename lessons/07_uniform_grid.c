@@ -13,7 +13,9 @@
  *   1. the resolution formula worked out for several densities λ, next to
  *      the resolution the grid actually chose;
  *   2. one ray walked through a coarse grid, cell by cell, as the printer
- *      shows the 3D-DDA's NODE_ENTER events;
+ *      shows the 3D-DDA's NODE_ENTER events, then the DDA's own state
+ *      (step, tDelta, tMax per axis, the axis that steps) worked out from
+ *      the grid's box and cell size, beside the library's cells;
  *   3. mailboxing on and off: triangle tests per ray, measured;
  *   4. too few vs too many cells: cells visited, triangle tests and time
  *      per ray across λ from 1/16 to 256.
@@ -122,6 +124,8 @@ typedef struct {
     int n, ok;
     int32_t last[3];
     float last_far;
+    int32_t cells[64][3]; /* the first 64 cells entered, for part 2's DDA table */
+    float first_near;
 } dda_check;
 
 static void dda_fn(const sidx_event *ev, void *user)
@@ -136,8 +140,63 @@ static void dda_fn(const sidx_event *ev, void *user)
         if (ev->t_far < ev->t_near) d->ok = 0;
     }
     memcpy(d->last, ev->cell, sizeof d->last);
+    if (d->n < 64) memcpy(d->cells[d->n], ev->cell, sizeof d->cells[0]);
+    if (d->n == 0) d->first_near = ev->t_near;
     d->last_far = ev->t_far;
     d->n++;
+}
+
+/* The 3D-DDA's own state (Amanatides & Woo 1987; deck 000 "Uniform Grid
+ * Traversal"), worked out here in double from the grid's box and cell size
+ * alone, beside the cells the library entered:
+ *   step[k]   = the sign of d[k]: which neighbour comes next on axis k;
+ *   tDelta[k] = cell[k] / |d[k]|: how much t one cell on axis k takes;
+ *   tMax[k]   = the t at which the ray leaves the current cell on axis k.
+ * Each step goes along the axis with the smallest tMax, then adds that
+ * axis's tDelta to its tMax.  Returns 1 if every cell matches the library's. */
+static int dda_table(const sidx_accel *a, const sidx_ray *ray, const dda_check *dc)
+{
+    sidx_grid_cells g;
+    sidx_error err = {0};
+    if (sidx_grid_cells_get(a, &g, &err) != SIDX_OK) {
+        printf("  (no grid view: %s)\n", err.message);
+        return 0;
+    }
+    const float *o = sidx_v3_array(&ray->org), *d = sidx_v3_array(&ray->dir);
+    const float *lo = sidx_v3_array(&g.box.min);
+    int cell[3], step[3];
+    double t_delta[3], t_max[3];
+    for (int k = 0; k < 3; ++k) {
+        /* the entry cell: where the ray enters the grid box (t_near of the first cell) */
+        const double p = (double)o[k] + (double)dc->first_near * d[k];
+        int c = (int)floor((p - lo[k]) / g.cell[k]);
+        cell[k] = c < 0 ? 0 : c >= (int)g.res[k] ? (int)g.res[k] - 1 : c;
+        step[k] = d[k] > 0 ? 1 : d[k] < 0 ? -1 : 0;
+        t_delta[k] = d[k] != 0 ? g.cell[k] / fabs((double)d[k]) : INFINITY;
+        const double wall = lo[k] + (double)g.cell[k] * (cell[k] + (step[k] > 0 ? 1 : 0));
+        t_max[k] = d[k] != 0 ? (wall - o[k]) / d[k] : INFINITY;
+    }
+    printf("\n  The 3D-DDA's own state, worked out from the grid's box and cell size:\n");
+    printf("    step = (%+d, %+d, %+d)   tDelta = cell / |d| = (%.6g, %.6g, %.6g)\n", step[0], step[1], step[2],
+           t_delta[0], t_delta[1], t_delta[2]);
+    printf("    %-4s %-12s %10s %10s %10s   %-6s %s\n", "step", "cell", "tMax x", "tMax y", "tMax z", "next", "library");
+    int agree = 1;
+    const int n = dc->n < 64 ? dc->n : 64;
+    for (int i = 0; i < n; ++i) {
+        const int axis = t_max[0] <= t_max[1] ? (t_max[0] <= t_max[2] ? 0 : 2) : (t_max[1] <= t_max[2] ? 1 : 2);
+        const int same = cell[0] == dc->cells[i][0] && cell[1] == dc->cells[i][1] && cell[2] == dc->cells[i][2];
+        agree &= same;
+        char here[24], lib[24];
+        snprintf(here, sizeof here, "(%d,%d,%d)", cell[0], cell[1], cell[2]);
+        snprintf(lib, sizeof lib, "(%d,%d,%d)", (int)dc->cells[i][0], (int)dc->cells[i][1], (int)dc->cells[i][2]);
+        printf("    %-4d %-12s %10.6g %10.6g %10.6g   %c%-5s %s%s\n", i + 1, here, t_max[0], t_max[1], t_max[2],
+               step[axis] > 0 ? '+' : '-', axis == 0 ? "x" : axis == 1 ? "y" : "z", lib, same ? "" : "  <- differs");
+        cell[axis] += step[axis];
+        t_max[axis] += t_delta[axis];
+    }
+    printf("    (the walk stops where the library stopped: the hit lies in the last cell)\n");
+    sidx_grid_cells_free(&g);
+    return agree;
 }
 
 int main(int argc, char **argv)
@@ -216,16 +275,17 @@ int main(int argc, char **argv)
     sidx_printer pr;
     sidx_printer_init(&pr, stdout);
     pr.mask = SIDX_EVMASK_TRAVERSAL & ~SIDX_EVMASK(SIDX_EV_PRIM_TEST);
-    dda_check dc = {0, 1, {0, 0, 0}, 0.0f};
+    dda_check dc = {.n = 0, .ok = 1};
     sidx_tee tee = {{sidx_printer_hook(&pr), {dda_fn, &dc, SIDX_EVMASK(SIDX_EV_NODE_ENTER)}}, 2};
     const sidx_hook th = sidx_tee_hook(&tee);
     sidx_query q = {0, SIDX_TRAVERSE_DEFAULT, &th, 0};
     sidx_hit h;
     sidx_accel_intersect(a, &ray, &q, &h);
-    sidx_accel_destroy(a);
     printf("  (triangle tests left out; mailbox lines are triangles already tested in an earlier cell)\n");
     printf("  %d cells, each a face neighbour of the last, entered at the t the last one was left: %s\n", dc.n,
            dc.ok ? "yes" : "NO");
+    const int dda_agrees = dda_table(a, &ray, &dc);
+    sidx_accel_destroy(a);
 
     /* ---- 3 ---- */
     printf("\n== 3. Mailboxing, lambda = 4, %d random rays\n", NRAYS);
@@ -263,6 +323,7 @@ int main(int argc, char **argv)
            lambdas[best]);
     lesson_check("resolution_formula", formula_ok);
     lesson_check("dda_cells_in_order", dc.ok && dc.n > 1);
+    lesson_check("dda_state_gives_library_cells", dda_agrees && dc.n > 1);
     lesson_check("mailbox_saves_tests", same && mb->tris < nomb->tris);
     lesson_check("middle_lambda_best", best > 0 && best < nl - 1);
     free(ms);
