@@ -32,6 +32,7 @@
 #include "sidx/packet.h"
 #include "sidx/parallel.h"
 #include <pthread.h>
+#include <stdatomic.h>
 
 typedef struct run_opts {
     const char *scenes_dir, *accel_list, *kinds_list, *builtin_list, *csv, *plot, *method_scenes;
@@ -63,6 +64,8 @@ typedef struct row {
     double build_ms, trace_ms;
     size_t rays_timed, rays_req;
     size_t bytes;
+    long long peak;      /* build's resident peak above the level before it (mesh not included); -1 = unknown */
+    long long heap;      /* most bytes live at once through the build's sidx_allocator; -1 = not sidx */
     uint32_t nodes;
     uint32_t depth;      /* deepest leaf (sidx_accel_stats.max_depth); 0 = not reported */
     double leaf_prims;   /* mean primitives per non-empty leaf; 0 = not reported */
@@ -97,6 +100,7 @@ static row *rows_add(rows *r)
     row *x = &r->v[r->n++];
     memset(x, 0, sizeof *x);
     x->steps = x->prims = -1;
+    x->peak = x->heap = -1;
     return x;
 }
 
@@ -349,11 +353,17 @@ static double bench_structure(const char *name, const sidx_mesh *m, const scene_
     memset(&bo, 0, sizeof bo);
     bo.tri = tri;
     bo.box = box;
+    bench_heap heap;
+    const sidx_allocator al = bench_heap_allocator(&heap);
+    bo.alloc = &al;
     sidx_accel *a = NULL;
     sidx_error err = {SIDX_OK, ""};
+    bench_mem mem;
+    bench_mem_begin(&mem);
     const double t0 = bench_build_clock_ms();
     sidx_status s = sidx_accel_build(name, m, &bo, &a, &err);
     const double build_ms = bench_build_clock_ms() - t0;
+    const long long peak = bench_mem_end(&mem);
     if (s != SIDX_OK) {
         fprintf(stderr, "sidx-bench run: %s on %s: %s\n", name, sc->name, err.message);
         return -1;
@@ -373,6 +383,8 @@ static double bench_structure(const char *name, const sidx_mesh *m, const scene_
         r->tris = m->num_triangles;
         r->build_ms = build_ms;
         r->bytes = st.bytes;
+        r->peak = peak;
+        r->heap = (long long)atomic_load(&heap.peak);
         r->nodes = st.nodes;
         r->depth = st.max_depth;
         r->leaf_prims = st.mean_leaf_prims;
@@ -522,7 +534,11 @@ static void bench_embree_rows(const char *name, bench_embree_cfg cfg, const sidx
     bench_embree *e = NULL;
     double build_ms = 0;
     char msg[256];
-    if (!bench_embree_build(m, cfg, &e, &build_ms, msg, sizeof msg)) {
+    bench_mem mem;
+    bench_mem_begin(&mem);
+    const int built = bench_embree_build(m, cfg, &e, &build_ms, msg, sizeof msg);
+    const long long peak = bench_mem_end(&mem);
+    if (!built) {
         fprintf(stderr, "sidx-bench run: %s on %s: %s\n", name, sc->name, msg);
         return;
     }
@@ -542,6 +558,7 @@ static void bench_embree_rows(const char *name, bench_embree_cfg cfg, const sidx
             r->tris = m->num_triangles;
             r->build_ms = build_ms;
             r->bytes = bench_embree_bytes(e);
+            r->peak = peak;
             r->rays_timed = r->rays_req = k->br.n;
             r->trace_ms = bench_embree_trace(e, k->rec, k->br.n, 0, packets[p], k->hits);
             for (int rep = 0; rep < 2 && r->trace_ms < 30.0; ++rep) {
@@ -975,9 +992,16 @@ static void parallel_rows(FILE *f, const run_opts *o, const scene_spec *sc, cons
 
 static void print_header(FILE *f)
 {
-    fprintf(f, "%-10s %-8s %-18s %9s %9s %8s %8s %5s %5s %5s %7s %8s %7s %6s %6s %6s %9s\n", "scene", "kind",
-            "accel", "build_ms", "Mrays/s", "MB", "nodes", "depth", "leaf", "dup", "steps", "prims", "checked",
+    fprintf(f, "%-10s %-8s %-18s %9s %9s %8s %8s %8s %8s %5s %5s %5s %7s %8s %7s %6s %6s %6s %9s\n", "scene",
+            "kind", "accel", "build_ms", "Mrays/s", "MB", "peak_MB", "heap_MB", "nodes", "depth", "leaf", "dup", "steps", "prims", "checked",
             "fmiss", "fhit", "wrong", "max_rel_t");
+}
+
+/* Bytes as MB with two decimals, "-" when not measured (< 0). */
+static void mb_cell(char *buf, size_t size, long long bytes)
+{
+    if (bytes >= 0) snprintf(buf, size, "%.2f", (double)bytes / 1048576.0);
+    else snprintf(buf, size, "-");
 }
 
 static void print_row(FILE *f, const row *r)
@@ -988,12 +1012,16 @@ static void print_row(FILE *f, const row *r)
     if (r->dup > 0) snprintf(dup, sizeof dup, "%.2f", r->dup); else snprintf(dup, sizeof dup, "-");
     if (r->steps >= 0) snprintf(steps, sizeof steps, "%.1f", r->steps); else snprintf(steps, sizeof steps, "-");
     if (r->prims >= 0) snprintf(prims, sizeof prims, "%.1f", r->prims); else snprintf(prims, sizeof prims, "-");
+    char peak[16], heap[16];
+    mb_cell(peak, sizeof peak, r->peak);
+    mb_cell(heap, sizeof heap, r->heap);
     char name[64];
     if (r->tri != SIDX_TRI_WATERTIGHT || r->box != SIDX_BOX_ROBUST)
         snprintf(name, sizeof name, "%.39s/%.12s/%.8s", r->accel, sidx_tri_method_name(r->tri), sidx_box_method_name(r->box));
     else copy_str(name, sizeof name, r->accel);
-    fprintf(f, "%-10.10s %-8s %-18s %9.2f %9.3f %8.2f %8u %5s %5s %5s %7s %8s %7llu %6llu %6llu %6llu %9.2e%s\n",
-            r->scene, r->kind, name, r->build_ms, row_mrays(r), (double)r->bytes / 1048576.0, r->nodes, depth, leaf,
+    fprintf(f, "%-10.10s %-8s %-18s %9.2f %9.3f %8.2f %8s %8s %8u %5s %5s %5s %7s %8s %7llu %6llu %6llu %6llu %9.2e%s\n",
+            r->scene, r->kind, name, r->build_ms, row_mrays(r), (double)r->bytes / 1048576.0, peak, heap, r->nodes,
+            depth, leaf,
             dup, steps, prims,
             (unsigned long long)r->err.rays, (unsigned long long)r->err.false_miss,
             (unsigned long long)r->err.false_hit, (unsigned long long)r->err.wrong_prim, r->err.max_rel_t,
@@ -1004,14 +1032,15 @@ static int write_csv(const char *path, const rows *rs)
 {
     FILE *f = fopen(path, "w");
     if (!f) return 0;
-    fprintf(f, "scene,tris,kind,accel,tri,box,embree,build_ms,trace_ms,rays_timed,mrays_per_s,bytes,nodes,"
+    fprintf(f, "scene,tris,kind,accel,tri,box,embree,build_ms,trace_ms,rays_timed,mrays_per_s,bytes,"
+               "build_peak_bytes,build_heap_peak_bytes,nodes,"
                "depth,mean_leaf_prims,dup_factor,steps_per_ray,prims_per_ray,checked,false_miss,false_hit,wrong_prim,max_rel_t,error_rate\n");
     for (size_t i = 0; i < rs->n; ++i) {
         const row *r = &rs->v[i];
-        fprintf(f, "%s,%u,%s,%s,%s,%s,%d,%.3f,%.3f,%zu,%.4f,%zu,%u,%u,%.3f,%.4f,%.3f,%.3f,%llu,%llu,%llu,%llu,%.3e,%.3e\n",
+        fprintf(f, "%s,%u,%s,%s,%s,%s,%d,%.3f,%.3f,%zu,%.4f,%zu,%lld,%lld,%u,%u,%.3f,%.4f,%.3f,%.3f,%llu,%llu,%llu,%llu,%.3e,%.3e\n",
                 r->scene, r->tris, r->kind, r->accel, r->embree ? "embree" : sidx_tri_method_name(r->tri),
                 r->embree ? "embree" : sidx_box_method_name(r->box), r->embree, r->build_ms, r->trace_ms,
-                r->rays_timed, row_mrays(r), r->bytes, r->nodes, r->depth, r->leaf_prims, r->dup, r->steps, r->prims,
+                r->rays_timed, row_mrays(r), r->bytes, r->peak, r->heap, r->nodes, r->depth, r->leaf_prims, r->dup, r->steps, r->prims,
                 (unsigned long long)r->err.rays, (unsigned long long)r->err.false_miss,
                 (unsigned long long)r->err.false_hit, (unsigned long long)r->err.wrong_prim, r->err.max_rel_t,
                 tk_errstats_rate(&r->err));
@@ -1595,7 +1624,34 @@ static void md_write_table(FILE *md, const char *caption, const rows *rs, const 
         fprintf(md, " |");
     }
     if (ratio) fprintf(md, " |");
-    fprintf(md, "\n\n");
+    fprintf(md, "\n");
+    /* the memory rows: the structure, and the build's resident peak above
+     * the loaded mesh (MB, "–" when not measured) */
+    for (int w = 0; w < 2; ++w) {
+        fprintf(md, "| ");
+        for (size_t h = 0; h < nh; ++h) {
+            char stem[64];
+            copy_str(stem, sizeof stem, scenes[hs[h]].name);
+            stem[strcspn(stem, "._")] = '\0';
+            fprintf(md, "%s%s", h ? " / " : "", stem);
+        }
+        fprintf(md, w ? " build peak, MB |" : " structure, MB |");
+        for (int a = 0; a < NA; ++a) {
+            if (!have[a]) continue;
+            fprintf(md, " ");
+            for (size_t h = 0; h < nh; ++h) {
+                const row *r = md_find(rs, scenes[hs[h]].name, "primary", accel[a]);
+                if (!r) r = md_find(rs, scenes[hs[h]].name, "diffuse", accel[a]);
+                const double v = !r ? -1 : w ? (double)r->peak : (double)r->bytes;
+                if (v >= 0) fprintf(md, "%s%.1f", h ? " / " : "", v / 1048576.0);
+                else fprintf(md, "%s–", h ? " / " : "");
+            }
+            fprintf(md, " |");
+        }
+        if (ratio) fprintf(md, " |");
+        fprintf(md, "\n");
+    }
+    fprintf(md, "\n");
     /* the errors of the rows above */
     unsigned long long bad = 0;
     fprintf(md, "Errors against the reference on these rows (rays checked per row:");
