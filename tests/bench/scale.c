@@ -247,6 +247,57 @@ static int write_plots(const char *plot, const char *scene, const scale_pt *pts,
     return ok;
 }
 
+/* The point of structure name at the largest size it reached; NULL if none. */
+static const scale_pt *largest_of(const scale_pt *pts, int npts, const char *const *names, int na, const char *name)
+{
+    const scale_pt *best = NULL;
+    for (int i = 0; i < npts; ++i)
+        if (pts[i].accel < na && !strcmp(names[pts[i].accel], name) && (!best || pts[i].tris > best->tris))
+            best = &pts[i];
+    return best;
+}
+
+/* The targets of `sidx-bench run` that concern scale, at the largest size
+ * both sides reached: bvh build vs Embree's, bvh8 build, peak memory (mesh
+ * included in both: peak above the loaded mesh + the mesh's bytes) and
+ * Mrays/s vs Embree HQ's.  One run, no rounds: indicative only. */
+static void largest_ratios(FILE *f, const scale_pt *pts, int npts, const char *const *names, int na)
+{
+    static const struct { const char *a, *b, *what; double goal; } pairs[] = {
+        {"bvh", "embree", "build ms", 1.0},       {"bvh8", "embree-hq", "build ms", 1.0},
+        {"bvh8", "embree-hq", "peak MB", 1.2},    {"bvh8", "embree-hq", "Mrays/s", 1.1},
+    };
+    int header = 0;
+    for (size_t i = 0; i < sizeof pairs / sizeof pairs[0]; ++i) {
+        const scale_pt *a = largest_of(pts, npts, names, na, pairs[i].a);
+        const scale_pt *b = largest_of(pts, npts, names, na, pairs[i].b);
+        if (!a || !b || a->tris != b->tris) continue;
+        double va, vb;
+        const int mem = pairs[i].what[0] == 'p', speed = pairs[i].what[0] == 'M';
+        if (mem) {
+            if (a->peak < 0 || b->peak < 0) continue;
+            va = (a->peak + a->mesh) / 1048576.0;
+            vb = (b->peak + b->mesh) / 1048576.0;
+        } else if (speed) {
+            va = a->mrays;
+            vb = b->mrays;
+        } else {
+            va = a->build_ms;
+            vb = b->build_ms;
+        }
+        if (!(vb > 0)) continue;
+        if (!header) {
+            fprintf(f, "\n== at the largest size (one run, no rounds: indicative; peak MB includes the mesh)\n");
+            header = 1;
+        }
+        const double r = va / vb;
+        const int pass = speed ? r >= pairs[i].goal : r <= pairs[i].goal;
+        fprintf(f, "%-5s %-9s vs %-10s %9.0f tris: %10.2f vs %10.2f = %5.2fx (target %s %.1fx: %s)\n", pairs[i].a,
+                pairs[i].what, pairs[i].b, a->tris, va, vb, r, speed ? ">=" : "<=", pairs[i].goal,
+                pass ? "PASS" : "FAIL");
+    }
+}
+
 int bench_cmd_scale(int argc, char **argv)
 {
     const char *scene = "icosphere", *accel_list = NULL, *csv = NULL, *plot = NULL;
@@ -508,6 +559,7 @@ int bench_cmd_scale(int argc, char **argv)
         fit(lrx, lr, nr, &kr, &c);
         fprintf(f, "%-14s %6d %10.3f %10.3f %10.3f %10.3f %14.3f %10.3f\n", names[ai], n, kb, km, kr, ks, bs, kp);
     }
+    largest_ratios(f, pts, npts, names, na);
     if (csv) {
         FILE *cf = fopen(csv, "w");
         if (!cf) {
