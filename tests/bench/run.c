@@ -1856,7 +1856,12 @@ static void run_usage(FILE *out)
             "  --revision REV     what was measured (e.g. a commit), cited in the Markdown blocks\n"
             "  --md-command CMD   the command the Markdown blocks cite (default: this command line\n"
             "                     without its output options)\n"
-            "Columns: build_ms, Mrays/s (one thread), MB (structure memory), nodes, depth (deepest\n"
+            "Columns: build_ms, Mrays/s (one thread), MB (structure memory: sidx_accel_stats.bytes,\n"
+            "Embree's memory monitor), peak_MB (the build's resident peak: how far the process's\n"
+            "resident set rose above its level just before the build, with the mesh loaded, so the\n"
+            "mesh is not included; Embree's includes its copy of the vertices and indices; \"-\" where\n"
+            "/proc/self/clear_refs is missing), heap_MB (sidx: the most bytes live at once through\n"
+            "the build's sidx_allocator), nodes, depth (deepest\n"
             "leaf), leaf (mean primitives per non-empty leaf or cell), dup (primitive references per\n"
             "triangle: the duplication factor of spatial subdivisions), steps (NODE_ENTER\n"
             "events per ray) and prims (PRIM_TEST events per ray) on up to 1000 rays, then on the\n"
@@ -1876,15 +1881,23 @@ static void run_usage(FILE *out)
             "(memory bandwidth, SMT) to judge the efficiencies by.  Wall-clock figures mean\n"
             "something on a quiet machine only.\n");
     fprintf(out,
-            "Targets (last section): bvh >= 0.5x Embree, kdtree >= 0.8x bvh, bvh8 >= 1.0x Embree,\n"
-            "on primary and diffuse rays of each --target-scenes scene: the tracers run in\n"
-            "interleaved rounds on the same warm rays (order reversed every other round; a tracer's\n"
-            "pass with an involuntary context switch, from getrusage, is run again), and each\n"
+            "Targets (last section), on each --target-scenes scene: speed on primary and diffuse\n"
+            "rays: bvh >= 0.5x Embree, kdtree >= 0.8x bvh, bvh8 >= 1.0x Embree, bvh8 >= 1.2x Embree\n"
+            "HQ, bvh >= Embree HQ x 0.75 (bunny primary), 1.1 (Sponza primary), 0.45 (diffuse);\n"
+            "build time: bvh <= 1.0x Embree's, bvh8 <= 1.0x Embree HQ's; memory: bvh8 build peak\n"
+            "<= 1.2x Embree HQ's, mesh included in both, verdict on the largest scene.\n"
+            "For speed the tracers run in interleaved rounds on the same warm rays (order reversed\n"
+            "every other round; a tracer's pass with an involuntary context switch, from getrusage,\n"
+            "is run again), and each\n"
             "target prints the median [min..max] of the per-round speed ratios and PASS/FAIL.\n"
             "\"fair\" times what rtcIntersect1 returns: sidx_ray_init per ray and t, prim, u, v, Ng\n"
             "(SIDX_QUERY_UV|SIDX_QUERY_NORMAL); \"prep\" is the table's timing (rays prepared\n"
-            "beforehand, no u, v, Ng).  The verdict is on the fair median; a FAIL does not change\n"
-            "the exit status.  A target runs when both sides are in --accel (embree: not --no-embree).\n");
+            "beforehand, no u, v, Ng).  The verdict is on the fair median.  Builds: each builder\n"
+            "builds once per round (at most 11 rounds), interleaved likewise, CPU time of the\n"
+            "process, with its resident peak.  A target runs when both sides are in --accel\n"
+            "(embree, embree-hq: not --no-embree).\n"
+            "Exit status: 1 when a structure failed (build error, crash, timeout) or an output\n"
+            "could not be written; a target's FAIL, or no target measurable, leaves it 0.\n");
 }
 
 int bench_cmd_run(int argc, char **argv)
