@@ -1603,31 +1603,11 @@ static void md_write_table(FILE *md, const char *caption, const rows *rs, const 
             fprintf(md, "\n");
         }
     }
-    /* the build row: "bunny / sponza build, ms | 61 / 51 | ..." */
-    fprintf(md, "| ");
-    for (size_t h = 0; h < nh; ++h) {
-        char stem[64];
-        copy_str(stem, sizeof stem, scenes[hs[h]].name);
-        stem[strcspn(stem, "._")] = '\0';
-        fprintf(md, "%s%s", h ? " / " : "", stem);
-    }
-    fprintf(md, " build, ms |");
-    for (int a = 0; a < NA; ++a) {
-        if (!have[a]) continue;
-        fprintf(md, " ");
-        for (size_t h = 0; h < nh; ++h) {
-            const row *r = md_find(rs, scenes[hs[h]].name, "primary", accel[a]);
-            if (!r) r = md_find(rs, scenes[hs[h]].name, "diffuse", accel[a]);
-            if (r) fprintf(md, "%s%.0f", h ? " / " : "", r->build_ms);
-            else fprintf(md, "%s–", h ? " / " : "");
-        }
-        fprintf(md, " |");
-    }
-    if (ratio) fprintf(md, " |");
-    fprintf(md, "\n");
-    /* the memory rows: the structure, and the build's resident peak above
-     * the loaded mesh (MB, "–" when not measured) */
-    for (int w = 0; w < 2; ++w) {
+    /* the per-structure rows: "bunny / sponza build, ms | 61 / 51 | ...",
+     * then the structure's MB and the build's resident peak above the
+     * loaded mesh (MB; "–" when not measured) */
+    static const char *const per_row[3] = {" build, ms |", " structure, MB |", " build peak, MB |"};
+    for (int w = 0; w < 3; ++w) {
         fprintf(md, "| ");
         for (size_t h = 0; h < nh; ++h) {
             char stem[64];
@@ -1635,16 +1615,17 @@ static void md_write_table(FILE *md, const char *caption, const rows *rs, const 
             stem[strcspn(stem, "._")] = '\0';
             fprintf(md, "%s%s", h ? " / " : "", stem);
         }
-        fprintf(md, w ? " build peak, MB |" : " structure, MB |");
+        fprintf(md, "%s", per_row[w]);
         for (int a = 0; a < NA; ++a) {
             if (!have[a]) continue;
             fprintf(md, " ");
             for (size_t h = 0; h < nh; ++h) {
                 const row *r = md_find(rs, scenes[hs[h]].name, "primary", accel[a]);
                 if (!r) r = md_find(rs, scenes[hs[h]].name, "diffuse", accel[a]);
-                const double v = !r ? -1 : w ? (double)r->peak : (double)r->bytes;
-                if (v >= 0) fprintf(md, "%s%.1f", h ? " / " : "", v / 1048576.0);
-                else fprintf(md, "%s–", h ? " / " : "");
+                const double v = !r ? -1 : w == 0 ? r->build_ms : w == 1 ? (double)r->bytes : (double)r->peak;
+                if (v < 0) fprintf(md, "%s–", h ? " / " : "");
+                else if (w == 0) fprintf(md, "%s%.0f", h ? " / " : "", v);
+                else fprintf(md, "%s%.1f", h ? " / " : "", v / 1048576.0);
             }
             fprintf(md, " |");
         }

@@ -369,7 +369,7 @@ static void measure_builds(FILE *f, const bench_targets_opts *o, const char *sce
     if (!any) return;
     const int rounds = o->rounds < TG_BUILD_ROUNDS ? o->rounds : TG_BUILD_ROUNDS;
     double ms[TG_BUILD_ROUNDS][TG_TRACERS], mb[TG_BUILD_ROUNDS][TG_TRACERS], tmp[TG_BUILD_ROUNDS];
-    int order[TG_TRACERS], nt = 0;
+    int order[TG_TRACERS] = {0}, nt = 0;
     for (int t = 0; t < TG_TRACERS; ++t)
         if (want[t]) order[nt++] = t;
     const double mesh = (double)bench_mesh_bytes(m);
