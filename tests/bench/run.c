@@ -1,7 +1,8 @@
 /* run.c — `sidx-bench run`: the benchmark table.
  *
  * For each scene x ray kind x structure: build ms, Mrays/s (one thread),
- * memory, nodes, mean traversal steps (NODE_ENTER events) and primitive
+ * memory (the structure's bytes, the build's resident peak and, for sidx,
+ * its allocator's heap peak: mem.c), nodes, mean traversal steps (NODE_ENTER events) and primitive
  * tests (PRIM_TEST events) per ray from a sidx_counters hook on a ray
  * subset, and the error against the double-precision watertight
  * brute-force reference (tk_ref_intersect) on a subset: false misses,
