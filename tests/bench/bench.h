@@ -102,6 +102,24 @@ int bench_cmd_run(int argc, char **argv);
 int bench_cmd_scale(int argc, char **argv);
 int bench_cmd_extras(int argc, char **argv); /* extras.c */
 
+/* The memory of a build (mem.c).  bench_mem_begin just before the build,
+ * bench_mem_end just after: bytes the resident set rose above its level
+ * at begin, at its peak during the build (-1: not measurable here, needs
+ * Linux's /proc/self/clear_refs). */
+typedef struct bench_mem {
+    long long base; /* resident bytes at begin; -1 = not measurable */
+} bench_mem;
+void bench_mem_begin(bench_mem *m);
+long long bench_mem_end(const bench_mem *m);
+/* A counting allocator for sidx_build_options.alloc: peak = the most bytes
+ * live at once through it (the build's heap peak). */
+typedef struct bench_heap {
+    _Atomic size_t live, peak;
+} bench_heap;
+sidx_allocator bench_heap_allocator(bench_heap *h);
+/* The mesh's positions and indices, the bytes every build starts from. */
+size_t bench_mesh_bytes(const sidx_mesh *m);
+
 /* Comma-separated list helpers. */
 int bench_list_has(const char *list, const char *name); /* NULL list = everything */
 int bench_progress_enabled(void);                        /* stderr is a terminal */

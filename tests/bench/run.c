@@ -1,7 +1,8 @@
 /* run.c — `sidx-bench run`: the benchmark table.
  *
  * For each scene x ray kind x structure: build ms, Mrays/s (one thread),
- * memory, nodes, mean traversal steps (NODE_ENTER events) and primitive
+ * memory (the structure's bytes, the build's resident peak and, for sidx,
+ * its allocator's heap peak: mem.c), nodes, mean traversal steps (NODE_ENTER events) and primitive
  * tests (PRIM_TEST events) per ray from a sidx_counters hook on a ray
  * subset, and the error against the double-precision watertight
  * brute-force reference (tk_ref_intersect) on a subset: false misses,
@@ -32,6 +33,7 @@
 #include "sidx/packet.h"
 #include "sidx/parallel.h"
 #include <pthread.h>
+#include <stdatomic.h>
 
 typedef struct run_opts {
     const char *scenes_dir, *accel_list, *kinds_list, *builtin_list, *csv, *plot, *method_scenes;
@@ -63,6 +65,8 @@ typedef struct row {
     double build_ms, trace_ms;
     size_t rays_timed, rays_req;
     size_t bytes;
+    long long peak;      /* build's resident peak above the level before it (mesh not included); -1 = unknown */
+    long long heap;      /* most bytes live at once through the build's sidx_allocator; -1 = not sidx */
     uint32_t nodes;
     uint32_t depth;      /* deepest leaf (sidx_accel_stats.max_depth); 0 = not reported */
     double leaf_prims;   /* mean primitives per non-empty leaf; 0 = not reported */
@@ -97,6 +101,7 @@ static row *rows_add(rows *r)
     row *x = &r->v[r->n++];
     memset(x, 0, sizeof *x);
     x->steps = x->prims = -1;
+    x->peak = x->heap = -1;
     return x;
 }
 
@@ -349,11 +354,17 @@ static double bench_structure(const char *name, const sidx_mesh *m, const scene_
     memset(&bo, 0, sizeof bo);
     bo.tri = tri;
     bo.box = box;
+    bench_heap heap;
+    const sidx_allocator al = bench_heap_allocator(&heap);
+    bo.alloc = &al;
     sidx_accel *a = NULL;
     sidx_error err = {SIDX_OK, ""};
+    bench_mem mem;
+    bench_mem_begin(&mem);
     const double t0 = bench_build_clock_ms();
     sidx_status s = sidx_accel_build(name, m, &bo, &a, &err);
     const double build_ms = bench_build_clock_ms() - t0;
+    const long long peak = bench_mem_end(&mem);
     if (s != SIDX_OK) {
         fprintf(stderr, "sidx-bench run: %s on %s: %s\n", name, sc->name, err.message);
         return -1;
@@ -373,6 +384,8 @@ static double bench_structure(const char *name, const sidx_mesh *m, const scene_
         r->tris = m->num_triangles;
         r->build_ms = build_ms;
         r->bytes = st.bytes;
+        r->peak = peak;
+        r->heap = (long long)atomic_load(&heap.peak);
         r->nodes = st.nodes;
         r->depth = st.max_depth;
         r->leaf_prims = st.mean_leaf_prims;
@@ -522,7 +535,11 @@ static void bench_embree_rows(const char *name, bench_embree_cfg cfg, const sidx
     bench_embree *e = NULL;
     double build_ms = 0;
     char msg[256];
-    if (!bench_embree_build(m, cfg, &e, &build_ms, msg, sizeof msg)) {
+    bench_mem mem;
+    bench_mem_begin(&mem);
+    const int built = bench_embree_build(m, cfg, &e, &build_ms, msg, sizeof msg);
+    const long long peak = bench_mem_end(&mem);
+    if (!built) {
         fprintf(stderr, "sidx-bench run: %s on %s: %s\n", name, sc->name, msg);
         return;
     }
@@ -542,6 +559,7 @@ static void bench_embree_rows(const char *name, bench_embree_cfg cfg, const sidx
             r->tris = m->num_triangles;
             r->build_ms = build_ms;
             r->bytes = bench_embree_bytes(e);
+            r->peak = peak;
             r->rays_timed = r->rays_req = k->br.n;
             r->trace_ms = bench_embree_trace(e, k->rec, k->br.n, 0, packets[p], k->hits);
             for (int rep = 0; rep < 2 && r->trace_ms < 30.0; ++rep) {
@@ -975,9 +993,16 @@ static void parallel_rows(FILE *f, const run_opts *o, const scene_spec *sc, cons
 
 static void print_header(FILE *f)
 {
-    fprintf(f, "%-10s %-8s %-18s %9s %9s %8s %8s %5s %5s %5s %7s %8s %7s %6s %6s %6s %9s\n", "scene", "kind",
-            "accel", "build_ms", "Mrays/s", "MB", "nodes", "depth", "leaf", "dup", "steps", "prims", "checked",
+    fprintf(f, "%-10s %-8s %-18s %9s %9s %8s %8s %8s %8s %5s %5s %5s %7s %8s %7s %6s %6s %6s %9s\n", "scene",
+            "kind", "accel", "build_ms", "Mrays/s", "MB", "peak_MB", "heap_MB", "nodes", "depth", "leaf", "dup", "steps", "prims", "checked",
             "fmiss", "fhit", "wrong", "max_rel_t");
+}
+
+/* Bytes as MB with two decimals, "-" when not measured (< 0). */
+static void mb_cell(char *buf, size_t size, long long bytes)
+{
+    if (bytes >= 0) snprintf(buf, size, "%.2f", (double)bytes / 1048576.0);
+    else snprintf(buf, size, "-");
 }
 
 static void print_row(FILE *f, const row *r)
@@ -988,12 +1013,16 @@ static void print_row(FILE *f, const row *r)
     if (r->dup > 0) snprintf(dup, sizeof dup, "%.2f", r->dup); else snprintf(dup, sizeof dup, "-");
     if (r->steps >= 0) snprintf(steps, sizeof steps, "%.1f", r->steps); else snprintf(steps, sizeof steps, "-");
     if (r->prims >= 0) snprintf(prims, sizeof prims, "%.1f", r->prims); else snprintf(prims, sizeof prims, "-");
+    char peak[16], heap[16];
+    mb_cell(peak, sizeof peak, r->peak);
+    mb_cell(heap, sizeof heap, r->heap);
     char name[64];
     if (r->tri != SIDX_TRI_WATERTIGHT || r->box != SIDX_BOX_ROBUST)
         snprintf(name, sizeof name, "%.39s/%.12s/%.8s", r->accel, sidx_tri_method_name(r->tri), sidx_box_method_name(r->box));
     else copy_str(name, sizeof name, r->accel);
-    fprintf(f, "%-10.10s %-8s %-18s %9.2f %9.3f %8.2f %8u %5s %5s %5s %7s %8s %7llu %6llu %6llu %6llu %9.2e%s\n",
-            r->scene, r->kind, name, r->build_ms, row_mrays(r), (double)r->bytes / 1048576.0, r->nodes, depth, leaf,
+    fprintf(f, "%-10.10s %-8s %-18s %9.2f %9.3f %8.2f %8s %8s %8u %5s %5s %5s %7s %8s %7llu %6llu %6llu %6llu %9.2e%s\n",
+            r->scene, r->kind, name, r->build_ms, row_mrays(r), (double)r->bytes / 1048576.0, peak, heap, r->nodes,
+            depth, leaf,
             dup, steps, prims,
             (unsigned long long)r->err.rays, (unsigned long long)r->err.false_miss,
             (unsigned long long)r->err.false_hit, (unsigned long long)r->err.wrong_prim, r->err.max_rel_t,
@@ -1004,14 +1033,15 @@ static int write_csv(const char *path, const rows *rs)
 {
     FILE *f = fopen(path, "w");
     if (!f) return 0;
-    fprintf(f, "scene,tris,kind,accel,tri,box,embree,build_ms,trace_ms,rays_timed,mrays_per_s,bytes,nodes,"
+    fprintf(f, "scene,tris,kind,accel,tri,box,embree,build_ms,trace_ms,rays_timed,mrays_per_s,bytes,"
+               "build_peak_bytes,build_heap_peak_bytes,nodes,"
                "depth,mean_leaf_prims,dup_factor,steps_per_ray,prims_per_ray,checked,false_miss,false_hit,wrong_prim,max_rel_t,error_rate\n");
     for (size_t i = 0; i < rs->n; ++i) {
         const row *r = &rs->v[i];
-        fprintf(f, "%s,%u,%s,%s,%s,%s,%d,%.3f,%.3f,%zu,%.4f,%zu,%u,%u,%.3f,%.4f,%.3f,%.3f,%llu,%llu,%llu,%llu,%.3e,%.3e\n",
+        fprintf(f, "%s,%u,%s,%s,%s,%s,%d,%.3f,%.3f,%zu,%.4f,%zu,%lld,%lld,%u,%u,%.3f,%.4f,%.3f,%.3f,%llu,%llu,%llu,%llu,%.3e,%.3e\n",
                 r->scene, r->tris, r->kind, r->accel, r->embree ? "embree" : sidx_tri_method_name(r->tri),
                 r->embree ? "embree" : sidx_box_method_name(r->box), r->embree, r->build_ms, r->trace_ms,
-                r->rays_timed, row_mrays(r), r->bytes, r->nodes, r->depth, r->leaf_prims, r->dup, r->steps, r->prims,
+                r->rays_timed, row_mrays(r), r->bytes, r->peak, r->heap, r->nodes, r->depth, r->leaf_prims, r->dup, r->steps, r->prims,
                 (unsigned long long)r->err.rays, (unsigned long long)r->err.false_miss,
                 (unsigned long long)r->err.false_hit, (unsigned long long)r->err.wrong_prim, r->err.max_rel_t,
                 tk_errstats_rate(&r->err));
@@ -1574,28 +1604,36 @@ static void md_write_table(FILE *md, const char *caption, const rows *rs, const 
             fprintf(md, "\n");
         }
     }
-    /* the build row: "bunny / sponza build, ms | 61 / 51 | ..." */
-    fprintf(md, "| ");
-    for (size_t h = 0; h < nh; ++h) {
-        char stem[64];
-        copy_str(stem, sizeof stem, scenes[hs[h]].name);
-        stem[strcspn(stem, "._")] = '\0';
-        fprintf(md, "%s%s", h ? " / " : "", stem);
-    }
-    fprintf(md, " build, ms |");
-    for (int a = 0; a < NA; ++a) {
-        if (!have[a]) continue;
-        fprintf(md, " ");
+    /* the per-structure rows: "bunny / sponza build, ms | 61 / 51 | ...",
+     * then the structure's MB and the build's resident peak above the
+     * loaded mesh (MB; "–" when not measured) */
+    static const char *const per_row[3] = {" build, ms |", " structure, MB |", " build peak, MB |"};
+    for (int w = 0; w < 3; ++w) {
+        fprintf(md, "| ");
         for (size_t h = 0; h < nh; ++h) {
-            const row *r = md_find(rs, scenes[hs[h]].name, "primary", accel[a]);
-            if (!r) r = md_find(rs, scenes[hs[h]].name, "diffuse", accel[a]);
-            if (r) fprintf(md, "%s%.0f", h ? " / " : "", r->build_ms);
-            else fprintf(md, "%s–", h ? " / " : "");
+            char stem[64];
+            copy_str(stem, sizeof stem, scenes[hs[h]].name);
+            stem[strcspn(stem, "._")] = '\0';
+            fprintf(md, "%s%s", h ? " / " : "", stem);
         }
-        fprintf(md, " |");
+        fprintf(md, "%s", per_row[w]);
+        for (int a = 0; a < NA; ++a) {
+            if (!have[a]) continue;
+            fprintf(md, " ");
+            for (size_t h = 0; h < nh; ++h) {
+                const row *r = md_find(rs, scenes[hs[h]].name, "primary", accel[a]);
+                if (!r) r = md_find(rs, scenes[hs[h]].name, "diffuse", accel[a]);
+                const double v = !r ? -1 : w == 0 ? r->build_ms : w == 1 ? (double)r->bytes : (double)r->peak;
+                if (v < 0) fprintf(md, "%s–", h ? " / " : "");
+                else if (w == 0) fprintf(md, "%s%.0f", h ? " / " : "", v);
+                else fprintf(md, "%s%.1f", h ? " / " : "", v / 1048576.0);
+            }
+            fprintf(md, " |");
+        }
+        if (ratio) fprintf(md, " |");
+        fprintf(md, "\n");
     }
-    if (ratio) fprintf(md, " |");
-    fprintf(md, "\n\n");
+    fprintf(md, "\n");
     /* the errors of the rows above */
     unsigned long long bad = 0;
     fprintf(md, "Errors against the reference on these rows (rays checked per row:");
@@ -1800,7 +1838,12 @@ static void run_usage(FILE *out)
             "  --revision REV     what was measured (e.g. a commit), cited in the Markdown blocks\n"
             "  --md-command CMD   the command the Markdown blocks cite (default: this command line\n"
             "                     without its output options)\n"
-            "Columns: build_ms, Mrays/s (one thread), MB (structure memory), nodes, depth (deepest\n"
+            "Columns: build_ms, Mrays/s (one thread), MB (structure memory: sidx_accel_stats.bytes,\n"
+            "Embree's memory monitor), peak_MB (the build's resident peak: how far the process's\n"
+            "resident set rose above its level just before the build, with the mesh loaded, so the\n"
+            "mesh is not included; Embree's includes its copy of the vertices and indices; \"-\" where\n"
+            "/proc/self/clear_refs is missing), heap_MB (sidx: the most bytes live at once through\n"
+            "the build's sidx_allocator), nodes, depth (deepest\n"
             "leaf), leaf (mean primitives per non-empty leaf or cell), dup (primitive references per\n"
             "triangle: the duplication factor of spatial subdivisions), steps (NODE_ENTER\n"
             "events per ray) and prims (PRIM_TEST events per ray) on up to 1000 rays, then on the\n"
@@ -1820,15 +1863,23 @@ static void run_usage(FILE *out)
             "(memory bandwidth, SMT) to judge the efficiencies by.  Wall-clock figures mean\n"
             "something on a quiet machine only.\n");
     fprintf(out,
-            "Targets (last section): bvh >= 0.5x Embree, kdtree >= 0.8x bvh, bvh8 >= 1.0x Embree,\n"
-            "on primary and diffuse rays of each --target-scenes scene: the tracers run in\n"
-            "interleaved rounds on the same warm rays (order reversed every other round; a tracer's\n"
-            "pass with an involuntary context switch, from getrusage, is run again), and each\n"
+            "Targets (last section), on each --target-scenes scene: speed on primary and diffuse\n"
+            "rays: bvh >= 0.5x Embree, kdtree >= 0.8x bvh, bvh8 >= 1.0x Embree, bvh8 >= 1.2x Embree\n"
+            "HQ, bvh >= Embree HQ x 0.75 (bunny primary), 1.1 (Sponza primary), 0.45 (diffuse);\n"
+            "build time: bvh <= 1.0x Embree's, bvh8 <= 1.0x Embree HQ's; memory: bvh8 build peak\n"
+            "<= 1.2x Embree HQ's, mesh included in both, verdict on the largest scene.\n"
+            "For speed the tracers run in interleaved rounds on the same warm rays (order reversed\n"
+            "every other round; a tracer's pass with an involuntary context switch, from getrusage,\n"
+            "is run again), and each\n"
             "target prints the median [min..max] of the per-round speed ratios and PASS/FAIL.\n"
             "\"fair\" times what rtcIntersect1 returns: sidx_ray_init per ray and t, prim, u, v, Ng\n"
             "(SIDX_QUERY_UV|SIDX_QUERY_NORMAL); \"prep\" is the table's timing (rays prepared\n"
-            "beforehand, no u, v, Ng).  The verdict is on the fair median; a FAIL does not change\n"
-            "the exit status.  A target runs when both sides are in --accel (embree: not --no-embree).\n");
+            "beforehand, no u, v, Ng).  The verdict is on the fair median.  Builds: each builder\n"
+            "builds once per round (at most 11 rounds), interleaved likewise, CPU time of the\n"
+            "process, with its resident peak.  A target runs when both sides are in --accel\n"
+            "(embree, embree-hq: not --no-embree).\n"
+            "Exit status: 1 when a structure failed (build error, crash, timeout) or an output\n"
+            "could not be written; a target's FAIL, or no target measurable, leaves it 0.\n");
 }
 
 int bench_cmd_run(int argc, char **argv)

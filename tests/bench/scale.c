@@ -1,5 +1,8 @@
-/* scale.c — `sidx-bench scale`: build time and traversal steps per ray
- * against triangle count (1k … 4M, procedural), with growth exponents
+/* scale.c — `sidx-bench scale`: build time, the build's peak memory,
+ * Mrays/s and traversal steps per ray against triangle count (1k … 4M by
+ * default, 16M and more with --max-tris; procedural meshes made on the
+ * fly), sidx structures beside Embree (default and HIGH quality), with
+ * growth exponents
  * fitted by least squares on log-log axes (n log n build shows as an
  * exponent a little above 1; log n steps as a small exponent, and as the
  * slope per doubling of n; n^(1/3) for uniform grids as about 0.33).
@@ -15,6 +18,7 @@
 #include <errno.h>
 #include <math.h>
 #include <stdlib.h>
+#include <stdatomic.h>
 #include <string.h>
 
 #include "bench.h"
@@ -22,6 +26,10 @@
 typedef struct scale_pt {
     int accel;     /* index into the structure list */
     double tris, build_ms, steps, prims, mrays;
+    double bytes;     /* the structure */
+    double peak;      /* resident peak of the build above the loaded mesh; < 0 = not measured */
+    double heap;      /* sidx: most bytes live through the build's allocator; < 0 = not sidx */
+    double mesh;      /* the mesh's positions and indices */
 } scale_pt;
 
 static void scale_usage(FILE *out)
@@ -30,22 +38,33 @@ static void scale_usage(FILE *out)
             "usage: sidx-bench scale [options]\n"
             "\n"
             "Sweeps the triangle count of a procedural scene and reports, per structure, build\n"
-            "time, steps per ray (NODE_ENTER events), primitive tests per ray and Mrays/s on\n"
-            "primary rays, then the growth fitted by least squares on log-log axes.\n"
+            "time (one thread, CPU time), the build's memory, steps per ray (NODE_ENTER events),\n"
+            "primitive tests per ray and Mrays/s on primary rays (one thread), then the growth\n"
+            "fitted by least squares on log-log axes (y ~ n^k).\n"
+            "Memory: MB is the structure; peak_MB the rise of the process's resident set during\n"
+            "the build above its level before it (the mesh is loaded then, so it is NOT included:\n"
+            "add mesh_MB, printed per size, for \"mesh included\"; Embree's peak includes its own\n"
+            "copy of the vertices and indices); heap_MB (sidx only) the most bytes live at once\n"
+            "through the build's allocator.  Embree rows (embree: build quality MEDIUM, embree-hq:\n"
+            "HIGH) build on a \"threads=1\" device and trace with rtcIntersect1.\n"
             "options:\n"
-            "  --scene icosphere|grid|soup|stadium  icosphere: levels (1280 x 4^k triangles); grid:\n"
-            "                     d x d quads (2 d^2); soup: random triangles of fixed size; stadium:\n"
+            "  --scene icosphere|grid|heightfield|soup|stadium  icosphere: levels (20 x 4^k\n"
+            "                     triangles); grid: d x d flat quads (2 d^2); heightfield: the same\n"
+            "                     quads on a rolling surface (1024 x 4^k triangles: 16.8M at\n"
+            "                     --max-tris 17e6); soup: random triangles of fixed size; stadium:\n"
             "                     teapot in a stadium, the stadium fixed (770 triangles, 2200 units\n"
             "                     across), the teapot (1 unit) growing in detail, rays from a camera\n"
             "                     looking at the teapot: the uniform grid's tests per ray grow ~n,\n"
             "                     the nested and irregular grids' stay flat (default icosphere)\n"
-            "  --accel LIST       structures (default: every registered one but brute)\n"
+            "  --accel LIST       structures (default: every registered one but brute, and embree,\n"
+            "                     embree-hq)\n"
             "  --min-tris N       smallest size (default 1000)\n"
             "  --max-tris N       largest size (default 4200000)\n"
             "  --budget-ms MS     a structure whose build takes longer skips the larger sizes\n"
             "                     (default 20000)\n"
             "  --rays N           primary rays per size (default 20000; counters on 2000)\n"
-            "  --csv FILE  --plot FILE.svg (build ms against triangles, log-log)\n");
+            "  --csv FILE  --plot FILE.svg (build ms against triangles, log-log; the build's peak\n"
+            "                     memory against triangles goes to FILE-memory.svg)\n");
 }
 
 /* Least squares slope and intercept of y on x. */
@@ -125,6 +144,45 @@ static sidx_status make_stadium_sweep(uint32_t detail, sidx_mesh *out, sidx_erro
     return rc;
 }
 
+/* The height field: d x d quads over x, z in [-1, 1], y a sum of two
+ * sine waves (0.1 high), two triangles per quad: a terrain-like mesh of
+ * any size with no file (2 d^2 triangles, (d+1)^2 vertices). */
+static sidx_status make_heightfield(uint32_t d, sidx_mesh *out, sidx_error *err)
+{
+    const size_t nv = ((size_t)d + 1) * ((size_t)d + 1), nt = 2 * (size_t)d * d;
+    float *xyz = malloc(nv * 3 * sizeof *xyz);
+    uint32_t *idx = malloc(nt * 3 * sizeof *idx);
+    if (!xyz || !idx || nv > UINT32_MAX || nt > UINT32_MAX) {
+        free(xyz);
+        free(idx);
+        if (err) {
+            err->status = SIDX_ERR_NOMEM;
+            snprintf(err->message, sizeof err->message, "out of memory");
+        }
+        return SIDX_ERR_NOMEM;
+    }
+    for (size_t j = 0; j <= d; ++j)
+        for (size_t i = 0; i <= d; ++i) {
+            float *v = xyz + 3 * (j * (d + 1) + i);
+            const double x = -1.0 + 2.0 * (double)i / d, z = -1.0 + 2.0 * (double)j / d;
+            v[0] = (float)x;
+            v[1] = (float)(0.06 * sin(7.0 * x + 1.3) * cos(5.0 * z) + 0.04 * sin(23.0 * (x + z)));
+            v[2] = (float)z;
+        }
+    uint32_t *t = idx;
+    for (uint32_t j = 0; j < d; ++j)
+        for (uint32_t i = 0; i < d; ++i) {
+            const uint32_t v00 = j * (d + 1) + i, v10 = v00 + 1, v01 = v00 + d + 1, v11 = v01 + 1;
+            const uint32_t q[6] = {v00, v01, v11, v00, v11, v10};
+            memcpy(t, q, sizeof q);
+            t += 6;
+        }
+    const sidx_status rc = sidx_mesh_from_arrays(out, xyz, (uint32_t)nv, idx, (uint32_t)nt, err);
+    free(xyz);
+    free(idx);
+    return rc;
+}
+
 /* Camera rays at the teapot (lesson 08's view): eye 2.3 units away, a
  * square image of about n pixels covering the teapot and some floor. */
 static void teapot_rays(size_t n, tk_rayrec *out)
@@ -142,6 +200,101 @@ static void teapot_rays(size_t n, tk_rayrec *out)
         const float v = (((float)((i / w) % w) + 0.5f) / (float)w * 2.0f - 1.0f) * 0.35f;
         const sidx_vec3 d = sidx_v3_add(fwd, sidx_v3_add(sidx_v3_scale(right, u), sidx_v3_scale(up, v)));
         out[i] = (tk_rayrec){{eye.x, eye.y, eye.z}, {d.x, d.y, d.z}, 0.0f, INFINITY};
+    }
+}
+
+/* v / scale printed with fmt, "-" when v < 0 (not measured). */
+static void num_cell(char *buf, size_t size, double v, double scale, const char *fmt)
+{
+    if (v >= 0) snprintf(buf, size, fmt, v / scale);
+    else snprintf(buf, size, "-");
+}
+
+/* --plot FILE.svg: build ms against triangles; FILE-memory.svg: the
+ * build's resident peak (MB, mesh not included) against triangles. */
+static int write_plots(const char *plot, const char *scene, const scale_pt *pts, int npts, const char *const *names,
+                       int na)
+{
+    bench_point *bp = calloc((size_t)npts + 1, sizeof *bp);
+    if (!bp) return 0;
+    int ok = 1;
+    char title[128], path[1024];
+    for (int pass = 0; pass < 2 && ok; ++pass) {
+        size_t n = 0;
+        for (int i = 0; i < npts; ++i) {
+            const double y = pass ? pts[i].peak / 1048576.0 : pts[i].build_ms;
+            if (!(y > 0)) continue;
+            bp[n].x = pts[i].tris;
+            bp[n].y = y;
+            bp[n].label = names[pts[i].accel];
+            bp[n].series = pts[i].accel;
+            ++n;
+        }
+        if (pass == 0) {
+            snprintf(path, sizeof path, "%s", plot);
+            snprintf(title, sizeof title, "build time against triangle count (%s)", scene);
+        } else {
+            const size_t len = strlen(plot);
+            const size_t stem = len >= 4 && !strcmp(plot + len - 4, ".svg") ? len - 4 : len;
+            snprintf(path, sizeof path, "%.*s-memory.svg", (int)stem, plot);
+            snprintf(title, sizeof title, "build peak memory against triangle count (%s)", scene);
+        }
+        ok = bench_svg_lines(path, title, "triangles",
+                             pass ? "build peak, MB resident (mesh not included)" : "build ms (one thread)", bp, n,
+                             names, na);
+    }
+    free(bp);
+    return ok;
+}
+
+/* The point of structure name at the largest size it reached; NULL if none. */
+static const scale_pt *largest_of(const scale_pt *pts, int npts, const char *const *names, int na, const char *name)
+{
+    const scale_pt *best = NULL;
+    for (int i = 0; i < npts; ++i)
+        if (pts[i].accel < na && !strcmp(names[pts[i].accel], name) && (!best || pts[i].tris > best->tris))
+            best = &pts[i];
+    return best;
+}
+
+/* The targets of `sidx-bench run` that concern scale, at the largest size
+ * both sides reached: bvh build vs Embree's, bvh8 build, peak memory (mesh
+ * included in both: peak above the loaded mesh + the mesh's bytes) and
+ * Mrays/s vs Embree HQ's.  One run, no rounds: indicative only. */
+static void largest_ratios(FILE *f, const scale_pt *pts, int npts, const char *const *names, int na)
+{
+    static const struct { const char *a, *b, *what; double goal; } pairs[] = {
+        {"bvh", "embree", "build ms", 1.0},       {"bvh8", "embree-hq", "build ms", 1.0},
+        {"bvh8", "embree-hq", "peak MB", 1.2},    {"bvh8", "embree-hq", "Mrays/s", 1.1},
+    };
+    int header = 0;
+    for (size_t i = 0; i < sizeof pairs / sizeof pairs[0]; ++i) {
+        const scale_pt *a = largest_of(pts, npts, names, na, pairs[i].a);
+        const scale_pt *b = largest_of(pts, npts, names, na, pairs[i].b);
+        if (!a || !b || a->tris != b->tris) continue;
+        double va, vb;
+        const int mem = pairs[i].what[0] == 'p', speed = pairs[i].what[0] == 'M';
+        if (mem) {
+            if (a->peak < 0 || b->peak < 0) continue;
+            va = (a->peak + a->mesh) / 1048576.0;
+            vb = (b->peak + b->mesh) / 1048576.0;
+        } else if (speed) {
+            va = a->mrays;
+            vb = b->mrays;
+        } else {
+            va = a->build_ms;
+            vb = b->build_ms;
+        }
+        if (!(vb > 0)) continue;
+        if (!header) {
+            fprintf(f, "\n== at the largest size (one run, no rounds: indicative; peak MB includes the mesh)\n");
+            header = 1;
+        }
+        const double r = va / vb;
+        const int pass = speed ? r >= pairs[i].goal : r <= pairs[i].goal;
+        fprintf(f, "%-5s %-9s vs %-10s %9.0f tris: %10.2f vs %10.2f = %5.2fx (target %s %.1fx: %s)\n", pairs[i].a,
+                pairs[i].what, pairs[i].b, a->tris, va, vb, r, speed ? ">=" : "<=", pairs[i].goal,
+                pass ? "PASS" : "FAIL");
     }
 }
 
@@ -182,9 +335,9 @@ int bench_cmd_scale(int argc, char **argv)
         fprintf(stderr, "sidx-bench scale: bad value '%s' for %s\n", val, a);
         return BENCH_USAGE;
     }
-    const int stadium = !strcmp(scene, "stadium");
-    if (strcmp(scene, "icosphere") && strcmp(scene, "grid") && strcmp(scene, "soup") && !stadium) {
-        fprintf(stderr, "sidx-bench scale: --scene must be icosphere, grid, soup or stadium\n");
+    const int stadium = !strcmp(scene, "stadium"), hfield = !strcmp(scene, "heightfield");
+    if (strcmp(scene, "icosphere") && strcmp(scene, "grid") && strcmp(scene, "soup") && !stadium && !hfield) {
+        fprintf(stderr, "sidx-bench scale: --scene must be icosphere, grid, heightfield, soup or stadium\n");
         return BENCH_USAGE;
     }
     /* the sizes: details of the scene */
@@ -204,20 +357,29 @@ int bench_cmd_scale(int argc, char **argv)
             tris = 8.3 * d * d + 2.0 + 6.0 * STADIUM_STANDS;
         } else {
             tris = 1024.0 * pow(4.0, k);
-            d = !strcmp(scene, "grid") ? (uint32_t)lround(sqrt(tris / 2)) : (uint32_t)tris;
-            if (!strcmp(scene, "grid")) tris = 2.0 * d * d;
+            const int quads = !strcmp(scene, "grid") || hfield;
+            d = quads ? (uint32_t)lround(sqrt(tris / 2)) : (uint32_t)tris;
+            if (quads) tris = 2.0 * d * d;
         }
         if (tris > max_tris) break;
         if (tris < min_tris) continue;
         details[nsizes] = d;
         ++nsizes;
     }
+    /* sidx structures, then Embree's default (MEDIUM) and HIGH builds */
     const char *names[64];
+    int is_embree[64] = {0};
     int na = 0;
-    for (size_t i = 0; i < sidx_accel_registered_count() && na < 64; ++i) {
+    for (size_t i = 0; i < sidx_accel_registered_count() && na < 62; ++i) {
         const char *nm = sidx_accel_registered_name(i);
         if (accel_list ? bench_list_has(accel_list, nm) : strcmp(nm, "brute") != 0) names[na++] = nm;
     }
+    static const char *const embree_names[2] = {"embree", "embree-hq"};
+    for (int e = 0; e < 2; ++e)
+        if (bench_list_has(accel_list, embree_names[e])) {
+            is_embree[na] = 1;
+            names[na++] = embree_names[e];
+        }
     if (na == 0) {
         fprintf(stderr, "sidx-bench scale: no structure selected\n");
         return BENCH_USAGE;
@@ -236,9 +398,12 @@ int bench_cmd_scale(int argc, char **argv)
     }
     bench_cpu_time = 1;
     FILE *f = stdout;
-    fprintf(f, "sidx-bench scale: scene %s, %zu %s rays per size, build budget %.0f ms\n", scene, nrays,
-            stadium ? "camera-at-the-teapot" : "primary", budget);
-    fprintf(f, "%-14s %10s %10s %9s %8s %8s %9s\n", "accel", "tris", "build_ms", "Mrays/s", "steps", "prims", "MB");
+    fprintf(f, "sidx-bench scale: scene %s, %zu %s rays per size, build budget %.0f ms; one thread; Embree %s\n"
+               "MB: the structure; peak_MB: resident peak of the build above the loaded mesh (mesh not\n"
+               "included; Embree's includes its copy of vertices and indices); heap_MB: sidx allocator peak\n",
+            scene, nrays, stadium ? "camera-at-the-teapot" : "primary", budget, bench_embree_version());
+    fprintf(f, "%-14s %10s %10s %9s %8s %8s %9s %9s %9s\n", "accel", "tris", "build_ms", "Mrays/s", "steps", "prims",
+            "MB", "peak_MB", "heap_MB");
     int rc = BENCH_OK;
     for (int si = 0; si < nsizes; ++si) {
         char spec[64];
@@ -246,12 +411,18 @@ int bench_cmd_scale(int argc, char **argv)
         sidx_mesh m = {0};
         sidx_error err = {SIDX_OK, ""};
         bench_progress("scale: making %s", spec);
-        if ((stadium ? make_stadium_sweep(details[si], &m, &err) : sidx_scene_open(spec, &m, &err)) != SIDX_OK) {
+        const sidx_status made = stadium  ? make_stadium_sweep(details[si], &m, &err)
+                                 : hfield ? make_heightfield(details[si], &m, &err)
+                                          : sidx_scene_open(spec, &m, &err);
+        if (made != SIDX_OK) {
             bench_progress_done();
             fprintf(stderr, "sidx-bench scale: %s: %s\n", spec, err.message);
             rc = BENCH_FAIL;
             break;
         }
+        const double mesh_bytes = (double)bench_mesh_bytes(&m);
+        bench_progress_done();
+        fprintf(f, "-- %s: %u triangles, mesh_MB %.2f\n", spec, m.num_triangles, mesh_bytes / 1048576.0);
         if (stadium) teapot_rays(nrays, rec);
         else tk_make_rays(&m, TK_RAYS_PRIMARY, nrays, 7, rec);
         bench_rays br;
@@ -281,34 +452,75 @@ int bench_cmd_scale(int argc, char **argv)
         for (int ai = 0; ai < na; ++ai) {
             if (skip[ai]) continue;
             bench_progress("scale: %s on %u triangles", names[ai], m.num_triangles);
-            sidx_accel *a = NULL;
-            const double t0 = bench_build_clock_ms();
-            if (sidx_accel_build(names[ai], &m, NULL, &a, &err) != SIDX_OK) {
-                bench_progress_done();
-                fprintf(stderr, "sidx-bench scale: %s on %s: %s\n", names[ai], spec, err.message);
-                skip[ai] = 1;
-                continue;
-            }
-            scale_pt *p = &pts[npts++];
+            scale_pt *p = &pts[npts];
+            memset(p, 0, sizeof *p);
             p->accel = ai;
             p->tris = m.num_triangles;
-            p->build_ms = bench_build_clock_ms() - t0;
-            double ms = 0;
-            size_t done = bench_trace(a, &br, 0, nrays, NULL, 0, 1, 3000.0, hits, &ms);
-            p->mrays = ms > 0 ? (double)done / (ms * 1e3) : 0;
-            sidx_counters c;
-            sidx_counters_init(&c);
-            sidx_hook h = sidx_counters_hook(&c);
-            sidx_query q = {0, SIDX_TRAVERSE_DEFAULT, &h, 0};
-            bench_trace(a, &sample, 0, nc, &q, 0, 1, 0.0, hits, NULL);
-            p->steps = (double)c.n[SIDX_EV_NODE_ENTER] / (double)nc;
-            p->prims = (double)c.n[SIDX_EV_PRIM_TEST] / (double)nc;
-            sidx_accel_stats st;
-            sidx_accel_stats_get(a, &st);
-            sidx_accel_destroy(a);
+            p->mesh = mesh_bytes;
+            p->steps = p->prims = -1;
+            p->heap = -1;
+            bench_mem mem;
+            if (is_embree[ai]) {
+                bench_embree_cfg cfg;
+                bench_embree_parse(names[ai], &cfg);
+                bench_embree *e = NULL;
+                char msg[256];
+                bench_mem_begin(&mem);
+                const int ok = bench_embree_build(&m, cfg, &e, &p->build_ms, msg, sizeof msg);
+                p->peak = (double)bench_mem_end(&mem);
+                if (!ok) {
+                    bench_progress_done();
+                    fprintf(stderr, "sidx-bench scale: %s on %s: %s\n", names[ai], spec, msg);
+                    skip[ai] = 1;
+                    continue;
+                }
+                p->bytes = (double)bench_embree_bytes(e);
+                const double ms = bench_embree_trace(e, rec, nrays, 0, 1, hits);
+                p->mrays = ms > 0 ? (double)nrays / (ms * 1e3) : 0;
+                bench_embree_free(e);
+            } else {
+                bench_heap heap;
+                const sidx_allocator al = bench_heap_allocator(&heap);
+                sidx_build_options bo;
+                memset(&bo, 0, sizeof bo);
+                bo.alloc = &al;
+                sidx_accel *a = NULL;
+                bench_mem_begin(&mem);
+                const double t0 = bench_build_clock_ms();
+                const sidx_status bs = sidx_accel_build(names[ai], &m, &bo, &a, &err);
+                p->build_ms = bench_build_clock_ms() - t0;
+                p->peak = (double)bench_mem_end(&mem);
+                if (bs != SIDX_OK) {
+                    bench_progress_done();
+                    fprintf(stderr, "sidx-bench scale: %s on %s: %s\n", names[ai], spec, err.message);
+                    skip[ai] = 1;
+                    continue;
+                }
+                p->heap = (double)atomic_load(&heap.peak);
+                double ms = 0;
+                size_t done = bench_trace(a, &br, 0, nrays, NULL, 0, 1, 3000.0, hits, &ms);
+                p->mrays = ms > 0 ? (double)done / (ms * 1e3) : 0;
+                sidx_counters c;
+                sidx_counters_init(&c);
+                sidx_hook h = sidx_counters_hook(&c);
+                sidx_query q = {0, SIDX_TRAVERSE_DEFAULT, &h, 0};
+                bench_trace(a, &sample, 0, nc, &q, 0, 1, 0.0, hits, NULL);
+                p->steps = (double)c.n[SIDX_EV_NODE_ENTER] / (double)nc;
+                p->prims = (double)c.n[SIDX_EV_PRIM_TEST] / (double)nc;
+                sidx_accel_stats st;
+                sidx_accel_stats_get(a, &st);
+                p->bytes = (double)st.bytes;
+                sidx_accel_destroy(a);
+            }
+            ++npts;
             bench_progress_done();
-            fprintf(f, "%-14s %10.0f %10.2f %9.3f %8.1f %8.1f %9.2f\n", names[ai], p->tris, p->build_ms, p->mrays,
-                    p->steps, p->prims, (double)st.bytes / 1048576.0);
+            char steps[16], prims[16], peak[16], heap[16];
+            num_cell(steps, sizeof steps, p->steps, 1.0, "%.1f");
+            num_cell(prims, sizeof prims, p->prims, 1.0, "%.1f");
+            num_cell(peak, sizeof peak, p->peak, 1048576.0, "%.2f");
+            num_cell(heap, sizeof heap, p->heap, 1048576.0, "%.2f");
+            fprintf(f, "%-14s %10.0f %10.2f %9.3f %8s %8s %9.2f %9s %9s\n", names[ai], p->tris, p->build_ms, p->mrays,
+                    steps, prims, p->bytes / 1048576.0, peak, heap);
             fflush(f);
             if (p->build_ms > budget) {
                 fprintf(f, "%-14s build over budget: larger sizes skipped\n", names[ai]);
@@ -322,54 +534,50 @@ int bench_cmd_scale(int argc, char **argv)
     }
     bench_progress_done();
     fprintf(f, "\n== growth (least squares on log-log: y ~ n^k; steps also as a + b log2 n)\n");
-    fprintf(f, "%-14s %6s %10s %10s %14s %10s\n", "accel", "sizes", "build k", "steps k", "steps b/log2n",
-              "prims k");
+    fprintf(f, "%-14s %6s %10s %10s %10s %10s %14s %10s\n", "accel", "sizes", "build k", "peak k", "Mrays k",
+            "steps k", "steps b/log2n", "prims k");
     for (int ai = 0; ai < na; ++ai) {
-        double lx[32], lb[32], ls[32], lp[32], l2[32], st[32];
-        int n = 0, ns = 0, np = 0;
+        double lx[32], lb[32], ls[32], lp[32], l2[32], st[32], lmx[32], lm[32], lrx[32], lr[32];
+        int n = 0, ns = 0, np = 0, nm = 0, nr = 0;
         for (int i = 0; i < npts; ++i)
             if (pts[i].accel == ai && n < 32) {
                 lx[n] = log(pts[i].tris);
                 lb[n] = log(fmax(pts[i].build_ms, 1e-3));
                 if (pts[i].steps > 0) { l2[ns] = log2(pts[i].tris); st[ns] = pts[i].steps; ls[ns++] = log(pts[i].steps); }
                 if (pts[i].prims > 0) lp[np++] = log(pts[i].prims);
+                /* memory below 1 MB is page and allocator noise: fitted from 1 MB up */
+                if (pts[i].peak >= 1048576.0) { lmx[nm] = lx[n]; lm[nm++] = log(pts[i].peak); }
+                if (pts[i].mrays > 0) { lrx[nr] = lx[n]; lr[nr++] = log(pts[i].mrays); }
                 ++n;
             }
-        double kb = NAN, ks = NAN, kp = NAN, bs = NAN, c;
+        double kb = NAN, ks = NAN, kp = NAN, bs = NAN, km = NAN, kr = NAN, c;
         fit(lx, lb, n, &kb, &c);
         if (ns == n) fit(lx, ls, ns, &ks, &c);
         if (ns >= 2) fit(l2, st, ns, &bs, &c);
         if (np == n) fit(lx, lp, np, &kp, &c);
-        fprintf(f, "%-14s %6d %10.3f %10.3f %14.3f %10.3f\n", names[ai], n, kb, ks, bs, kp);
+        fit(lmx, lm, nm, &km, &c);
+        fit(lrx, lr, nr, &kr, &c);
+        fprintf(f, "%-14s %6d %10.3f %10.3f %10.3f %10.3f %14.3f %10.3f\n", names[ai], n, kb, km, kr, ks, bs, kp);
     }
+    largest_ratios(f, pts, npts, names, na);
     if (csv) {
         FILE *cf = fopen(csv, "w");
         if (!cf) {
             fprintf(stderr, "sidx-bench scale: %s: %s\n", csv, strerror(errno));
             rc = BENCH_FAIL;
         } else {
-            fprintf(cf, "scene,accel,tris,build_ms,mrays_per_s,steps_per_ray,prims_per_ray\n");
+            fprintf(cf, "scene,accel,tris,build_ms,mrays_per_s,steps_per_ray,prims_per_ray,bytes,build_peak_bytes,"
+                        "build_heap_peak_bytes,mesh_bytes\n");
             for (int i = 0; i < npts; ++i)
-                fprintf(cf, "%s,%s,%.0f,%.3f,%.4f,%.3f,%.3f\n", scene, names[pts[i].accel], pts[i].tris,
-                        pts[i].build_ms, pts[i].mrays, pts[i].steps, pts[i].prims);
+                fprintf(cf, "%s,%s,%.0f,%.3f,%.4f,%.3f,%.3f,%.0f,%.0f,%.0f,%.0f\n", scene, names[pts[i].accel],
+                        pts[i].tris, pts[i].build_ms, pts[i].mrays, pts[i].steps, pts[i].prims, pts[i].bytes,
+                        pts[i].peak, pts[i].heap, pts[i].mesh);
             if (fclose(cf) != 0) rc = BENCH_FAIL;
         }
     }
-    if (plot) {
-        bench_point *bp = calloc((size_t)npts + 1, sizeof *bp);
-        if (bp) {
-            for (int i = 0; i < npts; ++i) {
-                bp[i].x = pts[i].tris;
-                bp[i].y = pts[i].build_ms;
-                bp[i].label = names[pts[i].accel];
-                bp[i].series = pts[i].accel;
-            }
-            char title[128];
-            snprintf(title, sizeof title, "sidx: build time against triangle count (%s)", scene);
-            if (!bench_svg_lines(plot, title, "triangles", "build ms (one thread)", bp, (size_t)npts, names, na))
-                rc = BENCH_FAIL;
-            free(bp);
-        }
+    if (plot && !write_plots(plot, scene, pts, npts, names, na)) {
+        fprintf(stderr, "sidx-bench scale: cannot write %s\n", plot);
+        rc = BENCH_FAIL;
     }
     free(pts);
     free(hits);
