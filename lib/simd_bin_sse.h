@@ -76,19 +76,18 @@ static void bounds_range(const par_build *build, uint32_t first, uint32_t count,
 
 /* ---- the SAH sweep over a node's bins --------------------------------------------- */
 
-/* The non-empty bins of one axis into used[], 4 counts per compare (the
- * scan over all 32 bins of every small node was a tenth of the build);
- * returns how many. */
+/* The non-empty bins of one axis into used[] (the scan over all 32 bins
+ * of every small node was a tenth of the build); returns how many.  Each
+ * bin index is written and the count advanced by 0 or 1: 6-8% faster
+ * than SSE compares of 4 counts followed by a loop over the set bits,
+ * whose exits mispredicted. */
 static inline uint32_t used_bins(const uint32_t *cnt, uint32_t nb, uint32_t *used)
 {
-    uint32_t k = 0, p = 0;
-    for (; p + 4 <= nb; p += 4) {
-        const __m128i c4 = _mm_loadu_si128((const __m128i *)(const void *)(cnt + p));
-        unsigned m = 0xFu & ~(unsigned)_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(c4, _mm_setzero_si128())));
-        for (; m; m &= m - 1) used[k++] = p + (uint32_t)__builtin_ctz(m);
+    uint32_t k = 0;
+    for (uint32_t p = 0; p < nb; ++p) {
+        used[k] = p; /* kept only if the bin is non-empty: no branch to mispredict */
+        k += cnt[p] != 0;
     }
-    for (; p < nb; ++p)
-        if (cnt[p]) used[k++] = p;
     return k;
 }
 
