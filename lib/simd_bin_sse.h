@@ -140,10 +140,18 @@ static uint32_t partition(const par_build *build, const binspec *s, uint32_t fir
     const __m128 half = _mm_set1_ps(0.5f), xyz = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0));
     __m128 lblo = _mm_set1_ps(INFINITY), lbhi = _mm_set1_ps(-INFINITY), lclo = lblo, lchi = lbhi;
     __m128 rblo = lblo, rbhi = lbhi, rclo = lblo, rchi = lbhi;
+    /* the side: bin_range's bin of the centroid, bit for bit bin_of, below
+     * the plane, read from lane axis (no scalar reload, no clamp branches) */
+    const __m128 cmin = _mm_setr_ps(s->cmin[0], s->cmin[1], s->cmin[2], 0.0f);
+    const __m128 scale = _mm_setr_ps(s->scale[0], s->scale[1], s->scale[2], 0.0f);
+    const __m128 top = _mm_set1_ps((float)(s->nb - 1)), zero = _mm_setzero_ps();
+    const __m128i planev = _mm_set1_epi32((int32_t)plane);
+    const int lane = 1 << axis;
     while (i < j) {
         const __m128 lo = _mm_and_ps(_mm_loadu_ps(refs[i].lo), xyz), hi = _mm_and_ps(_mm_loadu_ps(refs[i].hi), xyz);
         const __m128 c = _mm_mul_ps(_mm_add_ps(lo, hi), half);
-        if (bin_of(pref_c(&refs[i], axis), s->cmin[axis], s->scale[axis], s->nb) < plane) {
+        const __m128 f = _mm_min_ps(_mm_max_ps(_mm_mul_ps(_mm_sub_ps(c, cmin), scale), zero), top);
+        if (_mm_movemask_ps(_mm_castsi128_ps(_mm_cmplt_epi32(_mm_cvttps_epi32(f), planev))) & lane) {
             lblo = _mm_min_ps(lblo, lo);
             lbhi = _mm_max_ps(lbhi, hi);
             lclo = _mm_min_ps(lclo, c);
