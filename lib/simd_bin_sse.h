@@ -131,7 +131,9 @@ static inline float sweep_area(sweep_box acc) { return area_sse(acc.lo, acc.hi);
 
 /* bvh_build.c's two-pointer loop, gathering the children's boxes on the
  * way; why the right side folds with its operands swapped:
- * simd_bin_scalar.h, partition. */
+ * simd_bin_scalar.h, partition.  It keeps its branch on the side: a
+ * branch-free version was slower.  Rejected alternatives:
+ * docs/performance.md, Binary BVH. */
 static uint32_t partition(const par_build *build, const binspec *s, uint32_t first, uint32_t count, int axis,
                           uint32_t plane, nodebox *left, nodebox *right)
 {
