@@ -44,6 +44,9 @@
 #include <stdatomic.h>
 #include "bvh_internal.h"
 #include "pool.h"
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #define SB_BINS 32u          /* object and spatial bins per axis (Wald 2007; Stich et al. use 32-256) */
 #define SB_ALPHA 1e-5f       /* try spatial splits when sibling overlap > α · root area (Stich et al.) */
@@ -224,11 +227,71 @@ static void sweep(const sbuild *S, const sbin *bins, uint32_t nb, uint32_t n, fl
     }
 }
 
+#if defined(__SSE2__)
+/* object_bin with SSE2 for nodes of SB_SSE_MIN references or more (below
+ * that, moving the bins in and out costs more than it saves): a box as
+ * two 4-lane rows, the three axes' centroid, bin and growth in one set of
+ * instructions (as simd_bin_sse.h does for bvh_build.c).  Bit for bit the
+ * scalar loop's bins: the centroid is (min + max)·0.5 and the bin
+ * coordinate (c − lo)·scale in the same float operations; max(f, 0) gives
+ * 0 for a NaN f and min(f, nb − 1) then truncation gives sbin_of's clamp;
+ * _mm_min_ps(bin, box) is sidx_aabb_union's `bin < box ? bin : box`.  The
+ * bins come in cleared (object_clear), so only those it fills go back. */
+#define SB_SSE_MIN 24u
+
+static void object_bin_sse(const sref *refs, uint32_t i0, uint32_t i1, const float *lo, const float *scale,
+                           const int *use, sbin (*bins)[SB_BINS])
+{
+    __m128 blo[3][SB_BINS], bhi[3][SB_BINS];
+    uint32_t cnt[3][SB_BINS] = {{0}};
+    const __m128 inf = _mm_set1_ps(INFINITY), ninf = _mm_set1_ps(-INFINITY);
+    for (int k = 0; k < 3; ++k)
+        for (uint32_t b = 0; b < SB_BINS; ++b) {
+            blo[k][b] = inf;
+            bhi[k][b] = ninf;
+        }
+    const __m128 vlo = _mm_setr_ps(lo[0], lo[1], lo[2], 0.0f), vscale = _mm_setr_ps(scale[0], scale[1], scale[2], 0.0f);
+    const __m128 top = _mm_set1_ps((float)(SB_BINS - 1u)), half = _mm_set1_ps(0.5f), zero = _mm_setzero_ps();
+    const __m128 xyz = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0)); /* lane 3: max.x, or the id: zeroed */
+    for (uint32_t i = i0; i < i1; ++i) {
+        const __m128 mn = _mm_and_ps(_mm_loadu_ps(&refs[i].box.min.x), xyz);
+        const __m128 mx = _mm_and_ps(_mm_loadu_ps(&refs[i].box.max.x), xyz);
+        __m128 f = _mm_mul_ps(_mm_sub_ps(_mm_mul_ps(_mm_add_ps(mn, mx), half), vlo), vscale);
+        f = _mm_min_ps(_mm_max_ps(f, zero), top);
+        int32_t bin[4];
+        _mm_storeu_si128((__m128i *)(void *)bin, _mm_cvttps_epi32(f));
+        for (int k = 0; k < 3; ++k) {
+            blo[k][bin[k]] = _mm_min_ps(blo[k][bin[k]], mn);
+            bhi[k][bin[k]] = _mm_max_ps(bhi[k][bin[k]], mx);
+            cnt[k][bin[k]]++;
+        }
+    }
+    for (int k = 0; k < 3; ++k) {
+        if (!use[k]) continue;
+        for (uint32_t b = 0; b < SB_BINS; ++b) {
+            if (!cnt[k][b]) continue;
+            float l[4], h[4];
+            _mm_storeu_ps(l, blo[k][b]);
+            _mm_storeu_ps(h, bhi[k][b]);
+            bins[k][b].box = (sidx_aabb){{l[0], l[1], l[2]}, {h[0], h[1], h[2]}};
+            bins[k][b].enter += cnt[k][b];
+            bins[k][b].exit += cnt[k][b];
+        }
+    }
+}
+#endif
+
 /* The object bins of references [i0, i1) on the axes with use[k], one
  * pass (a centroid is computed once for all three axes). */
 static void object_bin(const sref *refs, uint32_t i0, uint32_t i1, const float *lo, const float *scale,
                        const int *use, sbin (*bins)[SB_BINS])
 {
+#if defined(__SSE2__)
+    if (i1 - i0 >= SB_SSE_MIN) {
+        object_bin_sse(refs, i0, i1, lo, scale, use, bins);
+        return;
+    }
+#endif
     for (uint32_t i = i0; i < i1; ++i) {
         const sidx_vec3 c = sidx_aabb_centroid(refs[i].box);
         for (int k = 0; k < 3; ++k) {
@@ -331,8 +394,29 @@ static void spatial_clear(sspatial *A)
 static void spatial_bin(const sref *refs, uint32_t i0, uint32_t i1, int k, float lo, float scale, uint32_t nb,
                         const float *plane, sspatial *A)
 {
+#if defined(__SSE2__)
+    /* `other` grown as 4-lane rows held here, one min and one max per part
+     * (sidx_aabb_union's operand order: the same bits), merged at the end */
+    __m128 olo[SB_BINS], ohi[SB_BINS];
+    for (uint32_t b = 0; b < nb; ++b) {
+        olo[b] = _mm_set1_ps(INFINITY);
+        ohi[b] = _mm_set1_ps(-INFINITY);
+    }
+    const __m128 xyz = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0)); /* lane 3: max.x, or the id: zeroed */
+#define SB_OTHER_GROW(b)                                                                                             \
+    do {                                                                                                             \
+        olo[b] = _mm_min_ps(olo[b], mn);                                                                             \
+        ohi[b] = _mm_max_ps(ohi[b], mx);                                                                             \
+    } while (0)
+#else
+#define SB_OTHER_GROW(b) (A->other[b] = sidx_aabb_union(A->other[b], box))
+#endif
     for (uint32_t i = i0; i < i1; ++i) {
         const sidx_aabb box = refs[i].box;
+#if defined(__SSE2__)
+        const __m128 mn = _mm_and_ps(_mm_loadu_ps(&refs[i].box.min.x), xyz);
+        const __m128 mx = _mm_and_ps(_mm_loadu_ps(&refs[i].box.max.x), xyz);
+#endif
         const float bmin = sidx_v3_get(box.min, k), bmax = sidx_v3_get(box.max, k);
         const uint32_t b0 = sbin_of(bmin, lo, scale, nb), b1 = sbin_of(bmax, lo, scale, nb);
         A->enter[b0]++;
@@ -344,17 +428,26 @@ static void spatial_bin(const sref *refs, uint32_t i0, uint32_t i1, int k, float
         for (; b < b1; ++b) {
             const float p = plane[b + 1];
             if (from <= p) { /* the part is not empty */
-                A->other[b] = sidx_aabb_union(A->other[b], box);
+                SB_OTHER_GROW(b);
                 A->klo[b] = MINF(A->klo[b], from);
                 A->khi[b] = MAXF(A->khi[b], p);
             }
             if (p > bmax) break; /* nothing of the box beyond this plane: the rest goes to bin b1 whole */
             from = p;
         }
-        A->other[b1] = sidx_aabb_union(A->other[b1], box);
+        SB_OTHER_GROW(b1);
         A->klo[b1] = MINF(A->klo[b1], from);
         A->khi[b1] = MAXF(A->khi[b1], bmax);
     }
+#undef SB_OTHER_GROW
+#if defined(__SSE2__)
+    for (uint32_t b = 0; b < nb; ++b) {
+        float l[4], h[4];
+        _mm_storeu_ps(l, olo[b]);
+        _mm_storeu_ps(h, ohi[b]);
+        A->other[b] = sidx_aabb_union(A->other[b], (sidx_aabb){{l[0], l[1], l[2]}, {h[0], h[1], h[2]}});
+    }
+#endif
 }
 
 static void spatial_split(const sbuild *S, const sref *refs, uint32_t n, sidx_aabb box, float inv_area, ssplit *best)
@@ -443,13 +536,12 @@ static sidx_status defer(sbuild *S, size_t off, uint32_t n, sidx_aabb box, uint3
  * spatial splits: the node is on top, so it may grow), the left child on
  * top; once the left subtree is built, top drops to off + nr and the right
  * child is on top.  So the pool holds the node on the path plus the right
- * siblings still waiting, about n + the spatial duplicates, instead of a
- * fresh copy of the children above every node on the path (the partition
- * wrote to the top and the parent's dead references stayed under it:
- * about 3n).  Every child keeps its references in the parent's order
+ * siblings still waiting, about n + the spatial duplicates (children
+ * copied above their parent would keep every dead parent on the path
+ * below them: about 3n).  Every child keeps its references in the parent's order
  * (stable partitions), so each node sees exactly the references, in the
- * order, it saw before: the same tree (docs/performance.md, "Spatial
- * splits", memory).
+ * order, it saw before: the same tree (docs/performance.md, "Build
+ * memory").
  *
  * Both children of node idx, laid out as above.  The references spatial
  * splits may still add below the node are shared by the children
