@@ -324,7 +324,25 @@ static void par_bin(const sbuild *S, const sref *refs, uint32_t n, int kind, con
 static void object_split(const sbuild *S, const sref *refs, uint32_t n, float inv_area, ssplit *best)
 {
     sidx_aabb cb = sidx_aabb_empty();
+#if defined(__SSE2__)
+    { /* sidx_aabb_grow of the centroids, as rows (the same operations, the same bits) */
+        const __m128 xyz = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0)), half = _mm_set1_ps(0.5f);
+        __m128 clo = _mm_set1_ps(INFINITY), chi = _mm_set1_ps(-INFINITY);
+        for (uint32_t i = 0; i < n; ++i) {
+            const __m128 mn = _mm_and_ps(_mm_loadu_ps(&refs[i].box.min.x), xyz);
+            const __m128 mx = _mm_and_ps(_mm_loadu_ps(&refs[i].box.max.x), xyz);
+            const __m128 c = _mm_mul_ps(_mm_add_ps(mn, mx), half);
+            clo = _mm_min_ps(clo, c);
+            chi = _mm_max_ps(chi, c);
+        }
+        float l[4], h[4];
+        _mm_storeu_ps(l, clo);
+        _mm_storeu_ps(h, chi);
+        cb = (sidx_aabb){{l[0], l[1], l[2]}, {h[0], h[1], h[2]}};
+    }
+#else
     for (uint32_t i = 0; i < n; ++i) cb = sidx_aabb_grow(cb, sidx_aabb_centroid(refs[i].box));
+#endif
     float lo[3], ext[3], scale[3];
     int use[3];
     for (int k = 0; k < 3; ++k) {
@@ -390,62 +408,86 @@ static void spatial_clear(sspatial *A)
     }
 }
 
-/* References [i0, i1) chopped into the nb bins of axis k. */
-static void spatial_bin(const sref *refs, uint32_t i0, uint32_t i1, int k, float lo, float scale, uint32_t nb,
-                        const float *plane, sspatial *A)
+/* References [i0, i1) chopped into the nb bins of every axis with use[k],
+ * one pass (a box is read once for the three axes; each axis's bins grow
+ * in reference order, as in a pass per axis). */
+static void spatial_bin(const sref *refs, uint32_t i0, uint32_t i1, const int *use, const float *lo,
+                        const float *scale, uint32_t nb, float (*plane)[SB_BINS + 1], sspatial *A)
 {
 #if defined(__SSE2__)
     /* `other` grown as 4-lane rows held here, one min and one max per part
-     * (sidx_aabb_union's operand order: the same bits), merged at the end */
-    __m128 olo[SB_BINS], ohi[SB_BINS];
-    for (uint32_t b = 0; b < nb; ++b) {
-        olo[b] = _mm_set1_ps(INFINITY);
-        ohi[b] = _mm_set1_ps(-INFINITY);
-    }
+     * (sidx_aabb_union's operand order: the same bits), merged at the end;
+     * the six bin numbers of a box in two rows, clamped as sbin_of does
+     * (see object_bin_sse) */
+    __m128 olo[3][SB_BINS], ohi[3][SB_BINS];
+    for (int k = 0; k < 3; ++k)
+        for (uint32_t b = 0; b < nb; ++b) {
+            olo[k][b] = _mm_set1_ps(INFINITY);
+            ohi[k][b] = _mm_set1_ps(-INFINITY);
+        }
     const __m128 xyz = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0)); /* lane 3: max.x, or the id: zeroed */
+    const __m128 vlo = _mm_setr_ps(lo[0], lo[1], lo[2], 0.0f), vscale = _mm_setr_ps(scale[0], scale[1], scale[2], 0.0f);
+    const __m128 top = _mm_set1_ps((float)(nb - 1u)), zero = _mm_setzero_ps();
 #define SB_OTHER_GROW(b)                                                                                             \
     do {                                                                                                             \
-        olo[b] = _mm_min_ps(olo[b], mn);                                                                             \
-        ohi[b] = _mm_max_ps(ohi[b], mx);                                                                             \
+        olo[k][b] = _mm_min_ps(olo[k][b], mn);                                                                       \
+        ohi[k][b] = _mm_max_ps(ohi[k][b], mx);                                                                       \
     } while (0)
 #else
-#define SB_OTHER_GROW(b) (A->other[b] = sidx_aabb_union(A->other[b], box))
+#define SB_OTHER_GROW(b) (A[k].other[b] = sidx_aabb_union(A[k].other[b], box))
 #endif
     for (uint32_t i = i0; i < i1; ++i) {
         const sidx_aabb box = refs[i].box;
+        int32_t first[4], last[4];
 #if defined(__SSE2__)
         const __m128 mn = _mm_and_ps(_mm_loadu_ps(&refs[i].box.min.x), xyz);
         const __m128 mx = _mm_and_ps(_mm_loadu_ps(&refs[i].box.max.x), xyz);
-#endif
-        const float bmin = sidx_v3_get(box.min, k), bmax = sidx_v3_get(box.max, k);
-        const uint32_t b0 = sbin_of(bmin, lo, scale, nb), b1 = sbin_of(bmax, lo, scale, nb);
-        A->enter[b0]++;
-        A->exit[b1]++;
-        /* the part in bin b spans [from, plane[b + 1]] on k; the last
-         * one, or the one after which nothing of the box is left, [from, bmax] */
-        float from = bmin;
-        uint32_t b = b0;
-        for (; b < b1; ++b) {
-            const float p = plane[b + 1];
-            if (from <= p) { /* the part is not empty */
-                SB_OTHER_GROW(b);
-                A->klo[b] = MINF(A->klo[b], from);
-                A->khi[b] = MAXF(A->khi[b], p);
-            }
-            if (p > bmax) break; /* nothing of the box beyond this plane: the rest goes to bin b1 whole */
-            from = p;
+        const __m128 f0 = _mm_min_ps(_mm_max_ps(_mm_mul_ps(_mm_sub_ps(mn, vlo), vscale), zero), top);
+        const __m128 f1 = _mm_min_ps(_mm_max_ps(_mm_mul_ps(_mm_sub_ps(mx, vlo), vscale), zero), top);
+        _mm_storeu_si128((__m128i *)(void *)first, _mm_cvttps_epi32(f0));
+        _mm_storeu_si128((__m128i *)(void *)last, _mm_cvttps_epi32(f1));
+#else
+        for (int k = 0; k < 3; ++k) {
+            first[k] = (int32_t)sbin_of(sidx_v3_get(box.min, k), lo[k], scale[k], nb);
+            last[k] = (int32_t)sbin_of(sidx_v3_get(box.max, k), lo[k], scale[k], nb);
         }
-        SB_OTHER_GROW(b1);
-        A->klo[b1] = MINF(A->klo[b1], from);
-        A->khi[b1] = MAXF(A->khi[b1], bmax);
+#endif
+        for (int k = 0; k < 3; ++k) {
+            if (!use[k]) continue;
+            sspatial *Ak = &A[k];
+            const float bmin = sidx_v3_get(box.min, k), bmax = sidx_v3_get(box.max, k);
+            const uint32_t b0 = (uint32_t)first[k], b1 = (uint32_t)last[k];
+            Ak->enter[b0]++;
+            Ak->exit[b1]++;
+            /* the part in bin b spans [from, plane[b + 1]] on k; the last
+             * one, or the one after which nothing of the box is left, [from, bmax] */
+            float from = bmin;
+            uint32_t b = b0;
+            for (; b < b1; ++b) {
+                const float p = plane[k][b + 1];
+                if (from <= p) { /* the part is not empty */
+                    SB_OTHER_GROW(b);
+                    Ak->klo[b] = MINF(Ak->klo[b], from);
+                    Ak->khi[b] = MAXF(Ak->khi[b], p);
+                }
+                if (p > bmax) break; /* nothing of the box beyond this plane: the rest goes to bin b1 whole */
+                from = p;
+            }
+            SB_OTHER_GROW(b1);
+            Ak->klo[b1] = MINF(Ak->klo[b1], from);
+            Ak->khi[b1] = MAXF(Ak->khi[b1], bmax);
+        }
     }
 #undef SB_OTHER_GROW
 #if defined(__SSE2__)
-    for (uint32_t b = 0; b < nb; ++b) {
-        float l[4], h[4];
-        _mm_storeu_ps(l, olo[b]);
-        _mm_storeu_ps(h, ohi[b]);
-        A->other[b] = sidx_aabb_union(A->other[b], (sidx_aabb){{l[0], l[1], l[2]}, {h[0], h[1], h[2]}});
+    for (int k = 0; k < 3; ++k) {
+        if (!use[k]) continue;
+        for (uint32_t b = 0; b < nb; ++b) {
+            float l[4], h[4];
+            _mm_storeu_ps(l, olo[k][b]);
+            _mm_storeu_ps(h, ohi[k][b]);
+            A[k].other[b] = sidx_aabb_union(A[k].other[b], (sidx_aabb){{l[0], l[1], l[2]}, {h[0], h[1], h[2]}});
+        }
     }
 #endif
 }
@@ -466,10 +508,8 @@ static void spatial_split(const sbuild *S, const sref *refs, uint32_t n, sidx_aa
     if (S->par) { /* the top of a build on several threads: chop on all of them */
         par_bin(S, refs, n, 2, lo, scale, use, nb, plane, NULL, acc);
     } else {
-        for (int k = 0; k < 3; ++k) {
-            spatial_clear(&acc[k]);
-            if (use[k]) spatial_bin(refs, 0, n, k, lo[k], scale[k], nb, plane[k], &acc[k]);
-        }
+        for (int k = 0; k < 3; ++k) spatial_clear(&acc[k]);
+        spatial_bin(refs, 0, n, use, lo, scale, nb, plane, acc);
     }
     for (int k = 0; k < 3; ++k) {
         if (!use[k]) continue;
@@ -735,10 +775,8 @@ static void bin_part(void *ctx, unsigned t)
         object_bin(P->refs, i0, i1, P->lo, P->scale, P->use, P->tobj[t]);
         return;
     }
-    for (int k = 0; k < 3; ++k) {
-        spatial_clear(&P->tspat[t][k]);
-        if (P->use[k]) spatial_bin(P->refs, i0, i1, k, P->lo[k], P->scale[k], P->nb, P->plane[k], &P->tspat[t][k]);
-    }
+    for (int k = 0; k < 3; ++k) spatial_clear(&P->tspat[t][k]);
+    spatial_bin(P->refs, i0, i1, P->use, P->lo, P->scale, P->nb, P->plane, P->tspat[t]);
 }
 
 /* A binning pass on all threads, the threads' bins merged in thread
