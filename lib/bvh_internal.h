@@ -136,8 +136,9 @@ static inline bvh_par_params bvh_params(const sidx_accel *a)
 }
 
 /* bvh_spatial.c: the binary tree with spatial splits (SBVH) that bvh4 and
- * bvh8 collapse; prim_id[] and tris[] hold references (a triangle may be
- * in several leaves).  Reads a->opt like bvh_build.c; sets a->impl. */
+ * bvh8 collapse; prim_id[] holds references (a triangle may be in several
+ * leaves), tris[] is NULL and the nodes are not aligned (only the collapse
+ * reads the tree).  Reads a->opt like bvh_build.c; sets a->impl. */
 sidx_status sidx__bvh_build_spatial(sidx_accel *a, sidx_error *err);
 
 /* bvh_obb.c: fit one oriented box per node (after nodes/tris are final). */

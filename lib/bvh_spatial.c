@@ -22,12 +22,13 @@
  * by more than α of the root's area (the paper's α = 10⁻⁵), and never
  * adding more than SB_BUDGET · n references in all.
  *
- * The result is an ordinary `bvh` (bvh_internal.h) whose prim_id[] and
- * tris[] hold references, a triangle possibly in several leaves, so the
- * collapse in bvh_wide.c reads it unchanged and the wide walks need no
- * change: a hit on a reference is a hit on its whole triangle, a true hit
- * wherever it lies.  It is not registered as a binary BVH of its own: the
- * binary BVHs keep every triangle in exactly one leaf.
+ * The result is an ordinary `bvh` (bvh_internal.h) whose prim_id[] holds
+ * references, a triangle possibly in several leaves (without tris[] or
+ * aligned nodes: the collapse in bvh_wide.c, its only reader, takes the
+ * corners from the mesh), and the wide walks need no change: a hit on a
+ * reference is a hit on its whole triangle, a true hit wherever it lies.
+ * It is not registered as a binary BVH of its own: the binary BVHs keep
+ * every triangle in exactly one leaf.
  *
  * Robustness: a reference's box must contain the whole part of its
  * triangle inside it, or a ray could slip through the gap.  The part on
@@ -43,6 +44,9 @@
 #include <stdatomic.h>
 #include "bvh_internal.h"
 #include "pool.h"
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #define SB_BINS 32u          /* object and spatial bins per axis (Wald 2007; Stich et al. use 32-256) */
 #define SB_ALPHA 1e-5f       /* try spatial splits when sibling overlap > α · root area (Stich et al.) */
@@ -65,15 +69,15 @@ typedef struct sref {
 
 typedef struct sbuild {
     const sidx_accel *a;
-    const bvh_tri *tris;    /* the mesh's triangles in input order (split_ref reads them) */
+    const sidx_mesh *mesh;  /* split_ref reads the triangles' corners here (no copy of them) */
     float c_trav, c_tri, min_overlap;
     uint32_t leaf_size, max_leaf, max_depth;
     uint64_t budget;        /* references spatial splits may still add below the node being split */
     bvh_node *nodes;        /* pre-order, as bvh_build.c writes them */
     size_t num_nodes, cap_nodes;
-    sref *out;              /* leaf references, in leaf order */
+    uint32_t *out;          /* the leaf references' triangles, in leaf order (all the collapse reads) */
     size_t num_out, cap_out;
-    sref *pool;             /* the references of the nodes on the current path, a stack */
+    sref *pool;             /* the references of the nodes still to build, a stack (see "the recursion") */
     size_t top, cap_pool;
     uint32_t num_leaves, max_depth_seen;
     struct stasks *par;     /* parallel build: where subtrees of at most `frontier` references */
@@ -110,9 +114,15 @@ static sidx_aabb box_and(sidx_aabb a, sidx_aabb b)
 
 /* The boxes of reference r's parts on either side of the plane x_k = p,
  * each cut to r's box; a part may come out empty.  See "Robustness". */
-static void split_ref(const bvh_tri *tris, const sref *r, int k, float p, sidx_aabb *L, sidx_aabb *R)
+static void split_ref(const sidx_mesh *m, const sref *r, int k, float p, sidx_aabb *L, sidx_aabb *R)
 {
-    const float(*v)[3] = (const float(*)[3])(const void *)tris[r->prim].v;
+    float v[3][3];
+    for (int i = 0; i < 3; ++i) {
+        const sidx_vec3 c = sidx_mesh_vertex(m, r->prim, i);
+        v[i][0] = c.x;
+        v[i][1] = c.y;
+        v[i][2] = c.z;
+    }
     float l0[3] = {INFINITY, INFINITY, INFINITY}, l1[3] = {-INFINITY, -INFINITY, -INFINITY};
     float r0[3] = {INFINITY, INFINITY, INFINITY}, r1[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (int i = 0; i < 3; ++i) {
@@ -217,11 +227,71 @@ static void sweep(const sbuild *S, const sbin *bins, uint32_t nb, uint32_t n, fl
     }
 }
 
+#if defined(__SSE2__)
+/* object_bin with SSE2 for nodes of SB_SSE_MIN references or more (below
+ * that, moving the bins in and out costs more than it saves): a box as
+ * two 4-lane rows, the three axes' centroid, bin and growth in one set of
+ * instructions (as simd_bin_sse.h does for bvh_build.c).  Bit for bit the
+ * scalar loop's bins: the centroid is (min + max)·0.5 and the bin
+ * coordinate (c − lo)·scale in the same float operations; max(f, 0) gives
+ * 0 for a NaN f and min(f, nb − 1) then truncation gives sbin_of's clamp;
+ * _mm_min_ps(bin, box) is sidx_aabb_union's `bin < box ? bin : box`.  The
+ * bins come in cleared (object_clear), so only those it fills go back. */
+#define SB_SSE_MIN 24u
+
+static void object_bin_sse(const sref *refs, uint32_t i0, uint32_t i1, const float *lo, const float *scale,
+                           const int *use, sbin (*bins)[SB_BINS])
+{
+    __m128 blo[3][SB_BINS], bhi[3][SB_BINS];
+    uint32_t cnt[3][SB_BINS] = {{0}};
+    const __m128 inf = _mm_set1_ps(INFINITY), ninf = _mm_set1_ps(-INFINITY);
+    for (int k = 0; k < 3; ++k)
+        for (uint32_t b = 0; b < SB_BINS; ++b) {
+            blo[k][b] = inf;
+            bhi[k][b] = ninf;
+        }
+    const __m128 vlo = _mm_setr_ps(lo[0], lo[1], lo[2], 0.0f), vscale = _mm_setr_ps(scale[0], scale[1], scale[2], 0.0f);
+    const __m128 top = _mm_set1_ps((float)(SB_BINS - 1u)), half = _mm_set1_ps(0.5f), zero = _mm_setzero_ps();
+    const __m128 xyz = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0)); /* lane 3: max.x, or the id: zeroed */
+    for (uint32_t i = i0; i < i1; ++i) {
+        const __m128 mn = _mm_and_ps(_mm_loadu_ps(&refs[i].box.min.x), xyz);
+        const __m128 mx = _mm_and_ps(_mm_loadu_ps(&refs[i].box.max.x), xyz);
+        __m128 f = _mm_mul_ps(_mm_sub_ps(_mm_mul_ps(_mm_add_ps(mn, mx), half), vlo), vscale);
+        f = _mm_min_ps(_mm_max_ps(f, zero), top);
+        int32_t bin[4];
+        _mm_storeu_si128((__m128i *)(void *)bin, _mm_cvttps_epi32(f));
+        for (int k = 0; k < 3; ++k) {
+            blo[k][bin[k]] = _mm_min_ps(blo[k][bin[k]], mn);
+            bhi[k][bin[k]] = _mm_max_ps(bhi[k][bin[k]], mx);
+            cnt[k][bin[k]]++;
+        }
+    }
+    for (int k = 0; k < 3; ++k) {
+        if (!use[k]) continue;
+        for (uint32_t b = 0; b < SB_BINS; ++b) {
+            if (!cnt[k][b]) continue;
+            float l[4], h[4];
+            _mm_storeu_ps(l, blo[k][b]);
+            _mm_storeu_ps(h, bhi[k][b]);
+            bins[k][b].box = (sidx_aabb){{l[0], l[1], l[2]}, {h[0], h[1], h[2]}};
+            bins[k][b].enter += cnt[k][b];
+            bins[k][b].exit += cnt[k][b];
+        }
+    }
+}
+#endif
+
 /* The object bins of references [i0, i1) on the axes with use[k], one
  * pass (a centroid is computed once for all three axes). */
 static void object_bin(const sref *refs, uint32_t i0, uint32_t i1, const float *lo, const float *scale,
                        const int *use, sbin (*bins)[SB_BINS])
 {
+#if defined(__SSE2__)
+    if (i1 - i0 >= SB_SSE_MIN) {
+        object_bin_sse(refs, i0, i1, lo, scale, use, bins);
+        return;
+    }
+#endif
     for (uint32_t i = i0; i < i1; ++i) {
         const sidx_vec3 c = sidx_aabb_centroid(refs[i].box);
         for (int k = 0; k < 3; ++k) {
@@ -254,7 +324,25 @@ static void par_bin(const sbuild *S, const sref *refs, uint32_t n, int kind, con
 static void object_split(const sbuild *S, const sref *refs, uint32_t n, float inv_area, ssplit *best)
 {
     sidx_aabb cb = sidx_aabb_empty();
+#if defined(__SSE2__)
+    { /* sidx_aabb_grow of the centroids, as rows (the same operations, the same bits) */
+        const __m128 xyz = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0)), half = _mm_set1_ps(0.5f);
+        __m128 clo = _mm_set1_ps(INFINITY), chi = _mm_set1_ps(-INFINITY);
+        for (uint32_t i = 0; i < n; ++i) {
+            const __m128 mn = _mm_and_ps(_mm_loadu_ps(&refs[i].box.min.x), xyz);
+            const __m128 mx = _mm_and_ps(_mm_loadu_ps(&refs[i].box.max.x), xyz);
+            const __m128 c = _mm_mul_ps(_mm_add_ps(mn, mx), half);
+            clo = _mm_min_ps(clo, c);
+            chi = _mm_max_ps(chi, c);
+        }
+        float l[4], h[4];
+        _mm_storeu_ps(l, clo);
+        _mm_storeu_ps(h, chi);
+        cb = (sidx_aabb){{l[0], l[1], l[2]}, {h[0], h[1], h[2]}};
+    }
+#else
     for (uint32_t i = 0; i < n; ++i) cb = sidx_aabb_grow(cb, sidx_aabb_centroid(refs[i].box));
+#endif
     float lo[3], ext[3], scale[3];
     int use[3];
     for (int k = 0; k < 3; ++k) {
@@ -320,34 +408,88 @@ static void spatial_clear(sspatial *A)
     }
 }
 
-/* References [i0, i1) chopped into the nb bins of axis k. */
-static void spatial_bin(const sref *refs, uint32_t i0, uint32_t i1, int k, float lo, float scale, uint32_t nb,
-                        const float *plane, sspatial *A)
+/* References [i0, i1) chopped into the nb bins of every axis with use[k],
+ * one pass (a box is read once for the three axes; each axis's bins grow
+ * in reference order, as in a pass per axis). */
+static void spatial_bin(const sref *refs, uint32_t i0, uint32_t i1, const int *use, const float *lo,
+                        const float *scale, uint32_t nb, float (*plane)[SB_BINS + 1], sspatial *A)
 {
+#if defined(__SSE2__)
+    /* `other` grown as 4-lane rows held here, one min and one max per part
+     * (sidx_aabb_union's operand order: the same bits), merged at the end;
+     * the six bin numbers of a box in two rows, clamped as sbin_of does
+     * (see object_bin_sse) */
+    __m128 olo[3][SB_BINS], ohi[3][SB_BINS];
+    for (int k = 0; k < 3; ++k)
+        for (uint32_t b = 0; b < nb; ++b) {
+            olo[k][b] = _mm_set1_ps(INFINITY);
+            ohi[k][b] = _mm_set1_ps(-INFINITY);
+        }
+    const __m128 xyz = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0)); /* lane 3: max.x, or the id: zeroed */
+    const __m128 vlo = _mm_setr_ps(lo[0], lo[1], lo[2], 0.0f), vscale = _mm_setr_ps(scale[0], scale[1], scale[2], 0.0f);
+    const __m128 top = _mm_set1_ps((float)(nb - 1u)), zero = _mm_setzero_ps();
+#define SB_OTHER_GROW(b)                                                                                             \
+    do {                                                                                                             \
+        olo[k][b] = _mm_min_ps(olo[k][b], mn);                                                                       \
+        ohi[k][b] = _mm_max_ps(ohi[k][b], mx);                                                                       \
+    } while (0)
+#else
+#define SB_OTHER_GROW(b) (A[k].other[b] = sidx_aabb_union(A[k].other[b], box))
+#endif
     for (uint32_t i = i0; i < i1; ++i) {
         const sidx_aabb box = refs[i].box;
-        const float bmin = sidx_v3_get(box.min, k), bmax = sidx_v3_get(box.max, k);
-        const uint32_t b0 = sbin_of(bmin, lo, scale, nb), b1 = sbin_of(bmax, lo, scale, nb);
-        A->enter[b0]++;
-        A->exit[b1]++;
-        /* the part in bin b spans [from, plane[b + 1]] on k; the last
-         * one, or the one after which nothing of the box is left, [from, bmax] */
-        float from = bmin;
-        uint32_t b = b0;
-        for (; b < b1; ++b) {
-            const float p = plane[b + 1];
-            if (from <= p) { /* the part is not empty */
-                A->other[b] = sidx_aabb_union(A->other[b], box);
-                A->klo[b] = MINF(A->klo[b], from);
-                A->khi[b] = MAXF(A->khi[b], p);
-            }
-            if (p > bmax) break; /* nothing of the box beyond this plane: the rest goes to bin b1 whole */
-            from = p;
+        int32_t first[4], last[4];
+#if defined(__SSE2__)
+        const __m128 mn = _mm_and_ps(_mm_loadu_ps(&refs[i].box.min.x), xyz);
+        const __m128 mx = _mm_and_ps(_mm_loadu_ps(&refs[i].box.max.x), xyz);
+        const __m128 f0 = _mm_min_ps(_mm_max_ps(_mm_mul_ps(_mm_sub_ps(mn, vlo), vscale), zero), top);
+        const __m128 f1 = _mm_min_ps(_mm_max_ps(_mm_mul_ps(_mm_sub_ps(mx, vlo), vscale), zero), top);
+        _mm_storeu_si128((__m128i *)(void *)first, _mm_cvttps_epi32(f0));
+        _mm_storeu_si128((__m128i *)(void *)last, _mm_cvttps_epi32(f1));
+#else
+        for (int k = 0; k < 3; ++k) {
+            first[k] = (int32_t)sbin_of(sidx_v3_get(box.min, k), lo[k], scale[k], nb);
+            last[k] = (int32_t)sbin_of(sidx_v3_get(box.max, k), lo[k], scale[k], nb);
         }
-        A->other[b1] = sidx_aabb_union(A->other[b1], box);
-        A->klo[b1] = MINF(A->klo[b1], from);
-        A->khi[b1] = MAXF(A->khi[b1], bmax);
+#endif
+        for (int k = 0; k < 3; ++k) {
+            if (!use[k]) continue;
+            sspatial *Ak = &A[k];
+            const float bmin = sidx_v3_get(box.min, k), bmax = sidx_v3_get(box.max, k);
+            const uint32_t b0 = (uint32_t)first[k], b1 = (uint32_t)last[k];
+            Ak->enter[b0]++;
+            Ak->exit[b1]++;
+            /* the part in bin b spans [from, plane[b + 1]] on k; the last
+             * one, or the one after which nothing of the box is left, [from, bmax] */
+            float from = bmin;
+            uint32_t b = b0;
+            for (; b < b1; ++b) {
+                const float p = plane[k][b + 1];
+                if (from <= p) { /* the part is not empty */
+                    SB_OTHER_GROW(b);
+                    Ak->klo[b] = MINF(Ak->klo[b], from);
+                    Ak->khi[b] = MAXF(Ak->khi[b], p);
+                }
+                if (p > bmax) break; /* nothing of the box beyond this plane: the rest goes to bin b1 whole */
+                from = p;
+            }
+            SB_OTHER_GROW(b1);
+            Ak->klo[b1] = MINF(Ak->klo[b1], from);
+            Ak->khi[b1] = MAXF(Ak->khi[b1], bmax);
+        }
     }
+#undef SB_OTHER_GROW
+#if defined(__SSE2__)
+    for (int k = 0; k < 3; ++k) {
+        if (!use[k]) continue;
+        for (uint32_t b = 0; b < nb; ++b) {
+            float l[4], h[4];
+            _mm_storeu_ps(l, olo[k][b]);
+            _mm_storeu_ps(h, ohi[k][b]);
+            A[k].other[b] = sidx_aabb_union(A[k].other[b], (sidx_aabb){{l[0], l[1], l[2]}, {h[0], h[1], h[2]}});
+        }
+    }
+#endif
 }
 
 static void spatial_split(const sbuild *S, const sref *refs, uint32_t n, sidx_aabb box, float inv_area, ssplit *best)
@@ -366,10 +508,8 @@ static void spatial_split(const sbuild *S, const sref *refs, uint32_t n, sidx_aa
     if (S->par) { /* the top of a build on several threads: chop on all of them */
         par_bin(S, refs, n, 2, lo, scale, use, nb, plane, NULL, acc);
     } else {
-        for (int k = 0; k < 3; ++k) {
-            spatial_clear(&acc[k]);
-            if (use[k]) spatial_bin(refs, 0, n, k, lo[k], scale[k], nb, plane[k], &acc[k]);
-        }
+        for (int k = 0; k < 3; ++k) spatial_clear(&acc[k]);
+        spatial_bin(refs, 0, n, use, lo, scale, nb, plane, acc);
     }
     for (int k = 0; k < 3; ++k) {
         if (!use[k]) continue;
@@ -409,7 +549,7 @@ static sidx_status make_leaf(sbuild *S, uint32_t idx, size_t off, uint32_t n)
     bvh_node *nd = &S->nodes[idx];
     nd->left_or_first = (uint32_t)S->num_out;
     nd->count_axis = n;
-    memcpy(S->out + S->num_out, S->pool + off, (size_t)n * sizeof *S->out);
+    for (uint32_t i = 0; i < n; ++i) S->out[S->num_out + i] = S->pool[off + i].prim;
     S->num_out += n;
     S->num_leaves++;
     return SIDX_OK;
@@ -417,6 +557,11 @@ static sidx_status make_leaf(sbuild *S, uint32_t idx, size_t off, uint32_t n)
 
 /* Room for `need` more references on top of the pool (it may move: the
  * recursion holds offsets, not pointers). */
+/* The pool's first size, in references per triangle: the root on top
+ * (n) and a spatial split's two sides above it (2n), so that it does not
+ * grow (growing copies it whole). */
+#define SB_POOL_RESERVE 3u
+
 static int pool_reserve(sbuild *S, size_t need)
 {
     return sidx__grow(S->a, (void **)&S->pool, &S->cap_pool, S->top + need, sizeof *S->pool);
@@ -425,35 +570,47 @@ static int pool_reserve(sbuild *S, size_t need)
 static sidx_status build(sbuild *S, size_t off, uint32_t n, sidx_aabb box, uint32_t depth, uint64_t budget);
 static sidx_status defer(sbuild *S, size_t off, uint32_t n, sidx_aabb box, uint32_t depth, uint64_t budget);
 
-/* Both children of node idx from the partition at the top of the pool:
- * [left nl | right nr], kept there while they are built.  The references
- * spatial splits may still add below the node are shared by the children
+/* The pool is a stack whose top segment is the node being built: its n
+ * references at [off, off + n), top = off + n.  A split leaves its
+ * children in the same place as [right nr | left nl] (nl + nr > n after
+ * spatial splits: the node is on top, so it may grow), the left child on
+ * top; once the left subtree is built, top drops to off + nr and the right
+ * child is on top.  So the pool holds the node on the path plus the right
+ * siblings still waiting, about n + the spatial duplicates (children
+ * copied above their parent would keep every dead parent on the path
+ * below them: about 3n).  Every child keeps its references in the parent's order
+ * (stable partitions), so each node sees exactly the references, in the
+ * order, it saw before: the same tree (docs/performance.md, "Build
+ * memory").
+ *
+ * Both children of node idx, laid out as above.  The references spatial
+ * splits may still add below the node are shared by the children
  * in proportion to their references, so a subtree's budget is fixed
  * before it is built: the same tree whichever thread builds which
  * subtree, in whatever order.  (Stich et al. keep one global budget,
  * spent in build order; this share gives trees as good:
  * docs/performance.md, "Spatial splits".) */
-static sidx_status children(sbuild *S, uint32_t idx, int axis, uint32_t nl, uint32_t nr, uint32_t depth,
+static sidx_status children(sbuild *S, uint32_t idx, int axis, size_t off, uint32_t nl, uint32_t nr, uint32_t depth,
                             uint64_t budget)
 {
-    const size_t at = S->top;
     sidx_aabb lb = sidx_aabb_empty(), rb = sidx_aabb_empty();
-    for (uint32_t i = 0; i < nl; ++i) lb = sidx_aabb_union(lb, S->pool[at + i].box);
-    for (uint32_t i = nl; i < nl + nr; ++i) rb = sidx_aabb_union(rb, S->pool[at + i].box);
+    for (uint32_t i = 0; i < nl; ++i) lb = sidx_aabb_union(lb, S->pool[off + nr + i].box);
+    for (uint32_t i = 0; i < nr; ++i) rb = sidx_aabb_union(rb, S->pool[off + i].box);
     S->nodes[idx].count_axis = (uint32_t)axis << BVH_AXIS_SHIFT;
-    S->top += (size_t)nl + nr;
+    S->top = off + nr + nl;
     const uint64_t bl = budget * nl / ((uint64_t)nl + nr);
-    sidx_status s = build(S, at, nl, lb, depth + 1u, bl); /* the left child is idx + 1 */
+    sidx_status s = build(S, off + nr, nl, lb, depth + 1u, bl); /* the left child is idx + 1 */
     if (s == SIDX_OK) {
         S->nodes[idx].left_or_first = (uint32_t)S->num_nodes;
-        s = build(S, at + nl, nr, rb, depth + 1u, budget - bl);
+        S->top = off + nr;
+        s = build(S, off, nr, rb, depth + 1u, budget - bl);
     }
-    S->top = at;
+    S->top = off;
     return s;
 }
 
-/* Node for the n references at pool[off], whose union is box; spatial
- * splits may add `budget` references below it. */
+/* Node for the n references at pool[off] (the top of the pool), whose
+ * union is box; spatial splits may add `budget` references below it. */
 static sidx_status build(sbuild *S, size_t off, uint32_t n, sidx_aabb box, uint32_t depth, uint64_t budget)
 {
     const int leaf = n <= S->leaf_size || depth >= S->max_depth;
@@ -476,35 +633,47 @@ static sidx_status build(sbuild *S, size_t off, uint32_t n, sidx_aabb box, uint3
     if (best.kind == 0 || (best.cost >= S->c_tri * (float)SB_ROUND(n) && n <= S->max_leaf)) {
         if (best.kind != 0 || n <= S->max_leaf) return make_leaf(S, idx, off, n);
         /* no plane separates them (all centroids equal) and too many for
-         * one leaf: halve in index order, as bvh_build.c does */
-        if (!pool_reserve(S, n)) return SIDX_ERR_NOMEM;
-        memcpy(S->pool + S->top, S->pool + off, (size_t)n * sizeof *S->pool);
-        return children(S, idx, sidx_aabb_max_axis(box), n / 2u, n - n / 2u, depth, budget);
+         * one leaf: halve in index order, as bvh_build.c does (the first
+         * half is the left child: moved above the second) */
+        const uint32_t nl = n / 2u, nr = n - nl;
+        if (!pool_reserve(S, nl)) return SIDX_ERR_NOMEM;
+        sref *refs = S->pool + off, *tmp = S->pool + S->top;
+        memcpy(tmp, refs, (size_t)nl * sizeof *refs);
+        memmove(refs, refs + nl, (size_t)nr * sizeof *refs);
+        memcpy(refs + nr, tmp, (size_t)nl * sizeof *refs);
+        return children(S, idx, sidx_aabb_max_axis(box), off, nl, nr, depth, budget);
     }
 
     const int k = best.axis;
-    if (!pool_reserve(S, 2u * (size_t)n)) return SIDX_ERR_NOMEM;
-    const sref *refs = S->pool + off;
-    sref *L = S->pool + S->top, *R = L + n;
     uint32_t nl = 0, nr = 0;
     if (best.kind == 1) {
+        /* Stable, in place but for the left side: a right reference moves
+         * down to refs[nr] (nr <= i), a left one to the space above the
+         * top, and the left side then follows the right. */
+        if (!pool_reserve(S, n)) return SIDX_ERR_NOMEM;
+        sref *refs = S->pool + off, *L = S->pool + S->top;
         for (uint32_t i = 0; i < n; ++i) {
             if (sbin_of(sidx_v3_get(sidx_aabb_centroid(refs[i].box), k), best.lo, best.scale, SB_BINS) < best.plane)
                 L[nl++] = refs[i];
             else
-                R[nr++] = refs[i];
+                refs[nr++] = refs[i];
         }
+        memcpy(refs + nr, L, (size_t)nl * sizeof *L);
     } else {
         /* The plane exactly as binning placed it; a reference wholly on one
          * side goes there, a straddler is split in two (or goes whole to the
-         * one side its clipped part survives on). */
+         * one side its clipped part survives on).  Both sides are written
+         * above the top (each is at most n), then moved down. */
+        if (!pool_reserve(S, 2u * (size_t)n)) return SIDX_ERR_NOMEM;
+        const sref *refs = S->pool + off;
+        sref *L = S->pool + S->top, *R = L + n;
         const float p = best.pos;
         for (uint32_t i = 0; i < n; ++i) {
             const sref *r = &refs[i];
             if (sidx_v3_get(r->box.max, k) <= p) { L[nl++] = *r; continue; }
             if (sidx_v3_get(r->box.min, k) >= p) { R[nr++] = *r; continue; }
             sidx_aabb lb, rb;
-            split_ref(S->tris, r, k, p, &lb, &rb);
+            split_ref(S->mesh, r, k, p, &lb, &rb);
             const int hl = !sidx_aabb_is_empty(lb), hr = !sidx_aabb_is_empty(rb);
             if (hl) { L[nl] = *r; L[nl++].box = lb; }
             if (hr) { R[nr] = *r; R[nr++].box = rb; }
@@ -513,9 +682,11 @@ static sidx_status build(sbuild *S, size_t off, uint32_t n, sidx_aabb box, uint3
         const uint64_t added = (uint64_t)nl + nr - n;
         budget = added < budget ? budget - added : 0;
         if (nl == 0 || nr == 0) return make_leaf(S, idx, off, n); /* rounding put all on one side: no progress */
+        sref *dst = S->pool + off;
+        memcpy(dst, R, (size_t)nr * sizeof *R);       /* below the top: no overlap */
+        memmove(dst + nr, L, (size_t)nl * sizeof *L); /* may overlap when duplicates were added */
     }
-    memmove(L + nl, R, (size_t)nr * sizeof *R); /* [left | right] at the top of the pool */
-    return children(S, idx, k, nl, nr, depth, budget);
+    return children(S, idx, k, off, nl, nr, depth, budget);
 }
 
 /* ---- several threads --------------------------------------------------------------- */
@@ -604,10 +775,8 @@ static void bin_part(void *ctx, unsigned t)
         object_bin(P->refs, i0, i1, P->lo, P->scale, P->use, P->tobj[t]);
         return;
     }
-    for (int k = 0; k < 3; ++k) {
-        spatial_clear(&P->tspat[t][k]);
-        if (P->use[k]) spatial_bin(P->refs, i0, i1, k, P->lo[k], P->scale[k], P->nb, P->plane[k], &P->tspat[t][k]);
-    }
+    for (int k = 0; k < 3; ++k) spatial_clear(&P->tspat[t][k]);
+    spatial_bin(P->refs, i0, i1, P->use, P->lo, P->scale, P->nb, P->plane, P->tspat[t]);
 }
 
 /* A binning pass on all threads, the threads' bins merged in thread
@@ -669,7 +838,7 @@ static sidx_status defer(sbuild *S, size_t off, uint32_t n, sidx_aabb box, uint3
     t->budget = budget;
     /* the build's parameters; arrays, counts, par and frontier start empty (memset) */
     t->build.a = &P->shadow;
-    t->build.tris = S->tris;
+    t->build.mesh = S->mesh;
     t->build.c_trav = S->c_trav;
     t->build.c_tri = S->c_tri;
     t->build.min_overlap = S->min_overlap;
@@ -678,7 +847,7 @@ static sidx_status defer(sbuild *S, size_t off, uint32_t n, sidx_aabb box, uint3
     t->build.max_depth = S->max_depth;
     P->count++; /* counted now, so the clean-up frees its arrays even if they cannot all be made */
     /* sized as the entry sizes the whole build's, so they rarely grow */
-    if (!pool_reserve(&t->build, 4u * (size_t)n) ||
+    if (!pool_reserve(&t->build, SB_POOL_RESERVE * (size_t)n) ||
         !sidx__grow(S->a, (void **)&t->build.nodes, &t->build.cap_nodes, n, sizeof *t->build.nodes) ||
         !sidx__grow(S->a, (void **)&t->build.out, &t->build.cap_out, n + n / 2u, sizeof *t->build.out))
         return SIDX_ERR_NOMEM;
@@ -718,7 +887,7 @@ static void free_tasks(const sidx_accel *a, stasks *P)
 /* Copies top node i's subtree into nodes/out in pre-order, a placeholder
  * replaced by its task's nodes (right-child indices and leaf starts
  * shifted); returns the subtree root's index in nodes. */
-static uint32_t stitch(const sbuild *S, const stasks *P, uint32_t i, bvh_node *nodes, size_t *nn, sref *out,
+static uint32_t stitch(const sbuild *S, const stasks *P, uint32_t i, bvh_node *nodes, size_t *nn, uint32_t *out,
                        size_t *no)
 {
     const bvh_node *src = &S->nodes[i];
@@ -774,7 +943,7 @@ static sidx_status finish_tasks(sbuild *S, stasks *P, unsigned threads)
         if (t->build.max_depth_seen > S->max_depth_seen) S->max_depth_seen = t->build.max_depth_seen;
     }
     bvh_node *nodes = sidx__alloc(S->a, nn, sizeof *nodes);
-    sref *out = sidx__alloc(S->a, no, sizeof *out);
+    uint32_t *out = sidx__alloc(S->a, no, sizeof *out);
     if (!nodes || !out) {
         sidx__free(S->a, nodes);
         sidx__free(S->a, out);
@@ -832,25 +1001,20 @@ sidx_status sidx__bvh_build_spatial(sidx_accel *a, sidx_error *err)
     }
 
     sidx_status s = SIDX_ERR_NOMEM;
-    bvh_tri *tris = NULL;
     bvh *b = sidx__calloc(a, 1, sizeof *b);
     if (!b || (parallel && (!P.tobj || !P.tspat))) goto fail;
     if (n > 0) {
-        /* Sized for a typical build, so the arrays rarely grow (each growth
-         * doubles them). */
-        tris = sidx__alloc(a, n, sizeof *tris);
-        if (!tris || !pool_reserve(&S, 4u * (size_t)n) ||
+        /* Sized for a typical build, so the arrays rarely grow (growing
+         * copies them whole); pages never written cost no memory. */
+        if (!pool_reserve(&S, SB_POOL_RESERVE * (size_t)n) ||
             !sidx__grow(a, (void **)&S.nodes, &S.cap_nodes, n, sizeof *S.nodes) ||
             !sidx__grow(a, (void **)&S.out, &S.cap_out, n + n / 2u, sizeof *S.out))
             goto fail;
-        S.tris = tris;
+        S.mesh = m;
         sidx_aabb root = sidx_aabb_empty();
         for (uint32_t i = 0; i < n; ++i) {
             sidx_aabb bb = sidx_aabb_empty();
-            for (int k = 0; k < 3; ++k) {
-                tris[i].v[k] = sidx_mesh_vertex(m, i, k);
-                bb = sidx_aabb_grow(bb, tris[i].v[k]);
-            }
+            for (int k = 0; k < 3; ++k) bb = sidx_aabb_grow(bb, sidx_mesh_vertex(m, i, k));
             S.pool[i].box = bb;
             S.pool[i].prim = i;
             root = sidx_aabb_union(root, bb);
@@ -860,24 +1024,20 @@ sidx_status sidx__bvh_build_spatial(sidx_accel *a, sidx_error *err)
         if ((s = build(&S, 0, n, root, 0, (uint64_t)((double)n * SB_BUDGET))) != SIDX_OK ||
             (s = finish_tasks(&S, &P, threads)) != SIDX_OK)
             goto fail;
-        s = SIDX_ERR_NOMEM;
-        const size_t nr = S.num_out;
-        b->nodes_mem = sidx__alloc(a, S.num_nodes + 2u, sizeof *b->nodes);
-        b->prim_id = sidx__alloc(a, nr, sizeof *b->prim_id);
-        b->tris = sidx__alloc(a, nr, sizeof *b->tris);
-        if (!b->nodes_mem || !b->prim_id || !b->tris) goto fail;
-        b->nodes = (bvh_node *)(void *)(((uintptr_t)b->nodes_mem + 63u) & ~(uintptr_t)63u);
-        memcpy(b->nodes, S.nodes, S.num_nodes * sizeof *b->nodes);
-        for (size_t i = 0; i < nr; ++i) {
-            b->prim_id[i] = S.out[i].prim;
-            b->tris[i] = tris[S.out[i].prim];
-        }
+        /* The builder's arrays become the tree's, not copied: the collapse
+         * (bvh_wide.c) is this tree's only reader, reads the triangles'
+         * corners from the mesh (no tris[]) and needs no aligned nodes. */
+        sidx__free(a, S.pool);
+        S.pool = NULL;
+        b->nodes_mem = b->nodes = S.nodes;
+        b->prim_id = S.out;
+        S.nodes = NULL;
+        S.out = NULL;
         b->num_nodes = (uint32_t)S.num_nodes;
         b->num_leaves = S.num_leaves;
         b->max_depth = S.max_depth_seen;
-        b->num_prims = (uint32_t)nr;
+        b->num_prims = (uint32_t)S.num_out;
     }
-    sidx__free(a, tris);
     sidx__free(a, S.pool);
     sidx__free(a, S.nodes);
     sidx__free(a, S.out);
@@ -889,7 +1049,6 @@ sidx_status sidx__bvh_build_spatial(sidx_accel *a, sidx_error *err)
     return SIDX_OK;
 
 fail:
-    sidx__free(a, tris);
     sidx__free(a, S.pool);
     sidx__free(a, S.nodes);
     sidx__free(a, S.out);
@@ -900,7 +1059,6 @@ fail:
     if (b) {
         sidx__free(a, b->nodes_mem);
         sidx__free(a, b->prim_id);
-        sidx__free(a, b->tris);
         sidx__free(a, b);
     }
     if (s == SIDX_ERR_NOMEM) return sidx__fail(err, s, "%s: out of memory", a->name);

@@ -158,6 +158,7 @@ static void set_kernels(wide_bvh *w, sidx_tri_method tri)
 
 typedef struct collapse {
     const bvh *b;
+    const sidx_mesh *mesh;                 /* leaves take their corners from here (the tree has no tris[]) */
     uint32_t W;
     const uint32_t *sub_count, *sub_first; /* per binary node: triangles below it and the first one */
     float *cost;                           /* [node][j − 1], W per node */
@@ -228,7 +229,8 @@ static void gather(const collapse *C, uint32_t n, uint32_t j, uint32_t *kids, ui
 }
 
 /* Triangles [first, first + count) of the binary tree's order as a run of
- * blocks; returns the first block. */
+ * blocks; returns the first block.  The corners come from the mesh, as
+ * the binary builds copy them into their tris[] (the same floats). */
 static uint32_t make_leaf(collapse *C, uint32_t first, uint32_t count)
 {
     const uint32_t b0 = C->num_blocks, nb = (count + 3u) / 4u;
@@ -236,8 +238,14 @@ static uint32_t make_leaf(collapse *C, uint32_t first, uint32_t count)
         wide_tri4 *block = &C->blocks[b0 + k];
         for (uint32_t l = 0; l < 4; ++l) {
             const uint32_t i = 4u * k + l;
-            if (i < count) wide_set_lane(block, l, C->b->tris[first + i].v, C->b->prim_id[first + i]);
-            else wide_set_lane(block, l, NULL, 0);
+            if (i < count) {
+                const uint32_t prim = C->b->prim_id[first + i];
+                const sidx_vec3 p[3] = {sidx_mesh_vertex(C->mesh, prim, 0), sidx_mesh_vertex(C->mesh, prim, 1),
+                                        sidx_mesh_vertex(C->mesh, prim, 2)};
+                wide_set_lane(block, l, p, prim);
+            } else {
+                wide_set_lane(block, l, NULL, 0);
+            }
         }
     }
     C->blocks[b0 + nb - 1].prim[0] |= WIDE_LAST_BLOCK;
@@ -249,6 +257,29 @@ static void set_slot(float *n, uint32_t W, uint32_t s, sidx_aabb bb)
 {
     n[0 * W + s] = bb.min.x; n[1 * W + s] = bb.min.y; n[2 * W + s] = bb.min.z;
     n[3 * W + s] = bb.max.x; n[4 * W + s] = bb.max.y; n[5 * W + s] = bb.max.z;
+}
+
+/* The wide nodes and blocks make_node(C, n2, ...) will write, added to
+ * *inner and *blocks: counted first so that the tree is written straight
+ * into arrays of its exact size (no worst-case scratch copied at the end). */
+static void count_node(const collapse *C, uint32_t n2, uint32_t *inner, uint32_t *blocks)
+{
+    const bvh_node *bn = C->b->nodes;
+    ++*inner;
+    uint32_t kids[8], k = 0;
+    uint8_t is_leaf[8];
+    if (!bvh_is_leaf(&bn[n2])) {
+        const uint32_t kl = C->node_k[n2];
+        gather(C, n2 + 1, kl, kids, is_leaf, &k);
+        gather(C, bn[n2].left_or_first, C->W - kl, kids, is_leaf, &k);
+    } else {
+        kids[k] = n2;
+        is_leaf[k++] = 1;
+    }
+    for (uint32_t s = 0; s < k; ++s) {
+        if (is_leaf[s]) *blocks += (C->sub_count[kids[s]] + 3u) / 4u;
+        else count_node(C, kids[s], inner, blocks);
+    }
 }
 
 /* Wide node for binary node n2 (an inner node the costs made a wide node,
@@ -457,13 +488,16 @@ static sidx_status wide_build(sidx_accel *a, sidx_error *err)
     bin.impl = NULL;
     sidx_status s = a->opt.no_spatial_splits ? sidx__bvh_vtable.build(&bin, err) : sidx__bvh_build_spatial(&bin, err);
     if (s != SIDX_OK) return s;
-    const bvh *b = bin.impl;
+    bvh *b = bin.impl;
+    /* The leaves take their corners from the mesh: a binary tree's copy of
+     * them (bvh_build.c's tris[]) is not needed here. */
+    sidx__free(&bin, b->tris);
+    b->tris = NULL;
 
     s = SIDX_ERR_NOMEM;
     uint32_t *sub = NULL, *counts = NULL;
-    float *tmp_nodes = NULL, *dp_cost = NULL;
+    float *dp_cost = NULL;
     uint8_t *dp_how = NULL;
-    wide_tri4 *tmp_blocks = NULL;
     wide_bvh *w = sidx__calloc(a, 1, sizeof *w);
     if (!w) goto fail;
     w->width = W;
@@ -474,11 +508,9 @@ static sidx_status wide_build(sidx_accel *a, sidx_error *err)
     if (b->num_nodes > 0) {
         const uint32_t nn = b->num_nodes;
         sub = sidx__alloc(a, 2u * (size_t)nn, sizeof *sub);
-        tmp_nodes = sidx__alloc(a, (size_t)nn * 8u * W, sizeof(float));
-        tmp_blocks = sidx__alloc(a, b->num_prims + 1u, sizeof *tmp_blocks);
         dp_cost = sidx__alloc(a, (size_t)nn * W, sizeof *dp_cost);
         dp_how = sidx__alloc(a, (size_t)nn * (W + 1u), 1);
-        if (!sub || !tmp_nodes || !tmp_blocks || !dp_cost || !dp_how) goto fail;
+        if (!sub || !dp_cost || !dp_how) goto fail;
         uint32_t *sub_count = sub, *sub_first = sub + nn;
         for (uint32_t i = nn; i-- > 0;) {
             const bvh_node *n = &b->nodes[i];
@@ -490,22 +522,23 @@ static sidx_status wide_build(sidx_accel *a, sidx_error *err)
                 sub_first[i] = sub_first[i + 1];
             }
         }
-        collapse C = {b, W, sub_count, sub_first, dp_cost, dp_how, dp_how + (size_t)nn * W, tmp_nodes, 0,
-                      tmp_blocks, 0, 0, 0};
+        collapse C = {b, m, W, sub_count, sub_first, dp_cost, dp_how, dp_how + (size_t)nn * W, NULL, 0, NULL, 0, 0, 0};
         collapse_costs(&C);
-        make_node(&C, 0, 0);
-        sidx__free(a, dp_cost);
-        sidx__free(a, dp_how);
+        sidx__free(a, dp_cost); /* the choices (how, node_k) are all the rest reads */
         dp_cost = NULL;
-        dp_how = NULL;
-        /* Exact-size, aligned copies: a node is whole cache lines. */
-        w->nodes_mem = sidx__alloc(a, (size_t)C.num_inner * 8u * W * sizeof(float) + 64u, 1);
-        w->blocks_mem = sidx__alloc(a, (size_t)C.num_blocks * sizeof(wide_tri4) + 64u, 1);
+        uint32_t num_inner = 0, num_blocks = 0;
+        count_node(&C, 0, &num_inner, &num_blocks);
+        /* Exact-size, aligned arrays: a node is whole cache lines. */
+        w->nodes_mem = sidx__alloc(a, (size_t)num_inner * 8u * W * sizeof(float) + 64u, 1);
+        w->blocks_mem = sidx__alloc(a, (size_t)num_blocks * sizeof(wide_tri4) + 64u, 1);
         if (!w->nodes_mem || !w->blocks_mem) goto fail;
         w->nodes = aligned_in(w->nodes_mem, 64);
         w->blocks = aligned_in(w->blocks_mem, 64);
-        memcpy(w->nodes, tmp_nodes, (size_t)C.num_inner * 8u * W * sizeof(float));
-        memcpy(w->blocks, tmp_blocks, (size_t)C.num_blocks * sizeof(wide_tri4));
+        C.nodes = w->nodes;
+        C.blocks = w->blocks;
+        make_node(&C, 0, 0);
+        sidx__free(a, dp_how);
+        dp_how = NULL;
         w->num_inner = C.num_inner;
         w->num_blocks = C.num_blocks;
         w->num_leaves = C.num_leaves;
@@ -535,8 +568,6 @@ static sidx_status wide_build(sidx_accel *a, sidx_error *err)
               e_.depth = w->max_depth);
     sidx__free(a, sub);
     sidx__free(a, counts);
-    sidx__free(a, tmp_nodes);
-    sidx__free(a, tmp_blocks);
     sidx__bvh_vtable.destroy(&bin);
     a->impl = w;
     a->fills_uv = a->fills_ng = 1; /* the walk sets u, v, ng from its leaf blocks (bvh_wide_walk.h) */
@@ -545,8 +576,6 @@ static sidx_status wide_build(sidx_accel *a, sidx_error *err)
 fail:
     sidx__free(a, sub);
     sidx__free(a, counts);
-    sidx__free(a, tmp_nodes);
-    sidx__free(a, tmp_blocks);
     sidx__free(a, dp_cost);
     sidx__free(a, dp_how);
     wide_free(a, w);
