@@ -457,6 +457,7 @@ static sidx_status wide_build(sidx_accel *a, sidx_error *err)
     bin.impl = NULL;
     sidx_status s = a->opt.no_spatial_splits ? sidx__bvh_vtable.build(&bin, err) : sidx__bvh_build_spatial(&bin, err);
     if (s != SIDX_OK) return s;
+    if (!a->opt.no_spatial_splits) sidx__bvh_optimize(&bin, bin.impl); /* the plain build did it already */
     const bvh *b = bin.impl;
 
     s = SIDX_ERR_NOMEM;
