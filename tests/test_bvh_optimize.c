@@ -8,7 +8,8 @@
  *    bvh-obb, bvh4 and bvh8;
  *  - one BUILD_REINSERT event per move the pass reports;
  *  - a budget of 0 leaves the tree bit-identical; a large one gives the
- *    same tree every time.
+ *    same tree every time;
+ *  - out of memory at any step: a clean failure or a valid tree, no leak.
  * Includes the BVH's private header to walk the node array. */
 #include <stdarg.h>
 #include <stddef.h>
@@ -250,6 +251,57 @@ static void test_bad_budget_refused(void **state)
     sidx_mesh_free(&m);
 }
 
+/* An allocator failing from the k-th call on, counting what is live. */
+typedef struct {
+    long calls, fail_at, live;
+} fail_alloc;
+static void *fa_alloc(size_t size, void *user)
+{
+    fail_alloc *f = user;
+    if (f->calls++ >= f->fail_at) return NULL;
+    void *p = malloc(size);
+    if (p) ++f->live;
+    return p;
+}
+static void fa_free(void *p, void *user)
+{
+    fail_alloc *f = user;
+    if (p) --f->live;
+    free(p);
+}
+
+/* Out of memory at every step, the pass included: a clean failure or a
+ * valid tree (the pass without its scratch leaves the tree as built),
+ * nothing leaked. */
+static void test_alloc_failures(void **state)
+{
+    (void)state;
+    sidx_mesh m = scene("teapot");
+    const char *names[] = {"bvh", "bvh8"};
+    for (size_t n = 0; n < 2; ++n) {
+        for (long k = 0; k < 64; ++k) {
+            fail_alloc f = {0, k, 0};
+            sidx_allocator al = {fa_alloc, fa_free, &f};
+            sidx_build_options bo;
+            memset(&bo, 0, sizeof bo);
+            bo.alloc = &al;
+            bo.optimize_ms = BIG_BUDGET;
+            sidx_accel *a = NULL;
+            sidx_error err;
+            const sidx_status s = sidx_accel_build(names[n], &m, &bo, &a, &err);
+            if (s == SIDX_OK) {
+                if (n == 0) check_tree(a, &m);
+                sidx_accel_destroy(a);
+            } else {
+                assert_int_equal(s, SIDX_ERR_NOMEM);
+                assert_null(a);
+            }
+            assert_int_equal(f.live, 0);
+        }
+    }
+    sidx_mesh_free(&m);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -257,6 +309,7 @@ int main(void)
         cmocka_unit_test(test_events_match_moves),
         cmocka_unit_test(test_budget_zero_and_determinism),
         cmocka_unit_test(test_bad_budget_refused),
+        cmocka_unit_test(test_alloc_failures),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
