@@ -642,11 +642,16 @@ static void json_event(sink_out *o, const sidx_event *ev, int unused)
         json_bounds(o, &ev->bounds);
         break;
     case SIDX_EV_BUILD_NODE:
+    case SIDX_EV_BUILD_REINSERT:
         json_id(o, "node", ev->node);
         json_id(o, "parent", ev->parent);
         json_id(o, "depth", ev->depth);
-        json_u32(o, "count", ev->count);
+        json_u32(o, "count", ev->count); /* reinsert: the pass */
         json_bounds(o, &ev->bounds);
+        if (ev->type == SIDX_EV_BUILD_REINSERT) {
+            json_u32(o, "aux", ev->aux);
+            json_float(o, "cost", ev->cost);
+        }
         break;
     case SIDX_EV_BUILD_CANDIDATE:
     case SIDX_EV_BUILD_SPLIT:
@@ -742,15 +747,6 @@ static void json_event(sink_out *o, const sidx_event *ev, int unused)
             if (ev->result == 0) json_i32(o, "reason", ev->reason); /* 1: the slab look-up limit */
         }
         json_u32(o, "count", ev->count);
-        json_bounds(o, &ev->bounds);
-        break;
-    case SIDX_EV_BUILD_REINSERT:
-        json_id(o, "node", ev->node);
-        json_id(o, "parent", ev->parent);
-        json_u32(o, "aux", ev->aux);
-        json_id(o, "depth", ev->depth);
-        json_u32(o, "count", ev->count);
-        json_float(o, "cost", ev->cost);
         json_bounds(o, &ev->bounds);
         break;
     default:

@@ -24,25 +24,17 @@
 
 #include "sidx/sidx.h"
 #include "bvh_internal.h"
+#include "common/testkit.h"
 
 static const char *const scenes[] = {"teapot", "soup", "stadium", "cornell", "menger"};
 #define NSCENES (sizeof scenes / sizeof scenes[0])
 #define BIG_BUDGET 1e6f /* ms: the pass ends by itself long before */
 
-static uint64_t rng_state;
-static float rng_unit(void) /* xorshift64*, [0, 1) */
-{
-    rng_state ^= rng_state >> 12;
-    rng_state ^= rng_state << 25;
-    rng_state ^= rng_state >> 27;
-    return (float)((rng_state * 0x2545F4914F6CDD1Dull) >> 40) / 16777216.0f;
-}
-
 static sidx_mesh scene(const char *name)
 {
     sidx_mesh m;
     sidx_error err;
-    if (sidx_scene_make(name, 0, &m, &err) != SIDX_OK) fail_msg("scene %s: %s", name, err.message);
+    if (sidx_scene_open(name, &m, &err) != SIDX_OK) fail_msg("scene %s: %s", name, err.message);
     return m;
 }
 
@@ -118,13 +110,12 @@ static void check_hits(const sidx_accel *a, const sidx_accel *ref, const sidx_me
     const sidx_aabb sb = sidx_mesh_bounds(m);
     const sidx_vec3 c = sidx_v3_scale(sidx_v3_add(sb.min, sb.max), 0.5f);
     const sidx_vec3 ext = sidx_v3_sub(sb.max, sb.min);
-    rng_state = seed * 0x9E3779B97F4A7C15ull + 1;
+    const sidx_aabb around = {sidx_v3_sub(c, sidx_v3_scale(ext, 1.5f)), sidx_v3_add(c, sidx_v3_scale(ext, 1.5f))};
+    tk_rng rng;
+    tk_rng_seed(&rng, seed);
     int hits = 0;
     for (int i = 0; i < 3000; ++i) {
-        const sidx_vec3 o = {c.x + (rng_unit() - 0.5f) * 3.0f * ext.x, c.y + (rng_unit() - 0.5f) * 3.0f * ext.y,
-                             c.z + (rng_unit() - 0.5f) * 3.0f * ext.z};
-        const sidx_vec3 t = {sb.min.x + rng_unit() * ext.x, sb.min.y + rng_unit() * ext.y,
-                             sb.min.z + rng_unit() * ext.z};
+        const sidx_vec3 o = tk_rng_in_box(&rng, around), t = tk_rng_in_box(&rng, sb);
         sidx_ray r;
         if (sidx_ray_init(&r, o, sidx_v3_sub(t, o), 0.0f, INFINITY) != SIDX_OK) continue;
         sidx_hit h, hr;
