@@ -48,7 +48,7 @@ sidx_status sidx__accel_build_with(const char *name, const sidx_accel_vtable *vt
     if (opt) o = *opt;
     if ((unsigned)o.tri >= SIDX_TRI_METHOD_COUNT || (unsigned)o.box >= SIDX_BOX_METHOD_COUNT || !(o.c_trav >= 0.0f) ||
         !(o.c_tri >= 0.0f) || !(o.empty_bonus >= 0.0f && o.empty_bonus < 1.0f) || !(o.grid_density >= 0.0f) ||
-        isinf(o.grid_density) || isinf(o.c_trav) || isinf(o.c_tri))
+        isinf(o.grid_density) || isinf(o.c_trav) || isinf(o.c_tri) || !(o.optimize_ms >= 0.0f))
         return sidx__fail(err, SIDX_ERR_INVALID_ARG, "build options out of range");
     sidx_status s = sidx_mesh_validate(mesh, err);
     if (s != SIDX_OK) return s;

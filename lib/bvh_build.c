@@ -392,7 +392,7 @@ static uint32_t build_node(builder *B, uint32_t first, uint32_t count, uint32_t 
 
 /* Expected cost of the finished tree under the SAH, relative to the root:
  * Σ_inner C_trav·A(n)/A(root) + Σ_leaves C_tri·N·A(n)/A(root). */
-static double tree_sah(const bvh *b, float c_trav, float c_tri)
+double sidx__bvh_tree_sah(const bvh *b, float c_trav, float c_tri)
 {
     if (b->num_nodes == 0) return 0.0;
     const double root = sidx_aabb_area(bvh_node_box(&b->nodes[0]));
@@ -500,7 +500,7 @@ static sidx_status build_tree(sidx_accel *a, sidx_error *err)
     b->num_leaves = B->num_leaves;
     b->max_depth = B->max_depth_seen;
     fill_tris(m, b);
-    b->sah_cost = tree_sah(b, B->c_trav, B->c_tri);
+    b->sah_cost = sidx__bvh_tree_sah(b, B->c_trav, B->c_tri);
     if (B->kind == BVH_OBB && (s = sidx__bvh_fit_obbs(a, b)) != SIDX_OK) goto fail;
 
 done:
@@ -577,15 +577,17 @@ static sidx_status bvh_refit(sidx_accel *a, sidx_error *err)
         n->bmax[0] = bb.max.x; n->bmax[1] = bb.max.y; n->bmax[2] = bb.max.z;
     }
     const bvh_par_params pp = bvh_params(a);
-    b->sah_cost = tree_sah(b, pp.c_trav, pp.c_tri);
+    b->sah_cost = sidx__bvh_tree_sah(b, pp.c_trav, pp.c_tri);
     if (b->obbs) return sidx__bvh_fit_obbs(a, b); /* reuses its array: cannot fail */
     return SIDX_OK;
 }
 
-/* The tree (on one thread or several), then the walks that fit it. */
+/* The tree (on one thread or several), optimised if asked
+ * (bvh_optimize.c), then the walks that fit it. */
 static sidx_status bvh_build(sidx_accel *a, sidx_error *err)
 {
     const sidx_status s = build_tree(a, err);
+    if (s == SIDX_OK) sidx__bvh_optimize(a, a->impl);
     if (s == SIDX_OK) sidx__bvh_pick_walks(a->impl);
     return s;
 }

@@ -141,6 +141,16 @@ static inline bvh_par_params bvh_params(const sidx_accel *a)
  * reads the tree).  Reads a->opt like bvh_build.c; sets a->impl. */
 sidx_status sidx__bvh_build_spatial(sidx_accel *a, sidx_error *err);
 
+/* bvh_build.c: the tree's expected cost under the SAH (stats sah_cost). */
+double sidx__bvh_tree_sah(const bvh *b, float c_trav, float c_tri);
+
+/* bvh_optimize.c: reinsertion (Bittner et al. 2013) over a built binary
+ * tree when a->opt.optimize_ms > 0; returns the moves made (each one a
+ * BUILD_REINSERT event on a->opt.hook).  Leaves keep their primitives;
+ * the nodes are renumbered, sah_cost recomputed, OBBs refitted.  Without
+ * the memory for its scratch it leaves the tree as built. */
+uint32_t sidx__bvh_optimize(const sidx_accel *a, bvh *b);
+
 /* bvh_obb.c: fit one oriented box per node (after nodes/tris are final). */
 sidx_status sidx__bvh_fit_obbs(const sidx_accel *a, bvh *b);
 

@@ -488,6 +488,8 @@ static sidx_status wide_build(sidx_accel *a, sidx_error *err)
     bin.impl = NULL;
     sidx_status s = a->opt.no_spatial_splits ? sidx__bvh_vtable.build(&bin, err) : sidx__bvh_build_spatial(&bin, err);
     if (s != SIDX_OK) return s;
+    /* the plain build optimised its tree already (bvh_build.c) */
+    if (!a->opt.no_spatial_splits) sidx__bvh_optimize(&bin, bin.impl);
     bvh *b = bin.impl;
     /* The leaves take their corners from the mesh: a binary tree's copy of
      * them (bvh_build.c's tris[]) is not needed here. */

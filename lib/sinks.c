@@ -247,6 +247,7 @@ static unsigned indent_level(const sidx_event *ev)
     case SIDX_EV_BUILD_NODE:
     case SIDX_EV_BUILD_MERGE:
     case SIDX_EV_BUILD_EXPAND:
+    case SIDX_EV_BUILD_REINSERT:
     case SIDX_EV_NODE_ENTER:
     case SIDX_EV_BOX_TEST:
     case SIDX_EV_NOTE:
@@ -410,6 +411,16 @@ static void format_event(sink_out *o, const sidx_event *ev, int show_bounds)
         break;
     case SIDX_EV_BUILD_EXPAND:
         out_expand(o, ev);
+        if (show_bounds) { out_puts(o, "  "); out_box(o, &ev->bounds); }
+        break;
+    case SIDX_EV_BUILD_REINSERT:
+        out_puts(o, "reinsert node ");
+        out_id(o, ev->node);
+        out_puts(o, " (parent ");
+        out_id(o, ev->parent);
+        out_puts(o, ") beside node ");
+        out_id(o, ev->aux);
+        out_printf(o, " at depth %" PRIu32 ": SAH -%g (pass %" PRIu32 ")", ev->depth, (double)ev->cost, ev->count);
         if (show_bounds) { out_puts(o, "  "); out_box(o, &ev->bounds); }
         break;
     default:
@@ -631,11 +642,16 @@ static void json_event(sink_out *o, const sidx_event *ev, int unused)
         json_bounds(o, &ev->bounds);
         break;
     case SIDX_EV_BUILD_NODE:
+    case SIDX_EV_BUILD_REINSERT:
         json_id(o, "node", ev->node);
         json_id(o, "parent", ev->parent);
         json_id(o, "depth", ev->depth);
-        json_u32(o, "count", ev->count);
+        json_u32(o, "count", ev->count); /* reinsert: the pass */
         json_bounds(o, &ev->bounds);
+        if (ev->type == SIDX_EV_BUILD_REINSERT) {
+            json_u32(o, "aux", ev->aux);
+            json_float(o, "cost", ev->cost);
+        }
         break;
     case SIDX_EV_BUILD_CANDIDATE:
     case SIDX_EV_BUILD_SPLIT:

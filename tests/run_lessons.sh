@@ -38,7 +38,7 @@ needs() {
     18_*|19_*) echo "bvh" ;;
     20_*) echo "bvh kdtree grid" ;;
     23_*) echo "grid grid-irregular" ;;
-    24_*) echo "bvh" ;;
+    24_*|26_*) echo "bvh" ;;
     *) echo "" ;;
     esac
 }
@@ -87,6 +87,7 @@ expect() {
     24_spawning_rays) echo "spawn_self_intersections=0 spawn_missed_occluders=0 hack_hits_itself_far_away=1
                             hack_misses_when_small=1" ;;
     25_kd_slide_example) echo "slide_tree=1 rows_match_slide=1 cannot_terminate_rows=2 ends_in_L3=1 same_hit=1" ;;
+    26_bvh_optimise) echo "sah_lower=1 events_sum_to_gain=1 same_hits=1" ;;
     *) echo "" ;;
     esac
 }

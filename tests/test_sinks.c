@@ -1233,6 +1233,24 @@ static void test_json_read_round_trip(void **state)
     sidx_recorder_free(&rec);
     sidx_accel_destroy(a);
     sidx_mesh_free(&m);
+
+    /* a tree optimisation's build_reinsert events, as the pass emits them */
+    assert_int_equal(sidx_scene_open("teapot", &m, NULL), SIDX_OK);
+    sidx_recorder_init(&rec);
+    h = sidx_recorder_hook(&rec);
+    h.mask = SIDX_EVMASK(SIDX_EV_BUILD_REINSERT);
+    bo.optimize_ms = 1e6f;
+    assert_int_equal(sidx_accel_build("bvh", &m, &bo, &a, NULL), SIDX_OK);
+    assert_true(rec.count > 0);
+    for (size_t i = 0; i < rec.count; ++i) {
+        const sidx_event back = json_round_trip(&rec.events[i], store, sizeof store);
+        assert_int_equal(back.node, rec.events[i].node);
+        assert_int_equal(back.aux, rec.events[i].aux);
+        assert_memory_equal(&back.cost, &rec.events[i].cost, sizeof back.cost);
+    }
+    sidx_recorder_free(&rec);
+    sidx_accel_destroy(a);
+    sidx_mesh_free(&m);
 }
 
 static sidx_status read_line(const char *line, sidx_error *err)

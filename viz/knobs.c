@@ -1,7 +1,7 @@
 /* knobs.c — the build knobs on a command line.
  *
  * sidx-step, sidx-dot, sidx-view and the lessons (lessons/lesson.h) take
- * the same eight options, each filling one sidx_build_options field, so
+ * the same nine options, each filling one sidx_build_options field, so
  * one table says what each flag fills and what values it takes.  The
  * ranges are those sidx_accel_build accepts, minus the 0 that means "the
  * structure's default" (leave the flag out for that). */
@@ -29,6 +29,7 @@ static const knob knobs[] = {
     {"--lambda", KNOB_POSITIVE, offsetof(sidx_build_options, grid_density), 0},
     {"--no-mailbox", KNOB_FLAG, offsetof(sidx_build_options, no_mailbox), 0},
     {"--empty-bonus", KNOB_FRACTION, offsetof(sidx_build_options, empty_bonus), 0},
+    {"--optimize", KNOB_POSITIVE, offsetof(sidx_build_options, optimize_ms), 0},
 };
 #define NKNOBS (sizeof knobs / sizeof knobs[0])
 
@@ -88,5 +89,6 @@ const char *sidx_viz_build_knobs_help(void)
            "  --max-depth N      depth limit of the trees (N >= 1)\n"
            "  --lambda X         grids: cells per triangle (the density of the resolution formula), X > 0\n"
            "  --no-mailbox       grids, kd-tree: no mailbox (a triangle in k cells is tested k times)\n"
-           "  --empty-bonus X    kd-tree SAH bonus for cutting off empty space, 0 <= X < 1\n";
+           "  --empty-bonus X    kd-tree SAH bonus for cutting off empty space, 0 <= X < 1\n"
+           "  --optimize MS      BVHs: improve the binary tree by reinsertion for at most MS ms, MS > 0\n";
 }

@@ -136,6 +136,8 @@ static void trace_usage(FILE *out)
             "  --tri watertight|moller|twostep  triangle test (default watertight)\n"
             "  --box robust|plain             box test (default robust)\n"
             "  --uv 0|1                       compute u, v (default 1)\n"
+            "  --optimize MS                  bvh, bvh4, bvh8: reinsertion pass over the binary tree,\n"
+            "                                 at most MS ms (sidx_build_options.optimize_ms; default off)\n"
             "  --cpu-time                     time one-thread traces in thread CPU time, builds in\n"
             "                                 process CPU time (default: wall-clock)\n"
             "Prints one JSON line: accel, tris, rays, build_ms, trace_ms, mrays_per_s, hits, nodes, bytes.\n"
@@ -162,7 +164,7 @@ int bench_cmd_trace(int argc, char **argv)
         } else if (!strcmp(a, "--cpu-time")) {
             bench_cpu_time = 1;
         } else if (!strcmp(a, "--accel") || !strcmp(a, "--threads") || !strcmp(a, "--traversal") ||
-                   !strcmp(a, "--tri") || !strcmp(a, "--box") || !strcmp(a, "--uv")) {
+                   !strcmp(a, "--tri") || !strcmp(a, "--box") || !strcmp(a, "--uv") || !strcmp(a, "--optimize")) {
             if (!val) {
                 fprintf(stderr, "sidx-bench trace: %s needs a value\n", a);
                 return BENCH_USAGE;
@@ -177,6 +179,14 @@ int bench_cmd_trace(int argc, char **argv)
                     return BENCH_USAGE;
                 }
                 threads = (unsigned)t;
+            } else if (!strcmp(a, "--optimize")) {
+                char *end;
+                const float ms = strtof(val, &end);
+                if (*end || end == val || !(ms >= 0.0f)) {
+                    fprintf(stderr, "sidx-bench trace: --optimize wants milliseconds >= 0, not '%s'\n", val);
+                    return BENCH_USAGE;
+                }
+                bo.optimize_ms = ms;
             } else if (!strcmp(a, "--traversal")) {
                 if (sidx_traversal_parse(val, &q.traversal) != SIDX_OK) {
                     fprintf(stderr, "sidx-bench trace: unknown traversal '%s' (default, stack, ordered, naive)\n",

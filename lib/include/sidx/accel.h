@@ -54,6 +54,10 @@ typedef struct sidx_build_options {
     int no_spatial_splits;        /* 1 = bvh4/bvh8 collapse the plain binned-SAH BVH (every triangle in
                                      one leaf, faster build) instead of the one with spatial splits */
     uint32_t threads;             /* build threads (bvh, bvh4, bvh8; the same tree for any count); 0 = 1 */
+    float optimize_ms;            /* bvh family, bvh4, bvh8: time budget in ms of the reinsertion pass
+                                     that improves the binary tree after the build (bvh_optimize.c);
+                                     0 = off.  A budget large enough gives the same tree every time;
+                                     one that cuts the pass short depends on the machine's speed */
 } sidx_build_options;
 
 typedef enum sidx_traversal {

@@ -52,6 +52,12 @@ typedef enum sidx_event_type {
                                 reason 1 = too many cells to check): node, axis, aux = 1 towards
                                 +axis / 0 towards -axis, count = cells grown, cell[]/extent[] = the
                                 expanded box, bounds */
+    /* build, tree optimisation (opt.optimize_ms; after the build's BUILD_END) */
+    SIDX_EV_BUILD_REINSERT,  /* a subtree moved where it costs less (Bittner 2013): node = the subtree,
+                                parent = its old parent (re-created over it and aux), aux = the node it
+                                now sits beside, depth = its new depth, count = the pass (from 1),
+                                cost = the SAH gain, bounds = its box.  Ids are those of the tree as
+                                built (its BUILD_NODE ids), before the pass renumbers the nodes */
     SIDX_EV_COUNT
 } sidx_event_type;
 
@@ -60,7 +66,8 @@ typedef enum sidx_event_type {
     (SIDX_EVMASK(SIDX_EV_BUILD_BEGIN) | SIDX_EVMASK(SIDX_EV_BUILD_NODE) |                          \
      SIDX_EVMASK(SIDX_EV_BUILD_CANDIDATE) | SIDX_EVMASK(SIDX_EV_BUILD_SPLIT) |                     \
      SIDX_EVMASK(SIDX_EV_BUILD_LEAF) | SIDX_EVMASK(SIDX_EV_BUILD_END) |                           \
-     SIDX_EVMASK(SIDX_EV_BUILD_MERGE) | SIDX_EVMASK(SIDX_EV_BUILD_EXPAND))
+     SIDX_EVMASK(SIDX_EV_BUILD_MERGE) | SIDX_EVMASK(SIDX_EV_BUILD_EXPAND) |                     \
+     SIDX_EVMASK(SIDX_EV_BUILD_REINSERT))
 #define SIDX_EVMASK_ALL ((1u << SIDX_EV_COUNT) - 1u)
 #define SIDX_EVMASK_TRAVERSAL (SIDX_EVMASK_ALL & ~SIDX_EVMASK_BUILD)
 

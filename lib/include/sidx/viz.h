@@ -135,7 +135,8 @@ int sidx_viz_parse_ray(const char *s, sidx_vec3 *org, sidx_vec3 *dir);
 
 /* The build knobs of the programs' and lessons' command lines: --bins N,
  * --c-trav X, --c-tri X, --leaf-size N, --max-depth N, --lambda X
- * (grid_density), --no-mailbox and --empty-bonus X, each filling one field
+ * (grid_density), --no-mailbox, --empty-bonus X and --optimize MS
+ * (optimize_ms), each filling one field
  * of *bo.  flag is argv[i], value argv[i + 1] (NULL at the end).  Returns
  * 0 if flag is no knob (nothing written), 1 if it took flag alone, 2 if it
  * took flag and value, -1 on a missing or bad value (or NULL flag / bo):
