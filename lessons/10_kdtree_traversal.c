@@ -10,8 +10,9 @@
  * "kD-Tree Traversal: Inner Loop".  Deck 001: "K-D Trees" ("Requirement:
  * intersection point must lie within zone").
  *
- * What it shows: the built-in 2D scene ("flat2d": triangles on the board,
- * as thin prisms) in a kd-tree, and one ray running across the board in
+ * What it shows: the built-in 2D scene ("flat2d": 16 triangles on the
+ * board, each tilted so that a ray in the board's plane meets it along its
+ * longest median) in a kd-tree, and one ray running across the board in
  * its plane, chosen so that it meets a triangle that straddles cells: the
  * hit is found in a cell the hit point does not lie in.  The traversal's
  * events are printed by the printer sink, and after every step the lesson

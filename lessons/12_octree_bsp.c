@@ -12,7 +12,8 @@
  * grid — still not as good adaptability as K-D tree").
  *
  * What it shows:
- *   1. a quadtree over the 2D board ("flat2d"): the top of the build as the
+ *   1. a quadtree over the 2D board ("flat2d", one triangle per shape),
+ *      split down to 2 triangles per leaf: the top of the build as the
  *      printer shows it (four children per node), and how deep it went
  *      where — leaves per depth;
  *   2. an octree over a 3D scene (default teapot) against the uniform grid
@@ -49,8 +50,9 @@ static void usage(FILE *f)
                "\n"
                "  SCENE   scene for the octree comparison: built-in name or .obj/.ply (default: teapot)\n"
                "The knobs below change the quadtree and the octree (--leaf-size: split above N\n"
-               "triangles, default 8; --max-depth) and the uniform grid (--lambda); the kd-trees\n"
-               "keep their two cost settings, the BSP tree its own.  The checks hold for the defaults.\n");
+               "triangles, default 2 for the board's quadtree, 8 for the octree; --max-depth) and the\n"
+               "uniform grid (--lambda); the kd-trees keep their two cost settings, the BSP tree its\n"
+               "own.  The checks hold for the defaults.\n");
 }
 
 static float lcg(uint32_t *s)
@@ -132,7 +134,9 @@ int main(int argc, char **argv)
     int ok = 1, same = 1;
 
     /* ---- 1. quadtree ---- */
-    printf("== 1. A quadtree over the 2D board ('flat2d', %u triangles): the top two levels\n", board.num_triangles);
+    printf("== 1. A quadtree over the 2D board ('flat2d', %u triangles, one per shape; leaves of at most %u):\n"
+           "   the top two levels\n",
+           board.num_triangles, knobs.leaf_size ? knobs.leaf_size : 2u);
     sidx_recorder rec;
     sidx_recorder_init(&rec);
     const sidx_hook rh = sidx_recorder_hook(&rec);
@@ -140,6 +144,9 @@ int main(int argc, char **argv)
     opt.hook = &rh;
     sidx_build_options qo = knobs;
     qo.hook = &rh;
+    /* 16 shapes and the default leaf size 8 would stop at depth 1: split
+     * down to 2 shapes per leaf, so the board shows where the tree goes deep */
+    if (!qo.leaf_size) qo.leaf_size = 2;
     sidx_accel *qt = NULL, *ref = NULL;
     if (sidx_accel_build("quadtree", &board, &qo, &qt, &err) != SIDX_OK ||
         sidx_accel_build("brute", &board, NULL, &ref, &err) != SIDX_OK) {

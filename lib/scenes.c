@@ -541,26 +541,33 @@ static const float flat_tris[16][6] = {
     {6.0f, 5.4f, 7.8f, 5.8f, 6.4f, 6.9f},
 };
 
-/* One 2D triangle extruded to a prism z in [-0.05, 0.05]: top, bottom,
- * three side quads = 8 triangles, closed, outward. */
-static void prism(builder *b, float ax, float ay, float bx, float by, float cx, float cy)
+/* One 2D triangle as one 3D triangle.  A ray in the plane of a flat
+ * triangle never meets it (the test sees it edge-on), so the triangle is
+ * tilted: the corner opposite its shortest side stays at z = 0, the next
+ * corner (in the given order) goes to z = +0.05 and the last to -0.05.
+ * Seen from +z it is the drawn triangle, with the same xy bounds, so 2D
+ * structures cut the same boxes; it crosses z = 0 along the segment from
+ * that corner to the shortest side's midpoint: its longest median, the
+ * longest chord through the centroid.  A ray in the plane z = 0 (a 2D ray)
+ * hits the triangle where it crosses this "spine" and misses it if it only
+ * clips a corner the spine does not reach, or runs along the spine. */
+static void board_tri(builder *b, const float t[6])
 {
-    /* counter-clockwise in xy, so the top faces +z */
-    if ((bx - ax) * (cy - ay) - (by - ay) * (cx - ax) < 0.0f) {
-        float tx = bx, ty = by;
-        bx = cx;
-        by = cy;
-        cx = tx;
-        cy = ty;
+    float len2[3]; /* len2[k]: squared length of the side opposite corner k */
+    for (int k = 0; k < 3; ++k) {
+        const float *p = &t[2 * ((k + 1) % 3)], *q = &t[2 * ((k + 2) % 3)];
+        len2[k] = (q[0] - p[0]) * (q[0] - p[0]) + (q[1] - p[1]) * (q[1] - p[1]);
     }
-    const float h = 0.05f;
-    const uint32_t a0 = vtx(b, ax, ay, -h), b0 = vtx(b, bx, by, -h), c0 = vtx(b, cx, cy, -h);
-    const uint32_t a1 = vtx(b, ax, ay, h), b1 = vtx(b, bx, by, h), c1 = vtx(b, cx, cy, h);
-    tri(b, a1, b1, c1); /* top, +z */
-    tri(b, a0, c0, b0); /* bottom, -z */
-    quad(b, a0, b0, b1, a1);
-    quad(b, b0, c0, c1, b1);
-    quad(b, c0, a0, a1, c1);
+    int c = 0; /* the spine's corner: opposite the shortest side (first on ties) */
+    for (int k = 1; k < 3; ++k)
+        if (len2[k] < len2[c]) c = k;
+    float z[3];
+    z[c] = 0.0f;
+    z[(c + 1) % 3] = 0.05f;
+    z[(c + 2) % 3] = -0.05f;
+    uint32_t v[3];
+    for (int k = 0; k < 3; ++k) v[k] = vtx(b, t[2 * k], t[2 * k + 1], z[k]);
+    tri(b, v[0], v[1], v[2]);
 }
 
 static void make_flat2d(builder *b, unsigned count)
@@ -568,15 +575,17 @@ static void make_flat2d(builder *b, unsigned count)
     uint64_t st = 0xF1A72Dull;
     for (unsigned i = 0; i < count && !b->failed; ++i) {
         if (i < 16) {
-            const float *t = flat_tris[i];
-            prism(b, t[0], t[1], t[2], t[3], t[4], t[5]);
+            board_tri(b, flat_tris[i]);
             continue;
         }
         /* extras: small triangles, size 0.2 .. 1.0, inside [0, 10]^2 */
         const float size = 0.2f + 0.8f * rnd01(&st);
         const float x = 0.1f + (9.8f - size) * rnd01(&st), y = 0.1f + (9.8f - size) * rnd01(&st);
-        prism(b, x, y, x + size * rnd01(&st) + 0.1f * size, y + 0.1f * size * rnd01(&st),
-              x + size * rnd01(&st), y + size * (0.5f + 0.5f * rnd01(&st)));
+        /* drawn in this order since the shapes were first made (last corner first) */
+        const float r5 = rnd01(&st), r4 = rnd01(&st), r3 = rnd01(&st), r2 = rnd01(&st);
+        const float t[6] = {x, y, x + size * r2 + 0.1f * size, y + 0.1f * size * r3, x + size * r4,
+                            y + size * (0.5f + 0.5f * r5)};
+        board_tri(b, t);
     }
 }
 

@@ -104,7 +104,7 @@ knob_args() {
     07_*) echo "--lambda 0.25" ;;
     08_*) echo "--lambda 0.25" ;;
     09_*) echo "--c-trav 4" ;;
-    12_*) echo "--leaf-size 2" ;;
+    12_*) echo "--leaf-size 1" ;;
     13_*) echo "--leaf-size 1" ;;
     14_*) echo "--leaf-size 1" ;;
     15_*) echo "--leaf-size 1" ;;

@@ -306,8 +306,9 @@ static void painter_3d_soup(void **state)
     sidx_mesh_free(&m);
 }
 
-/* Doom-style 2D: the flat2d scene's prisms are walls in the plane z = 0;
- * the eye stands in that plane and looks along it. */
+/* Doom-style 2D: the flat2d scene's triangles cross the plane z = 0 in
+ * segments (their spines), the walls; the eye stands in that plane and
+ * looks along it. */
 static void painter_2d(void **state)
 {
     (void)state;

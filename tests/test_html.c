@@ -29,7 +29,7 @@ static char bin_dir[512] = "build/bin";
 static char tmp_dir[256];
 static const char *chromium;
 
-#define RAY "0,3.1,0,1,0.3,0"
+#define RAY "0,1.8,0,1,0.35,0"
 #define MISS_RAY "0,3.1,0,-1,0,0"
 
 /* ---- helpers ------------------------------------------------------------------------------ */

@@ -828,8 +828,8 @@ static void scene_counts(void **state)
     assert_int_equal(tri_count("soup", 0), 2000);
     assert_int_equal(tri_count("soup", 7), 7);
     assert_int_equal(tri_count("cornell", 0), 36);
-    assert_int_equal(tri_count("flat2d", 0), 16 * 8);
-    assert_int_equal(tri_count("flat2d", 40), 40 * 8);
+    assert_int_equal(tri_count("flat2d", 0), 16); /* one triangle per shape drawn */
+    assert_int_equal(tri_count("flat2d", 40), 40);
     const uint32_t teapot = tri_count("teapot", 0);
     assert_true(teapot >= 2000 && teapot <= 4000);
     assert_true(tri_count("teapot", 80) > teapot);
@@ -851,7 +851,7 @@ static void scenes_closed_and_outward(void **state)
         sidx_mesh_free(&m);
     }
     /* The other solids are closed per part (parts share no vertices). */
-    const char *solid[] = {"teapot", "menger", "flat2d"};
+    const char *solid[] = {"teapot", "menger"};
     for (size_t i = 0; i < sizeof solid / sizeof solid[0]; ++i) {
         sidx_mesh m;
         assert_int_equal(sidx_scene_make(solid[i], 0, &m, NULL), SIDX_OK);
@@ -881,13 +881,33 @@ static void scene_shapes(void **state)
     assert_true(small >= 2000);
     sidx_mesh_free(&m);
 
-    /* flat2d: inside [0,10]^2 x [-0.05, 0.05], every triangle parallel
-     * to z or in a z plane */
-    assert_int_equal(sidx_scene_make("flat2d", 0, &m, NULL), SIDX_OK);
-    bb = sidx_mesh_bounds(&m);
-    assert_true(bb.min.x >= 0 && bb.min.y >= 0 && bb.max.x <= 10 && bb.max.y <= 10);
-    assert_true(bb.min.z == -0.05f && bb.max.z == 0.05f);
-    sidx_mesh_free(&m);
+    /* flat2d: inside [0,10]^2 x [-0.05, 0.05], one tilted triangle per
+     * shape: the corner opposite the shortest side at z = 0, the next one
+     * at +0.05, the last at -0.05, so it crosses z = 0 along its longest
+     * median (the other two corners' midpoint has z = 0) */
+    for (uint32_t detail = 0; detail <= 40; detail += 40) {
+        assert_int_equal(sidx_scene_make("flat2d", detail, &m, NULL), SIDX_OK);
+        bb = sidx_mesh_bounds(&m);
+        assert_true(bb.min.x >= 0 && bb.min.y >= 0 && bb.max.x <= 10 && bb.max.y <= 10);
+        assert_true(bb.min.z == -0.05f && bb.max.z == 0.05f);
+        for (uint32_t t = 0; t < m.num_triangles; ++t) {
+            sidx_vec3 p[3];
+            float side2[3];
+            int c = 0;
+            for (int k = 0; k < 3; ++k) p[k] = sidx_mesh_vertex(&m, t, k);
+            for (int k = 0; k < 3; ++k) {
+                const sidx_vec3 e = sidx_v3_sub(p[(k + 2) % 3], p[(k + 1) % 3]);
+                side2[k] = e.x * e.x + e.y * e.y;
+            }
+            for (int k = 1; k < 3; ++k)
+                if (side2[k] < side2[c]) c = k;
+            assert_true(p[c].z == 0.0f && p[(c + 1) % 3].z == 0.05f && p[(c + 2) % 3].z == -0.05f);
+        }
+        /* the first shape, (0.5, 0.5) (3.5, 0.8) (1.2, 3.0): shortest side
+         * opposite (3.5, 0.8), the spine from there to (0.85, 1.75) */
+        assert_true(sidx_mesh_vertex(&m, 0, 1).x == 3.5f && sidx_mesh_vertex(&m, 0, 1).z == 0.0f);
+        sidx_mesh_free(&m);
+    }
 
     /* soup and grid stay in their boxes */
     assert_int_equal(sidx_scene_make("soup", 0, &m, NULL), SIDX_OK);

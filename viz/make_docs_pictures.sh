@@ -2,7 +2,8 @@
 # make_docs_pictures.sh — regenerate docs/img/: the Graphviz tree of every
 # registered tree structure over the teapot (cut at depth 5, with one ray),
 # and sidx-view screenshots of every structure on the 2D lecture scene
-# (traversal half-way, and the build with the SAH curve), plus 3D and heat
+# (traversal half-way, and the build with the SAH curve; each shape drawn
+# with its spine, the segment a ray in the plane hits), plus 3D and heat
 # views of the teapot, the few further views the tutorial's lessons show
 # (heat maps of the teapot in the stadium, the BVH's first level); and the
 # web pages of the tutorial's main examples (sidx-view --html) into WEB_DIR,

@@ -91,12 +91,55 @@ static void thick_box2d(viz_canvas *cv, const map2d *m, sidx_aabb b, int width, 
     viz_thick_line(cv, x0, y1, x0, y0, width, color);
 }
 
-/* Triangles seen from +z.  Edge-on ones (the walls of flat2d's prisms,
- * which are what a ray in the plane actually hits) are drawn as segments. */
+/* The height at which a 2D scene's shapes are cut for their spines: the
+ * ray's plane if the ray stays in one z plane, else the scene's middle.
+ * NAN for a scene that is not flat (z extent under 5% of x and y). */
+static float spine_height(const view_state *v)
+{
+    const sidx_vec3 e = sidx_aabb_extent(v->bounds);
+    if (sidx_aabb_is_empty(v->bounds) || !(e.z > 0.0f) || !(e.z < 0.05f * fminf(e.x, e.y))) return NAN;
+    return v->has_ray && v->dir.z == 0.0f ? v->org.z : 0.5f * (v->bounds.min.z + v->bounds.max.z);
+}
+
+/* The segment where triangle (a, b, c) crosses the plane z = z0: what a
+ * ray in that plane can hit (flat2d tilts each shape so this is its
+ * longest median, lib/scenes.c).  0 if it does not cross in a segment. */
+static int spine(sidx_vec3 a, sidx_vec3 b, sidx_vec3 c, float z0, float seg[4])
+{
+    const sidx_vec3 p[3] = {a, b, c};
+    int n = 0;
+    for (int k = 0; k < 3 && n <= 2; ++k) {
+        const sidx_vec3 u = p[k], w = p[(k + 1) % 3];
+        const float du = u.z - z0, dw = w.z - z0;
+        float x, y;
+        if (du == 0.0f) {
+            x = u.x;
+            y = u.y;
+        } else if ((du < 0.0f) != (dw < 0.0f) && dw != 0.0f) {
+            const float s = du / (du - dw);
+            x = u.x + s * (w.x - u.x);
+            y = u.y + s * (w.y - u.y);
+        } else {
+            continue;
+        }
+        if (n < 2) {
+            seg[2 * n] = x;
+            seg[2 * n + 1] = y;
+        }
+        ++n;
+    }
+    return n == 2 && (seg[0] != seg[2] || seg[1] != seg[3]);
+}
+
+/* Triangles seen from +z; in a 2D scene each with its spine, the segment
+ * a ray in the plane actually hits, so a ray that only clips a corner is
+ * seen to miss.  Edge-on triangles are drawn as segments. */
 static void draw_triangles(const view_state *v, viz_canvas *cv, const map2d *m, int marked_pass)
 {
     static const uint32_t fill[4] = {0xffc9d3e0u, 0xff8fb3e8u, 0xff5cb85cu, 0xffc49ae8u};
     static const uint32_t edge[4] = {0xff8792a3u, 0xff3f6fb8u, 0xff1e7b1eu, 0xff7d3fb8u};
+    static const uint32_t spine_col[4] = {0xff4b5566u, 0xff1f4f98u, 0xff0e5b0eu, 0xff5d1f98u};
+    const float z0 = spine_height(v);
     for (uint32_t t = 0; t < v->mesh.num_triangles; ++t) {
         int mark = v->prim_mark ? v->prim_mark[t] : 0;
         if ((mark != 0) != (marked_pass != 0)) continue;
@@ -109,6 +152,9 @@ static void draw_triangles(const view_state *v, viz_canvas *cv, const map2d *m, 
             viz_line(cv, ax, ay, bx, by, edge[mark]);
             viz_line(cv, bx, by, cx, cy, edge[mark]);
             viz_line(cv, cx, cy, ax, ay, edge[mark]);
+            float seg[4];
+            if (isfinite(z0) && spine(a, b, c, z0, seg))
+                viz_thick_line(cv, mx(m, seg[0]), my(m, seg[1]), mx(m, seg[2]), my(m, seg[3]), 2, spine_col[mark]);
         } else if (mark) {
             int w = mark == 2 ? 4 : 3;
             viz_thick_line(cv, ax, ay, bx, by, w, edge[mark]);

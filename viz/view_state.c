@@ -274,12 +274,14 @@ sidx_status view_load_events(view_state *v, const char *path, size_t step, sidx_
 
 void view_default_ray(const view_state *v, sidx_vec3 *org, sidx_vec3 *dir)
 {
-    /* from the left edge, slightly below the middle, rising gently: it
-     * crosses most of a 2D scene and so most of the structure */
+    /* from the left edge, low, rising gently: it crosses most of a 2D
+     * scene and so most of the structure (on flat2d it passes by the
+     * first shapes' spines and hits far right, so a kd-tree pushes and
+     * pops before it stops) */
     sidx_aabb b = v->bounds;
     if (sidx_aabb_is_empty(b)) b.min = b.max = sidx_v3(0, 0, 0);
     sidx_vec3 e = sidx_aabb_extent(b), c = sidx_aabb_centroid(b);
-    *org = sidx_v3(b.min.x - 0.05f * e.x, b.min.y + 0.3f * e.y, c.z);
+    *org = sidx_v3(b.min.x - 0.05f * e.x, b.min.y + 0.15f * e.y, c.z);
     *dir = sidx_v3(1.0f, e.x > 0.0f ? 0.35f * e.y / e.x : 0.3f, 0.0f);
 }
 

@@ -13,7 +13,7 @@ int kd_walk(const sidx_ex *ex, const sidx_kd_node *nodes, const uint32_t *refs, 
 
 #define NSCENES 3
 #define RAYS 40
-/* flat2d: the slide's 2D scene (thin prisms), walked by rays in its
+/* flat2d: the slide's 2D scene (tilted triangles), walked by rays in its
  * middle plane as on the slides' pictures, and from the front; soup: overlapping
  * triangles straddling cells ("CANNOT terminate"); cornell: walls on the
  * split planes. */
@@ -81,7 +81,7 @@ static int setup(void)
         if (sidx_kdtree_nodes(accels[s], &nodes, &nn, NULL) != SIDX_OK) return -1;
         const sidx_aabb b = sidx_mesh_bounds(&meshes[s]);
         const sidx_vec3 c = sidx_aabb_centroid(b), e = sidx_aabb_extent(b);
-        const int flat = e.z < 0.05f * fminf(e.x, e.y); /* flat2d: prisms 0.1 high */
+        const int flat = e.z < 0.05f * fminf(e.x, e.y); /* flat2d: triangles 0.1 high */
         uint32_t st = 808u + (uint32_t)s;
         for (int i = 0, tries = 0; i < RAYS; ++i) {
             const float u = ex_rand(&st), v = ex_rand(&st), w = ex_rand(&st);

@@ -13,9 +13,10 @@
  * remembers its original triangle); sidx_bsp_info_get reports how many cuts
  * the build made.
  *
- * 2D (Doom-style): build over the "flat2d" scene (2D triangles extruded
- * along z) and put the eye in the plane z = 0: the order is then that of a
- * 2D BSP over the prisms' walls.  3D: any mesh, any eye.
+ * 2D (Doom-style): build over the "flat2d" scene (one tilted triangle per
+ * 2D shape, crossing z = 0 along its longest median) and put the eye in
+ * the plane z = 0: the order is then that of a 2D BSP over those
+ * segments.  3D: any mesh, any eye.
  *
  * The order is exact when every leaf holds at most one piece (the default
  * leaf size, 1).  A leaf forced by the depth limit or the split budget may

@@ -81,8 +81,8 @@ static inline sidx_vec3 sidx_mesh_vertex(const sidx_mesh *m, uint32_t tri, int k
 
 /* Built-in procedural scenes, so every test and lesson runs without files.
  * detail scales the triangle count (0 = the scene's default).  Y is up
- * except in flat2d.  Closed objects (icosphere, teapot parts, menger cubes,
- * flat2d prisms) share vertices along edges and face outward.
+ * except in flat2d.  Closed objects (icosphere, teapot parts, menger cubes)
+ * share vertices along edges and face outward.
  *   "icosphere"  closed sphere, subdivided icosahedron (detail = levels, default 3: 1280 tris)
  *   "teapot"     a recognisable closed teapot-like object (body, lid, spout, handle) (~2–4k tris;
  *                detail = segments around the body, default 40: 3412 tris)
@@ -93,9 +93,12 @@ static inline sidx_vec3 sidx_mesh_vertex(const sidx_mesh *m, uint32_t tri, int k
  *                corners within 0.05 of each triangle's centre)
  *   "menger"     Menger sponge of cubes in [-1,1]^3 (detail = level, default 2: 4800 tris),
  *                many coplanar faces
- *   "flat2d"     the 2D lecture scene: 2D triangles in the xy plane extruded along z into
- *                thin prisms (z in [-0.05, 0.05]), viewed from +z; 8 triangles per prism;
- *                detail = number of 2D triangles (default 16 hand-placed; more are random)
+ *   "flat2d"     the 2D lecture scene, viewed from +z: one triangle per 2D shape, tilted so
+ *                the corner opposite its shortest side is at z = 0 and the other two at
+ *                +0.05 and -0.05.  From +z it is the drawn shape; a ray in the plane z = 0
+ *                (a 2D ray) hits it only where it crosses its "spine", the longest median,
+ *                so it misses a shape whose corner it merely clips.  detail = number of
+ *                shapes = triangles (default 16 hand-placed; more are random)
  *   "cornell"    the Cornell box (walls, light, two closed blocks: 36 tris), the published
  *                measurements in mm scaled by 0.01; walls face into the room; detail ignored
  *   "grid"       tessellated plane y = 0, x,z in [-1,1], facing +y, detail x detail quads
