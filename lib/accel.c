@@ -234,6 +234,8 @@ static SIDX_INLINE void refine_t(const sidx_mesh *m, const sidx_ray *r, sidx_hit
     if (SIDX_UNLIKELY(spread > 4.0f * hit->t * fabsf(sidx_v3_array(&r->dir)[kz]))) refine_t_plane(m, r, hit);
 }
 
+void sidx__hit_refine_t(const sidx_mesh *m, const sidx_ray *r, sidx_hit *hit) { refine_t(m, r, hit); }
+
 /* u, v and the geometric normal of the final hit only: the hot loop never
  * pays for them ("no u/v or normals unless asked").  A structure that
  * keeps them from its own traversal (a->fills_uv, a->fills_ng) has set
