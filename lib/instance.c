@@ -363,6 +363,11 @@ static SIDX_INLINE int agg_walk(const sidx_accel *a, const sidx_ray *r, const si
                 hit->ng = xf_normal(in->inv, sidx_v3_cross(sidx_v3_sub(p1, p0), sidx_v3_sub(p2, p0)));
         }
     }
+    /* t refined on the plane as sidx_accel_intersect does (accel.c), on the
+     * local ray (the same t along the world ray), after the u, v re-test
+     * above, which is bounded just past the walk's t; a nested child
+     * refined its own final hit. */
+    if (!in->nested) sidx__hit_refine_t(in->accel->mesh, &best_local, hit);
     return 1;
 }
 

@@ -366,6 +366,11 @@ static SIDX_INLINE sidx_vec3 sidx__tri_normal(sidx_vec3 p0, sidx_vec3 p1, sidx_v
     return sidx_v3_cross(sidx_v3_sub(p1, p0), sidx_v3_sub(p2, p0));
 }
 
+/* accel.c: hit->t of a closest hit on triangle hit->prim of m, recomputed
+ * on the triangle's plane when the test's t is coarse, as
+ * sidx_accel_intersect does after every walk; for the walks that return
+ * closest hits without it (packets, aggregates).  prim, u, v untouched. */
+void sidx__hit_refine_t(const sidx_mesh *m, const sidx_ray *r, sidx_hit *hit);
 /* accel.c: u, v and/or the normal (need: SIDX_QUERY_UV | SIDX_QUERY_NORMAL)
  * of a hit on a->mesh, recomputed from the mesh — the core's finish of a
  * query, and the packet walks'.  hit->prim and hit->t must be set. */
