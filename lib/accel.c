@@ -189,7 +189,7 @@ void sidx__hit_attrs_from_mesh(const sidx_accel *a, const sidx_ray *r, uint32_t 
  * rounded to float once.  Kept only within 2^-12 (|p0 − o|₁ + |e1|₁ +
  * |e2|₁) / |d|₁ of the test's t, far above the test's own error: a ray
  * that grazes a triangle and is accepted on an edge has no meaningful
- * plane t (flat2d's prism apex: 3.26 for the edge's 0.976).  Clamped to
+ * plane t (a thin prism's apex: 3.26 for the edge's 0.976).  Clamped to
  * [tmin, the float below tmax], where the walk accepted the test's t. */
 static SIDX_NOINLINE void refine_t_plane(const sidx_mesh *m, const sidx_ray *r, sidx_hit *hit)
 {
@@ -220,7 +220,8 @@ static SIDX_NOINLINE void refine_t_plane(const sidx_mesh *m, const sidx_ray *r, 
  * ray's dominant axis measures it: when |az| + |bz| + |cz| exceeds 4 t |d_kz|
  * (1% of the bunny's diffuse hits, 25% of Sponza's), t is recomputed on
  * the plane in double (refine_t_plane); otherwise the test's t stands.
- * Runs once per ray, after the walk: which triangle is closest and its
+ * Runs once per ray, after the walk, for queries that ask
+ * (SIDX_QUERY_PRECISE_T): which triangle is closest and its
  * u, v stay the test's (watertightness is the test's), only t changes.
  * Bound and figures: docs/spawning.md, "Precision of t". */
 static SIDX_INLINE void refine_t(const sidx_mesh *m, const sidx_ray *r, sidx_hit *hit)
@@ -252,7 +253,9 @@ static SIDX_INLINE void finish_hit(const sidx_accel *a, const sidx_ray *r, const
     /* Aggregates (instance.c) set the instance and fill u, v, ng in world
      * space themselves: their a->mesh is not where the hit lies. */
     if (hit->instance != SIDX_NO_HIT) return;
-    refine_t(a->mesh, r, hit);
+    /* On request only: the mesh read misses the cache on incoherent rays
+     * (docs/performance.md, "Precision of the closest hit's t"). */
+    if (q->flags & SIDX__QUERY_REFINE_T) refine_t(a->mesh, r, hit);
     if (!(q->flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL | SIDX_QUERY_POINT))) return;
     if (SIDX_LIKELY(!(q->flags & SIDX_QUERY_POINT))) {
         const uint32_t own = (a->fills_uv ? SIDX_QUERY_UV : 0u) | (a->fills_ng ? SIDX_QUERY_NORMAL : 0u);

@@ -367,7 +367,7 @@ static SIDX_INLINE int agg_walk(const sidx_accel *a, const sidx_ray *r, const si
      * local ray (the same t along the world ray), after the u, v re-test
      * above, which is bounded just past the walk's t; a nested child
      * refined its own final hit. */
-    if (!in->nested) sidx__hit_refine_t(in->accel->mesh, &best_local, hit);
+    if (!in->nested && (q->flags & SIDX__QUERY_REFINE_T)) sidx__hit_refine_t(in->accel->mesh, &best_local, hit);
     return 1;
 }
 

@@ -468,7 +468,8 @@ static sidx_status run_packet(const sidx_accel *a, const sidx_ray *rays, uint32_
         if (pkt.prim[i] != SIDX_NO_HIT) {
             hits[i].t = pkt.best[i];
             hits[i].prim = pkt.prim[i];
-            sidx__hit_refine_t(a->mesh, &rays[i], &hits[i]); /* as sidx_accel_intersect does */
+            if (o.flags & SIDX__QUERY_REFINE_T) /* as sidx_accel_intersect does */
+                sidx__hit_refine_t(a->mesh, &rays[i], &hits[i]);
             if (o.flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL)) /* a call only when asked */
                 sidx__packet_finish(a, &rays[i], o.flags, &hits[i]);
         }

@@ -371,6 +371,9 @@ static SIDX_INLINE sidx_vec3 sidx__tri_normal(sidx_vec3 p0, sidx_vec3 p1, sidx_v
  * sidx_accel_intersect does after every walk; for the walks that return
  * closest hits without it (packets, aggregates).  prim, u, v untouched. */
 void sidx__hit_refine_t(const sidx_mesh *m, const sidx_ray *r, sidx_hit *hit);
+/* The query flag that asks for it (the point of SIDX_QUERY_POINT is made
+ * from u, v, not t, and does not need it). */
+#define SIDX__QUERY_REFINE_T SIDX_QUERY_PRECISE_T
 /* accel.c: u, v and/or the normal (need: SIDX_QUERY_UV | SIDX_QUERY_NORMAL)
  * of a hit on a->mesh, recomputed from the mesh — the core's finish of a
  * query, and the packet walks'.  hit->prim and hit->t must be set. */

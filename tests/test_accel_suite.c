@@ -704,9 +704,7 @@ static int attrs_ok(const sidx_mesh *m, sidx_tri_method tm, const sidx_ray *r, u
     const sidx_vec3 p0 = sidx_mesh_vertex(m, h->prim, 0), p1 = sidx_mesh_vertex(m, h->prim, 1),
                     p2 = sidx_mesh_vertex(m, h->prim, 2);
     float t = 0.0f, u = 0.0f, v = 0.0f;
-    /* bound +inf: the walk accepted the test's t, which the query may then
-     * have refined on the plane (accel.c), so h->t can lie below it */
-    if (!sidx_intersect_triangle(tm, r, p0, p1, p2, INFINITY, &t, &u, &v)) {
+    if (!sidx_intersect_triangle(tm, r, p0, p1, p2, nextafterf(h->t, INFINITY), &t, &u, &v)) {
         *why = "the hit triangle does not reproduce the hit";
         return 0;
     }

@@ -13,6 +13,9 @@
  * check leaves to the test has its vertices within 4 t |d_kz| of the
  * origin along the ray, so the shear's rounding stays a few ε of t.
  *
+ * The refinement is asked for with SIDX_QUERY_PRECISE_T (queries and
+ * packets alike); a default query keeps the test's t (test below).
+ *
  * Checked for every registered structure, the packet walks (whose t must
  * also be the single ray's, bit for bit) and aggregates with an identity
  * transform, one level and nested. */
@@ -26,6 +29,9 @@
 #include <math.h>
 #include <cmocka.h>
 #include "sidx/sidx.h"
+
+static const sidx_query precise = {.flags = SIDX_QUERY_PRECISE_T};
+static const sidx_packet_options precise_packets = {.mode = SIDX_PACKET_PLAIN, .flags = SIDX_QUERY_PRECISE_T};
 #include "common/testkit.h"
 
 /* 2^-17 (7.6e-6): the bound of docs/spawning.md, "Precision of t". */
@@ -124,6 +130,7 @@ static void t_within_bound(void **state)
     assert_non_null(single);
     assert_non_null(pk);
     tally all = {0, 0.0};
+    size_t refined = 0; /* hits whose t the flag changed */
     for (size_t si = 0; si < sizeof scenes / sizeof scenes[0]; ++si) {
         sidx_mesh base;
         if (strcmp(scenes[si], "slivers") == 0)
@@ -144,12 +151,19 @@ static void t_within_bound(void **state)
                 assert_int_equal(sidx_accel_build(name, &m, NULL, &a, NULL), SIDX_OK);
                 snprintf(what, sizeof what, "%s %s, %s", scenes[si], variants[vi].tag, name);
                 for (size_t i = 0; i < n; ++i) {
-                    assert_int_equal(sidx_accel_intersect(a, &rays[i], NULL, &single[i]), SIDX_OK);
+                    assert_int_equal(sidx_accel_intersect(a, &rays[i], &precise, &single[i]), SIDX_OK);
                     check(what, &m, &rays[i], &single[i], &all);
+                    /* a default query: the same triangle, the test's own t */
+                    sidx_hit d;
+                    assert_int_equal(sidx_accel_intersect(a, &rays[i], NULL, &d), SIDX_OK);
+                    if (d.prim != single[i].prim)
+                        fail_msg("%s, ray %zu: prim %u without the flag, %u with it", what, i, (unsigned)d.prim,
+                                 (unsigned)single[i].prim);
+                    refined += d.t != single[i].t;
                 }
                 /* packets: the single ray's answer, t included */
                 for (size_t i = 0; i + 16 <= n; i += 16)
-                    assert_int_equal(sidx_packet_intersect(a, &rays[i], 16, 16, NULL, &pk[i], NULL), SIDX_OK);
+                    assert_int_equal(sidx_packet_intersect(a, &rays[i], 16, 16, &precise_packets, &pk[i], NULL), SIDX_OK);
                 /* On a hit at the shared diagonal of a quad a packet walk may
                  * accept the other triangle than the single ray (so at main
                  * c7cae4c already); its t is then held to the bound alone. */
@@ -169,10 +183,10 @@ static void t_within_bound(void **state)
                     assert_int_equal(sidx_aggregate_build(&outer, 1, NULL, &nest, NULL), SIDX_OK);
                     for (size_t i = 0; i < n; ++i) {
                         sidx_hit h;
-                        sidx_accel_intersect(agg, &rays[i], NULL, &h);
+                        sidx_accel_intersect(agg, &rays[i], &precise, &h);
                         snprintf(what, sizeof what, "%s %s, aggregate", scenes[si], variants[vi].tag);
                         check(what, &m, &rays[i], &h, &all);
-                        sidx_accel_intersect(nest, &rays[i], NULL, &h);
+                        sidx_accel_intersect(nest, &rays[i], &precise, &h);
                         snprintf(what, sizeof what, "%s %s, nested aggregate", scenes[si], variants[vi].tag);
                         check(what, &m, &rays[i], &h, &all);
                     }
@@ -185,8 +199,10 @@ static void t_within_bound(void **state)
         }
         sidx_mesh_free(&base);
     }
-    printf("t precision: %zu hits, worst relative error %.3g (bound %.3g)\n", all.hits, all.worst, TPREC_BOUND);
+    printf("t precision: %zu hits, worst relative error %.3g (bound %.3g); the flag refined %zu\n", all.hits,
+           all.worst, TPREC_BOUND, refined);
     assert_true(all.hits > 0);
+    assert_true(refined > 0); /* these scenes are where the test's t is coarse */
     free(rays);
     free(single);
     free(pk);
@@ -208,12 +224,12 @@ static void t_inside_interval(void **state)
         assert_int_equal(sidx_accel_build(sidx_accel_registered_name(k), &m, NULL, &a, NULL), SIDX_OK);
         for (size_t i = 0; i < n; ++i) {
             sidx_hit h;
-            sidx_accel_intersect(a, &rays[i], NULL, &h);
+            sidx_accel_intersect(a, &rays[i], &precise, &h);
             if (h.prim == SIDX_NO_HIT) continue;
             sidx_ray r = rays[i];
             r.tmax = nextafterf(h.t, INFINITY);
             sidx_hit h2;
-            sidx_accel_intersect(a, &r, NULL, &h2);
+            sidx_accel_intersect(a, &r, &precise, &h2);
             if (h2.prim == SIDX_NO_HIT) continue; /* the walk's float t was above the refined one */
             assert_true(h2.t >= r.tmin && h2.t < r.tmax);
         }

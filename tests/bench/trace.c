@@ -136,6 +136,7 @@ static void trace_usage(FILE *out)
             "  --tri watertight|moller|twostep  triangle test (default watertight)\n"
             "  --box robust|plain             box test (default robust)\n"
             "  --uv 0|1                       compute u, v (default 1)\n"
+            "  --precise-t                    refine the closest hit's t on its plane (SIDX_QUERY_PRECISE_T)\n"
             "  --optimize MS                  bvh, bvh4, bvh8: reinsertion pass over the binary tree,\n"
             "                                 at most MS ms (sidx_build_options.optimize_ms; default off)\n"
             "  --cpu-time                     time one-thread traces in thread CPU time, builds in\n"
@@ -161,6 +162,8 @@ int bench_cmd_trace(int argc, char **argv)
             return BENCH_OK;
         } else if (!strcmp(a, "--any-hit")) {
             any_hit = 1;
+        } else if (!strcmp(a, "--precise-t")) {
+            q.flags |= SIDX_QUERY_PRECISE_T;
         } else if (!strcmp(a, "--cpu-time")) {
             bench_cpu_time = 1;
         } else if (!strcmp(a, "--accel") || !strcmp(a, "--threads") || !strcmp(a, "--traversal") ||

@@ -73,6 +73,9 @@ sidx_status sidx_traversal_parse(const char *name, sidx_traversal *out);
 #define SIDX_QUERY_UV     1u  /* fill hit.u, hit.v */
 #define SIDX_QUERY_NORMAL 2u  /* fill hit.ng */
 #define SIDX_QUERY_POINT  4u  /* fill hit.p, hit.p_err (and u, v, ng): for sidx_ray_spawn, sidx/spawn.h */
+#define SIDX_QUERY_PRECISE_T 8u /* the closest hit's t refined on its triangle's plane where the watertight
+                                 test's t is coarse: docs/spawning.md,
+                                 "Precision of t"; it reads the hit triangle from the mesh once per ray */
 
 typedef struct sidx_query {
     uint32_t flags;               /* SIDX_QUERY_* */

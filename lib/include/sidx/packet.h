@@ -83,7 +83,7 @@ typedef enum sidx_packet_mode {
 typedef struct sidx_packet_options {
     sidx_packet_mode mode;
     uint32_t frustum_depth; /* frustum tests down to this node depth; 0 = every depth */
-    uint32_t flags;         /* SIDX_QUERY_UV / SIDX_QUERY_NORMAL */
+    uint32_t flags;         /* SIDX_QUERY_UV / SIDX_QUERY_NORMAL / SIDX_QUERY_PRECISE_T */
 } sidx_packet_options;
 
 /* Work counters, accumulated (zero them first). */
