@@ -198,8 +198,6 @@ typedef struct par_build {
     unsigned threads;
 } par_build;
 
-static inline float pref_c(const pref *r, int k) { return (r->lo[k] + r->hi[k]) * 0.5f; }
-
 /* One node array under construction, in pre-order. */
 typedef struct nodebuf {
     bvh_node *nodes;
