@@ -27,7 +27,9 @@
 # Embree) is reported as skipped.  Besides the commands: README.md stays
 # at most 170 lines, and every lesson's header names the library function
 # it is about ("Read: lib/FILE.c, FUNCTION"), which must be defined in
-# that file.  Run from the repository root; exit 1 if anything failed.
+# that file.  DOCTEST_ONLY=TEXT runs only the entries whose first doc line
+# contains TEXT; DOCTEST_TIMES=1 prints the seconds each run takes.  Run
+# from the repository root; exit 1 if anything failed.
 
 BUILD=${BUILD:-build}
 LIST=tests/doctests.txt
@@ -95,6 +97,7 @@ while [ $i -lt $n ]; do
     else
         run=$(printf '%s\n' "$first" | sed 's|^build/|$BUILD/|; s| build/| $BUILD/|g')
     fi
+    case $first in *"${DOCTEST_ONLY:-}"*) ;; *) continue ;; esac
     # a program of build/bin/ that this build does not have: skipped
     need=$(printf '%s\n' "$run" | grep -o '\$BUILD/bin/[a-z-]*' | sed 's|\$BUILD/||' | sort -u)
     missing=""
