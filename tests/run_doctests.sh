@@ -6,9 +6,10 @@
 #
 # The commands are taken from the docs themselves (tests/doc_commands.awk):
 # every line of a ```sh block in README.md, docs/tutorial.md,
-# docs/exercises.md and docs/programs.md, every command in
-# a table cell (a code span starting with build/bin/, build/lessons/, make
-# or sh) and every build/... line of a lesson's header comment.  Each one
+# docs/exercises.md and docs/programs.md, every command in a table cell
+# (a code span starting with build/bin/, build/lessons/, make or sh), every
+# code span in prose that runs a program of build/, and every build/...
+# line of a lesson's header comment.  Each one
 # must be listed, exactly as written, on a "doc:" line of
 # tests/doctests.txt, whose entry says how it is run and what is checked:
 #
@@ -26,8 +27,8 @@
 # (sidx-view without SDL2, sidx-dot without Graphviz, sidx-bench without
 # Embree) is reported as skipped.  Besides the commands: README.md stays
 # at most 170 lines, and every lesson's header names the library function
-# it is about ("Read: lib/FILE.c, FUNCTION"), which must be defined in
-# that file.  DOCTEST_ONLY=TEXT runs only the entries whose first doc line
+# it is about ("Read: lib/FILE.c, FUNCTION", several separated by ";"),
+# which must be defined in that file.  DOCTEST_ONLY=TEXT runs only the entries whose first doc line
 # contains TEXT; DOCTEST_TIMES=1 prints the seconds each run takes.  Run
 # from the repository root; exit 1 if anything failed.
 
