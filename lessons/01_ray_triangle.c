@@ -23,6 +23,7 @@
  *   4. the same leak count on a closed mesh, rays shot from inside it at
  *      its vertices and edges (SCENE, default icosphere).
  *
+ * Read:  lib/intersect.c, sidx_intersect_triangle
  * Run:   build/lessons/01_ray_triangle [SCENE]
  *        SCENE = a built-in scene name ("icosphere", "teapot:2", ...) or an
  *        .obj/.ply file; it should be closed and contain its box centre.

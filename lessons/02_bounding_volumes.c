@@ -23,6 +23,7 @@
  * One random ray is traced through the printer: each volume's test, then
  * the object's triangles.
  *
+ * Read:  lib/intersect.c, sidx_intersect_aabb; lib/intersect.c, sidx_obb_fit
  * Run:   build/lessons/02_bounding_volumes [SCENE]
  *        SCENE = a built-in scene name or an .obj/.ply file (default teapot)
  */

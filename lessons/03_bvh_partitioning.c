@@ -23,6 +23,7 @@
  * traced, and per builder the SAH cost of the root split, of the whole
  * tree, and what random rays actually paid (boxes and triangles tested).
  *
+ * Read:  lib/bvh_build.c, find_binned
  * Run:   build/lessons/03_bvh_partitioning [SCENE]
  *        SCENE = a built-in scene name or .obj/.ply to split instead of the
  *        eleven triangles (only the first candidates are printed then).

@@ -22,6 +22,7 @@
  *      reference) on a real scene: build time, expected cost of the tree
  *      under the SAH, and what rays pay — measured.
  *
+ * Read:  lib/bvh_build.c, find_sweep
  * Run:   build/lessons/04_bvh_build_review [SCENE]
  *        SCENE = a built-in scene name or .obj/.ply for part 3 (default teapot)
  */

@@ -19,6 +19,7 @@
  * rays on a real scene (default teapot), also with the explicit-stack
  * traversal that sidx uses by default.
  *
+ * Read:  lib/bvh_traverse.c, ordered_body
  * Run:   build/lessons/05_bvh_traversal [SCENE]
  *        SCENE = a built-in scene name or .obj/.ply for the averages (default teapot)
  */

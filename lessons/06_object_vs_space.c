@@ -31,6 +31,7 @@
  *      time per ray, memory; each of the slide's ticks set beside what
  *      was measured.  Counts are checked; times only printed.
  *
+ * Read:  lib/kdtree_traverse.c, kd_walk_slide
  * Run:   build/lessons/06_object_vs_space [SCENE]
  *        SCENE = a built-in scene name or .obj/.ply (default soup:600)
  */

@@ -20,6 +20,7 @@
  *   4. too few vs too many cells: cells visited, triangle tests and time
  *      per ray across λ from 1/16 to 256.
  *
+ * Read:  lib/grid.c, grid_walk
  * Run:   build/lessons/07_uniform_grid [SCENE]
  *        SCENE = a built-in scene name or .obj/.ply (default teapot)
  */

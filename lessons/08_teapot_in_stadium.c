@@ -20,6 +20,7 @@
  * first pixel row that reaches the teapot is also traced for the uniform
  * grid through the printer, in short.
  *
+ * Read:  lib/grid2.c, grid2_walk
  * Run:   build/lessons/08_teapot_in_stadium [SCENE]
  *        SCENE = a built-in scene name or .obj/.ply (default stadium)
  */

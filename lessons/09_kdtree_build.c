@@ -22,6 +22,7 @@
  *      references, SAH cost, and what rays pay;
  *   3. the SAH tree's leaves by depth: "deep and thin".
  *
+ * Read:  lib/kdtree_build.c, sweep_axis
  * Run:   build/lessons/09_kdtree_build [SCENE]
  *        SCENE = a built-in scene name or .obj/.ply (default teapot)
  */

@@ -20,6 +20,7 @@
  * the deferred far children (with their t intervals) — and marks the
  * step where a hit is found but the walk CANNOT terminate.
  *
+ * Read:  lib/kdtree_traverse.c, kd_walk_slide
  * Run:   build/lessons/10_kdtree_traversal [SCENE]
  *        SCENE = a built-in scene name or .obj/.ply (default flat2d); rays
  *        then run through the middle of its box

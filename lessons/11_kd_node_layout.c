@@ -20,6 +20,7 @@
  * 8 bytes per node against a node that also stores its box, measured with
  * sidx_accel_stats.
  *
+ * Read:  lib/kdtree_internal.h, kd_make_inner
  * Run:   build/lessons/11_kd_node_layout [SCENE]
  *        SCENE = a built-in scene name or .obj/.ply (default teapot)
  */

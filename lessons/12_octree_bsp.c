@@ -29,6 +29,7 @@
  *      from the eye, a piece drawn later is never behind a piece drawn
  *      earlier.
  *
+ * Read:  lib/octree.c, octree_walk; lib/bsp.c, sidx_bsp_paint
  * Run:   build/lessons/12_octree_bsp [SCENE]
  *        SCENE = a built-in scene name or .obj/.ply for part 2 (default teapot)
  */

@@ -21,6 +21,7 @@
  * (lib/octree.c "Bounds": at most 64·n + 1 nodes whatever the scene) and
  * its queries pay instead: O(n) tests, like the trees.
  *
+ * Read:  lib/bvh_traverse.c, stack_walk
  * Run:   build/lessons/13_worst_case [SCENE]
  *        SCENE = a built-in scene name or .obj/.ply to use as the "good"
  *        contrast instead of the soup (its first n triangles are used)

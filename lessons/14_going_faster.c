@@ -36,6 +36,7 @@
  * SIDX_SIMD=avx2 keeps bvh8 off AVX-512 (the same code with 32 registers
  * instead of 16), to see what the bigger register file brings.
  *
+ * Read:  lib/packet.c, packet_walk_impl
  * Run:   build/lessons/14_going_faster [SCENE]
  *        SIDX_SIMD=scalar build/lessons/14_going_faster
  *        SCENE = a built-in scene name or .obj/.ply (default teapot)

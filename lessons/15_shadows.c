@@ -24,6 +24,8 @@
  *   3. ray classification against the BVH for closest hits: preprocessing
  *      time, memory, time per ray.
  *
+ * Read:  lib/lightbuffer.c, sidx_lightbuffer_occluded;
+ *        lib/rayclass.c, rc_query
  * Run:   build/lessons/15_shadows [SCENE]
  *        SCENE = a built-in scene name or .obj/.ply (default cornell); the
  *        light is put at 90% of the box height above its centre

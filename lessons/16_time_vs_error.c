@@ -18,6 +18,8 @@
  *      robust / plain box test: rays that escape (leaks) and time per ray.
  * One escaping ray is traced through the printer, to see where it got lost.
  *
+ * Read:  lib/intersect.c, sidx_intersect_aabb;
+ *        lib/intersect.c, sidx_intersect_triangle
  * Run:   build/lessons/16_time_vs_error [SCENE]
  *        SCENE = a closed mesh, built-in name or .obj/.ply (default
  *        icosphere:4); rays start at its box centre, which must be inside

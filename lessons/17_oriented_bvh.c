@@ -24,6 +24,7 @@
  * Times are printed, never checked: whether fewer, dearer tests win
  * depends on the machine and the scene — the slide's "yes, and no".
  *
+ * Read:  lib/bvh_obb.c, sidx__bvh_fit_obbs
  * Run:   build/lessons/17_oriented_bvh [SCENE]
  *        SCENE = a built-in scene name or .obj/.ply (default teapot)
  */

@@ -28,6 +28,7 @@
  * its tile's candidates: the bundle is conservative, but the rays are still
  * needed to say which candidate each of them hits.
  *
+ * Read:  lib/beam.c, sidx_beam_trace
  * Run:   build/lessons/18_beams_and_cones [SCENE]
  *        SCENE = a built-in scene name or .obj/.ply (default teapot)
  */

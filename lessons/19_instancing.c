@@ -23,6 +23,7 @@
  *   4. nesting: K rows, each an aggregate of K copies, placed by a top
  *      aggregate — an aggregate is itself an object to place; same hits.
  *
+ * Read:  lib/instance.c, agg_walk
  * Run:   build/lessons/19_instancing [SCENE]
  *        SCENE = a built-in scene name or .obj/.ply (default teapot)
  */

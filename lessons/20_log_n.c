@@ -19,6 +19,7 @@
  * The O(log n) is "on average", for ordinary scenes: lesson 13 builds the
  * scenes where it fails.
  *
+ * Read:  lib/bvh_traverse.c, stack_walk
  * Run:   build/lessons/20_log_n
  *        (no SCENE: the lesson makes its own scenes; a SCENE argument adds
  *        that scene's row to the table, outside the fit)

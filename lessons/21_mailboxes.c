@@ -27,6 +27,7 @@
  * The replay counts the events of a real walk; the threads are simulated
  * (one test each in turn), so the lost skips are deterministic.
  *
+ * Read:  lib/grid_internal.h, sidx__mailbox_seen
  * Run:   build/lessons/21_mailboxes [SCENE]
  *        SCENE = a built-in scene name or .obj/.ply (default teapot)
  */

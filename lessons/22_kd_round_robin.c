@@ -32,6 +32,7 @@
  * stretched scene — and neither near what the SAH build does with far
  * fewer nodes.
  *
+ * Read:  lib/kdtree_build.c, refs_node
  * Run:   build/lessons/22_kd_round_robin [SCENE]
  *        SCENE = a built-in scene name or .obj/.ply (default teapot)
  */

@@ -31,6 +31,7 @@
  * Cells print as coordinates at the finest level with their extent:
  * "cell (2,4,0) 2x2x1" spans x 2..4, y 4..6.
  *
+ * Read:  lib/grid_irregular.c, merge_cells; lib/grid_irregular.c, expand_cell
  * Run:   build/lessons/23_irregular_grid [SCENE]
  *        SCENE = the scene of part 5 (default stadium); parts 1-4 always use
  *        the lesson's own 2D scene

@@ -27,6 +27,7 @@
  *      triangle they left, and shadow rays that miss an occluder the
  *      double-precision reference finds between the point and the light.
  *
+ * Read:  lib/spawn.c, sidx_ray_spawn
  * Run:   build/lessons/24_spawning_rays [SCENE]
  *        SCENE = a built-in scene name or .obj/.ply (default cornell); the
  *        light is put at 90% of the box height above its centre, the

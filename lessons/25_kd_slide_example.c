@@ -22,6 +22,8 @@
  *   3. what the SAH kd-tree makes of the same eight triangles.
  * The CHECK lines compare the rows with the slide's.
  *
+ * Read:  lib/kdtree_build.c, sidx_kdtree_build_from_splits;
+ *        lib/kdtree_traverse.c, kd_walk_slide
  * Run:   build/lessons/25_kd_slide_example [SCENE]
  *        SCENE = a built-in scene name or .obj/.ply (default kd-slide); other
  *        scenes get their SAH tree, their node ids and a ray through the middle

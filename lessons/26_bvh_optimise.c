@@ -13,6 +13,7 @@
  *   2. the tree before and after: SAH cost (stats), and what rays pay —
  *      nodes visited and triangles tested per ray, counted, same hits.
  *
+ * Read:  lib/bvh_optimize.c, sidx__bvh_optimize
  * Run:   build/lessons/26_bvh_optimise [SCENE]
  *        SCENE = a built-in scene name or .obj/.ply (default teapot)
  */
