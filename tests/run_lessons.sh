@@ -68,7 +68,8 @@ expect() {
     # No time is checked: speed-ups cannot be promised on a shared or
     # single-core CI machine; the checks are on hits and counted work.
     14_going_faster) echo "same_hits=1 wide_fewer_node_visits=1 frustum_box_tests_le_plain=1
-                           frustum_culls_nodes=1" ;;
+                           frustum_4x4_same_walk=1 frustum_8x8_saves_box_tests=1 frustum_culls_nodes=1
+                           saved_box_tests_come_from_culls=1" ;;
     15_shadows) echo "same_answers=1 any_hit_cheaper=1 light_buffer_saves=1" ;;
     16_time_vs_error) echo "watertight_leaks=0 moller_leaks_more=1 robust_box_misses=0 plain_box_misses_more=1" ;;
     17_oriented_bvh) echo "same_hits=1 obb_fewer_box_tests=1 obb_fewer_box_hits=1 obb_more_memory=1" ;;

@@ -39,6 +39,38 @@ void bench_rays_free(bench_rays *br);
 size_t bench_trace(const sidx_accel *a, const bench_rays *br, size_t begin, size_t end, const sidx_query *q,
                    int any_hit, unsigned threads, double budget_ms, sidx_hit *hits, double *ms);
 
+/* How every traced row is timed (bench_time_passes): one cold pass (the
+ * first one: caches cold, and the pages of a fresh hit array faulted in by
+ * its writes), then every buffer touched (the hit array written, the rays
+ * read), then up to `passes` warm passes; the figure a row reports is the
+ * best warm pass, the median is printed beside it, the cold pass apart. */
+#define BENCH_PASSES 5 /* default warm passes */
+typedef struct bench_timing {
+    double cold_ms;   /* the first pass */
+    double best_ms;   /* the fastest warm pass */
+    double median_ms; /* the median warm pass */
+    int passes;       /* warm passes timed (>= 1) */
+} bench_timing;
+/* A buffer to touch before the warm passes: write = 1 for an output (each
+ * page written, its contents kept), 0 for an input (each page read). */
+typedef struct bench_buf {
+    const void *p;
+    size_t bytes;
+    int write;
+} bench_buf;
+void bench_touch(const bench_buf *bufs, int nbufs);
+/* pass(ctx, cold) runs one pass and returns its milliseconds (cold = 1 for
+ * the first).  Warm passes stop early once they have spent budget_ms
+ * (budget_ms <= 0: no limit); at least one always runs. */
+void bench_time_passes(double (*pass)(void *ctx, int cold), void *ctx, const bench_buf *bufs, int nbufs,
+                       int passes, double budget_ms, bench_timing *out);
+/* Mrays/s of rays traced in ms (0 when ms <= 0). */
+double bench_mrays(size_t rays, double ms);
+/* bench_trace timed the bench_time_passes way (one thread or several,
+ * every ray of [begin, end), no budget per pass). */
+void bench_trace_timed(const sidx_accel *a, const bench_rays *br, size_t begin, size_t end, const sidx_query *q,
+                       int any_hit, unsigned threads, int passes, double budget_ms, sidx_hit *hits, bench_timing *t);
+
 /* Embree 3 as the peer. */
 typedef struct bench_embree bench_embree;
 typedef struct bench_embree_cfg {
@@ -56,6 +88,9 @@ size_t bench_embree_bytes(const bench_embree *e);
 /* rtcIntersect1 / rtcOccluded1, one thread; packet = 1, 4, 8 or 16
  * (rtcIntersectN).  Returns elapsed ms.  u, v and ng are filled. */
 double bench_embree_trace(bench_embree *e, const tk_rayrec *rays, size_t n, int any_hit, int packet, sidx_hit *hits);
+/* The same timed the bench_time_passes way. */
+void bench_embree_trace_timed(bench_embree *e, const tk_rayrec *rays, size_t n, int any_hit, int packet, int passes,
+                              double budget_ms, sidx_hit *hits, bench_timing *t);
 void bench_embree_free(bench_embree *e);
 const char *bench_embree_version(void);
 

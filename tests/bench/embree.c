@@ -223,6 +223,29 @@ double bench_embree_trace(bench_embree *e, const tk_rayrec *rays, size_t n, int 
     return bench_clock_ms() - t0;
 }
 
+typedef struct embree_pass {
+    bench_embree *e;
+    const tk_rayrec *rays;
+    size_t n;
+    int any_hit, packet;
+    sidx_hit *hits;
+} embree_pass;
+
+static double embree_pass_run(void *ctx, int cold)
+{
+    (void)cold;
+    const embree_pass *p = ctx;
+    return bench_embree_trace(p->e, p->rays, p->n, p->any_hit, p->packet, p->hits);
+}
+
+void bench_embree_trace_timed(bench_embree *e, const tk_rayrec *rays, size_t n, int any_hit, int packet, int passes,
+                              double budget_ms, sidx_hit *hits, bench_timing *t)
+{
+    embree_pass p = {e, rays, n, any_hit, packet, hits};
+    const bench_buf bufs[2] = {{hits, n * sizeof *hits, 1}, {rays, n * sizeof *rays, 0}};
+    bench_time_passes(embree_pass_run, &p, bufs, 2, passes, budget_ms, t);
+}
+
 void bench_embree_free(bench_embree *e)
 {
     if (!e) return;

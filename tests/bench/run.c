@@ -52,6 +52,7 @@ typedef struct run_opts {
     int targets, rounds;
     /* --markdown: the file, the revision measured, the command to cite */
     const char *markdown, *revision, *md_command;
+    int passes; /* warm passes per timed row (bench_time_passes) */
 } run_opts;
 
 typedef struct row {
@@ -62,8 +63,10 @@ typedef struct row {
     int packet;      /* Embree packet width (4, 8, 16) for rtcIntersectN rows, else 0 */
     int builtin;     /* scene is a built-in */
     uint32_t tris;
-    double build_ms, trace_ms;
-    size_t rays_timed, rays_req;
+    double build_ms, trace_ms;   /* trace_ms: the best warm pass (bench_time_passes) */
+    double cold_ms, median_ms;   /* the cold pass, the median warm pass */
+    int passes;                  /* warm passes timed */
+    size_t rays_timed, rays_req; /* rays per pass */
     size_t bytes;
     long long peak;      /* build's resident peak above the level before it (mesh not included); -1 = unknown */
     long long heap;      /* most bytes live at once through the build's sidx_allocator; -1 = not sidx */
@@ -106,6 +109,14 @@ static row *rows_add(rows *r)
 }
 
 static double row_mrays(const row *r) { return r->trace_ms > 0 ? (double)r->rays_timed / (r->trace_ms * 1e3) : 0; }
+
+static void row_timing(row *r, const bench_timing *tm)
+{
+    r->trace_ms = tm->best_ms;
+    r->cold_ms = tm->cold_ms;
+    r->median_ms = tm->median_ms;
+    r->passes = tm->passes;
+}
 
 /* One ray set of one scene, prepared once for every structure. */
 typedef struct kind_data {
@@ -308,13 +319,36 @@ static double probe_cost(const sidx_accel *a, const kind_data *k, size_t n)
     return best;
 }
 
-/* Timed trace of up to n rays within about budget ms: all of them (best of
- * up to 3 runs while short: a preempted run on a busy machine would decide
- * the number), or, for a slow structure, 8 contiguous blocks spread evenly
- * over the set (coherent primary rays stay coherent, the whole image is
- * covered).  Returns the rays timed; *all = 1 when k->hits holds every ray. */
+/* Timed trace of up to n rays within about budget ms: all of them, or,
+ * for a slow structure, 8 contiguous blocks spread evenly over the set
+ * (coherent primary rays stay coherent, the whole image is covered).
+ * Either way timed as every row is (bench_time_passes): a cold pass, then
+ * up to `passes` warm passes while they stay within the budget, the best
+ * counting (a preempted pass on a busy machine does not decide the
+ * figure).  Returns the rays per pass; *all = 1 when k->hits holds every
+ * ray. */
+typedef struct blocks_pass {
+    const sidx_accel *a;
+    const kind_data *k;
+    size_t blocks, per;
+} blocks_pass;
+
+static double blocks_pass_run(void *ctx, int cold)
+{
+    (void)cold;
+    const blocks_pass *p = ctx;
+    double sum = 0;
+    for (size_t b = 0; b < p->blocks; ++b) {
+        const size_t begin = b * p->k->br.n / p->blocks;
+        double t;
+        bench_trace(p->a, &p->k->br, begin, begin + p->per, NULL, 0, 1, 0.0, p->k->hits, &t);
+        sum += t;
+    }
+    return sum;
+}
+
 static size_t timed_trace(const sidx_accel *a, const kind_data *k, size_t n, double budget, double ms_per_ray,
-                          double *ms, int *all)
+                          int passes, bench_timing *tm, int *all)
 {
     const size_t total = k->br.n;
     size_t want = ms_per_ray > 0 ? (size_t)(budget / ms_per_ray) : n;
@@ -322,33 +356,28 @@ static size_t timed_trace(const sidx_accel *a, const kind_data *k, size_t n, dou
     if (want > n) want = n;
     *all = 0;
     if (want >= total) {
-        bench_trace(a, &k->br, 0, n, NULL, 0, 1, 0.0, k->hits, ms);
-        for (int rep = 0; rep < 2 && *ms < 30.0; ++rep) {
-            double again;
-            bench_trace(a, &k->br, 0, n, NULL, 0, 1, 0.0, k->hits, &again);
-            if (again < *ms) *ms = again;
-        }
+        bench_trace_timed(a, &k->br, 0, n, NULL, 0, 1, passes, budget, k->hits, tm);
         *all = n == k->br.n;
         return n;
     }
     /* fewer rays than the set (slow structure, or a ray limit) */
-    const size_t blocks = 8, per = want / blocks;
-    double sum = 0;
-    for (size_t b = 0; b < blocks; ++b) {
-        const size_t begin = b * total / blocks;
-        double t;
-        bench_trace(a, &k->br, begin, begin + per, NULL, 0, 1, 0.0, k->hits, &t);
-        sum += t;
+    blocks_pass p = {a, k, 8, want / 8};
+    bench_buf bufs[8 * 3];
+    for (size_t b = 0; b < p.blocks; ++b) {
+        const size_t begin = b * total / p.blocks;
+        bufs[3 * b] = (bench_buf){k->hits + begin, p.per * sizeof *k->hits, 1};
+        bufs[3 * b + 1] = (bench_buf){k->br.r + begin, p.per * sizeof *k->br.r, 0};
+        bufs[3 * b + 2] = (bench_buf){k->br.valid + begin, p.per, 0};
     }
-    *ms = sum;
-    return per * blocks;
+    bench_time_passes(blocks_pass_run, &p, bufs, (int)(3 * p.blocks), passes, budget, tm);
+    return p.per * p.blocks;
 }
 
 /* One structure (with one tri/box method) on one scene, every kind.
  * Returns the build time in ms, < 0 when the build failed. */
 static double bench_structure(const char *name, const sidx_mesh *m, const scene_spec *sc, kind_data *kinds, int nk,
                               sidx_tri_method tri, sidx_box_method box, size_t ray_limit, double budget,
-                              rows *out)
+                              int passes, rows *out)
 {
     sidx_build_options bo;
     memset(&bo, 0, sizeof bo);
@@ -394,7 +423,9 @@ static double bench_structure(const char *name, const sidx_mesh *m, const scene_
         const double cost = probe_cost(a, k, n);
         int all = 0;
         r->rays_req = n;
-        r->rays_timed = timed_trace(a, k, n, budget, cost, &r->trace_ms, &all);
+        bench_timing tm;
+        r->rays_timed = timed_trace(a, k, n, budget, cost, passes, &tm, &all);
+        row_timing(r, &tm);
         size_t max = cost > 0 ? (size_t)(budget / cost) : k->nsub;
         if (max < 200) max = 200;
         measure_errors(a, k, all ? k->hits : NULL, max, r);
@@ -424,13 +455,13 @@ static double job_run(const job *j, rows *out)
 {
     if (!j->sweep)
         return bench_structure(j->name, j->m, j->sc, j->kd, j->nk, SIDX_TRI_WATERTIGHT, SIDX_BOX_ROBUST, (size_t)-1,
-                               j->o->time_budget, out);
+                               j->o->time_budget, j->o->passes, out);
     for (int t = 0; t < SIDX_TRI_METHOD_COUNT; ++t)
         for (int b = 0; b < SIDX_BOX_METHOD_COUNT; ++b) {
             if (t == SIDX_TRI_WATERTIGHT && b == SIDX_BOX_ROBUST) continue;
             if (!strcmp(j->name, "brute") && b != SIDX_BOX_ROBUST) continue; /* brute has no boxes */
             bench_structure(j->name, j->m, j->sc, j->kd, j->nk, (sidx_tri_method)t, (sidx_box_method)b,
-                            j->o->rays / 4 + 1, j->o->time_budget / 2, out);
+                            j->o->rays / 4 + 1, j->o->time_budget / 2, j->o->passes, out);
         }
     return 0;
 }
@@ -561,11 +592,9 @@ static void bench_embree_rows(const char *name, bench_embree_cfg cfg, const sidx
             r->bytes = bench_embree_bytes(e);
             r->peak = peak;
             r->rays_timed = r->rays_req = k->br.n;
-            r->trace_ms = bench_embree_trace(e, k->rec, k->br.n, 0, packets[p], k->hits);
-            for (int rep = 0; rep < 2 && r->trace_ms < 30.0; ++rep) {
-                const double again = bench_embree_trace(e, k->rec, k->br.n, 0, packets[p], k->hits);
-                if (again < r->trace_ms) r->trace_ms = again;
-            }
+            bench_timing tm;
+            bench_embree_trace_timed(e, k->rec, k->br.n, 0, packets[p], o->passes, o->time_budget, k->hits, &tm);
+            row_timing(r, &tm);
             measure_errors(NULL, k, k->hits, k->nsub, r);
         }
     }
@@ -583,7 +612,8 @@ static void bench_embree_rows(const char *name, bench_embree_cfg cfg, const sidx
  *            into 4x4 tiles (outside the timing), so each of its packets
  *            is as compact as sidx's; sidx reads its tiles in place
  *            (wide BVHs) or gathers them (bvh) inside the timed call.
- *            Times: thread CPU time, best of 3.
+ *            Times: thread CPU time, best of --passes warm passes
+ *            after a cold one (bench_time_passes), like the table.
  *   threads  the "bvh" build on 1 and 2 threads against Embree's on a
  *            "threads=1" and a "threads=2" device, and sidx_trace_parallel
  *            on 1 and 2 threads: wall-clock, best of 5, so they mean
@@ -635,6 +665,40 @@ static size_t pp_mismatches(const sidx_hit *a, const sidx_hit *b, size_t n)
     return bad;
 }
 
+/* One pass of the packet section: sidx_trace_tiles (tile > 0; stats of
+ * the cold pass into *st) or single rays (tile = 0), timed by
+ * bench_time_passes like every row. */
+typedef struct pp_pass {
+    const sidx_accel *a;
+    const sidx_ray *r;
+    uint32_t W, H, tile;
+    sidx_packet_options po;
+    sidx_hit *out;
+    sidx_packet_stats *st;
+} pp_pass;
+
+static double pp_pass_run(void *ctx, int cold)
+{
+    const pp_pass *p = ctx;
+    const size_t N = (size_t)p->W * p->H;
+    sidx_packet_stats scratch;
+    memset(&scratch, 0, sizeof scratch);
+    const double t0 = bench_clock_ms();
+    if (p->tile) sidx_trace_tiles(p->a, p->r, p->W, p->H, p->tile, &p->po, p->out, cold ? p->st : &scratch);
+    else
+        for (size_t i = 0; i < N; ++i) sidx_accel_intersect(p->a, &p->r[i], NULL, &p->out[i]);
+    return bench_clock_ms() - t0;
+}
+
+static double pp_time(const pp_pass *p, int passes)
+{
+    const size_t N = (size_t)p->W * p->H;
+    const bench_buf bufs[2] = {{p->out, N * sizeof *p->out, 1}, {p->r, N * sizeof *p->r, 0}};
+    bench_timing tm;
+    bench_time_passes(pp_pass_run, (void *)(uintptr_t)p, bufs, 2, passes, 0.0, &tm);
+    return tm.best_ms;
+}
+
 /* Packet rows of one structure: sidx_trace_tiles in 4x4 and 8x8 tiles,
  * plain and frustum, hits checked against that structure's single rays
  * (ref, traced in single_ms); the fastest row so far lands in *best
@@ -643,7 +707,7 @@ static size_t pp_mismatches(const sidx_hit *a, const sidx_hit *b, size_t n)
  * their structure (sidx-bvh8-8x8-plain). */
 static void pp_packet_rows(FILE *f, const scene_spec *sc, const char *accel, const sidx_accel *a, const kind_data *k,
                            uint32_t W, uint32_t H, const sidx_hit *ref, double single_ms, sidx_hit *got, double *best_mr,
-                           char *best_name, size_t best_size, double tile8[2])
+                           char *best_name, size_t best_size, double tile8[2], int passes)
 {
     const size_t N = (size_t)W * H;
     const int wide = strcmp(accel, "bvh") != 0;
@@ -654,15 +718,8 @@ static void pp_packet_rows(FILE *f, const scene_spec *sc, const char *accel, con
             const sidx_packet_options po = {mode ? SIDX_PACKET_FRUSTUM : SIDX_PACKET_PLAIN, 0, 0};
             sidx_packet_stats ps;
             memset(&ps, 0, sizeof ps);
-            double best = INFINITY;
-            for (int rep = 0; rep < 3; ++rep) {
-                sidx_packet_stats scratch;
-                memset(&scratch, 0, sizeof scratch);
-                const double t0 = bench_clock_ms();
-                sidx_trace_tiles(a, k->br.r, W, H, tile, &po, got, rep ? &scratch : &ps);
-                const double t = bench_clock_ms() - t0;
-                if (t < best) best = t;
-            }
+            const pp_pass pass = {a, k->br.r, W, H, tile, po, got, &ps};
+            const double best = pp_time(&pass, passes);
             const double mr = (double)N / (best * 1e3);
             const size_t bad = pp_mismatches(ref, got, N);
             if (tile == 8 && !bad) tile8[mode] = mr;
@@ -709,39 +766,31 @@ static void packet_parallel_rows(FILE *f, const run_opts *o, const scene_spec *s
     if (!ref || !got || !tiled || !eh) goto done;
 
     /* single rays: the reference hits and the time to beat */
-    double single = INFINITY;
-    for (int rep = 0; rep < 3; ++rep) {
-        const double t0 = bench_clock_ms();
-        for (size_t i = 0; i < N; ++i) sidx_accel_intersect(a, &k->br.r[i], NULL, &ref[i]);
-        const double t = bench_clock_ms() - t0;
-        if (t < single) single = t;
-    }
-    fprintf(f, "\npackets %s: %ux%u primary rays, \"bvh\"; single rays %.3f Mrays/s (thread CPU time, best of 3)\n",
-            sc->name, W, H, (double)N / (single * 1e3));
+    const sidx_packet_options no_po = {SIDX_PACKET_PLAIN, 0, 0};
+    const pp_pass single_pass = {a, k->br.r, W, H, 0, no_po, ref, NULL};
+    const double single = pp_time(&single_pass, o->passes);
+    fprintf(f, "\npackets %s: %ux%u primary rays, \"bvh\"; single rays %.3f Mrays/s (thread CPU time, best of %d "
+               "warm passes after a cold one)\n",
+            sc->name, W, H, (double)N / (single * 1e3), o->passes);
     double best_sidx = 0;
     char best_sidx_name[48] = "";
     ms->packets = 1;
     ms->image_w = W;
     ms->image_h = H;
     pp_packet_rows(f, sc, "bvh", a, k, W, H, ref, single, got, &best_sidx, best_sidx_name, sizeof best_sidx_name,
-                   ms->tile8[0]);
+                   ms->tile8[0], o->passes);
     /* the same over the wide BVHs (packet_wide.c), against their own single rays */
     static const char *const wide_names[2] = {"bvh8", "bvh4"};
     for (int wi = 0; wi < 2; ++wi) {
         sidx_accel *wa = NULL;
         sidx_hit *wref = malloc(N * sizeof *wref);
         if (wref && sidx_accel_build(wide_names[wi], m, &bo, &wa, NULL) == SIDX_OK) {
-            double wsingle = INFINITY;
-            for (int rep = 0; rep < 3; ++rep) {
-                const double t0 = bench_clock_ms();
-                for (size_t i = 0; i < N; ++i) sidx_accel_intersect(wa, &k->br.r[i], NULL, &wref[i]);
-                const double t = bench_clock_ms() - t0;
-                if (t < wsingle) wsingle = t;
-            }
+            const pp_pass wsingle_pass = {wa, k->br.r, W, H, 0, no_po, wref, NULL};
+            const double wsingle = pp_time(&wsingle_pass, o->passes);
             fprintf(f, "packets %s: \"%s\" single rays %.3f Mrays/s\n", sc->name, wide_names[wi],
                     (double)N / (wsingle * 1e3));
             pp_packet_rows(f, sc, wide_names[wi], wa, k, W, H, wref, wsingle, got, &best_sidx, best_sidx_name,
-                           sizeof best_sidx_name, ms->tile8[wi ? 1 : 2]);
+                           sizeof best_sidx_name, ms->tile8[wi ? 1 : 2], o->passes);
         }
         sidx_accel_destroy(wa);
         free(wref);
@@ -764,11 +813,9 @@ static void packet_parallel_rows(FILE *f, const run_opts *o, const scene_spec *s
             int best_p = 0;
             static const int widths[4] = {1, 4, 8, 16};
             for (int p = 0; p < 4; ++p) {
-                double best = INFINITY;
-                for (int rep = 0; rep < 3; ++rep) {
-                    const double t = bench_embree_trace(e, tiled, nt, 0, widths[p], eh);
-                    if (t < best) best = t;
-                }
+                bench_timing tm;
+                bench_embree_trace_timed(e, tiled, nt, 0, widths[p], o->passes, 0.0, eh, &tm);
+                const double best = tm.best_ms;
                 const double mr = (double)nt / (best * 1e3);
                 fprintf(f, "packet embree-p%-2d(4x4 tiles) %-12s %9.3f Mrays/s\n", widths[p], sc->name, mr);
                 if (widths[p] > 1 && mr > best_e) {
@@ -1035,16 +1082,18 @@ static int write_csv(const char *path, const rows *rs)
     if (!f) return 0;
     fprintf(f, "scene,tris,kind,accel,tri,box,embree,build_ms,trace_ms,rays_timed,mrays_per_s,bytes,"
                "build_peak_bytes,build_heap_peak_bytes,nodes,"
-               "depth,mean_leaf_prims,dup_factor,steps_per_ray,prims_per_ray,checked,false_miss,false_hit,wrong_prim,max_rel_t,error_rate\n");
+               "depth,mean_leaf_prims,dup_factor,steps_per_ray,prims_per_ray,checked,false_miss,false_hit,wrong_prim,max_rel_t,error_rate,"
+               "mrays_median,mrays_cold,passes\n");
     for (size_t i = 0; i < rs->n; ++i) {
         const row *r = &rs->v[i];
-        fprintf(f, "%s,%u,%s,%s,%s,%s,%d,%.3f,%.3f,%zu,%.4f,%zu,%lld,%lld,%u,%u,%.3f,%.4f,%.3f,%.3f,%llu,%llu,%llu,%llu,%.3e,%.3e\n",
+        fprintf(f, "%s,%u,%s,%s,%s,%s,%d,%.3f,%.3f,%zu,%.4f,%zu,%lld,%lld,%u,%u,%.3f,%.4f,%.3f,%.3f,%llu,%llu,%llu,%llu,%.3e,%.3e,%.4f,%.4f,%d\n",
                 r->scene, r->tris, r->kind, r->accel, r->embree ? "embree" : sidx_tri_method_name(r->tri),
                 r->embree ? "embree" : sidx_box_method_name(r->box), r->embree, r->build_ms, r->trace_ms,
                 r->rays_timed, row_mrays(r), r->bytes, r->peak, r->heap, r->nodes, r->depth, r->leaf_prims, r->dup, r->steps, r->prims,
                 (unsigned long long)r->err.rays, (unsigned long long)r->err.false_miss,
                 (unsigned long long)r->err.false_hit, (unsigned long long)r->err.wrong_prim, r->err.max_rel_t,
-                tk_errstats_rate(&r->err));
+                tk_errstats_rate(&r->err), bench_mrays(r->rays_timed, r->median_ms),
+                bench_mrays(r->rays_timed, r->cold_ms), r->passes);
     }
     return fclose(f) == 0;
 }
@@ -1548,7 +1597,7 @@ static const row *md_find(const rows *rs, const char *scene, const char *kind, c
  * headline scenes' primary and diffuse rays, the build times, and the
  * errors of those rows. */
 static void md_write_table(FILE *md, const char *caption, const rows *rs, const scene_spec *scenes, const size_t *hs,
-                           size_t nh)
+                           size_t nh, int passes)
 {
     static const char *const accel[] = {"bvh", "bvh4", "bvh8", "kdtree", "embree", "embree-hq"};
     static const char *const head[] = {"`bvh`", "`bvh4`", "`bvh8`", "`kdtree`", "Embree `rtcIntersect1`", "Embree HQ"};
@@ -1559,9 +1608,9 @@ static void md_write_table(FILE *md, const char *caption, const rows *rs, const 
         for (size_t k = 0; k < 2; ++k)
             for (int a = 0; a < NA; ++a) have[a] |= md_find(rs, scenes[hs[h]].name, kinds[k], accel[a]) != NULL;
     const int ratio = have[2] && have[4];
-    fprintf(md, "<!-- bench:table begin -->\n%s; Mrays/s on one thread (CPU time of the tracing thread), builds in ms "
-                "(CPU time of the process):\n\n| scene, rays |",
-            caption);
+    fprintf(md, "<!-- bench:table begin -->\n%s; Mrays/s on one thread (CPU time of the tracing thread, the best of "
+                "up to %d warm passes after a cold one), builds in ms (CPU time of the process):\n\n| scene, rays |",
+            caption, passes);
     int ncol = 0;
     for (int a = 0; a < NA; ++a)
         if (have[a]) {
@@ -1690,7 +1739,7 @@ static void md_pair(FILE *md, const double v[2], const char *fmt)
 }
 
 static void md_write_packets(FILE *md, const char *caption, const scene_spec *scenes, const md_scene *all,
-                             const size_t *hs, size_t ns, const rows *rs)
+                             const size_t *hs, size_t ns, const rows *rs, int passes)
 {
     size_t first = ns;
     for (size_t h = 0; h < ns && first == ns; ++h)
@@ -1698,10 +1747,11 @@ static void md_write_packets(FILE *md, const char *caption, const scene_spec *sc
     if (first == ns) return;
     fprintf(md, "<!-- bench:packets begin -->\n%s; `sidx_trace_tiles` on the %u×%u primary image in 8×8 tiles, "
                 "the faster of plain and frustum tiles, against Embree's fastest packet call (`rtcIntersect4/8/16`) "
-                "on the same image in 4×4 tiles; Mrays/s on one thread (CPU time of the thread, best of 3):\n\n"
+                "on the same image in 4×4 tiles; Mrays/s on one thread (CPU time of the thread, best of %d warm "
+                "passes after a cold one):\n\n"
                 "| scene | `bvh` 8×8 | `bvh4` 8×8 | `bvh8` 8×8 | Embree, best packet | `bvh8` 8×8 / Embree |\n"
                 "|---|---|---|---|---|---|\n",
-            caption, all[first].image_w, all[first].image_h);
+            caption, all[first].image_w, all[first].image_h, passes);
     for (size_t h = 0; h < ns; ++h) {
         const size_t i = hs[h];
         const md_scene *ms = &all[i];
@@ -1811,8 +1861,10 @@ static void run_usage(FILE *out)
             "  --ref-budget N     ray x triangle tests for the reference per scene and kind\n"
             "                     (default 1.5e8; the subset has at least 500 rays)\n"
             "  --time-budget MS   time about MS ms of tracing per row (default 100): a slow structure\n"
-            "                     traces 8 blocks of contiguous rays spread over the set; fast\n"
-            "                     ones trace every ray 3 times and the fastest run counts\n"
+            "                     traces 8 blocks of contiguous rays spread over the set, a fast one\n"
+            "                     every ray; either way a cold pass (reported in the CSV) and then\n"
+            "                     warm passes while within MS, the fastest counting\n"
+            "  --passes N         at most N warm passes per row (default 5; at least 1 runs)\n"
             "  --build-budget MS  skip a structure whose predicted build exceeds MS (default 8000)\n"
             "  --method-scenes L  built-in scenes for the triangle/box test sweep (default cornell,icosphere)\n"
             "  --timeout S        each structure runs per scene in a child process, killed after S\n"
@@ -1885,7 +1937,7 @@ static void run_usage(FILE *out)
 int bench_cmd_run(int argc, char **argv)
 {
     run_opts o = {NULL, NULL, NULL, NULL, NULL, NULL, "cornell,icosphere", 20000, 1, 1.5e8, 100.0, 8000.0, 5000,
-                  1, 1, 1, 1, 60000.0, 4096, 2, "bunny,sponza", 1, 21, NULL, NULL, NULL};
+                  1, 1, 1, 1, 60000.0, 4096, 2, "bunny,sponza", 1, 21, NULL, NULL, NULL, BENCH_PASSES};
     for (int i = 1; i < argc; ++i) {
         const char *a = argv[i];
         const char *val = (i + 1 < argc) ? argv[i + 1] : NULL;
@@ -1920,6 +1972,11 @@ int bench_cmd_run(int argc, char **argv)
             const long v = strtol(val, &end, 10);
             if (*end || v < 1 || v > 1001) goto bad_value;
             o.rounds = (int)v;
+        }
+        else if (!strcmp(a, "--passes")) {
+            const long v = strtol(val, &end, 10);
+            if (*end || end == val || v < 1 || v > 1000) goto bad_value;
+            o.passes = (int)v;
         }
         else if (!strcmp(a, "--timeout")) {
             o.timeout_ms = strtod(val, &end) * 1e3;
@@ -2013,8 +2070,9 @@ int bench_cmd_run(int argc, char **argv)
     FILE *f = stdout;
     fprintf(f, "sidx-bench run: %zu rays per scene x kind (seed %llu), one thread; Embree %s; "
                "reference: double-precision watertight brute force;\n"
-               "times are CPU time of the tracing thread (builds: of the process), not wall-clock\n",
-            o.rays, (unsigned long long)o.seed, bench_embree_version());
+               "times are CPU time of the tracing thread (builds: of the process), not wall-clock;\n"
+               "Mrays/s: the best of up to %d warm passes after a cold one (the CSV has the cold and median)\n",
+            o.rays, (unsigned long long)o.seed, bench_embree_version(), o.passes);
     const double t_start = tk_now_ms();
     int failures = 0;
     double ms_per_tri[128] = {0};
@@ -2119,8 +2177,8 @@ int bench_cmd_run(int argc, char **argv)
     if (md) {
         size_t hs[64];
         const size_t nh = md_headline_scenes(&o, scenes, ns, hs);
-        md_write_table(md, caption, &rs, scenes, hs, nh);
-        md_write_packets(md, caption, scenes, mds, hs, nh, &rs);
+        md_write_table(md, caption, &rs, scenes, hs, nh, o.passes);
+        md_write_packets(md, caption, scenes, mds, hs, nh, &rs, o.passes);
         md_write_threads(md, caption, scenes, mds, hs, nh, &rs);
         md_write_hooks(md, caption, mdh);
         fflush(md);

@@ -32,6 +32,27 @@ typedef struct scale_pt {
     double mesh;      /* the mesh's positions and indices */
 } scale_pt;
 
+/* Tracing time per structure and size: the cold pass stops after this
+ * many ms (the rays it reached are the ones timed warm), and the warm
+ * passes stop once they have spent it (bench_time_passes). */
+#define SCALE_TRACE_MS 3000.0
+
+typedef struct scale_pass {
+    const sidx_accel *a;
+    const bench_rays *br;
+    size_t n; /* rays per pass: all, or what the cold pass reached */
+    sidx_hit *hits;
+} scale_pass;
+
+static double scale_pass_run(void *ctx, int cold)
+{
+    scale_pass *p = ctx;
+    double ms = 0;
+    const size_t done = bench_trace(p->a, p->br, 0, p->n, NULL, 0, 1, cold ? SCALE_TRACE_MS : 0.0, p->hits, &ms);
+    if (cold) p->n = done;
+    return ms;
+}
+
 static void scale_usage(FILE *out)
 {
     fprintf(out,
@@ -63,8 +84,12 @@ static void scale_usage(FILE *out)
             "  --budget-ms MS     a structure whose build takes longer skips the larger sizes\n"
             "                     (default 20000)\n"
             "  --rays N           primary rays per size (default 20000; counters on 2000)\n"
+            "  --passes N         Mrays/s: the best of up to N warm passes (default %d) after a cold\n"
+            "                     one, sidx and Embree alike; the cold pass stops after 3 s (the rays\n"
+            "                     it reached are the ones timed), the warm passes once they spent 3 s\n"
             "  --csv FILE  --plot FILE.svg (build ms against triangles, log-log; the build's peak\n"
-            "                     memory against triangles goes to FILE-memory.svg)\n");
+            "                     memory against triangles goes to FILE-memory.svg)\n",
+            BENCH_PASSES);
 }
 
 /* Least squares slope and intercept of y on x. */
@@ -302,6 +327,7 @@ int bench_cmd_scale(int argc, char **argv)
 {
     const char *scene = "icosphere", *accel_list = NULL, *csv = NULL, *plot = NULL;
     double min_tris = 1000, max_tris = 4200000, budget = 20000;
+    int passes = BENCH_PASSES;
     size_t nrays = 20000;
     for (int i = 1; i < argc; ++i) {
         const char *a = argv[i], *val = i + 1 < argc ? argv[i + 1] : NULL;
@@ -323,6 +349,11 @@ int bench_cmd_scale(int argc, char **argv)
         else if (!strcmp(a, "--min-tris")) { min_tris = strtod(val, &end); if (*end || !(min_tris > 0)) goto bad; }
         else if (!strcmp(a, "--max-tris")) { max_tris = strtod(val, &end); if (*end || !(max_tris > 0)) goto bad; }
         else if (!strcmp(a, "--budget-ms")) { budget = strtod(val, &end); if (*end || !(budget > 0)) goto bad; }
+        else if (!strcmp(a, "--passes")) {
+            const long v = strtol(val, &end, 10);
+            if (*end || end == val || v < 1 || v > 1000) goto bad;
+            passes = (int)v;
+        }
         else if (!strcmp(a, "--rays")) {
             nrays = (size_t)strtoull(val, &end, 10);
             if (*end || nrays == 0 || nrays > 10000000) goto bad;
@@ -399,9 +430,10 @@ int bench_cmd_scale(int argc, char **argv)
     bench_cpu_time = 1;
     FILE *f = stdout;
     fprintf(f, "sidx-bench scale: scene %s, %zu %s rays per size, build budget %.0f ms; one thread; Embree %s\n"
+               "Mrays/s: the best of up to %d warm passes after a cold one (thread CPU time)\n"
                "MB: the structure; peak_MB: resident peak of the build above the loaded mesh (mesh not\n"
                "included; Embree's includes its copy of vertices and indices); heap_MB: sidx allocator peak\n",
-            scene, nrays, stadium ? "camera-at-the-teapot" : "primary", budget, bench_embree_version());
+            scene, nrays, stadium ? "camera-at-the-teapot" : "primary", budget, bench_embree_version(), passes);
     fprintf(f, "%-14s %10s %10s %9s %8s %8s %9s %9s %9s\n", "accel", "tris", "build_ms", "Mrays/s", "steps", "prims",
             "MB", "peak_MB", "heap_MB");
     int rc = BENCH_OK;
@@ -475,8 +507,9 @@ int bench_cmd_scale(int argc, char **argv)
                     continue;
                 }
                 p->bytes = (double)bench_embree_bytes(e);
-                const double ms = bench_embree_trace(e, rec, nrays, 0, 1, hits);
-                p->mrays = ms > 0 ? (double)nrays / (ms * 1e3) : 0;
+                bench_timing tm;
+                bench_embree_trace_timed(e, rec, nrays, 0, 1, passes, SCALE_TRACE_MS, hits, &tm);
+                p->mrays = bench_mrays(nrays, tm.best_ms);
                 bench_embree_free(e);
             } else {
                 bench_heap heap;
@@ -497,9 +530,13 @@ int bench_cmd_scale(int argc, char **argv)
                     continue;
                 }
                 p->heap = (double)atomic_load(&heap.peak);
-                double ms = 0;
-                size_t done = bench_trace(a, &br, 0, nrays, NULL, 0, 1, 3000.0, hits, &ms);
-                p->mrays = ms > 0 ? (double)done / (ms * 1e3) : 0;
+                scale_pass sp = {a, &br, nrays, hits};
+                const bench_buf bufs[3] = {{hits, nrays * sizeof *hits, 1},
+                                           {br.r, nrays * sizeof *br.r, 0},
+                                           {br.valid, nrays, 0}};
+                bench_timing tm;
+                bench_time_passes(scale_pass_run, &sp, bufs, 3, passes, SCALE_TRACE_MS, &tm);
+                p->mrays = bench_mrays(sp.n, tm.best_ms);
                 sidx_counters c;
                 sidx_counters_init(&c);
                 sidx_hook h = sidx_counters_hook(&c);

@@ -1,0 +1,87 @@
+#!/bin/sh
+# run_bench.sh — sidx-bench's timing options on a small built-in scene.
+#
+#   BUILD=build sh tests/run_bench.sh        (make test-run does this)
+#
+# Every traced row is timed as a cold pass, then warm passes (--passes N):
+# checks that `trace` reports the cold, best and median figures and the
+# number of warm passes, for a sidx structure and for Embree, that its
+# headline (mrays_per_s) is the best warm pass, that the best is at least
+# the median (the same passes, sorted), that the hits written do not
+# depend on the number of passes, that a bad --passes exits 2, and that `run` and `scale` take
+# --passes and report it (run's CSV: mrays_median, mrays_cold, passes).
+# Times themselves are never checked.  Without sidx-bench (no Embree) it
+# says so in one line and passes.  Run from the repository root.
+
+BUILD=${BUILD:-build}
+BENCH=$BUILD/bin/sidx-bench
+
+if [ ! -x "$BENCH" ]; then
+    echo "bench: skipped: no $BENCH (built only with Embree, libembree-dev)"
+    exit 0
+fi
+TMP=$(mktemp -d "${TMPDIR:-/tmp}/sidx-bench-test.XXXXXX") || exit 1
+trap 'rm -rf "$TMP"' EXIT
+failed=0
+fail() {
+    echo "bench: FAILED: $*"
+    failed=1
+}
+
+# A JSON number: key KEY of the one-line object in file FILE.
+num() {
+    sed -n "s/.*\"$1\":\\([-0-9.e+]*\\).*/\\1/p" "$2"
+}
+
+"$BENCH" trace --help >"$TMP/help" 2>&1 || fail "trace --help exits $?"
+grep -q -- "--passes N" "$TMP/help" || fail "trace --help does not name --passes"
+"$BENCH" rays teapot primary 3000 1 "$TMP/rays.bin" >/dev/null || fail "rays exits $?"
+
+for accel in bvh8 embree; do
+    out=$TMP/$accel.json
+    if ! "$BENCH" trace --accel $accel --passes 3 teapot "$TMP/rays.bin" "$TMP/$accel.hits" >"$out"; then
+        fail "trace --accel $accel --passes 3 exits $?"
+        continue
+    fi
+    for key in mrays_per_s mrays_best mrays_median mrays_cold cold_ms trace_ms passes; do
+        [ -n "$(num $key "$out")" ] || fail "trace --accel $accel: no \"$key\" in $(cat "$out")"
+    done
+    [ "$(num passes "$out")" = 3 ] || fail "trace --accel $accel --passes 3: passes $(num passes "$out")"
+    [ "$(num mrays_per_s "$out")" = "$(num mrays_best "$out")" ] ||
+        fail "trace --accel $accel: mrays_per_s $(num mrays_per_s "$out") is not mrays_best $(num mrays_best "$out")"
+    awk -v b="$(num mrays_best "$out")" -v m="$(num mrays_median "$out")" -v c="$(num mrays_cold "$out")" \
+        'BEGIN { exit !(b >= m && m > 0 && c > 0) }' ||
+        fail "trace --accel $accel: best $(num mrays_best "$out") < median $(num mrays_median "$out"), or a zero figure"
+done
+"$BENCH" trace --accel bvh8 --passes 1 teapot "$TMP/rays.bin" "$TMP/one.hits" >/dev/null ||
+    fail "trace --passes 1 exits $?"
+cmp -s "$TMP/bvh8.hits" "$TMP/one.hits" || fail "trace writes other hits with --passes 3 than with --passes 1"
+
+for bad in 0 x 1001; do
+    "$BENCH" trace --accel bvh8 --passes $bad teapot "$TMP/rays.bin" "$TMP/x.hits" >/dev/null 2>&1
+    rc=$?
+    [ $rc = 2 ] || fail "trace --passes $bad exits $rc, not 2"
+done
+
+if "$BENCH" run --builtin teapot --accel bvh,embree --kinds primary --rays 1000 --passes 2 --no-methods \
+    --no-hooks --no-packets --no-targets --timeout 0 --csv "$TMP/run.csv" >"$TMP/run.txt" 2>&1; then
+    head -1 "$TMP/run.csv" | grep -q ",mrays_median,mrays_cold,passes$" || fail "run's CSV header: $(head -1 "$TMP/run.csv")"
+    rows=$(awk -F, 'NR > 1 && $NF == 2' "$TMP/run.csv" | wc -l)
+    [ "$rows" -ge 2 ] || fail "run --passes 2: $rows CSV rows with passes = 2 (want bvh and embree)"
+    grep -q "up to 2 warm passes after a cold one" "$TMP/run.txt" || fail "run does not say how rows are timed"
+else
+    fail "run --passes 2 exits $?: $(tail -3 "$TMP/run.txt")"
+fi
+"$BENCH" run --passes 0 --builtin teapot >/dev/null 2>&1
+rc=$?
+[ $rc = 2 ] || fail "run --passes 0 exits $rc, not 2"
+
+if "$BENCH" scale --accel bvh8,embree --max-tris 2000 --rays 500 --passes 2 >"$TMP/scale.txt" 2>&1; then
+    grep -q "up to 2 warm passes after a cold one" "$TMP/scale.txt" || fail "scale does not say how it times"
+    grep -q "^embree " "$TMP/scale.txt" || fail "scale has no embree row"
+else
+    fail "scale --passes 2 exits $?: $(tail -3 "$TMP/scale.txt")"
+fi
+
+[ $failed = 0 ] && echo "bench: trace, run and scale time a cold pass and warm passes (--passes)"
+exit $failed
