@@ -224,22 +224,51 @@ static const char *const hint_leaf =
     "a leaf tests each of its triangles refs[first .. first + count) against the best hit so far, "
     "sidx_ex_test_triangle(ex, prim, best->t, &t), and reports a closer one with sidx_ex_hit_update";
 
+static const char *const hint_stop_nohit =
+    "\"Traversal can be terminated as soon as surface intersection is found in the current node\": only a hit "
+    "stops the walk; with no hit (best->prim == SIDX_NO_HIT) pop the next cell, and return 0 when the stack is "
+    "empty";
+static const char *const hint_start =
+    "the loop is \"given (node, t_near, t_far)\": start at the root, sidx_ex_node_enter(ex, 0, 0, t_near, "
+    "t_far), and report every cell you enter";
+static const char *const hint_near_interval =
+    "the same child with another interval: when the plane cuts the cell, \"continue with (near child, t_near, "
+    "t_split)\" (t_far becomes t_split), and when it lies beyond the cell the near child keeps (t_near, t_far)";
+static const char *const hint_far_interval =
+    "the same far child with another interval: it is pushed as (far child, t_split, t_far), and when the plane "
+    "lies before the cell the far child keeps (t_near, t_far)";
+
+/* The hint follows what differs at the first divergence: a stop where
+ * the reference goes on (or the reverse) is the termination rule; the
+ * root not entered is the start; another triangle step is the leaf; a
+ * push where the reference enters (or the reverse) is the three cases; the
+ * same cell with another interval is the interval the slide gives that
+ * child; another cell is near/far; a pop is the stack. */
 static const char *hint(size_t i, const sidx_event *ref, const sidx_event *stu)
 {
     const int r = (int)(i % RAYS);
     const int ref_stop = ref && ref->type == SIDX_EV_TERMINATE && ref->reason == SIDX_TERM_HIT_IN_CELL;
     const int stu_stop = stu && stu->type == SIDX_EV_TERMINATE && stu->reason == SIDX_TERM_HIT_IN_CELL;
+    if (stu_stop && !ref_stop) {
+        if (stu->prim == SIDX_NO_HIT) return hint_stop_nohit;
+        return r >= K_IN_PLANE && r < K_TMAX ? hint_nan : hint_cannot;
+    }
     if (ref_stop && !stu_stop) return hint_stop;
-    if (stu_stop && !ref_stop) return r >= K_IN_PLANE && r < K_TMAX ? hint_nan : hint_cannot;
+    if (ref && ref->type == SIDX_EV_NODE_ENTER && ref->node == 0 && (!stu || stu->type != SIDX_EV_NODE_ENTER))
+        return hint_start;
     if ((ref && (ref->type == SIDX_EV_PRIM_TEST || ref->type == SIDX_EV_HIT_UPDATE)) ||
         (stu && (stu->type == SIDX_EV_PRIM_TEST || stu->type == SIDX_EV_HIT_UPDATE)))
         return hint_leaf;
     if ((ref && ref->type == SIDX_EV_STACK_POP) || (stu && stu->type == SIDX_EV_STACK_POP)) return hint_pop;
     if (ref && ref->type == SIDX_EV_TERMINATE && stu && stu->type == SIDX_EV_NODE_ENTER) return hint_pop;
-    if (r >= K_ON_PLANE && r < K_NEG_ZERO) return hint_tie;
+    if (ref && stu && (ref->type == SIDX_EV_STACK_PUSH) != (stu->type == SIDX_EV_STACK_PUSH))
+        return r >= K_IN_PLANE && r < K_TMAX ? hint_nan : hint_tie;
+    if (ref && stu && ref->type == stu->type && ref->node == stu->node &&
+        (ref->type == SIDX_EV_NODE_ENTER || ref->type == SIDX_EV_STACK_PUSH))
+        return ref->type == SIDX_EV_NODE_ENTER ? hint_near_interval : hint_far_interval;
     if (r >= K_NEG_ZERO && r < K_IN_PLANE) return hint_zero;
     if (r >= K_IN_PLANE && r < K_TMAX) return hint_nan;
-    if (ref && stu && ref->type == SIDX_EV_STACK_PUSH && stu->type != SIDX_EV_STACK_PUSH) return hint_tie;
+    if (r >= K_ON_PLANE && r < K_NEG_ZERO) return hint_tie;
     return hint_direction;
 }
 
@@ -293,6 +322,7 @@ static void student(size_t i, const sidx_hook *h)
     } else if (kd_walk(&ex, nodes, refs, tn, tf, &best)) {
         e.reason = SIDX_TERM_HIT_IN_CELL;
         e.t = best.t;
+        e.prim = best.prim; /* not compared: the hint tells a stop with no hit */
         e.count = c.entered;
         e.node = c.node;
         e.t_near = c.t_near;
