@@ -15,8 +15,12 @@
 #   exit 2, BUILD FAILED   invalid (the mutation does not compile): not counted
 #   exit 0                 survived
 # A survivor listed in tests/exercises/equivalent.txt (with the argument
-# why it cannot change behaviour) counts as equivalent.  Then every
-# planted mistake of tests/exercises/mistakes.txt runs and must give its
+# why it cannot change behaviour) counts as equivalent; one whose argument
+# starts with [memory] is a memory error no trace shows (a write past an
+# array), caught only by a sanitizer build (BUILD=build/san after make
+# SAN=1), and is counted apart.  The score is killed / (valid - equivalent
+# - memory).  Then every planted mistake of tests/exercises/mistakes.txt
+# runs and must give its
 # exit status and its expect texts (the hint it must get).
 # --sample N runs every N-th mutant of each exercise (a deterministic
 # sample, for make test).  Exit 1 if a non-equivalent mutant survives, an
@@ -73,7 +77,7 @@ fi
 equiv=tests/exercises/equivalent.txt
 start=$(date +%s)
 fail=0
-printf '%-22s %9s %7s %7s %10s %8s %7s\n' exercise generated invalid killed equivalent survived score
+printf '%-22s %9s %7s %7s %10s %7s %8s %7s\n' exercise generated invalid killed equivalent memory survived score
 for name in $names; do
     sol=lessons/exercises/solutions/$name.c
     [ -f "$sol" ] || { echo "mutants.sh: no $sol" >&2; exit 2; }
@@ -103,17 +107,20 @@ for name in $names; do
             if (cls == "invalid") { ++inv; next }
             if (cls == "killed") {
                 ++kill
-                if ($2 in eq) { printf "  stale equivalent (killed): %s :: %s\n", name, $2 > "/dev/stderr"; ++bad }
+                if (($2 in eq) && eq[$2] !~ /^\[memory\]/) {
+                    printf "  stale equivalent (killed): %s :: %s\n", name, $2 > "/dev/stderr"
+                    ++bad
+                }
                 next
             }
-            if ($2 in eq) { ++eqv; next }
+            if ($2 in eq) { if (eq[$2] ~ /^\[memory\]/) ++mem; else ++eqv; next }
             ++surv
             printf "  SURVIVED %s.%d: %s :: %s\n", name, $1, name, $2 > "/dev/stderr"
         }
         END {
-            valid = kill + eqv + surv
-            score = valid - eqv > 0 ? 100 * kill / (valid - eqv) : 100
-            printf "%-22s %9d %7d %7d %10d %8d %6.1f%%\n", name, gen, inv, kill, eqv, surv, score
+            valid = kill + eqv + mem + surv
+            score = valid - eqv - mem > 0 ? 100 * kill / (valid - eqv - mem) : 100
+            printf "%-22s %9d %7d %7d %10d %7d %8d %6.1f%%\n", name, gen, inv, kill, eqv, mem, surv, score
             exit (surv > 0 || bad > 0)
         }' "$d/run" "$d/index" 2>&1 || fail=1
 done
