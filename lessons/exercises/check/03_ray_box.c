@@ -15,7 +15,7 @@ typedef struct box_case {
 } box_case;
 
 #define BOX_RANDOM 40
-#define BOX_FIXED 19
+#define BOX_FIXED 21
 static box_case cases[BOX_FIXED + BOX_RANDOM];
 
 static const char *const hint_slab =
@@ -74,6 +74,10 @@ static int setup(void)
        0, INFINITY);
     BC("ray on a face plane of the box (d = 0 on that axis)", hint_on_plane, U,
        ex_ray(-5, 1, 0.5f, 1, 0, 0, 0, INFINITY), 0, INFINITY);
+    BC("ray on the min face plane, +0 on that axis (NaN at the near plane)", hint_on_plane, U,
+       ex_ray(-5, -1, 0.5f, 1, 0, 0, 0, INFINITY), 0, INFINITY);
+    BC("ray on the max face plane, -0 on that axis (NaN at the near plane)", hint_on_plane, U,
+       ex_ray(-5, 1, 0.5f, 1, -0.0f, 0, 0, INFINITY), 0, INFINITY);
     BC("origin inside the box", hint_inside, U, ex_ray(0.25f, 0.5f, -0.5f, 1, -1, 0.5f, 0, INFINITY), 0, INFINITY);
     BC("origin inside, tmin > 0", hint_inside, U, ex_ray(0, 0, 0, 0.5f, 0.25f, 1, 0.5f, INFINITY), 0.5f, INFINITY);
     BC("box behind the origin", hint_clip, U, ex_ray(5, 0, 0, 1, 0, 0, 0, INFINITY), 0, INFINITY);

@@ -274,7 +274,8 @@ static const char *const hint_far_interval =
  * root not entered is the start; another triangle step is the leaf; a
  * push where the reference enters (or the reverse) is the three cases; the
  * same cell with another interval is the interval the slide gives that
- * child; another cell is near/far; a pop is the stack. */
+ * child; another cell entered or pushed is near/far (the -0 rule on the
+ * axis-parallel rays, the NaN rule inside the plane); a pop is the stack. */
 static const char *hint(size_t i, const sidx_event *ref, const sidx_event *stu)
 {
     const int r = (int)(i % RAYS);
@@ -299,7 +300,6 @@ static const char *hint(size_t i, const sidx_event *ref, const sidx_event *stu)
         return ref->type == SIDX_EV_NODE_ENTER ? hint_near_interval : hint_far_interval;
     if (r >= K_NEG_ZERO && r < K_IN_PLANE) return hint_zero;
     if (r >= K_IN_PLANE && r < K_TMAX) return hint_nan;
-    if (r >= K_ON_PLANE && r < K_NEG_ZERO) return hint_tie;
     return hint_direction;
 }
 
