@@ -358,7 +358,13 @@ $(BUILD)/bin/sidx-check: $(EX_CHECK_OBJ)
 # make exercise EX=NAME: check lessons/exercises/NAME.c, the stub a student
 # edits in place.  make exercises-handout: the repository without the
 # reference solutions and the planted mistakes (which are solutions too).
-.PHONY: exercise exercises-handout
+# make exercise-mutants: every generated mutant of every reference solution
+# and every planted mistake through sidx-check (tests/exercises/mutants.sh;
+# the mutation score per exercise, exit 1 if a non-equivalent mutant survives).
+.PHONY: exercise exercises-handout exercise-mutants
+exercise-mutants: build
+	BUILD=$(BUILD) sh tests/exercises/mutants.sh
+
 exercise: build
 	@if [ -z "$(EX)" ]; then echo "usage: make exercise EX=NAME   (NAME from: $(BUILD)/bin/sidx-check --list)"; exit 2; fi
 	$(BUILD)/bin/sidx-check $(EX) lessons/exercises/$(EX).c

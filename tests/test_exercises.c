@@ -10,7 +10,14 @@
  *    (the case, the step, the hint); crashing and endlessly looping
  *    variants exit 2 naming the case;
  *  - the kd-tree walk of exercise 08, solved, gives the library's traced
- *    walk bit for bit.
+ *    walk bit for bit;
+ *  - every correct variant of tests/exercises/variants/ (NAME--SLUG.c: a
+ *    solution organised differently, e.g. pbrt's near/far by the origin's
+ *    side) passes;
+ *  - a deterministic sample of the generated mutants
+ *    (tests/exercises/mutants.sh --sample) is killed, or listed as
+ *    equivalent in tests/exercises/equivalent.txt (the full run is make
+ *    exercise-mutants).
  * sidx-check compiles each file, so this suite runs the compiler: it is
  * found through the build directory's bin/sidx-check (the sibling of this
  * binary's tests/), and it compiles with that build's sanitizer flags.
@@ -403,6 +410,67 @@ static void kd_walk_bit_exact(void **state)
     assert_int_equal(system(cmd), 0);
 }
 
+/* Every correct variant passes: tests/exercises/variants/NAME--SLUG.c is
+ * checked as exercise NAME. */
+static void variants_pass(void **state)
+{
+    (void)state;
+    DIR *d = opendir("tests/exercises/variants");
+    if (!d) {
+        print_message("skipped: no tests/exercises/variants/ (a handout tree)\n");
+        return;
+    }
+    static char names_buf[32][64], files[32][PATH_MAX];
+    const char *names_[32] = {0}, *files_[32] = {0};
+    int n = 0;
+    struct dirent *e;
+    while ((e = readdir(d)) && n < 32) {
+        const char *dash = strstr(e->d_name, "--");
+        const size_t len = strlen(e->d_name);
+        if (!dash || len < 3 || strcmp(e->d_name + len - 2, ".c") || (size_t)(dash - e->d_name) >= 64) continue;
+        snprintf(names_buf[n], sizeof names_buf[n], "%.*s", (int)(dash - e->d_name), e->d_name);
+        snprintf(files[n], sizeof files[n], "tests/exercises/variants/%s", e->d_name);
+        names_[n] = names_buf[n];
+        files_[n] = files[n];
+        ++n;
+    }
+    closedir(d);
+    assert_true(n >= 2);
+    char *out[32];
+    int rc[32];
+    check_all(n, names_, files_, rc, out);
+    for (int i = 0; i < n; ++i) {
+        if (rc[i] != 0) print_message("%s: exit %d\n%s", files[i], rc[i], out[i]);
+        assert_int_equal(rc[i], 0);
+        free(out[i]);
+    }
+}
+
+/* A sample of the generated mutants, every MUTANT_SAMPLE-th of each
+ * exercise, is killed or listed as equivalent (mutants.sh exits 0). */
+#define MUTANT_SAMPLE "15"
+static void mutant_sample_killed(void **state)
+{
+    (void)state;
+    if (access("tests/exercises/mutants.sh", R_OK) != 0 || access("lessons/exercises/solutions", R_OK) != 0) {
+        print_message("skipped: no tests/exercises/ or no solutions (a handout tree)\n");
+        return;
+    }
+    char build[PATH_MAX + 32], cmd[2 * PATH_MAX + 128];
+    snprintf(build, sizeof build, "%s", checker);
+    for (int k = 0; k < 2; ++k) *strrchr(build, '/') = '\0';
+    snprintf(cmd, sizeof cmd, "BUILD='%s' sh tests/exercises/mutants.sh --no-mistakes --jobs 4 --sample " MUTANT_SAMPLE " 2>&1",
+             build);
+    FILE *p = popen(cmd, "r");
+    assert_non_null(p);
+    char *out;
+    const int rc = drain(p, &out);
+    if (rc != 0) print_message("%s", out);
+    assert_int_equal(rc, 0);
+    assert_non_null(strstr(out, "mutant run:"));
+    free(out);
+}
+
 int main(void)
 {
     if (find_checker() != 0) {
@@ -416,6 +484,8 @@ int main(void)
         cmocka_unit_test(usage_and_errors),
         cmocka_unit_test(traces_and_diff),
         cmocka_unit_test(kd_walk_bit_exact),
+        cmocka_unit_test(variants_pass),
+        cmocka_unit_test(mutant_sample_killed),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

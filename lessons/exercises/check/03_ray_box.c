@@ -15,7 +15,7 @@ typedef struct box_case {
 } box_case;
 
 #define BOX_RANDOM 40
-#define BOX_FIXED 16
+#define BOX_FIXED 21
 static box_case cases[BOX_FIXED + BOX_RANDOM];
 
 static const char *const hint_slab =
@@ -32,6 +32,9 @@ static const char *const hint_inside =
 static const char *const hint_clip =
     "clip to [tmin, tmax]: a box behind the origin or beyond tmax is a miss, and an infinite tmax stays infinite "
     "only until a slab's exit cuts it";
+static const char *const hint_touch =
+    "the box is hit when t_near <= t_far, the bound included: a ray through a flat box, along an edge or leaving "
+    "through a face at tmin has t_near == t_far, a hit of one point";
 static const char *const hint_neg =
     "near and far planes swap for a negative direction component: with d < 0 the ray enters at max and leaves at min";
 
@@ -71,6 +74,10 @@ static int setup(void)
        0, INFINITY);
     BC("ray on a face plane of the box (d = 0 on that axis)", hint_on_plane, U,
        ex_ray(-5, 1, 0.5f, 1, 0, 0, 0, INFINITY), 0, INFINITY);
+    BC("ray on the min face plane, +0 on that axis (NaN at the near plane)", hint_on_plane, U,
+       ex_ray(-5, -1, 0.5f, 1, 0, 0, 0, INFINITY), 0, INFINITY);
+    BC("ray on the max face plane, -0 on that axis (NaN at the near plane)", hint_on_plane, U,
+       ex_ray(-5, 1, 0.5f, 1, -0.0f, 0, 0, INFINITY), 0, INFINITY);
     BC("origin inside the box", hint_inside, U, ex_ray(0.25f, 0.5f, -0.5f, 1, -1, 0.5f, 0, INFINITY), 0, INFINITY);
     BC("origin inside, tmin > 0", hint_inside, U, ex_ray(0, 0, 0, 0.5f, 0.25f, 1, 0.5f, INFINITY), 0.5f, INFINITY);
     BC("box behind the origin", hint_clip, U, ex_ray(5, 0, 0, 1, 0, 0, 0, INFINITY), 0, INFINITY);
@@ -78,6 +85,12 @@ static int setup(void)
     BC("tmax inside the box", hint_clip, U, ex_ray(-5, 0, 0, 1, 0, 0, 0, 5.0f), 0, 5.0f);
     BC("flat box (zero thickness in z)", hint_slab, B(-1, -1, 0, 1, 1, 0), ex_ray(0.5f, 0.5f, 3, 0, 0.25f, -1, 0,
        INFINITY), 0, INFINITY);
+    BC("flat box crossed head-on (t_near == t_far)", hint_touch, B(-1, -1, 0, 1, 1, 0),
+       ex_ray(0.5f, 0.5f, 3, 0, 0, -1, 0, INFINITY), 0, INFINITY);
+    BC("touching an edge of the box (t_near == t_far)", hint_touch, U, ex_ray(-2, 0, 0.5f, 1, 1, 0, 0, INFINITY), 0,
+       INFINITY);
+    BC("origin on the exit face, leaving (t_near == t_far == tmin)", hint_touch, U,
+       ex_ray(1, 0.25f, 0.5f, 1, 0.5f, 0.25f, 0, INFINITY), 0, INFINITY);
     uint32_t s = 4242u;
     for (int i = 0; i < BOX_RANDOM; ++i) {
         float lo[3], hi[3];

@@ -78,10 +78,10 @@ static void cost_setup(void)
 
 /* ---- part 2: the split choice -------------------------------------------- */
 
-#define NSCENES 2
+#define NSCENES 3
 #define NBUILDERS 3
 #define NODES_PER 6 /* inner nodes per build and scene, the first in depth-first order */
-static const char *const scene_names[NSCENES] = {"soup:150", "flat2d:6"};
+static const char *const scene_names[NSCENES] = {"soup:150", "flat2d:6", "cornell"};
 static const char *const builder_names[NBUILDERS] = {"bvh-sweep", "bvh-everyb", "bvh"};
 static const char *const builder_what[NBUILDERS] = {"full sweep", "every-B sweep (B = 8)", "binned (16 bins)"};
 static sidx_mesh meshes[NSCENES];
@@ -179,13 +179,23 @@ static void teardown(void)
     }
 }
 
-static size_t num_cases(void)
+/* Part 3: four coincident triangles (every centroid equal): no plane
+ * separates them, so no candidate and no split, for the sweep and the bins. */
+#define COINCIDENT_CASES 2
+static const uint32_t coincident_prims[4] = {0, 1, 2, 3};
+static const sidx_aabb coincident_boxes[4] = {
+    {{0, 0, 0}, {1, 1, 0}}, {{0, 0, 0}, {1, 1, 0}}, {{0, 0, 0}, {1, 1, 0}}, {{0, 0, 0}, {1, 1, 0}}};
+static const sidx_vec3 coincident_cents[4] = {{0.5f, 0.5f, 0}, {0.5f, 0.5f, 0}, {0.5f, 0.5f, 0}, {0.5f, 0.5f, 0}};
+
+static size_t num_split_cases(void)
 {
-    size_t n = COST_CASES;
+    size_t n = 0;
     for (int b = 0; b < NBUILDERS; ++b)
         for (int s = 0; s < NSCENES; ++s) n += num_nodes[b][s];
     return n;
 }
+
+static size_t num_cases(void) { return COST_CASES + num_split_cases() + COINCIDENT_CASES; }
 
 /* Case i of part 2: builder, scene and node. */
 static const node_case *split_case(size_t i, int *b_out, int *s_out)
@@ -238,6 +248,14 @@ static void describe(size_t i, ex_case_info *out)
         out->hint = hint_cost;
         return;
     }
+    if (i >= COST_CASES + num_split_cases()) {
+        const int binned = i + 1 == num_cases();
+        snprintf(out->name, sizeof out->name, "%s, four coincident triangles (every centroid equal)",
+                 binned ? builder_what[2] : builder_what[0]);
+        snprintf(out->what, sizeof out->what, "4 triangles, each with the box [0 0 0]-[1 1 0]: no plane separates them");
+        out->hint = binned ? hint_bins : hint_sweep;
+        return;
+    }
     int b = 0, s = 0;
     const node_case *c = split_case(i, &b, &s);
     snprintf(out->name, sizeof out->name, "%s, scene %s, node %u (%u triangles)", builder_what[b], scene_names[s],
@@ -258,6 +276,7 @@ static void reference(size_t i, const sidx_hook *h)
         sidx_ex_candidate(&ex, 0, 0, 0.0f, ref_cost(c), c->nl, c->nr);
         return;
     }
+    if (i >= COST_CASES + num_split_cases()) return; /* no candidate, no split */
     int b = 0, s = 0;
     const node_case *c = split_case(i, &b, &s);
     for (size_t k = 0; k < c->nev; ++k) sidx_hook_emit(h, &c->ev[k]);
@@ -273,6 +292,13 @@ static void student(size_t i, const sidx_hook *h)
         const cost_case *c = &cost_cases[i];
         sidx_ex_candidate(&ex, 0, 0, 0.0f, sah_cost(c->parent, c->left, c->nl, c->right, c->nr, C_TRAV, C_TRI),
                           c->nl, c->nr);
+        return;
+    }
+    if (i >= COST_CASES + num_split_cases()) {
+        if (i + 1 == num_cases())
+            split_binned(&ex, 0, coincident_prims, 4, coincident_boxes, coincident_cents, BINS, C_TRAV, C_TRI);
+        else
+            split_sweep(&ex, 0, coincident_prims, 4, coincident_boxes, coincident_cents, 1u, C_TRAV, C_TRI);
         return;
     }
     int b = 0, s = 0;

@@ -12,9 +12,9 @@ void bvh_hit_naive(const sidx_ex *ex, const sidx_bvh_node *nodes, const uint32_t
 void bvh_hit_ordered(const sidx_ex *ex, const sidx_bvh_node *nodes, const uint32_t *prims, uint32_t node,
                      uint32_t depth, float t_near, float t_far, sidx_hit *best);
 
-#define NSCENES 2
+#define NSCENES 3
 #define RAYS 40
-static const char *const scene_names[NSCENES] = {"flat2d", "soup:200"};
+static const char *const scene_names[NSCENES] = {"flat2d", "soup:200", "cornell"};
 static sidx_mesh meshes[NSCENES];
 static sidx_accel *accels[NSCENES];
 static sidx_ray rays[NSCENES][RAYS];

@@ -6,6 +6,7 @@
  * runs inside the library's own 3D-DDA (grid_internal.h), with one
  * mailbox for the three rays, so a cache that is not cleared between
  * rays shows. */
+#include <stdlib.h>
 #include <string.h>
 #include "check.h"
 #include "grid_cases.h"
@@ -16,9 +17,37 @@ void cell_prims(const sidx_ex *ex, sidx_ex_mailbox *mb, const uint32_t *refs, ui
 #define PER_CASE 3 /* rays traced in a row with one mailbox */
 #define CASES_PER_SCENE (GRID_RAYS / PER_CASE)
 
-static int setup(void) { return grid_setup("grid"); }
+/* The last case traces one ray three times in a row: every triangle the
+ * first pass tests is tested again by the next, whichever slot it lands
+ * in.  The ray is the first of scene soup:120 that tests a triangle of
+ * the last slot (prim mod 32 = 31), so a slot left stale shows. */
+static int same_scene = 1, same_ray = 0;
+
+static int tests_last_slot(int s, int r)
+{
+    ex_trace t = {NULL, 0, 0};
+    const sidx_hook h = {ex_trace_hook_fn, &t, 0};
+    grid_reference_ray(s, r, 0, &h);
+    int found = 0;
+    for (size_t k = 0; k < t.n; ++k)
+        found |= t.ev[k].type == SIDX_EV_PRIM_TEST && t.ev[k].prim % SIDX_EX_MAILBOX_SIZE == SIDX_EX_MAILBOX_SIZE - 1;
+    free(t.ev);
+    return found;
+}
+
+static int setup(void)
+{
+    if (grid_setup("grid") != 0) return -1;
+    for (int r = 0; r < GRID_RAYS; ++r)
+        if (tests_last_slot(same_scene, r)) {
+            same_ray = r;
+            break;
+        }
+    return 0;
+}
 static void teardown(void) { grid_teardown(); }
-static size_t num_cases(void) { return GRID_NSCENES * CASES_PER_SCENE; }
+static size_t num_cases(void) { return GRID_NSCENES * CASES_PER_SCENE + 1; }
+static int is_same_case(size_t i) { return i == GRID_NSCENES * CASES_PER_SCENE; }
 
 static const char *const hint_clear =
     "the cache is per ray (\"data local to a ray\"): clear every slot when a new ray starts, or a triangle "
@@ -33,6 +62,14 @@ static const char *const hint_stamp =
 
 static void describe(size_t i, ex_case_info *out)
 {
+    if (is_same_case(i)) {
+        snprintf(out->name, sizeof out->name, "scene %s, ray %d traced three times in a row (every slot reused)",
+                 grid_scene_names[same_scene], same_ray + 1);
+        ex_format_ray(out->what, sizeof out->what, &grid_rays[same_scene][same_ray]);
+        out->hint = NULL;
+        grid_view_case(same_scene, same_ray, "grid", out);
+        return;
+    }
     const int s = (int)(i / CASES_PER_SCENE), r = (int)(i % CASES_PER_SCENE) * PER_CASE;
     const sidx_grid_cells *g = &grid_views[s];
     snprintf(out->name, sizeof out->name, "scene %s (%u x %u x %u cells), rays %d-%d in a row (%s, ...)",
@@ -49,6 +86,10 @@ static void describe(size_t i, ex_case_info *out)
 
 static void reference(size_t i, const sidx_hook *h)
 {
+    if (is_same_case(i)) {
+        for (int k = 0; k < PER_CASE; ++k) grid_reference_ray(same_scene, same_ray, (uint32_t)k, h);
+        return;
+    }
     const int s = (int)(i / CASES_PER_SCENE), r = (int)(i % CASES_PER_SCENE) * PER_CASE;
     for (int k = 0; k < PER_CASE; ++k) grid_reference_ray(s, r + k, (uint32_t)k, h);
 }
@@ -69,6 +110,10 @@ static void student(size_t i, const sidx_hook *h)
     const int s = (int)(i / CASES_PER_SCENE), r = (int)(i % CASES_PER_SCENE) * PER_CASE;
     sidx_ex_mailbox mb;
     memset(&mb, 0xA5, sizeof mb); /* whatever the memory held: no triangle's id */
+    if (is_same_case(i)) {
+        for (int k = 0; k < PER_CASE; ++k) grid_student_ray(same_scene, same_ray, (uint32_t)k, h, "grid", walk, &mb);
+        return;
+    }
     for (int k = 0; k < PER_CASE; ++k) grid_student_ray(s, r + k, (uint32_t)k, h, "grid", walk, &mb);
 }
 

@@ -12,7 +12,7 @@ int kd_walk(const sidx_ex *ex, const sidx_kd_node *nodes, const uint32_t *refs, 
             sidx_hit *best);
 
 #define NSCENES 3
-#define RAYS 40
+#define RAYS 43
 /* flat2d: the slide's 2D scene (tilted triangles), walked by rays in its
  * middle plane as on the slides' pictures, and from the front; soup: overlapping
  * triangles straddling cells ("CANNOT terminate"); cornell: walls on the
@@ -24,7 +24,7 @@ static sidx_ray rays[NSCENES][RAYS];
 static const char *ray_kind[NSCENES][RAYS];
 
 enum { K_OUTSIDE = 0, K_BEYOND = 8, K_INSIDE = 12, K_ON_PLANE = 20, K_TFAR_TIE = 24, K_NEG_ZERO = 28, K_IN_PLANE = 32,
-       K_TMAX = 36 };
+       K_TMAX = 36, K_TMIN_TIE = 40, K_ULP = 41, K_EXIT = 42 };
 
 /* The root's split, or a split met deeper down on the way to point p
  * (depth levels at most): *axis, *pos. */
@@ -87,7 +87,7 @@ static int setup(void)
             const float u = ex_rand(&st), v = ex_rand(&st), w = ex_rand(&st);
             sidx_vec3 p = sidx_v3(b.min.x + u * e.x, b.min.y + v * e.y, b.min.z + w * e.z);
             sidx_vec3 o, d = sidx_v3(ex_rand(&st) - 0.5f, ex_rand(&st) - 0.5f, ex_rand(&st) - 0.5f);
-            float tmax = INFINITY;
+            float tmin = 0.0f, tmax = INFINITY;
             int in_plane = flat; /* flat2d: the ray in the scene's plane, d.z = ±0 */
             if (i < K_INSIDE) { /* from outside, towards a point of the scene */
                 const float a = ex_rand(&st) * 6.2831853f;
@@ -138,6 +138,37 @@ static int setup(void)
                 else { p.z = nodes[0].u.split; d.z = (i & 1) ? -0.0f : 0.0f; }
                 o = p;
                 ray_kind[s][i] = "running inside the root's split plane (t_split = NaN)";
+            } else if (i == K_EXIT) { /* on the root's plane and on the scene box's exit face: the cell is [0, 0] */
+                const uint32_t axis = nodes[0].bits & 3u, other = flat ? 1u - (axis & 1u) : (axis + 1u) % 3u;
+                float oc[3] = {p.x, p.y, p.z}, dc[3] = {0.2f * d.x, 0.2f * d.y, flat ? 0.0f : 0.2f * d.z};
+                const float hi[3] = {b.max.x, b.max.y, b.max.z};
+                oc[axis] = nodes[0].u.split;
+                oc[other] = hi[other];
+                dc[other] = 1.0f;
+                if (dc[axis] == 0.0f) dc[axis] = 0.25f;
+                o = sidx_v3(oc[0], oc[1], oc[2]);
+                d = sidx_v3(dc[0], dc[1], dc[2]);
+                ray_kind[s][i] = "leaving from the root's plane on the scene's face (t_split = t_near = t_far = 0)";
+            } else if (i >= K_TMIN_TIE) { /* along the root's axis, reaching its plane at tmin or just past it */
+                const uint32_t axis = nodes[0].bits & 3u;
+                const float split = nodes[0].u.split, sgn = (i & 1) ? -1.0f : 1.0f;
+                float oc[3] = {p.x, p.y, p.z}, dc[3] = {0.25f * d.x, 0.25f * d.y, flat ? 0.0f : 0.25f * d.z};
+                dc[axis] = sgn;
+                /* K_TMIN_TIE: the origin a unit before the plane and tmin = t_split > 0 (a tie at t_near > 0);
+                 * K_ULP: the origin one float past the plane (t_split = -ulp, just behind t_near = 0) */
+                oc[axis] = i == K_TMIN_TIE ? split - sgn : nextafterf(split, sgn * INFINITY);
+                o = sidx_v3(oc[0], oc[1], oc[2]);
+                d = sidx_v3(dc[0], dc[1], dc[2]);
+                in_plane = 0;
+                if (flat) o.z = c.z;
+                if (i == K_TMIN_TIE) {
+                    const sidx_ray tmp = ex_ray(o.x, o.y, o.z, d.x, d.y, d.z, 0, INFINITY);
+                    const float inv[3] = {tmp.inv_dir.x, tmp.inv_dir.y, tmp.inv_dir.z};
+                    tmin = (split - oc[axis]) * inv[axis];
+                    ray_kind[s][i] = "starting before the root's plane, tmin on it (t_split = t_near > 0)";
+                } else {
+                    ray_kind[s][i] = "starting one float past the root's plane (t_split = -ulp)";
+                }
             } else if (flat) { /* flat2d from the front: one cell, hits */
                 o = sidx_v3(p.x, p.y, 5.0f);
                 d = sidx_v3((ex_rand(&st) - 0.5f) * 0.2f, (ex_rand(&st) - 0.5f) * 0.2f, -1.0f);
@@ -154,7 +185,7 @@ static int setup(void)
                 d.z = (i & 1) ? -0.0f : 0.0f;
             }
             if (d.x == 0.0f && d.y == 0.0f && d.z == 0.0f) d.x = 1.0f;
-            rays[s][i] = ex_ray(o.x, o.y, o.z, d.x, d.y, d.z, 0, tmax);
+            rays[s][i] = ex_ray(o.x, o.y, o.z, d.x, d.y, d.z, tmin, tmax);
             if (i >= K_BEYOND && i < K_INSIDE) { /* search for a ray the slide's "CANNOT terminate" is about */
                 if (hit_beyond_cell(accels[s], &rays[s][i])) ray_kind[s][i] = "a hit beyond its cell: CANNOT terminate";
                 else if (++tries < 1000) --i; /* the same slot again */
@@ -224,22 +255,51 @@ static const char *const hint_leaf =
     "a leaf tests each of its triangles refs[first .. first + count) against the best hit so far, "
     "sidx_ex_test_triangle(ex, prim, best->t, &t), and reports a closer one with sidx_ex_hit_update";
 
+static const char *const hint_stop_nohit =
+    "\"Traversal can be terminated as soon as surface intersection is found in the current node\": only a hit "
+    "stops the walk; with no hit (best->prim == SIDX_NO_HIT) pop the next cell, and return 0 when the stack is "
+    "empty";
+static const char *const hint_start =
+    "the loop is \"given (node, t_near, t_far)\": start at the root, sidx_ex_node_enter(ex, 0, 0, t_near, "
+    "t_far), and report every cell you enter";
+static const char *const hint_near_interval =
+    "the same child with another interval: when the plane cuts the cell, \"continue with (near child, t_near, "
+    "t_split)\" (t_far becomes t_split), and when it lies beyond the cell the near child keeps (t_near, t_far)";
+static const char *const hint_far_interval =
+    "the same far child with another interval: it is pushed as (far child, t_split, t_far), and when the plane "
+    "lies before the cell the far child keeps (t_near, t_far)";
+
+/* The hint follows what differs at the first divergence: a stop where
+ * the reference goes on (or the reverse) is the termination rule; the
+ * root not entered is the start; another triangle step is the leaf; a
+ * push where the reference enters (or the reverse) is the three cases; the
+ * same cell with another interval is the interval the slide gives that
+ * child; another cell entered or pushed is near/far (the -0 rule on the
+ * axis-parallel rays, the NaN rule inside the plane); a pop is the stack. */
 static const char *hint(size_t i, const sidx_event *ref, const sidx_event *stu)
 {
     const int r = (int)(i % RAYS);
     const int ref_stop = ref && ref->type == SIDX_EV_TERMINATE && ref->reason == SIDX_TERM_HIT_IN_CELL;
     const int stu_stop = stu && stu->type == SIDX_EV_TERMINATE && stu->reason == SIDX_TERM_HIT_IN_CELL;
+    if (stu_stop && !ref_stop) {
+        if (stu->prim == SIDX_NO_HIT) return hint_stop_nohit;
+        return r >= K_IN_PLANE && r < K_TMAX ? hint_nan : hint_cannot;
+    }
     if (ref_stop && !stu_stop) return hint_stop;
-    if (stu_stop && !ref_stop) return r >= K_IN_PLANE && r < K_TMAX ? hint_nan : hint_cannot;
+    if (ref && ref->type == SIDX_EV_NODE_ENTER && ref->node == 0 && (!stu || stu->type != SIDX_EV_NODE_ENTER))
+        return hint_start;
     if ((ref && (ref->type == SIDX_EV_PRIM_TEST || ref->type == SIDX_EV_HIT_UPDATE)) ||
         (stu && (stu->type == SIDX_EV_PRIM_TEST || stu->type == SIDX_EV_HIT_UPDATE)))
         return hint_leaf;
     if ((ref && ref->type == SIDX_EV_STACK_POP) || (stu && stu->type == SIDX_EV_STACK_POP)) return hint_pop;
     if (ref && ref->type == SIDX_EV_TERMINATE && stu && stu->type == SIDX_EV_NODE_ENTER) return hint_pop;
-    if (r >= K_ON_PLANE && r < K_NEG_ZERO) return hint_tie;
+    if (ref && stu && (ref->type == SIDX_EV_STACK_PUSH) != (stu->type == SIDX_EV_STACK_PUSH))
+        return r >= K_IN_PLANE && r < K_TMAX ? hint_nan : hint_tie;
+    if (ref && stu && ref->type == stu->type && ref->node == stu->node &&
+        (ref->type == SIDX_EV_NODE_ENTER || ref->type == SIDX_EV_STACK_PUSH))
+        return ref->type == SIDX_EV_NODE_ENTER ? hint_near_interval : hint_far_interval;
     if (r >= K_NEG_ZERO && r < K_IN_PLANE) return hint_zero;
     if (r >= K_IN_PLANE && r < K_TMAX) return hint_nan;
-    if (ref && stu && ref->type == SIDX_EV_STACK_PUSH && stu->type != SIDX_EV_STACK_PUSH) return hint_tie;
     return hint_direction;
 }
 
@@ -293,6 +353,7 @@ static void student(size_t i, const sidx_hook *h)
     } else if (kd_walk(&ex, nodes, refs, tn, tf, &best)) {
         e.reason = SIDX_TERM_HIT_IN_CELL;
         e.t = best.t;
+        e.prim = best.prim; /* not compared: the hint tells a stop with no hit */
         e.count = c.entered;
         e.node = c.node;
         e.t_near = c.t_near;

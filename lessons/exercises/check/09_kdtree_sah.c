@@ -36,7 +36,7 @@ typedef struct node_case {
     sidx_event *ev; /* the node's CANDIDATE events and its SPLIT */
     size_t nev;
 } node_case;
-#define MAX_CASES (3 * NSCENES)
+#define MAX_CASES (3 * NSCENES + 1)
 static node_case cases[MAX_CASES];
 static size_t ncases;
 
@@ -161,6 +161,22 @@ static int setup(void)
         free(rec.ev);
         sidx_mesh_free(&m);
     }
+    /* Three triangles whose boxes fill the whole cell: every event lies on
+     * a face of the cell, no plane strictly inside, no candidate, no split. */
+    if (ncases < MAX_CASES) {
+        node_case *c = &cases[ncases];
+        c->boxes = malloc(3 * sizeof *c->boxes);
+        if (!c->boxes) return -1;
+        const sidx_aabb unit = {{0, 0, 0}, {1, 1, 1}};
+        for (int k = 0; k < 3; ++k) c->boxes[k] = unit;
+        c->scene = -1;
+        c->node = 0;
+        c->n = 3;
+        c->cell = unit;
+        c->ev = NULL;
+        c->nev = 0;
+        ++ncases;
+    }
     return ncases ? 0 : -1;
 }
 
@@ -197,8 +213,11 @@ static const char *const hint_best =
 static void describe(size_t i, ex_case_info *out)
 {
     const node_case *c = &cases[i];
-    snprintf(out->name, sizeof out->name, "scene %s (%s), node %u%s", scene_names[c->scene], scene_what[c->scene],
-             c->node, c->node ? " (a child: straddling triangles clipped to its cell)" : " (the root)");
+    if (c->scene < 0)
+        snprintf(out->name, sizeof out->name, "three triangles whose boxes fill the cell: no plane inside it");
+    else
+        snprintf(out->name, sizeof out->name, "scene %s (%s), node %u%s", scene_names[c->scene], scene_what[c->scene],
+                 c->node, c->node ? " (a child: straddling triangles clipped to its cell)" : " (the root)");
     snprintf(out->what, sizeof out->what,
              "cell [%g %g %g]-[%g %g %g], %u triangles; C_trav = %g, C_tri = %g, empty bonus %g",
              (double)c->cell.min.x, (double)c->cell.min.y, (double)c->cell.min.z, (double)c->cell.max.x,

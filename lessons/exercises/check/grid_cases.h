@@ -16,10 +16,10 @@
 #include "sidx/grid.h"
 #include "grid_internal.h"
 
-#define GRID_NSCENES 3
+#define GRID_NSCENES 4
 #define GRID_FIXED 12 /* hand-made rays of scene 0 */
 #define GRID_RAYS 24  /* rays per scene */
-static const char *const grid_scene_names[GRID_NSCENES] = {"slanted", "soup:120", "cornell"};
+static const char *const grid_scene_names[GRID_NSCENES] = {"slanted", "soup:120", "cornell", "icosphere:1"};
 static sidx_mesh grid_meshes[GRID_NSCENES];
 static sidx_accel *grid_accels[GRID_NSCENES];
 static sidx_grid_cells grid_views[GRID_NSCENES];

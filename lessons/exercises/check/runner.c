@@ -234,9 +234,9 @@ static int same_event(const sidx_event *a, const sidx_event *b)
     case SIDX_EV_BUILD_SPLIT:
         return a->node == b->node && a->axis == b->axis && same_float(a->pos, b->pos) &&
                same_float(a->cost, b->cost) && a->count == b->count && a->aux == b->aux;
-    case SIDX_EV_NOTE: /* a result the driver reports: cell[] and count (its format callback prints it) */
+    case SIDX_EV_NOTE: /* a result the driver reports: cell[], count, t_near and t_far (its format callback prints it) */
         return a->cell[0] == b->cell[0] && a->cell[1] == b->cell[1] && a->cell[2] == b->cell[2] &&
-               a->count == b->count;
+               a->count == b->count && same_float(a->t_near, b->t_near) && same_float(a->t_far, b->t_far);
     default: return 1;
     }
 }

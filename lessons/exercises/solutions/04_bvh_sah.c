@@ -7,8 +7,7 @@
 /* C = C_trav + (A_L·N_L + A_R·N_R)·C_tri / A, from the areas. */
 static float cost_of(float al, uint32_t nl, float ar, uint32_t nr, float area, float c_trav, float c_tri)
 {
-    const float inv = area > 0.0f ? 1.0f / area : 0.0f;
-    return c_trav + c_tri * (al * (float)nl + ar * (float)nr) * inv;
+    return c_trav + c_tri * (al * (float)nl + ar * (float)nr) * (1.0f / area);
 }
 
 float sah_cost(sidx_aabb parent, sidx_aabb left, uint32_t n_left, sidx_aabb right, uint32_t n_right, float c_trav,
