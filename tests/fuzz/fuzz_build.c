@@ -1,6 +1,8 @@
 /* fuzz_build.c — libFuzzer target: build ONE registered structure over a
  * small mesh made of the input bytes, trace a few rays made of the input
- * bytes, and check each closest hit and any-hit answer against brute force.
+ * bytes, and check each closest hit and any-hit answer against brute force
+ * (one way for a direction that is an axis or a plane to within float
+ * resolution: fuzz_oracle.h).
  *
  * Why one structure per input: building all ~25 of them (the ray
  * classification among them) for every input ran at ~1 exec/s; with a
