@@ -209,5 +209,26 @@ for prog in "$DIR"/*; do
     fi
 done
 
+# sidx-tour: the heading of the build events says how many it prints (40, or
+# every one with --full), never a count of -1.
+tour=$BUILD/bin/sidx-tour
+if [ -x "$tour" ] && registered kdtree; then
+    tourdir=${TMPDIR:-/tmp}/sidx_tour.$$
+    why=""
+    "$tour" --accel kdtree --scene kd-slide --full --out "$tourdir" >"$out" 2>&1 || why="$why --full exit code $?;"
+    grep -q -- "-- build (every decision)" "$out" || why="$why --full does not say it prints every decision;"
+    grep -q "first -" "$out" && why="$why --full prints a negative count: $(grep -m1 'first -' "$out");"
+    "$tour" --accel kdtree --scene kd-slide --out "$tourdir" >"$out" 2>&1 || why="$why exit code $?;"
+    grep -q -- "-- build (first 40 decisions)" "$out" || why="$why without --full it does not say 'first 40 decisions';"
+    rm -rf "$tourdir"
+    if [ -z "$why" ]; then
+        echo "PASS sidx-tour"
+        passed=$((passed + 1))
+    else
+        echo "FAIL sidx-tour:$why"
+        failed=$((failed + 1))
+    fi
+fi
+
 echo "lessons: $passed passed, $failed failed, $skipped skipped"
 [ $failed -eq 0 ]
