@@ -910,6 +910,37 @@ static size_t differing_pixels(SDL_Surface *a, SDL_Surface *b)
     return diff;
 }
 
+/* The heat map reads at a glance: steps per pixel span decades (the teapot in the stadium:
+ * ~10 on the stadium's floor, thousands in the grid cell that holds the teapot), so the
+ * colours follow a log scale.  On a linear one the floor is black; here most pixels under the
+ * horizon must show colour (at least a third of the scene's area, its top being sky). */
+static void view_heat_map_log_scale(void **state)
+{
+    (void)state;
+    if (!sidx_accel_is_registered("grid")) return;
+    view_state v;
+    sidx_error err;
+    assert_int_equal(view_open(&v, "stadium", "grid", &err), SIDX_OK);
+    v.mode = VIEW_HEAT;
+    v.zoom = 3.0f;
+    const int w = 550, h = 350, sw = view_scene_width(w);
+    SDL_Surface *s = view_render_surface(&v, w, h);
+    assert_non_null(s);
+    size_t coloured = 0, dark = 0;
+    for (int y = 20; y < h - 50; ++y) /* below the title, above the legend */
+        for (int x = 0; x < sw; ++x) {
+            const uint32_t p = ((uint32_t *)((uint8_t *)s->pixels + (size_t)y * (size_t)s->pitch))[x];
+            const int r = (int)((p >> 16) & 255), g = (int)((p >> 8) & 255), b = (int)(p & 255);
+            if (r + g + b > 120) ++coloured; else ++dark;
+        }
+    print_message("heat map of grid on stadium: %zu of %zu pixels coloured, max %u steps\n", coloured,
+                  coloured + dark, v.heat_max);
+    assert_true(v.heat_max > 1000); /* the teapot's cell */
+    assert_true(coloured * 3 > coloured + dark);
+    SDL_FreeSurface(s);
+    view_close(&v);
+}
+
 static SDL_Surface *load_png(const char *path)
 {
     SDL_Surface *s = IMG_Load(path);
@@ -1256,6 +1287,7 @@ static void view_steps_real_recording(void **state)
 static void skip_without_sdl(void) { print_message("built without SDL2: the viewer is not built, skipped\n"); skip(); }
 static void view_screenshots_differ_between_steps(void **state) { (void)state; skip_without_sdl(); }
 static void view_keys_and_mouse(void **state) { (void)state; skip_without_sdl(); }
+static void view_heat_map_log_scale(void **state) { (void)state; skip_without_sdl(); }
 static void view_steps_real_recording(void **state) { (void)state; skip_without_sdl(); }
 #endif /* SIDX_HAVE_SDL */
 
@@ -1658,6 +1690,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(dot_real_structure),
         cmocka_unit_test(view_screenshots_differ_between_steps),
         cmocka_unit_test(view_keys_and_mouse),
+        cmocka_unit_test(view_heat_map_log_scale),
         cmocka_unit_test(view_steps_real_recording),
         cmocka_unit_test(view_events_from_file),
         cmocka_unit_test(leaf_prims_from_real_builds),
