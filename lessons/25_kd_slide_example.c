@@ -361,8 +361,8 @@ int main(int argc, char **argv)
            "   The decks give the SAH's constants no values (deck 000 counts a triangle as 1 and\n"
            "   leaves C_trav a symbol; deck 001 names C_trav and C_tri), so both ratios are this\n"
            "   lesson's.  The cost decides how deep the SAH cuts (a dear step: shallower; a cheap\n"
-           "   one: deeper), and neither draws the slide's planes: the slide picks them to show\n"
-           "   the walk, so the scene comes with them.\n",
+           "   one: deeper), and neither draws the slide's planes: the slide picks them to\n"
+           "   show the walk, so the scene comes with them.\n",
            slide ? "the slide's tree" : "the tree above", s0.nodes, s0.leaves, s0.max_depth, (double)(knobs.c_trav > 0 ? knobs.c_trav : 16.0f),
            (double)(knobs.c_tri > 0 ? knobs.c_tri : 1.0f), s1.nodes, s1.leaves, s1.max_depth,
            (double)cheap_knobs.c_trav, (double)cheap_knobs.c_tri, s2.nodes, s2.leaves, s2.max_depth);
