@@ -126,7 +126,10 @@ int main(int argc, char **argv)
         sidx_build_options opt = {0};
         opt.hook = &build_hook;
         sidx_accel *a = NULL;
-        printf("-- build (first %ld decisions)\n", limit);
+        if (limit < 0)
+            printf("-- build (every decision)\n");
+        else
+            printf("-- build (first %ld decisions)\n", limit);
         if (sidx_accel_build(name, &mesh, &opt, &a, &err) != SIDX_OK) {
             printf("build failed: %s\n", err.message);
             ++failures;

@@ -336,9 +336,9 @@ static void traces_and_diff(void **state)
     assert_non_null(strstr(out, "traces     not written"));
     assert_null(strstr(out, "reference.jsonl and"));
     free(out);
-    /* a directory that does not exist yet is made */
-    char tdir[sizeof dir + 8];
-    snprintf(tdir, sizeof tdir, "%s/traces", dir);
+    /* a directory that does not exist yet is made, with the ones above it */
+    char tdir[sizeof dir + 16];
+    snprintf(tdir, sizeof tdir, "%s/new/traces", dir);
     snprintf(cmd, sizeof cmd, "'%s' 05_bvh_traversal %s --trace %s", checker, file, tdir);
     p = popen(cmd, "r");
     assert_non_null(p);

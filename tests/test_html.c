@@ -330,6 +330,96 @@ static void page_keys_and_buttons(void **state)
     free(got);
 }
 
+/* A page with `script` inserted before </body> (the page's own scripts run first), written to
+ * tmp_dir/NAME.html; its path in out. */
+static void page_with_script(const char *page, const char *name, const char *script, char *out, size_t size)
+{
+    snprintf(out, size, "%s/%s.html", tmp_dir, name);
+    FILE *in = fopen(page, "rb"), *o = fopen(out, "wb");
+    assert_non_null(in);
+    assert_non_null(o);
+    char line[4096];
+    while (fgets(line, sizeof line, in)) {
+        if (!strcmp(line, "</body>\n")) fputs(script, o);
+        fputs(line, o);
+    }
+    fclose(in);
+    fclose(o);
+}
+
+/* At the step whose event reads "prim N test: hit" the panel's best hit is prim N (the
+ * structure records it as the closest hit in the next event), and at 1280×800 every event
+ * line fits the panel's width: long lines wrap instead of being cut. */
+static void page_best_hit_and_lines_fit(void **state)
+{
+    (void)state;
+    if (!have_viewer() || !have_browser()) skip();
+    char page[400], measured[400];
+    write_page("fit", "--accel kdtree --ray " RAY, page, sizeof page);
+    static const char script[] =
+        "<script>(function () {\n"
+        "  var cut = 0, lines = document.querySelectorAll('#events div');\n"
+        "  for (var i = 0; i < lines.length; ++i) if (lines[i].scrollWidth > lines[i].clientWidth + 1) ++cut;\n"
+        "  var p = document.getElementById('panel');\n"
+        "  var out = lines.length + ' ' + cut + ' ' + (p.scrollWidth > p.clientWidth + 1 ? 1 : 0) + ' ' + window.innerWidth;\n"
+        "  out += '|' + document.getElementById('info').textContent;\n"
+        "  document.body.insertAdjacentHTML('beforeend', '<pre id=\"' + 'fit\">' + out + '</pre>');\n"
+        "})();</script>\n";
+    page_with_script(page, "fit-measured", script, measured, sizeof measured);
+
+    /* the first triangle test that hits, and the closest-hit event after it */
+    view_state v;
+    sidx_error err;
+    sidx_vec3 org, dir;
+    assert_int_equal(view_open(&v, "flat2d", "kdtree", &err), SIDX_OK);
+    assert_int_equal(sidx_viz_parse_ray(RAY, &org, &dir), 0);
+    assert_int_equal(view_set_ray(&v, org, dir, SIZE_MAX), SIDX_OK);
+    size_t k = 0;
+    uint32_t prim = 0;
+    for (size_t i = 0; i + 1 < v.trav.count && !k; ++i) {
+        const sidx_event *e = &v.trav.events[i];
+        if (e->type == SIDX_EV_PRIM_TEST && e->result == 1 && v.trav.events[i + 1].type == SIDX_EV_HIT_UPDATE) {
+            k = i + 1;
+            prim = e->prim;
+        }
+    }
+    view_close(&v);
+    assert_true(k > 0);
+
+    char url[600], args[1024], cmd[2048], want[64];
+    snprintf(url, sizeof url, "file://%s#step=%zu", measured, k);
+    snprintf(args, sizeof args, "--window-size=1280,800 --dump-dom '%s'", url);
+    browser_cmd(cmd, sizeof cmd, args);
+    char *dom = output_of(cmd);
+    char *st = ready_state(dom);
+    char *fit = between(dom, "<pre id=\"fit\">", "</pre>");
+    free(dom);
+    assert_non_null(fit);
+    print_message("step %zu (prim %u test: hit): %s\n", k, prim, fit);
+    char best[64];
+    state_get(st, "best", best, sizeof best);
+    snprintf(want, sizeof want, "%u@", prim);
+    assert_true(!strncmp(best, want, strlen(want)));
+    snprintf(want, sizeof want, "best hit: prim %u ", prim);
+    assert_non_null(strstr(fit, want));
+    unsigned lines = 0, cut = 1, wide = 1, width = 0;
+    assert_int_equal(sscanf(fit, "%u %u %u %u", &lines, &cut, &wide, &width), 4);
+    assert_int_equal(width, 1280);
+    assert_true(lines > 10);
+    assert_int_equal(cut, 0);
+    assert_int_equal(wide, 0);
+    free(fit);
+    free(st);
+
+    /* one step earlier the hit is not there yet */
+    snprintf(url, sizeof url, "file://%s#step=%zu", page, k - 1);
+    dom = page_dom(url);
+    st = ready_state(dom);
+    free(dom);
+    expect_state(st, "best", "none");
+    free(st);
+}
+
 /* A ray that hits nothing: the page says so. */
 static void page_says_the_ray_misses(void **state)
 {
@@ -441,6 +531,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(page_steps_like_the_recorder),
         cmocka_unit_test(page_keys_and_buttons),
         cmocka_unit_test(page_says_the_ray_misses),
+        cmocka_unit_test(page_best_hit_and_lines_fit),
         cmocka_unit_test(teapot_page_is_small),
         cmocka_unit_test(bad_input),
 #else

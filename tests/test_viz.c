@@ -8,6 +8,7 @@
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
+#include <signal.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -420,6 +421,7 @@ static void dot_real_structure(void **state)
     memset(&opt, 0, sizeof opt);
     opt.build = &bo;
     opt.max_depth = SIDX_DOT_ALL_DEPTHS;
+    opt.max_width = SIDX_DOT_UNLIMITED; /* every node, as the structure counts them */
     opt.has_ray = 1;
     assert_int_equal(sidx_viz_parse_ray(TINY_RAY, &opt.ray_org, &opt.ray_dir), 0);
     assert_int_equal(sidx_dot_write(&m, name, &opt, path, &err), SIDX_OK);
@@ -499,8 +501,8 @@ static void dot_labels_say_the_structure(void **state)
     }
 }
 
-/* Wide trees fit a page by default: grid2 on the teapot (185 top-level cells) wraps its cells
- * into rows, the octree (eight children a node) is cut where a level gets too wide. */
+/* Wide trees fit a page by default: grid2 on the teapot (185 top-level cells) and the octree
+ * (eight children a node) fold the siblings past the page's width. */
 static void dot_wide_trees_fit_a_page(void **state)
 {
     (void)state;
@@ -527,10 +529,173 @@ static void dot_wide_trees_fit_a_page(void **state)
         assert_int_equal(sidx_dot_write(&m, names[i], NULL, svg, &err), SIDX_OK);
         const double w = svg_width_pt(svg);
         print_message("%s on teapot: svg width %.0f pt\n", names[i], w);
-        assert_true(w > 0.0 && w < 2500.0); /* 20,000-1,000,000 pt before rows and the width cut */
+        assert_true(w > 0.0 && w < 2500.0); /* 20,000-1,000,000 pt drawn level by level, unfolded */
         unlink(svg);
     }
     sidx_mesh_free(&m);
+}
+
+/* A wide level folds: a root over 20 grid cells, every fourth empty, drawn at most 6 boxes
+ * across.  The cells the ray visited are drawn first (an empty one too), then the fullest;
+ * the rest fold into one "… N more cells (M empty)" box, and the caption says so. */
+static void wide_cells(evbuf *b)
+{
+    b->n = 0;
+    node(b, 0, UINT32_MAX, 0, 150, box(0, 0, 20, 1));
+    for (uint32_t k = 1; k <= 20; ++k) {
+        node(b, k, 0, 1, k % 4 ? k : 0, box((float)k - 1, 0, (float)k, 1));
+        b->ev[b->n - 1].cell[0] = (int32_t)k - 1;
+        b->ev[b->n - 1].cell[1] = b->ev[b->n - 1].cell[2] = 0;
+        sidx_event *e = add(b, SIDX_EV_BUILD_LEAF);
+        e->node = k;
+        e->count = k % 4 ? k : 0;
+        e->reason = k % 4 ? SIDX_LEAF_FEW_PRIMS : SIDX_LEAF_EMPTY;
+    }
+}
+
+static void dot_folds_wide_levels(void **state)
+{
+    (void)state;
+    evbuf b, r;
+    wide_cells(&b);
+    r.n = 0;
+    add(&r, SIDX_EV_RAY_BEGIN);
+    add(&r, SIDX_EV_NODE_ENTER)->node = 0;
+    add(&r, SIDX_EV_NODE_ENTER)->node = 17;
+    add(&r, SIDX_EV_NODE_ENTER)->node = 20; /* an empty cell */
+    add(&r, SIDX_EV_RAY_END);
+    char path[128];
+    tmp_path(path, sizeof path, "fold.dot");
+    sidx_error err;
+    sidx_dot_options opt;
+    memset(&opt, 0, sizeof opt);
+    opt.max_width = 6;
+
+    /* with the ray: its two cells, then the fullest (19); 17 folded, 4 of them empty
+     * (4, 8, 12, 16), holding 150 - 17 - 19 = 114 prims */
+    assert_int_equal(sidx_dot_write_events(b.ev, b.n, r.ev, r.n, &opt, path, &err), SIDX_OK);
+    Agraph_t *g = read_graph(path);
+    assert_int_equal(agnnodes(g), 5); /* root, 3 cells, the fold */
+    assert_non_null(agnode(g, (char *)"n17", 0));
+    assert_non_null(agnode(g, (char *)"n20", 0));
+    assert_non_null(agnode(g, (char *)"n19", 0));
+    assert_null(agnode(g, (char *)"n18", 0));
+    const char *fold = node_attr(g, "fold0", "label");
+    assert_non_null(strstr(fold, "\xe2\x80\xa6 17 more cells (4 empty)"));
+    assert_non_null(strstr(fold, "17 nodes, 114 prims in all"));
+    assert_null(strstr(fold, "ray visited"));
+    const char *caption = agget(g, (char *)"label");
+    assert_non_null(caption);
+    assert_non_null(strstr(caption, "folded to fit a page (about 6 boxes across"));
+    assert_non_null(strstr(caption, "17 siblings in 1 \xe2\x80\xa6 boxes"));
+    agclose(g);
+
+    /* without it: the three fullest, 19 18 17; five empty cells folded */
+    assert_int_equal(sidx_dot_write_events(b.ev, b.n, NULL, 0, &opt, path, &err), SIDX_OK);
+    g = read_graph(path);
+    assert_non_null(agnode(g, (char *)"n18", 0));
+    assert_null(agnode(g, (char *)"n20", 0));
+    assert_non_null(strstr(node_attr(g, "fold0", "label"), "17 more cells (5 empty)"));
+    agclose(g);
+
+    /* no limit: all 21 nodes, no fold, no caption */
+    opt.max_width = SIDX_DOT_UNLIMITED;
+    assert_int_equal(sidx_dot_write_events(b.ev, b.n, NULL, 0, &opt, path, &err), SIDX_OK);
+    g = read_graph(path);
+    assert_int_equal(agnnodes(g), 21);
+    assert_null(agnode(g, (char *)"fold0", 0));
+    assert_null(strstr(agget(g, (char *)"label"), "folded"));
+    agclose(g);
+
+    /* a limit on all boxes folds too */
+    opt.max_width = 0;
+    opt.max_nodes = 4;
+    assert_int_equal(sidx_dot_write_events(b.ev, b.n, NULL, 0, &opt, path, &err), SIDX_OK);
+    g = read_graph(path);
+    assert_true(agnnodes(g) <= 4);
+    assert_non_null(agnode(g, (char *)"fold0", 0));
+    agclose(g);
+    unlink(path);
+}
+
+/* A hang detector, not a benchmark: every structure on every built-in scene, drawn to the
+ * bottom (--depth 1000), is laid out by Graphviz within a generous 20 s, at most about 3,000 pt
+ * wide; a drawing that leaves nodes out says so in its caption. */
+static const char *dot_hang_case = "";
+static void dot_hang_alarm(int sig)
+{
+    (void)sig;
+    static const char msg[] = "\nsidx_dot_write did not finish within 20 s: ";
+    if (write(STDERR_FILENO, msg, sizeof msg - 1) < 0 || write(STDERR_FILENO, dot_hang_case, strlen(dot_hang_case)) < 0 ||
+        write(STDERR_FILENO, "\n", 1) < 0)
+        _exit(1);
+    _exit(1);
+}
+
+static void dot_every_structure_and_scene_finishes(void **state)
+{
+    (void)state;
+    if (getenv("SIDX_FAST_TESTS")) {
+        print_message("gvc layout not run under SIDX_FAST_TESTS: skipped\n");
+        return;
+    }
+#if defined(__SANITIZE_ADDRESS__)
+    print_message("not run under AddressSanitizer (Graphviz's text layout reads past a harfbuzz buffer): skipped\n");
+    return;
+#endif
+    char svg[128], name[160];
+    tmp_path(svg, sizeof svg, "all.svg");
+    signal(SIGALRM, dot_hang_alarm);
+    unsigned drawn = 0, folded = 0, cells_folded = 0;
+    for (const char *const *sc = sidx_scene_names(); *sc; ++sc) {
+        sidx_mesh m;
+        sidx_error err;
+        assert_int_equal(sidx_scene_open(*sc, &m, &err), SIDX_OK);
+        for (size_t i = 0; i < sidx_accel_registered_count(); ++i) {
+            const char *accel = sidx_accel_registered_name(i);
+            snprintf(name, sizeof name, "%s on %s", accel, *sc);
+            dot_hang_case = name;
+            sidx_dot_options opt;
+            memset(&opt, 0, sizeof opt);
+            opt.max_depth = 1000;
+            opt.scene = *sc;
+            alarm(20);
+            const sidx_status st = sidx_dot_write(&m, accel, &opt, svg, &err);
+            alarm(0);
+            if (st == SIDX_ERR_UNSUPPORTED) continue; /* no tree: brute, grid, ... */
+            if (st != SIDX_OK) print_message("%s: %s\n", name, err.message);
+            assert_int_equal(st, SIDX_OK);
+            ++drawn;
+            FILE *f = fopen(svg, "r");
+            assert_non_null(f);
+            static char text[1 << 20];
+            const size_t n = fread(text, 1, sizeof text - 1, f);
+            text[n] = '\0';
+            fclose(f);
+                    /* the title: "<structure>: <N> nodes, ..."; the boxes: class="node" */
+            const char *title = strstr(text, " nodes, ");
+            assert_non_null(title);
+            while (title > text && title[-1] >= '0' && title[-1] <= '9') --title;
+            const unsigned long nodes = strtoul(title, NULL, 10);
+            unsigned long boxes = 0;
+            for (const char *p = text; (p = strstr(p, "class=\"node\"")) != NULL; ++p) ++boxes;
+            const double width = svg_width_pt(svg);
+            if (width >= 3000.0) print_message("%s: %.0f pt wide\n", name, width);
+            assert_true(width < 3000.0);
+            if (boxes < nodes) {
+                if (!strstr(text, "folded to fit a page")) print_message("%s: %lu of %lu nodes drawn, no caption\n",
+                                                                          name, boxes, nodes);
+                assert_non_null(strstr(text, "folded to fit a page"));
+                ++folded;
+            }
+            cells_folded += strstr(text, " more cells (") != NULL;
+        }
+        sidx_mesh_free(&m);
+    }
+    signal(SIGALRM, SIG_DFL);
+    print_message("%u drawings, %u folded (%u with a \"more cells\" box)\n", drawn, folded, cells_folded);
+    assert_true(folded > 0 && cells_folded > 0);
+    unlink(svg);
 }
 
 #else
@@ -538,6 +703,8 @@ static void dot_wide_trees_fit_a_page(void **state)
  * answers SIDX_ERR_UNSUPPORTED (test_args checks it) and these are skipped. */
 static void skip_without_graphviz(void) { print_message("built without Graphviz: no drawings, skipped\n"); skip(); }
 static void dot_synthetic_parses_back(void **state) { (void)state; skip_without_graphviz(); }
+static void dot_folds_wide_levels(void **state) { (void)state; skip_without_graphviz(); }
+static void dot_every_structure_and_scene_finishes(void **state) { (void)state; skip_without_graphviz(); }
 static void dot_real_structure(void **state) { (void)state; skip_without_graphviz(); }
 #endif /* SIDX_HAVE_GRAPHVIZ */
 
@@ -741,6 +908,37 @@ static size_t differing_pixels(SDL_Surface *a, SDL_Surface *b)
             diff += pa != pb;
         }
     return diff;
+}
+
+/* The heat map reads at a glance: steps per pixel span decades (the teapot in the stadium:
+ * ~10 on the stadium's floor, thousands in the grid cell that holds the teapot), so the
+ * colours follow a log scale.  On a linear one the floor is black; here most pixels under the
+ * horizon must show colour (at least a third of the scene's area, its top being sky). */
+static void view_heat_map_log_scale(void **state)
+{
+    (void)state;
+    if (!sidx_accel_is_registered("grid")) return;
+    view_state v;
+    sidx_error err;
+    assert_int_equal(view_open(&v, "stadium", "grid", &err), SIDX_OK);
+    v.mode = VIEW_HEAT;
+    v.zoom = 3.0f;
+    const int w = 550, h = 350, sw = view_scene_width(w);
+    SDL_Surface *s = view_render_surface(&v, w, h);
+    assert_non_null(s);
+    size_t coloured = 0, dark = 0;
+    for (int y = 20; y < h - 50; ++y) /* below the title, above the legend */
+        for (int x = 0; x < sw; ++x) {
+            const uint32_t p = ((uint32_t *)((uint8_t *)s->pixels + (size_t)y * (size_t)s->pitch))[x];
+            const int r = (int)((p >> 16) & 255), g = (int)((p >> 8) & 255), b = (int)(p & 255);
+            if (r + g + b > 120) ++coloured; else ++dark;
+        }
+    print_message("heat map of grid on stadium: %zu of %zu pixels coloured, max %u steps\n", coloured,
+                  coloured + dark, v.heat_max);
+    assert_true(v.heat_max > 1000); /* the teapot's cell */
+    assert_true(coloured * 3 > coloured + dark);
+    SDL_FreeSurface(s);
+    view_close(&v);
 }
 
 static SDL_Surface *load_png(const char *path)
@@ -1089,6 +1287,7 @@ static void view_steps_real_recording(void **state)
 static void skip_without_sdl(void) { print_message("built without SDL2: the viewer is not built, skipped\n"); skip(); }
 static void view_screenshots_differ_between_steps(void **state) { (void)state; skip_without_sdl(); }
 static void view_keys_and_mouse(void **state) { (void)state; skip_without_sdl(); }
+static void view_heat_map_log_scale(void **state) { (void)state; skip_without_sdl(); }
 static void view_steps_real_recording(void **state) { (void)state; skip_without_sdl(); }
 #endif /* SIDX_HAVE_SDL */
 
@@ -1276,6 +1475,22 @@ static void step_matches_expected(void **state)
     snprintf(cmd, sizeof cmd, "%s/sidx-dot --accel brute %s -o /tmp/sidx_never.dot 2>/dev/null", bin_dir, TINY_SCENE);
     rc = system(cmd);
     assert_true(WIFEXITED(rc) && WEXITSTATUS(rc) == 1);
+    /* the width and box limits: 0 = none, a width below 2 or a non-number is a usage error */
+    snprintf(cmd, sizeof cmd, "%s/sidx-dot --accel bvh %s --max-width 1 -o - >/dev/null 2>&1", bin_dir, TINY_SCENE);
+    rc = system(cmd);
+    assert_true(WIFEXITED(rc) && WEXITSTATUS(rc) == 2);
+    snprintf(cmd, sizeof cmd, "%s/sidx-dot --accel bvh %s --max-nodes x -o - >/dev/null 2>&1", bin_dir, TINY_SCENE);
+    rc = system(cmd);
+    assert_true(WIFEXITED(rc) && WEXITSTATUS(rc) == 2);
+    snprintf(cmd, sizeof cmd, "%s/sidx-dot --accel bvh %s --leaf-size 1 --max-width 2 -o - 2>&1", bin_dir, TINY_SCENE);
+    char *folded = run_capture(cmd);
+    assert_non_null(strstr(folded, "folded to fit a page (about 2 boxes across"));
+    free(folded);
+    snprintf(cmd, sizeof cmd, "%s/sidx-dot --accel bvh %s --leaf-size 1 --max-width 0 --max-nodes 0 -o - 2>&1", bin_dir,
+             TINY_SCENE);
+    folded = run_capture(cmd);
+    assert_null(strstr(folded, "folded"));
+    free(folded);
 #endif
 }
 
@@ -1475,12 +1690,15 @@ int main(int argc, char **argv)
         cmocka_unit_test(dot_real_structure),
         cmocka_unit_test(view_screenshots_differ_between_steps),
         cmocka_unit_test(view_keys_and_mouse),
+        cmocka_unit_test(view_heat_map_log_scale),
         cmocka_unit_test(view_steps_real_recording),
         cmocka_unit_test(view_events_from_file),
         cmocka_unit_test(leaf_prims_from_real_builds),
         cmocka_unit_test(dot_real_leaf_labels),
         cmocka_unit_test(dot_labels_say_the_structure),
         cmocka_unit_test(dot_wide_trees_fit_a_page),
+        cmocka_unit_test(dot_folds_wide_levels),
+        cmocka_unit_test(dot_every_structure_and_scene_finishes),
         cmocka_unit_test(step_matches_expected),
         cmocka_unit_test(build_knobs_fill_options),
         cmocka_unit_test(step_panel_step_break),

@@ -7,7 +7,9 @@
  * and, with a ray, the primitives the ray tested there.  With a ray, visited nodes are
  * filled along a yellow-to-red gradient in visit order and numbered, nodes
  * whose box test failed are greyed, the hit leaf gets a double red border.
- * Below max_depth each cut subtree becomes one summary node. */
+ * Below max_depth each cut subtree becomes one summary node; siblings past the
+ * width a level may hold fold into one "… N more" box, and the caption says
+ * what was left out. */
 #include <ctype.h>
 #include <float.h>
 #include <math.h>
@@ -151,54 +153,51 @@ typedef struct dot_ctx {
     const sidx_viz_tree *t;
     int with_ray;
     uint32_t cut_level; /* levels below the drawn root after which subtrees are summarised */
-    uint32_t summaries;
+    uint32_t max_width; /* boxes across the drawing, at most (UINT32_MAX: no fold) */
+    uint32_t max_nodes; /* boxes the drawing holds, about (UINT32_MAX: no limit) */
     float scale;        /* the scene's extent: split values within a few ulps of it print as 0 */
     const sidx_accel *labels; /* node labels, or NULL */
+    /* per tree node, for the whole subtree below and including it */
+    uint32_t *sub_nodes, *sub_visited;
+    uint64_t *sub_prims;
+    /* what the drawing leaves out */
+    uint32_t drawn;                  /* boxes drawn */
+    uint32_t summaries, cut_nodes;   /* subtrees cut at cut_level, and their nodes */
+    uint32_t folds, folded_nodes;    /* "… N more" boxes for siblings past the width, and their nodes */
+    uint32_t folded_top;             /* siblings folded (the N of the boxes, summed) */
+    uint32_t closed, closed_nodes;   /* subtrees summarised to keep the width, and their nodes */
 } dot_ctx;
 
-/* Wide trees (grid2's hundreds of top-level cells, the octree's eight children per node) drawn
- * level by level make strips tens of thousands of points wide.  Two remedies keep a page:
- *  - children past DOT_ROW of one parent wrap into further rows (invisible edges stack row k
- *    under row k-1; the parent's edges to them do not constrain the ranks);
- *  - without an explicit depth, the cut level is the deepest (up to SIDX_DOT_DEFAULT_DEPTH) at
- *    which the drawing holds at most DOT_NODE_BUDGET nodes. */
-#define DOT_ROW 8u
-#define DOT_NODE_BUDGET 160u
-#define DOT_WIDTH_BUDGET 32u
-
-/* Nodes drawn when cutting after `level` levels: the nodes of levels 0..level plus one summary
- * per inner node of the last level. */
-static uint32_t auto_cut_level(const sidx_viz_tree *t, uint32_t max_level)
+/* Subtree sizes for every node in one pass: a breadth-first order (parents before children),
+ * then the sums taken from the end of it. */
+static int subtree_sums(dot_ctx *c)
 {
-    uint32_t *cur = malloc(t->count * sizeof *cur), *next = malloc(t->count * sizeof *next);
-    uint32_t best = 1, drawn = 1, ncur = 1;
-    if (!cur || !next) { free(cur); free(next); return max_level; }
-    cur[0] = t->root;
-    for (uint32_t level = 1; level <= max_level && ncur; ++level) {
-        uint32_t nnext = 0;
-        for (uint32_t i = 0; i < ncur; ++i) {
-            const sidx_viz_node *nd = &t->nodes[cur[i]];
-            for (uint32_t k = 0; k < nd->child_count; ++k) next[nnext++] = t->children[nd->child_base + k];
-        }
-        /* the widest rank of this level: each parent's children wrapped into rows of DOT_ROW */
-        uint32_t width = 0;
-        for (uint32_t i = 0; i < ncur; ++i) {
-            const uint32_t k = t->nodes[cur[i]].child_count;
-            width += k < DOT_ROW ? k : DOT_ROW;
-        }
-        drawn += nnext;
-        uint32_t inner = 0;
-        for (uint32_t i = 0; i < nnext; ++i) inner += t->nodes[next[i]].child_count > 0;
-        if (level > 1 && (drawn + inner > DOT_NODE_BUDGET || width > DOT_WIDTH_BUDGET)) break;
-        best = level;
-        uint32_t *tmp = cur;
-        cur = next;
-        next = tmp;
-        ncur = nnext;
+    const sidx_viz_tree *t = c->t;
+    uint32_t *order = malloc(t->count * sizeof *order);
+    c->sub_nodes = calloc(t->count, sizeof *c->sub_nodes);
+    c->sub_visited = calloc(t->count, sizeof *c->sub_visited);
+    c->sub_prims = calloc(t->count, sizeof *c->sub_prims);
+    if (!order || !c->sub_nodes || !c->sub_visited || !c->sub_prims) { free(order); return -1; }
+    size_t n = 0, next = 0;
+    order[n++] = t->root;
+    while (next < n) {
+        const sidx_viz_node *nd = &t->nodes[order[next++]];
+        for (uint32_t k = 0; k < nd->child_count && n < t->count; ++k) order[n++] = t->children[nd->child_base + k];
     }
-    free(cur);
-    free(next);
-    return best;
+    for (size_t k = n; k-- > 0;) {
+        const uint32_t i = order[k];
+        const sidx_viz_node *nd = &t->nodes[i];
+        c->sub_nodes[i] += 1;
+        c->sub_visited[i] += nd->visit_order != 0;
+        if (nd->is_leaf) c->sub_prims[i] += nd->leaf_count;
+        if (nd->parent != SIDX_VIZ_NONE) {
+            c->sub_nodes[nd->parent] += c->sub_nodes[i];
+            c->sub_visited[nd->parent] += c->sub_visited[i];
+            c->sub_prims[nd->parent] += c->sub_prims[i];
+        }
+    }
+    free(order);
+    return 0;
 }
 
 static Agnode_t *add_node(dot_ctx *c, uint32_t i)
@@ -231,52 +230,186 @@ static Agnode_t *add_node(dot_ctx *c, uint32_t i)
             set(n, "peripheries", "2");
         }
     }
+    ++c->drawn;
     return n;
 }
 
-static int add_summary(dot_ctx *c, Agnode_t *parent, uint32_t i)
+/* Node states: not drawn, drawn and closed (a summary below it when it has children), drawn
+ * and open (its children weighed; those not shown are in its "… more" box) */
+enum { DOT_OUT = 0, DOT_CLOSED = 1, DOT_OPEN = 2 };
+/* Why a box stands for children not drawn */
+enum { DOT_FOLD, DOT_CUT, DOT_CLOSE };
+
+/* One box under `parent` standing for the children of node p that are not drawn
+ * (state[child] == DOT_OUT).  DOT_CUT: every child, below the depth cut; DOT_CLOSE: every
+ * child, the subtree summarised to keep the width ("+N nodes, M prims", named cut<id>);
+ * DOT_FOLD: the siblings past the width ("… N more cells (M empty)", named fold<id>). */
+static int add_folded(dot_ctx *c, Agnode_t *parent, uint32_t p, const unsigned char *state, int why)
 {
     const sidx_viz_tree *t = c->t;
-    const sidx_viz_node *nd = &t->nodes[i];
-    uint32_t nodes = 0, visited = 0;
+    const sidx_viz_node *nd = &t->nodes[p];
+    uint32_t nodes = 0, visited = 0, siblings = 0, empty = 0, cells = 1, any_kept = 0;
     uint64_t prims = 0;
     for (uint32_t k = 0; k < nd->child_count; ++k) {
-        uint32_t nn;
-        uint64_t pp;
-        sidx_viz_tree_subtree(t, t->children[nd->child_base + k], &nn, &pp);
-        nodes += nn;
-        prims += pp;
+        const uint32_t ch = t->children[nd->child_base + k];
+        if (state[ch] != DOT_OUT) { any_kept = 1; continue; }
+        nodes += c->sub_nodes[ch];
+        prims += c->sub_prims[ch];
+        visited += c->sub_visited[ch];
+        ++siblings;
+        empty += c->sub_prims[ch] == 0;
+        cells &= t->nodes[ch].cell[0] >= 0;
     }
-    if (c->with_ray) {
-        /* visited nodes below: walk the subtree */
-        uint32_t *stack = malloc(t->count * sizeof *stack);
-        if (!stack) return -1;
-        size_t sp = 0;
-        for (uint32_t k = 0; k < nd->child_count; ++k) stack[sp++] = t->children[nd->child_base + k];
-        while (sp) {
-            const sidx_viz_node *x = &t->nodes[stack[--sp]];
-            if (x->visit_order) ++visited;
-            for (uint32_t k = 0; k < x->child_count && sp < t->count; ++k) stack[sp++] = t->children[x->child_base + k];
+    if (!siblings) return 0;
+    char name[40];
+    strbuf lb = {{0}, 0};
+    if (why != DOT_FOLD) {
+        snprintf(name, sizeof name, "cut%u", nd->id);
+        sb_add(&lb, "+%u nodes, %llu prims", nodes, (unsigned long long)prims);
+        if (why == DOT_CUT) {
+            c->summaries++;
+            c->cut_nodes += nodes;
+        } else {
+            c->closed++;
+            c->closed_nodes += nodes;
         }
-        free(stack);
+    } else {
+        snprintf(name, sizeof name, "fold%u", nd->id);
+        const char *what = cells ? (siblings == 1 ? "cell" : "cells") : (siblings == 1 ? "node" : "nodes");
+        sb_add(&lb, "\xe2\x80\xa6 %u %s%s", siblings, any_kept ? "more " : "", what);
+        if (empty || cells) sb_add(&lb, " (%u empty)", empty);
+        sb_add(&lb, "\\n%u nodes, %llu prims in all", nodes, (unsigned long long)prims);
+        c->folds++;
+        c->folded_nodes += nodes;
+        c->folded_top += siblings;
     }
-    char name[40], label[96];
-    snprintf(name, sizeof name, "cut%u", nd->id);
-    if (visited)
-        snprintf(label, sizeof label, "+%u nodes, %llu prims\\nray visited %u", nodes, (unsigned long long)prims,
-                 visited);
-    else
-        snprintf(label, sizeof label, "+%u nodes, %llu prims", nodes, (unsigned long long)prims);
+    if (visited) sb_add(&lb, "\\nray visited %u", visited);
     Agnode_t *s = agnode(c->g, name, 1);
     if (!s) return -1;
-    set(s, "label", label);
+    set(s, "label", lb.s);
     set(s, "shape", "folder");
     set(s, "style", "filled,dashed");
     set(s, "fillcolor", visited ? "#ffe0b0" : "#f0f0f0");
     Agedge_t *e = agedge(c->g, parent, s, NULL, 1);
     if (!e) return -1;
     set(e, "style", "dashed");
-    c->summaries++;
+    ++c->drawn;
+    return 0;
+}
+
+/* Which nodes are drawn.
+ *
+ * dot lays a tree out about as wide as its bottom boxes: the drawn leaves, the "… more" boxes
+ * and the summaries, at whatever depth they end.  So max_width bounds those boxes, the
+ * frontier, and max_nodes all boxes.  The drawing starts as the root over one summary and
+ * opens nodes best first — the ones the ray visited (in visit order), then the ones holding
+ * the most primitives — while the frontier has room.  Opening a node shows its children in
+ * the same order of interest, at most half the room left (and one at least), the rest folded
+ * into one "… N more" box after them; a single sibling is shown rather than folded.  Nodes at
+ * cut_level stay closed.  So a wide level becomes a few cells and a fold, and the page's width
+ * goes to the deepest paths of interest rather than to one level. */
+typedef struct cand { uint32_t node, visit; uint64_t prims; uint32_t nodes, order; } cand;
+
+/* 1: a is more interesting than b */
+static int before(const cand *a, const cand *b)
+{
+    const uint32_t va = a->visit ? a->visit : UINT32_MAX, vb = b->visit ? b->visit : UINT32_MAX;
+    if (va != vb) return va < vb;
+    if (a->prims != b->prims) return a->prims > b->prims;
+    if (a->nodes != b->nodes) return a->nodes > b->nodes;
+    return a->order < b->order;
+}
+
+static int cmp_cand(const void *x, const void *y)
+{
+    const cand *a = x, *b = y;
+    return before(a, b) ? -1 : before(b, a) ? 1 : 0;
+}
+
+static cand cand_of(const dot_ctx *c, uint32_t i, uint32_t order)
+{
+    cand k = {i, c->t->nodes[i].visit_order, c->sub_prims[i], c->sub_nodes[i], order};
+    return k;
+}
+
+/* A binary heap of the closed nodes that may be opened, best on top. */
+typedef struct heap { cand *a; size_t n; } heap;
+
+static void heap_push(heap *h, cand k)
+{
+    size_t i = h->n++;
+    while (i && before(&k, &h->a[(i - 1) / 2])) {
+        h->a[i] = h->a[(i - 1) / 2];
+        i = (i - 1) / 2;
+    }
+    h->a[i] = k;
+}
+
+static cand heap_pop(heap *h)
+{
+    cand top = h->a[0], last = h->a[--h->n];
+    size_t i = 0;
+    for (;;) {
+        size_t l = 2 * i + 1, r = l + 1, m = i;
+        const cand *best = &last;
+        if (l < h->n && before(&h->a[l], best)) { m = l; best = &h->a[l]; }
+        if (r < h->n && before(&h->a[r], best)) m = r;
+        if (m == i) break;
+        h->a[i] = h->a[m];
+        i = m;
+    }
+    if (h->n) h->a[i] = last;
+    return top;
+}
+
+
+static int choose(dot_ctx *c, unsigned char *state, uint32_t *level, cand *kids)
+{
+    const sidx_viz_tree *t = c->t;
+    const uint64_t unlimited = UINT64_MAX / 4;
+    const uint64_t max_width = c->max_width == UINT32_MAX ? unlimited : c->max_width;
+    const uint64_t max_nodes = c->max_nodes == UINT32_MAX ? unlimited : c->max_nodes;
+    heap h = {malloc(t->count * sizeof(cand)), 0};
+    if (!h.a) return -1;
+    const int root_inner = t->nodes[t->root].child_count > 0;
+    uint64_t frontier = 1, boxes = 1 + (uint64_t)root_inner; /* the root and its summary */
+    uint32_t order = 0;
+    state[t->root] = DOT_CLOSED;
+    level[t->root] = 0;
+    if (root_inner && c->cut_level > 0) heap_push(&h, cand_of(c, t->root, order++));
+    while (h.n) {
+        const uint32_t p = heap_pop(&h).node;
+        const sidx_viz_node *nd = &t->nodes[p];
+        const uint32_t k = nd->child_count;
+        for (uint32_t j = 0; j < k; ++j) kids[j] = cand_of(c, t->children[nd->child_base + j], j);
+        qsort(kids, k, sizeof *kids, cmp_cand);
+        /* the room the frontier has once p's summary gives its place up */
+        const uint64_t room = max_width + 1 > frontier ? max_width + 1 - frontier : 0;
+        uint64_t show = room / 2 > 1 ? room / 2 : 1;
+        if (show + 1 >= k) show = k;  /* no "… 1 more": show it */
+        /* fewer where all boxes would pass max_nodes (a closed inner child brings its summary) */
+        uint64_t inner = 0;
+        for (uint64_t j = 0; j < show; ++j) inner += t->nodes[kids[j].node].child_count > 0;
+        uint64_t fold = show < k, new_boxes = boxes - 1 + show + inner + fold;
+        while (show > 1 && new_boxes > max_nodes) {
+            --show;
+            inner -= t->nodes[kids[show].node].child_count > 0;
+            fold = 1;
+            new_boxes = boxes - 1 + show + inner + fold;
+        }
+        const uint64_t new_frontier = frontier - 1 + show + fold;
+        if ((new_frontier > max_width && new_frontier > frontier) || new_boxes > max_nodes) continue;
+        frontier = new_frontier;
+        boxes = new_boxes;
+        state[p] = DOT_OPEN;
+        for (uint64_t j = 0; j < show; ++j) {
+            const uint32_t ch = kids[j].node;
+            state[ch] = DOT_CLOSED;
+            level[ch] = level[p] + 1;
+            if (t->nodes[ch].child_count && level[ch] < c->cut_level) heap_push(&h, cand_of(c, ch, order++));
+        }
+    }
+    free(h.a);
     return 0;
 }
 
@@ -284,56 +417,45 @@ static int build_graph(dot_ctx *c)
 {
     const sidx_viz_tree *t = c->t;
     Agnode_t **made = calloc(t->count, sizeof *made);
-    uint32_t *stack = malloc(t->count * sizeof *stack), *level = malloc(t->count * sizeof *level);
+    unsigned char *state = calloc(t->count, 1);
+    uint32_t *level = malloc(t->count * sizeof *level), *stack = malloc(t->count * sizeof *stack);
+    cand *kids = malloc(t->count * sizeof *kids);
     int rc = 0;
-    if (!made || !stack || !level) { rc = -1; goto out; }
+    if (!made || !state || !level || !stack || !kids || choose(c, state, level, kids) != 0) { rc = -1; goto out; }
+    /* depth first, children left to right as the build made them */
     size_t sp = 0;
     stack[sp++] = t->root;
-    level[t->root] = 0;
     while (sp && rc == 0) {
-        uint32_t i = stack[--sp];
+        const uint32_t i = stack[--sp];
         const sidx_viz_node *nd = &t->nodes[i];
-        Agnode_t *n = add_node(c, i);
+        Agnode_t *n = made[i] = add_node(c, i);
         if (!n) { rc = -1; break; }
-        made[i] = n;
         if (nd->parent != SIDX_VIZ_NONE && made[nd->parent]) {
-            /* a wrapped child (past DOT_ROW of its parent's children) hangs from the sibling one
-             * row above by a dotted line, two ranks down (room for that sibling's summary): an
-             * edge from the parent, routed around the rows, would widen the drawing again */
-            const sidx_viz_node *p = &t->nodes[nd->parent];
-            uint32_t k = 0;
-            while (k < p->child_count && t->children[p->child_base + k] != i) ++k;
-            Agnode_t *from = made[nd->parent];
-            if (k >= DOT_ROW && k < p->child_count) from = made[t->children[p->child_base + k - DOT_ROW]];
-            Agedge_t *e = from ? agedge(c->g, from, n, NULL, 1) : NULL;
+            Agedge_t *e = agedge(c->g, made[nd->parent], n, NULL, 1);
             if (!e) { rc = -1; break; }
-            if (from != made[nd->parent]) {
-                set(e, "style", "dotted");
-                set(e, "color", "#9a9a9a");
-                set(e, "arrowhead", "none");
-                set(e, "weight", "100");
-                set(e, "minlen", level[i] < c->cut_level ? "1" : "2");
-            } else if (c->with_ray && nd->visit_order && p->visit_order) {
+            if (c->with_ray && nd->visit_order && t->nodes[nd->parent].visit_order) {
                 set(e, "color", "#d04000");
                 set(e, "penwidth", "2");
             }
         }
-        if (nd->child_count == 0) continue;
-        if (level[i] >= c->cut_level) {
-            rc = add_summary(c, n, i);
-            continue;
-        }
-        /* push in reverse so children are created left to right */
         for (uint32_t k = nd->child_count; k-- > 0;) {
             const uint32_t ch = t->children[nd->child_base + k];
-            level[ch] = level[i] + 1;
-            stack[sp++] = ch;
+            if (state[ch] != DOT_OUT) stack[sp++] = ch;
         }
+    }
+    /* then the boxes for what is not drawn: after the shown children (ordering=out keeps a
+     * node's edges in the order they were made), so a "… more" box ends its row */
+    for (uint32_t i = 0; i < t->count && rc == 0; ++i) {
+        if (!made[i] || !t->nodes[i].child_count) continue;
+        const int why = state[i] == DOT_OPEN ? DOT_FOLD : level[i] >= c->cut_level ? DOT_CUT : DOT_CLOSE;
+        rc = add_folded(c, made[i], i, state, why);
     }
 out:
     free(made);
-    free(stack);
+    free(state);
     free(level);
+    free(stack);
+    free(kids);
     return rc;
 }
 
@@ -391,7 +513,18 @@ sidx_status sidx_dot_write_events(const sidx_event *build, size_t nbuild, const 
     c.t = &t;
     c.with_ray = with_ray;
     c.labels = o.labels;
-    c.cut_level = o.max_depth ? o.max_depth : auto_cut_level(&t, SIDX_DOT_DEFAULT_DEPTH);
+    c.cut_level = o.max_depth ? o.max_depth : SIDX_DOT_DEFAULT_DEPTH;
+    c.max_width = o.max_width ? o.max_width : SIDX_DOT_DEFAULT_WIDTH;
+    c.max_nodes = o.max_nodes ? o.max_nodes : SIDX_DOT_DEFAULT_NODES;
+    if (c.max_width < 2) c.max_width = 2; /* one drawn child and its "… more" box */
+    if (c.max_nodes < 2) c.max_nodes = 2;
+    if (subtree_sums(&c) != 0) {
+        free(c.sub_nodes);
+        free(c.sub_visited);
+        free(c.sub_prims);
+        sidx_viz_tree_free(&t);
+        return fail(err, SIDX_ERR_NOMEM, "out of memory sizing the tree");
+    }
     {
         const sidx_aabb rb = t.nodes[t.root].bounds;
         const float m[6] = {rb.min.x, rb.min.y, rb.min.z, rb.max.x, rb.max.y, rb.max.z};
@@ -402,10 +535,31 @@ sidx_status sidx_dot_write_events(const sidx_event *build, size_t nbuild, const 
     Agdesc_t desc = Agdirected;
     c.g = agopen((char *)"sidx", desc, NULL);
     if (!c.g) {
+        free(c.sub_nodes);
+        free(c.sub_visited);
+        free(c.sub_prims);
         sidx_viz_tree_free(&t);
         return fail(err, SIDX_ERR_NOMEM, "cgraph: agopen failed");
     }
-    char title[200];
+    set(c.g, "labelloc", "t");
+    set(c.g, "fontname", "Helvetica");
+    set(c.g, "ordering", "out");
+    agattr(c.g, AGNODE, (char *)"shape", (char *)"box");
+    agattr(c.g, AGNODE, (char *)"style", (char *)"rounded,filled");
+    agattr(c.g, AGNODE, (char *)"fontname", (char *)"Helvetica");
+    agattr(c.g, AGNODE, (char *)"fontsize", (char *)"10");
+    agattr(c.g, AGEDGE, (char *)"arrowsize", (char *)"0.6");
+
+    const int built = build_graph(&c);
+    free(c.sub_nodes);
+    free(c.sub_visited);
+    free(c.sub_prims);
+    if (built != 0) {
+        agclose(c.g);
+        sidx_viz_tree_free(&t);
+        return fail(err, SIDX_ERR_NOMEM, "cgraph: out of memory building the graph");
+    }
+    char title[600];
     if (o.title)
         snprintf(title, sizeof title, "%s", o.title);
     else if (with_ray && t.hit_prim != SIDX_VIZ_NONE)
@@ -417,21 +571,29 @@ sidx_status sidx_dot_write_events(const sidx_event *build, size_t nbuild, const 
     else
         snprintf(title, sizeof title, "%s: %zu nodes, %u leaves, depth %u", t.structure, t.count, t.leaves,
                  t.max_depth);
-    set(c.g, "label", title);
-    set(c.g, "labelloc", "t");
-    set(c.g, "fontname", "Helvetica");
-    set(c.g, "ordering", "out");
-    agattr(c.g, AGNODE, (char *)"shape", (char *)"box");
-    agattr(c.g, AGNODE, (char *)"style", (char *)"rounded,filled");
-    agattr(c.g, AGNODE, (char *)"fontname", (char *)"Helvetica");
-    agattr(c.g, AGNODE, (char *)"fontsize", (char *)"10");
-    agattr(c.g, AGEDGE, (char *)"arrowsize", (char *)"0.6");
-
-    if (build_graph(&c) != 0) {
-        agclose(c.g);
-        sidx_viz_tree_free(&t);
-        return fail(err, SIDX_ERR_NOMEM, "cgraph: out of memory building the graph");
+    /* the caption says what the drawing leaves out, and why */
+    {
+        size_t n = strlen(title);
+        if ((c.folds || c.closed) && n < sizeof title)
+            n += (size_t)snprintf(title + n, sizeof title - n, "\\nfolded to fit a page (about %u boxes across, %u in all):",
+                                  c.max_width, c.max_nodes);
+        if (c.folds && n < sizeof title)
+            n += (size_t)snprintf(title + n, sizeof title - n, " %u siblings in %u \xe2\x80\xa6 boxes%s", c.folded_top,
+                                  c.folds, c.closed ? "," : "");
+        if (c.closed && n < sizeof title)
+            n += (size_t)snprintf(title + n, sizeof title - n, " %u subtrees summarised", c.closed);
+        if ((c.folds || c.closed) && n < sizeof title)
+            n += (size_t)snprintf(title + n, sizeof title - n, "; %u nodes not drawn", c.folded_nodes + c.closed_nodes);
+        if (c.summaries && n < sizeof title)
+            snprintf(title + n, sizeof title - n, "\\ncut below depth %u: %u subtrees summarised (%u nodes)",
+                     c.cut_level, c.summaries, c.cut_nodes);
     }
+    set(c.g, "label", title);
+    if (o.progress && !text) {
+        fprintf(o.progress, "laying out %u boxes with Graphviz dot...\n", c.drawn);
+        fflush(o.progress);
+    }
+
 
     FILE *f = strcmp(path, "-") == 0 ? stdout : fopen(path, "wb");
     if (!f) {
@@ -479,6 +641,10 @@ sidx_status sidx_dot_write(const sidx_mesh *mesh, const char *accel_name, const 
     if (opt && opt->build) bo = *opt->build;
     bo.hook = &bh;
     sidx_accel *a = NULL;
+    if (opt && opt->progress) {
+        fprintf(opt->progress, "building %s over %u triangles...\n", accel_name, (unsigned)mesh->num_triangles);
+        fflush(opt->progress);
+    }
     sidx_status st = sidx_scene_accel_build(opt ? opt->scene : NULL, accel_name, mesh, &bo, &a, err);
     if (st == SIDX_OK && brec.overflow) st = fail(err, SIDX_ERR_NOMEM, "out of memory recording the build");
     if (st == SIDX_OK && opt && opt->has_ray) {

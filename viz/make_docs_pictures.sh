@@ -35,8 +35,8 @@ failed=0
 
 names=$("$BIN/sidx-dot" --list | awk '{print $1}')
 for a in $names; do
-  # wide trees (many children per node): sidx-dot's default depth stops where a level gets too
-  # wide for a page and wraps big families into rows; binary trees are drawn 5 levels deep
+  # wide trees (many children per node) get sidx-dot's default depth, binary trees 5 levels;
+  # either way siblings past the page's width fold into one "... N more" box
   case $a in grid2|bvh4|bvh8|octree|quadtree|rayclass) depth="" ;; *) depth=5 ;; esac
   if "$BIN/sidx-dot" --accel "$a" teapot ${depth:+--depth $depth} --ray "$TEAPOT_RAY" -o "$OUT/tree-$a-teapot.svg" >/dev/null 2>"$OUT/.err"; then
     if [ "$(wc -c < "$OUT/tree-$a-teapot.svg")" -gt 2000000 ]; then

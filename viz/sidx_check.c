@@ -48,7 +48,8 @@ static void usage(FILE *f)
             "  --trace DIR     write DIR/reference.jsonl and DIR/yours.jsonl for the failing case\n"
             "                  (or for case K) as JSON Lines: compare them with sidx-step --diff; for\n"
             "                  a walk the report also prints the two sidx-view --events commands\n"
-            "                  that step through each over its scene and structure\n"
+            "                  that step through each over its scene and structure (DIR and the\n"
+            "                  directories above it are made)\n"
             "  --timeout S     time limit per case, seconds (default 2)\n"
             "  --case K        run only case K\n"
             "  --verbose       one line per case\n"
@@ -99,6 +100,25 @@ static int add_words(char **argv, int n, char *words)
     return n;
 }
 
+/* Makes the directories above DIR (mkdir -p of its parent), so that --trace a/b works when a/
+ * does not exist; the runner makes DIR itself when it writes the traces, and says so if it
+ * cannot.  A parent that cannot be made is left for that message. */
+static void make_parents(const char *dir)
+{
+    char path[PATH_MAX];
+    if (snprintf(path, sizeof path, "%s", dir) >= (int)sizeof path) return;
+    char *last = strrchr(path, '/');
+    if (!last || last == path) return;
+    *last = '\0';
+    for (char *p = path + 1; *p; ++p) {
+        if (*p != '/') continue;
+        *p = '\0';
+        if (mkdir(path, 0777) != 0 && errno != EEXIST) return;
+        *p = '/';
+    }
+    (void)mkdir(path, 0777);
+}
+
 int main(int argc, char **argv)
 {
     const char *name = NULL, *file = NULL;
@@ -114,6 +134,7 @@ int main(int argc, char **argv)
             return 0;
         } else if ((!strcmp(a, "--trace") || !strcmp(a, "--timeout") || !strcmp(a, "--case")) && i + 1 < argc) {
             if (npass > 12) return 2;
+            if (!strcmp(a, "--trace")) make_parents(argv[i + 1]);
             pass[npass++] = argv[i];
             pass[npass++] = argv[++i];
         } else if (!strcmp(a, "--verbose")) {

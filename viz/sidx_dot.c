@@ -1,18 +1,21 @@
 /* sidx-dot — a structure's tree as a Graphviz picture.
  *
- *   sidx-dot --accel NAME SCENE [--depth K] [--ray ox,oy,oz,dx,dy,dz] [build knobs] -o tree.{dot,gv,svg,png,pdf}
+ *   sidx-dot --accel NAME SCENE [--depth K] [--max-width N] [--max-nodes N] [--ray ox,oy,oz,dx,dy,dz]
+ *            [build knobs] -o tree.{dot,gv,svg,png,pdf}
  *
  * Exit status: 0 written, 1 failure (build, no tree, I/O), 2 usage. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 #include "sidx/sidx.h"
 #include "sidx/viz.h"
 
 static void usage(FILE *f)
 {
     fprintf(f,
-            "usage: sidx-dot --accel NAME SCENE [--depth K] [--ray ox,oy,oz,dx,dy,dz] [build knobs] -o OUT\n"
+            "usage: sidx-dot --accel NAME SCENE [--depth K] [--max-width N] [--max-nodes N]\n"
+            "                [--ray ox,oy,oz,dx,dy,dz] [build knobs] -o OUT\n"
             "\n"
             "Builds structure NAME over SCENE (a .obj/.ply file or a built-in scene such as\n"
             "teapot, flat2d, icosphere:2), rebuilds its tree from the build events and writes it\n"
@@ -22,16 +25,22 @@ static void usage(FILE *f)
             "\n"
             "  --accel NAME     structure (see --list)\n"
             "  --depth K        cut the tree K levels below the root; each cut subtree becomes\n"
-            "                   one summary node \"+N nodes, M prims\" (default %u, fewer where a\n"
-            "                   level gets too wide for a page; 0 = no cut).  More than 8 children\n"
-            "                   of one node wrap into rows joined by dotted lines\n"
+            "                   one summary node \"+N nodes, M prims\" (default %u; 0 = no cut)\n"
+            "  --max-width N    about N boxes across the page (default %u; 0 = no limit).  Nodes\n"
+            "                   open best first: those the ray visited, then those holding the\n"
+            "                   most primitives; siblings past the width fold into one\n"
+            "                   \"... N more cells (M empty)\" box, other subtrees into \"+N nodes\"\n"
+            "                   summaries, and the caption says what was folded\n"
+            "  --max-nodes N    about N boxes in all (default %u; 0 = no limit).  The two limits\n"
+            "                   keep Graphviz's layout to a few seconds at any depth; on a\n"
+            "                   terminal the stages (build, layout) are printed on stderr\n"
             "  --ray R          trace the ray ox,oy,oz,dx,dy,dz: visited nodes coloured in visit\n"
             "                   order and numbered, pruned ones grey, the hit leaf outlined red\n"
             "  -o, --output OUT output file\n"
             "  --list           list the registered structures\n"
             "  -h, --help       this help\n"
             "\n%s",
-            SIDX_DOT_DEFAULT_DEPTH, sidx_viz_build_knobs_help());
+            SIDX_DOT_DEFAULT_DEPTH, SIDX_DOT_DEFAULT_WIDTH, SIDX_DOT_DEFAULT_NODES, sidx_viz_build_knobs_help());
 }
 
 int main(int argc, char **argv)
@@ -70,6 +79,20 @@ int main(int argc, char **argv)
                 return 2;
             }
             opt.max_depth = k == 0 ? SIDX_DOT_ALL_DEPTHS : (uint32_t)k;
+        } else if ((!strcmp(a, "--max-width") || !strcmp(a, "--max-nodes")) && has_val) {
+            char *end;
+            long k = strtol(argv[++i], &end, 10);
+            const long least = !strcmp(a, "--max-width") ? 2 : 1;
+            if (*end || end == argv[i] || (k != 0 && k < least) || k > 1000000) {
+                fprintf(stderr, "sidx-dot: %s wants 0 (no limit) or a number from %ld to 1000000, not '%s'\n", a,
+                        least, argv[i]);
+                return 2;
+            }
+            const uint32_t v = k == 0 ? SIDX_DOT_UNLIMITED : (uint32_t)k;
+            if (!strcmp(a, "--max-width"))
+                opt.max_width = v;
+            else
+                opt.max_nodes = v;
         } else if (!strcmp(a, "--ray") && has_val) {
             if (sidx_viz_parse_ray(argv[++i], &opt.ray_org, &opt.ray_dir) != 0) {
                 fprintf(stderr, "sidx-dot: --ray wants ox,oy,oz,dx,dy,dz (finite, non-zero direction), not '%s'\n",
@@ -98,6 +121,8 @@ int main(int argc, char **argv)
         return 2;
     }
     opt.build = &bo;
+    /* on a terminal, say what takes time: the build of a big scene, Graphviz's layout */
+    if (isatty(STDERR_FILENO)) opt.progress = stderr;
     opt.scene = scene; /* kd-slide with kdtree: the slide's tree, its nodes named as the slide names them */
 
     sidx_mesh mesh;

@@ -622,6 +622,15 @@ static void count_fn(const sidx_event *ev, void *user)
     ((step_count *)user)->n++;
 }
 
+/* The heat map's colour for n steps when the busiest pixel took max: on a log scale,
+ * log(1 + n) / log(1 + max).  Steps per pixel span three or four decades (a few dozen through
+ * a tree, thousands in the one grid cell that holds the teapot in the stadium): on a linear
+ * scale everything but the busiest pixels would be black. */
+static float heat_fraction(uint32_t n, uint32_t max)
+{
+    return max ? (float)(log1p((double)n) / log1p((double)max)) : 0.0f;
+}
+
 static int render_image(view_state *v, int w, int h, view_mode mode)
 {
     if (v->image && v->image_valid && v->image_w == w && v->image_h == h && v->image_mode == mode) return 0;
@@ -678,7 +687,7 @@ static int render_image(view_state *v, int w, int h, view_mode mode)
         for (int y = 0; y < h; y += ps)
             for (int x = 0; x < w; x += ps) {
                 uint32_t n = counts[(size_t)y * (size_t)w + (size_t)x];
-                uint32_t col = viz_heat_color(maxc ? (float)n / (float)maxc : 0.0f);
+                uint32_t col = viz_heat_color(heat_fraction(n, maxc));
                 for (int yy = y; yy < y + ps && yy < h; ++yy)
                     for (int xx = x; xx < x + ps && xx < w; ++xx) img[(size_t)yy * (size_t)w + (size_t)xx] = col;
             }
@@ -721,9 +730,20 @@ static void render_3d(view_state *v, viz_canvas *cv, int heat)
     }
     viz_textf(cv, 8, 8, 2, 0xffffffffu, "%s: %s", heat ? "heat" : "3D", v->accel_name);
     if (heat) {
-        /* colour bar */
+        /* colour bar, log scale, ticked at 1, 10, 100, ... */
         for (int i = 0; i < 200; ++i) viz_fill_rect(cv, 10 + i, h - 30, 1, 12, viz_heat_color((float)i / 199.0f));
-        viz_textf(cv, 10, h - 44, 1, 0xffffffffu, "steps per pixel (nodes + prim tests): 0 .. %u", v->heat_max);
+        viz_textf(cv, 10, h - 44, 1, 0xffffffffu, "steps per pixel (nodes + prim tests), log scale: 0 .. %u",
+                  v->heat_max);
+        int last_label = -100;
+        for (uint32_t tick = 1; v->heat_max && tick <= v->heat_max; tick *= 10) {
+            const int x = 10 + (int)lroundf(199.0f * heat_fraction(tick, v->heat_max));
+            viz_fill_rect(cv, x, h - 18, 1, 4, 0xffffffffu);
+            if (x - last_label >= 30) {
+                viz_textf(cv, x - 2, h - 12, 1, 0xffffffffu, "%u", tick);
+                last_label = x;
+            }
+            if (tick > UINT32_MAX / 10) break;
+        }
     }
 
     viz_clip(cv, sw, 0, cv->w - sw, h);

@@ -15,6 +15,7 @@
 #define SIDX_VIZ_H
 
 #include <stddef.h>
+#include <stdio.h>
 #include <stdint.h>
 #include "accel.h"
 #include "hook.h"
@@ -99,11 +100,22 @@ void sidx_viz_tree_subtree(const sidx_viz_tree *t, uint32_t i, uint32_t *nodes, 
 
 #define SIDX_DOT_DEFAULT_DEPTH 6u
 #define SIDX_DOT_ALL_DEPTHS UINT32_MAX
+#define SIDX_DOT_DEFAULT_WIDTH 12u  /* bottom boxes: a drawing about 2,500 px (26 in) wide */
+#define SIDX_DOT_DEFAULT_NODES 400u /* boxes in all: dot lays them out in a second or two */
+#define SIDX_DOT_UNLIMITED UINT32_MAX
 
 typedef struct sidx_dot_options {
-    uint32_t max_depth;            /* deeper subtrees become one summary node; 0 = up to
-                                      SIDX_DOT_DEFAULT_DEPTH, fewer levels where a level gets too
-                                      wide for a page; SIDX_DOT_ALL_DEPTHS = no cut */
+    uint32_t max_depth;            /* deeper subtrees become one summary node; 0 =
+                                      SIDX_DOT_DEFAULT_DEPTH; SIDX_DOT_ALL_DEPTHS = no cut */
+    uint32_t max_width;            /* bottom boxes (drawn leaves, folds, summaries), about the
+                                      drawing's width in boxes: nodes open best first (visited by
+                                      the ray, then holding the most primitives), siblings past it
+                                      fold into one "… N more cells (M empty)" box and the caption
+                                      says so; 0 = SIDX_DOT_DEFAULT_WIDTH; SIDX_DOT_UNLIMITED = no
+                                      fold */
+    uint32_t max_nodes;            /* boxes in all, about; 0 = SIDX_DOT_DEFAULT_NODES;
+                                      SIDX_DOT_UNLIMITED = no limit */
+    FILE *progress;                /* stage lines (build, layout) go here; NULL = quiet */
     const sidx_build_options *build; /* passed to the build (its hook is replaced); NULL = defaults */
     int has_ray;                   /* 1: trace ray_org + t·ray_dir and colour what it did */
     sidx_vec3 ray_org, ray_dir;
