@@ -126,6 +126,11 @@ ALL_LIBS = $(VIZA) $(LIBA) $(PKG_LIBS) $(LDLIBS)
 
 .PHONY: all deps build optional-parts demo test test-run test-tsan valgrind bench install clean docs apidocs fuzz cppcheck
 
+# No object is intermediate: the programs', lessons' and suites' objects are
+# reached only through pattern rules, and make would delete them after the
+# first build, then compile them again once their .d files name them.
+.SECONDARY:
+
 all: build
 
 build: optional-parts $(LIBA) $(LIBSO) $(VIZA) $(PROGS) $(LESSONS) $(TESTS)
