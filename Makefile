@@ -244,14 +244,16 @@ test-run:
 # ThreadSanitizer over the suites that run threads: the parallel build, the
 # parallel trace and the worker pool (test_parallel), concurrent queries on
 # every structure (test_threads).  Only these are built, in build/tsan
-# (TSAN=1).  die_after_fork=0: test_pool_after_fork forks while the pool's
-# threads run, on purpose (the child must not inherit them); its child only
+# (TSAN=1), and run at their small sizes (FAST_TESTS=0: the full ones).
+# die_after_fork=0: test_pool_after_fork forks while the pool's threads
+# run, on purpose (the child must not inherit them); its child only
 # queries serially.  Any report fails the run (exitcode).
 TSAN_TESTS := test_parallel test_threads
+TSAN_FAST := $(if $(filter command line environment,$(origin FAST_TESTS)),$(FAST_TESTS),1)
 test-tsan:
 	@$(MAKE) --no-print-directory $(BUILD_JOBS) TSAN=1 $(TSAN_TESTS:%=$(BUILDDIR)/tsan/tests/%)
 	@TSAN_OPTIONS="halt_on_error=1 exitcode=66 die_after_fork=0 second_deadlock_stack=1" \
-	  $(if $(filter 0,$(FAST_TESTS)),,SIDX_FAST_TESTS=1) JOBS=$(TEST_JOBS) LABEL=test-tsan \
+	  $(if $(filter 0,$(TSAN_FAST)),,SIDX_FAST_TESTS=1) JOBS=$(TEST_JOBS) LABEL=test-tsan \
 	  sh tests/runner.sh $(TSAN_TESTS:%=$(BUILDDIR)/tsan/tests/%) \
 	  && echo "test-tsan: the threaded suites ran with no ThreadSanitizer report"
 
