@@ -5,9 +5,11 @@
 #   make deps       install the missing Debian packages (as root; else prints the command)
 #   make demo       deps, build, run the guided tour
 #   make test       deps, build, run every cmocka suite and the lessons' checks
-#   make test SAN=1 the same under AddressSanitizer + UndefinedBehaviorSanitizer (build/san)
+#   make test SAN=1 the same under AddressSanitizer + UndefinedBehaviorSanitizer (build/san),
+#                   the suites at their small sizes (SIDX_FAST_TESTS=1; FAST_TESTS=0 for full)
 #   make test-tsan  the threaded suites under ThreadSanitizer (build/tsan)
-#   make valgrind   the suites under valgrind memcheck
+#   make valgrind   the suites under valgrind memcheck (small sizes)
+#   TEST_JOBS=N     how many suites run at once (default: the number of cores)
 #   make cppcheck   static analysis of every C file (cppcheck, warning + portability)
 #   make bench      the benchmark table (build/bench/); refreshes the figures in
 #                   docs/benchmark.md and README.md (docs/bench_refresh.sh)
@@ -126,6 +128,11 @@ ALL_LIBS = $(VIZA) $(LIBA) $(PKG_LIBS) $(LDLIBS)
 
 .PHONY: all deps build optional-parts demo test test-run test-tsan valgrind bench install clean docs apidocs fuzz cppcheck
 
+# No object is intermediate: the programs', lessons' and suites' objects are
+# reached only through pattern rules, and make would delete them after the
+# first build, then compile them again once their .d files name them.
+.SECONDARY:
+
 all: build
 
 build: optional-parts $(LIBA) $(LIBSO) $(VIZA) $(PROGS) $(LESSONS) $(TESTS)
@@ -205,59 +212,62 @@ $(BUILD)/tests/%: $(BUILD)/obj/tests/%.o $(TEST_COMMON_OBJ) $(VIZA) $(LIBA)
 	@mkdir -p $(dir $@)
 	$(CC) $(LDFLAGS) -o $@ $< $(TEST_COMMON_OBJ) $(ALL_LIBS) $(CMOCKA_LIBS)
 
+# The build inside demo, test, valgrind, bench and docs uses every core,
+# unless make was given its own -j (MAKEFLAGS holds it in a recipe only).
+NPROC := $(shell nproc 2>/dev/null || echo 2)
+BUILD_JOBS = $(if $(filter -j%,$(MAKEFLAGS)),,-j$(NPROC))
+
 demo: deps
-	@$(MAKE) --no-print-directory build
+	@$(MAKE) --no-print-directory $(BUILD_JOBS) build
 	$(BUILD)/bin/sidx-tour
 
-# Each suite runs from the repository root; all run even if one fails.
+# build and test-run as two commands: in one -j call make would start the
+# suites before the build is done.
 test: deps
-	@$(MAKE) --no-print-directory build
+	@$(MAKE) --no-print-directory $(BUILD_JOBS) build
 	@$(MAKE) --no-print-directory test-run
 
+# Every suite and every shell check (tests/run_*.sh, given BUILD), from the
+# repository root, TEST_JOBS at a time; all run even if one fails.
+# tests/runner.sh prints each one's output whole, in this order (the shell
+# checks first: the lessons take longest), and ends on "test-run: N passed,
+# N failed".  Under the sanitizers the suites run at their small sizes
+# (SIDX_FAST_TESTS=1, as under valgrind): they look for memory errors and
+# undefined behaviour on every path, which more rays do not add to.
+TEST_JOBS ?= $(NPROC)
+TEST_SCRIPTS := $(wildcard tests/run_*.sh)
+FAST_TESTS ?= $(if $(SANFLAGS),1,0)
+FAST_ENV := $(if $(filter 1,$(FAST_TESTS)),SIDX_FAST_TESTS=1)
 test-run:
-	@failed=0; for t in $(TESTS); do \
-	  echo "== $$t"; \
-	  $$t || { echo "!! FAILED: $$t"; failed=$$((failed+1)); }; \
-	done; \
-	if [ -x tests/run_lessons.sh ]; then \
-	  echo "== lessons"; BUILD=$(BUILD) sh tests/run_lessons.sh || { echo "!! FAILED: lessons"; failed=$$((failed+1)); }; \
-	fi; \
-	echo "== doc tests"; BUILD=$(BUILD) sh tests/run_doctests.sh || { echo "!! FAILED: doc tests"; failed=$$((failed+1)); }; \
-	if [ -f tests/run_step_tmux.sh ]; then \
-	  echo "== sidx-step in tmux"; BUILD=$(BUILD) sh tests/run_step_tmux.sh </dev/null || { echo "!! FAILED: sidx-step in tmux"; failed=$$((failed+1)); }; \
-	fi; \
-	if [ -f tests/run_bench.sh ]; then \
-	  echo "== sidx-bench timing"; BUILD=$(BUILD) sh tests/run_bench.sh || { echo "!! FAILED: sidx-bench timing"; failed=$$((failed+1)); }; \
-	fi; \
-	if [ $$failed -ne 0 ]; then echo "$$failed suite(s) failed"; exit 1; fi; \
-	echo "all suites passed"
+	@$(FAST_ENV) JOBS=$(TEST_JOBS) BUILD=$(BUILD) LABEL=test-run sh tests/runner.sh $(TEST_SCRIPTS) $(TESTS)
 
 # ThreadSanitizer over the suites that run threads: the parallel build, the
 # parallel trace and the worker pool (test_parallel), concurrent queries on
 # every structure (test_threads).  Only these are built, in build/tsan
-# (TSAN=1).  die_after_fork=0: test_pool_after_fork forks while the pool's
-# threads run, on purpose (the child must not inherit them); its child only
+# (TSAN=1), and run at their small sizes (FAST_TESTS=0: the full ones).
+# die_after_fork=0: test_pool_after_fork forks while the pool's threads
+# run, on purpose (the child must not inherit them); its child only
 # queries serially.  Any report fails the run (exitcode).
 TSAN_TESTS := test_parallel test_threads
+TSAN_FAST := $(if $(filter command line environment,$(origin FAST_TESTS)),$(FAST_TESTS),1)
 test-tsan:
-	@$(MAKE) --no-print-directory TSAN=1 $(TSAN_TESTS:%=$(BUILDDIR)/tsan/tests/%)
-	@for t in $(TSAN_TESTS); do \
-	  echo "== tsan $$t"; \
-	  TSAN_OPTIONS="halt_on_error=1 exitcode=66 die_after_fork=0 second_deadlock_stack=1" $(BUILDDIR)/tsan/tests/$$t \
-	    || { echo "!! FAILED under ThreadSanitizer: $$t"; exit 1; }; \
-	done; echo "test-tsan: the threaded suites ran with no ThreadSanitizer report"
+	@$(MAKE) --no-print-directory $(BUILD_JOBS) TSAN=1 $(TSAN_TESTS:%=$(BUILDDIR)/tsan/tests/%)
+	@TSAN_OPTIONS="halt_on_error=1 exitcode=66 die_after_fork=0 second_deadlock_stack=1" \
+	  $(if $(filter 0,$(TSAN_FAST)),,SIDX_FAST_TESTS=1) JOBS=$(TEST_JOBS) LABEL=test-tsan \
+	  sh tests/runner.sh $(TSAN_TESTS:%=$(BUILDDIR)/tsan/tests/%) \
+	  && echo "test-tsan: the threaded suites ran with no ThreadSanitizer report"
 
+# Each suite at its small size under memcheck; a suite's output is printed
+# only when it fails (errors, leaks: exit 99).
+VALGRIND := valgrind -q --error-exitcode=99 --suppressions=tests/valgrind.supp --leak-check=full \
+            --show-leak-kinds=definite,indirect,possible --errors-for-leak-kinds=definite,indirect,possible
 valgrind: deps
-	@$(MAKE) --no-print-directory build
-	@failed=0; for t in $(TESTS); do \
-	  echo "== valgrind $$t"; \
-	  SIDX_FAST_TESTS=1 valgrind -q --error-exitcode=99 --suppressions=tests/valgrind.supp --leak-check=full --show-leak-kinds=definite,indirect,possible \
-	    --errors-for-leak-kinds=definite,indirect,possible $$t >/dev/null || { echo "!! FAILED: $$t"; failed=1; }; \
-	done; \
-	if [ $$failed -eq 0 ]; then echo "valgrind: every suite ran with zero errors and zero leaks"; fi; exit $$failed
+	@$(MAKE) --no-print-directory $(BUILD_JOBS) build
+	@SIDX_FAST_TESTS=1 PREFIX="$(VALGRIND)" QUIET=1 JOBS=$(TEST_JOBS) BUILD=$(BUILD) LABEL=valgrind \
+	  sh tests/runner.sh $(TESTS) && echo "valgrind: every suite ran with zero errors and zero leaks"
 
 bench: deps
-	@$(MAKE) --no-print-directory build
+	@$(MAKE) --no-print-directory $(BUILD_JOBS) build
 	@mkdir -p $(BUILD)/bench
 	$(BUILD)/bin/sidx-bench run --csv $(BUILD)/bench/table.csv --plot $(BUILD)/bench/error_vs_speed.svg \
 	  --markdown $(BUILD)/bench/table.md --md-command "make bench" --revision "$$(git describe --always --dirty 2>/dev/null)" \
@@ -315,7 +325,7 @@ fuzz: $(FUZZ_BINS)
 # Pictures for docs/: Graphviz trees and viewer screenshots (headless),
 # the web pages of docs/web/ (sidx-view --html), then the API reference.
 docs: deps
-	@$(MAKE) --no-print-directory build
+	@$(MAKE) --no-print-directory $(BUILD_JOBS) build
 	sh viz/make_docs_pictures.sh $(BUILD) docs/img
 	sh docs/make_tutorial.sh $(BUILD) docs/tutorial.md
 	@$(MAKE) --no-print-directory apidocs
@@ -375,4 +385,6 @@ exercises-handout:
 	  | tar -czf $(BUILDDIR)/sidx-exercises.tar.gz --transform 's,^,sidx-exercises/,' -T -
 	@echo "exercises-handout: $(BUILDDIR)/sidx-exercises.tar.gz (no lessons/exercises/solutions/, no tests/exercises/)"
 
--include $(shell find $(BUILDDIR) -name '*.d' 2>/dev/null)
+# This configuration's dependency files only: another tree under build/ may
+# be compiling at the same time (.ci/run builds several side by side).
+-include $(shell find $(BUILD)/obj $(BUILD)/nohooks $(FUZZ_DIR)/obj -name '*.d' 2>/dev/null)

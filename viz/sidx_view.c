@@ -9,6 +9,7 @@
  * writes a PNG: no window, no display, no video driver.  With --html it
  * writes one web page stepping through the same build and traversal
  * (viz/html.c), without SDL at all.  F1 / h in the window lists the keys.
+ * Without a display the window cannot open: sidx-view says so and exits 1.
  * Exit status: 0 ok, 1 failure, 2 usage. */
 #include <stdio.h>
 #include <stdlib.h>
@@ -46,6 +47,9 @@ static void usage(FILE *f)
             "                      build and the ray's traversal, and exit (no display)\n"
             "  --list              list the registered structures\n"
             "  -h, --help          this help\n"
+            "\n"
+            "The window needs a display (DISPLAY or WAYLAND_DISPLAY); without one, use\n"
+            "--screenshot or --html.  SDL_VIDEODRIVER, when set, picks SDL's video driver.\n"
             "\n%s",
             sidx_viz_build_knobs_help());
 }
@@ -78,15 +82,56 @@ static const char *default_accel(void)
 
 /* ---- interactive ------------------------------------------------------------------------- */
 
+/* The two ways to see a traversal without a window. */
+static void no_window_hint(void)
+{
+    fputs("sidx-view: without a window: --screenshot out.png draws one frame, --html out.html writes a web page\n",
+          stderr);
+}
+
+static int env_set(const char *name)
+{
+    const char *e = getenv(name);
+    return e && *e;
+}
+
+/* Whether a window can be shown.  On Linux SDL reaches a screen through an
+ * X server (DISPLAY) or a Wayland compositor (WAYLAND_DISPLAY); with
+ * neither, SDL_Init still succeeds on its "offscreen" driver, and the
+ * window then waits, unseen, for input that never comes.  SDL_VIDEODRIVER
+ * set by hand picks a driver on purpose and is obeyed. */
+static int display_reachable(void)
+{
+#ifdef __linux__
+    if (!env_set("SDL_VIDEODRIVER") && !env_set("DISPLAY") && !env_set("WAYLAND_DISPLAY")) {
+        fputs("sidx-view: no display (neither DISPLAY nor WAYLAND_DISPLAY is set): cannot open a window\n", stderr);
+        no_window_hint();
+        return 0;
+    }
+#endif
+    return 1;
+}
+
 static int run_window(view_state *v, int w, int h)
 {
     if (SDL_Init(SDL_INIT_VIDEO) != 0) {
-        fprintf(stderr, "sidx-view: cannot open a window: %s (try --screenshot)\n", SDL_GetError());
+        fprintf(stderr, "sidx-view: cannot open a window: %s\n", SDL_GetError());
+        no_window_hint();
+        return 1;
+    }
+    /* a DISPLAY naming no server also ends on a driver that shows nothing */
+    const char *driver = SDL_GetCurrentVideoDriver();
+    if (!env_set("SDL_VIDEODRIVER") && driver && (!strcmp(driver, "offscreen") || !strcmp(driver, "dummy"))) {
+        fprintf(stderr, "sidx-view: no display: SDL found only its '%s' video driver, which shows no window\n",
+                driver);
+        no_window_hint();
+        SDL_Quit();
         return 1;
     }
     SDL_Window *win = SDL_CreateWindow("sidx-view", SDL_WINDOWPOS_CENTERED, SDL_WINDOWPOS_CENTERED, w, h, 0);
     if (!win) {
         fprintf(stderr, "sidx-view: cannot open a window: %s\n", SDL_GetError());
+        no_window_hint();
         SDL_Quit();
         return 1;
     }
@@ -229,6 +274,8 @@ int main(int argc, char **argv)
         fprintf(stderr, "sidx-view: no structure named '%s' (try --list)\n", accel);
         return 2;
     }
+    /* before the build: a window that cannot open is said at once */
+    if (!html && !shot && !display_reachable()) return 1;
 
     char html_msg[300];
     if (html && view_html_check_scene(scene, html_msg, sizeof html_msg) != 0) {
