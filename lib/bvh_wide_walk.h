@@ -171,7 +171,7 @@ WINL int WFN(leaf_)(const sidx_accel *a, const wide_bvh *w, uint32_t first_block
 /* u, v and ng of the final hit, from the leaf block's copy of the
  * triangle (so no index and vertex look-ups in the mesh, which a diffuse
  * ray mostly misses in cache): the same test and normal the core would
- * compute (accel.c finish_hit), on the same floats, so the same bits.
+ * compute (hit.c, sidx__hit_finish), on the same floats, so the same bits.
  * In the walk that keeps u, v (keep_uv, for queries asking for them) the
  * SIMD kernel left the accepted lane's V, W, det in vw_det, and u, v are the
  * scalar test's last step on them (sidx__tri_watertight_uv).  A hit the

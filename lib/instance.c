@@ -19,6 +19,11 @@
 
 #define SIDX_STRUCTURE_NAME "aggregate"
 
+/* What an aggregate's hit is finished with (sidx__hit_finish, hit.c):
+ * t refined, u, v and the normal.  An instanced hit carries no point:
+ * its triangle lies in the child's space, not in a->mesh. */
+#define AGG_FINISH (SIDX__QUERY_REFINE_T | SIDX_QUERY_UV | SIDX_QUERY_NORMAL)
+
 typedef struct agg_inst {
     const sidx_accel *accel;
     float m[12];            /* object to world */
@@ -342,32 +347,19 @@ static SIDX_INLINE int agg_walk(const sidx_accel *a, const sidx_ray *r, const si
     hit->t = best_hit.t;
     hit->prim = best_hit.prim;
     hit->instance = in->leaf_base + (in->nested ? best_hit.instance : 0u);
-    if (q->flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL)) {
-        if (in->nested) {
-            /* the child aggregate filled them in its own world space */
+    if (in->nested) {
+        /* the child aggregate finished its hit in its own world space */
+        if (q->flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL)) {
             hit->u = best_hit.u;
             hit->v = best_hit.v;
             hit->ng = xf_normal(in->inv, best_hit.ng);
-        } else {
-            const sidx_mesh *m = in->accel->mesh;
-            const sidx_vec3 p0 = sidx_mesh_vertex(m, hit->prim, 0), p1 = sidx_mesh_vertex(m, hit->prim, 1),
-                            p2 = sidx_mesh_vertex(m, hit->prim, 2);
-            float t, u = 0.0f, v = 0.0f;
-            /* same test, same local ray, bound just past the hit: same t (as accel.c does) */
-            if ((q->flags & SIDX_QUERY_UV) &&
-                sidx__tri_test(in->accel->opt.tri, &best_local, p0, p1, p2, nextafterf(hit->t, INFINITY), &t, &u, &v)) {
-                hit->u = u;
-                hit->v = v;
-            }
-            if (q->flags & SIDX_QUERY_NORMAL)
-                hit->ng = xf_normal(in->inv, sidx_v3_cross(sidx_v3_sub(p1, p0), sidx_v3_sub(p2, p0)));
         }
+    } else if (q->flags & AGG_FINISH) {
+        /* finished on the child's mesh and the local ray (the same t along
+         * the world ray), then the normal taken to world space */
+        sidx__hit_finish(in->accel->mesh, in->accel->opt.tri, &best_local, q->flags & AGG_FINISH, 0u, hit);
+        if (q->flags & SIDX_QUERY_NORMAL) hit->ng = xf_normal(in->inv, hit->ng);
     }
-    /* t refined on the plane as sidx_accel_intersect does (accel.c), on the
-     * local ray (the same t along the world ray), after the u, v re-test
-     * above, which is bounded just past the walk's t; a nested child
-     * refined its own final hit. */
-    if (!in->nested && (q->flags & SIDX__QUERY_REFINE_T)) sidx__hit_refine_t(in->accel->mesh, &best_local, hit);
     return 1;
 }
 

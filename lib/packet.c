@@ -400,17 +400,6 @@ int sidx__packet_have_avx2(void)
 #endif
 }
 
-void sidx__packet_finish(const sidx_accel *a, const sidx_ray *r, uint32_t flags, sidx_hit *h)
-{
-    if (h->prim == SIDX_NO_HIT) {
-        *h = sidx_hit_none();
-        return;
-    }
-    /* never touch the mesh unless asked; the packet walks keep no u, v */
-    const uint32_t need = flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL);
-    if (need) sidx__hit_attrs_from_mesh(a, r, need, h);
-}
-
 /* avx: 1 / 0 as decided by the caller, or −1 to ask have_avx2. */
 static sidx_status run_packet(const sidx_accel *a, const sidx_ray *rays, uint32_t n, uint32_t w,
                               const sidx_packet_options *opt, sidx_hit *hits, uint8_t *occ, sidx_packet_stats *stats,
@@ -468,10 +457,8 @@ static sidx_status run_packet(const sidx_accel *a, const sidx_ray *rays, uint32_
         if (pkt.prim[i] != SIDX_NO_HIT) {
             hits[i].t = pkt.best[i];
             hits[i].prim = pkt.prim[i];
-            if (o.flags & SIDX__QUERY_REFINE_T) /* as sidx_accel_intersect does */
-                sidx__hit_refine_t(a->mesh, &rays[i], &hits[i]);
-            if (o.flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL)) /* a call only when asked */
-                sidx__packet_finish(a, &rays[i], o.flags, &hits[i]);
+            if (o.flags & SIDX__PACKET_FINISH) /* a call only when asked */
+                sidx__hit_finish(a->mesh, a->opt.tri, &rays[i], o.flags & SIDX__PACKET_FINISH, 0u, &hits[i]);
         }
     }
     return SIDX_OK;

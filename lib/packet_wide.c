@@ -530,7 +530,7 @@ void sidx__packet_wide(const sidx_accel *a, const sidx_ray *rays, uint32_t n, ui
             if (pkt.prim[i] == SIDX_NO_HIT) continue;
             hit->t = pkt.best[i];
             hit->prim = pkt.prim[i];
-            if (flags & SIDX__QUERY_REFINE_T) sidx__hit_refine_t(a->mesh, pkt.ray[i], hit); /* as sidx_accel_intersect does */
-            if (flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL)) sidx__packet_finish(a, pkt.ray[i], flags, hit);
+            if (flags & SIDX__PACKET_FINISH) /* a call only when asked */
+                sidx__hit_finish(a->mesh, a->opt.tri, pkt.ray[i], flags & SIDX__PACKET_FINISH, 0u, hit);
         }
 }
