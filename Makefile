@@ -222,6 +222,7 @@ test-run:
 	if [ -x tests/run_lessons.sh ]; then \
 	  echo "== lessons"; BUILD=$(BUILD) sh tests/run_lessons.sh || { echo "!! FAILED: lessons"; failed=$$((failed+1)); }; \
 	fi; \
+	echo "== SIMD intrinsics only in lib/simd_*.h"; sh tests/check_simd_rules.sh lib || { echo "!! FAILED: SIMD rule"; failed=$$((failed+1)); }; \
 	if [ -f tests/run_step_tmux.sh ]; then \
 	  echo "== sidx-step in tmux"; BUILD=$(BUILD) sh tests/run_step_tmux.sh </dev/null || { echo "!! FAILED: sidx-step in tmux"; failed=$$((failed+1)); }; \
 	fi; \

@@ -21,8 +21,8 @@
 #include "bvh_internal.h"
 #include "bvh_wide_internal.h"
 #include "packet_internal.h"
-#if defined(__x86_64__) || defined(__i386__)
-#include <immintrin.h>
+#include "simd_isa.h"
+#ifdef SIDX_SIMD_X86
 #define PKT_X86 1
 #endif
 
@@ -49,9 +49,9 @@ typedef struct packet {
     /* frustum: 4 inward plane normals through the common origin, the apex */
     int frustum;
     float apex[3], plane_n[4][3], plane_l1[4]; /* plane normals and their L1 norms */
-#if defined(__SSE2__)
+#ifdef SIDX_SIMD_SSE2
     /* the same, one plane per lane (simd_packet_sse.h); plane_pos_lanes: normal component >= 0 */
-    __m128 plane_n_lanes[3], plane_pos_lanes[3], plane_l1_lanes;
+    sidx__f32x4 plane_n_lanes[3], plane_pos_lanes[3], plane_l1_lanes;
 #endif
 } packet;
 
@@ -76,7 +76,7 @@ typedef struct pstack {
  * triangle, AVX2).  The choice is made here, once. */
 
 #include "simd_packet_scalar.h"
-#if defined(__SSE2__)
+#ifdef SIDX_SIMD_SSE2
 #include "simd_packet_sse.h"
 #endif
 #ifdef PKT_X86
@@ -95,7 +95,7 @@ static void tri8_avx2(const walkopt *walk, packet *pkt, uint32_t group, const bv
 #endif
 
 /* The frustum's kernels: SSE2 wherever it is there (every x86-64). */
-#if defined(__SSE2__)
+#ifdef SIDX_SIMD_SSE2
 static int frustum_overlap(const packet *pkt, const bvh_node *n) { return frustum_overlap_sse(pkt, n); }
 static SIDX_INLINE int frustum_rays_inside(const packet *pkt, const sidx_ray *rays, uint32_t n, const float len2[4])
 {

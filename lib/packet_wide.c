@@ -68,8 +68,8 @@
  * (the reference) and simd_packet_wide_avx2.h. */
 #include "bvh_wide_internal.h"
 #include "packet_internal.h"
-#if (defined(__x86_64__) || defined(__i386__)) && defined(__SSE2__)
-#include <immintrin.h>
+#include "simd_isa.h"
+#ifdef SIDX_SIMD_SSE2
 #define PW_X86 1 /* SSE2 (the set-up, the triangle blocks) always; AVX2 chosen at run time */
 #endif
 

@@ -248,8 +248,8 @@ static uint32_t task_new(taskset *ts)
 }
 
 /* A bin's box as two 4-float rows (x, y, z, unused), so that the binning
- * loop can grow it with one SSE min and one max: _mm_min_ps(a, b) is
- * a < b ? a : b lane by lane, exactly sidx_v3_min's expression (and max
+ * loop can grow it with one SSE min and one max: the SSE min of a and b
+ * is a < b ? a : b lane by lane, exactly sidx_v3_min's expression (and max
  * sidx_v3_max's), so the boxes are bit for bit those of the scalar code
  * and of the sequential builder. */
 typedef struct binbox {
