@@ -186,8 +186,12 @@ static SIDX_INLINE void finish_hit(const sidx_accel *a, const sidx_ray *r, const
     if (hit->instance != SIDX_NO_HIT) return;
     /* On request only: the mesh read misses the cache on incoherent rays
      * (docs/performance.md, "Precision of the closest hit's t"). */
-    if (!(q->flags & (SIDX__QUERY_REFINE_T | SIDX_QUERY_UV | SIDX_QUERY_NORMAL | SIDX_QUERY_POINT))) return;
     const uint32_t own = (a->fills_uv ? SIDX_QUERY_UV : 0u) | (a->fills_ng ? SIDX_QUERY_NORMAL : 0u);
+    /* a call only when there is something to do: a query asking for u, v
+     * from a structure that filled them (bvh, bvh8, kdtree) makes none */
+    if (!(q->flags & (SIDX__QUERY_REFINE_T | SIDX_QUERY_POINT)) &&
+        !(q->flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL) & ~own))
+        return;
     sidx__hit_finish(a->mesh, a->opt.tri, r, q->flags, own, hit);
 }
 
