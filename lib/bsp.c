@@ -213,8 +213,8 @@ static void cut_polygon(const bsp_build *b, const plane *pl, const sidx_vec3 *v,
  * of it).  A point of the piece farther from the plane than ε is farther
  * than ε from every region on the other side, so nothing is lost; the
  * whole piece, routed down the other subtree by its far vertices, would
- * land in leaves it comes nowhere near (that was 3/4 of the triangle
- * tests on the teapot). */
+ * land in leaves it comes nowhere near (docs/performance.md, "Octree,
+ * BSP"). */
 static uint32_t add_contact(bsp_build *b, const plane *pl, const sidx_vec3 *v, uint32_t n, uint32_t tri, int side)
 {
     if (side == 0) return add_extra(b, v, n, tri);

@@ -7,7 +7,7 @@
  * overlap, and a ray crossing the overlap must visit both.  A spatial
  * split cuts space instead, as a kd-tree does: a triangle that straddles
  * the plane goes to both sides as two references, each bounded by the
- * part of the triangle on its side, and the siblings no longer overlap.
+ * part of the triangle on its side, and the siblings do not overlap.
  * More references, fewer visits.  Per node the SAH picks the cheapest of
  *
  *   - a leaf                                 ⌈N⌉ · C_tri

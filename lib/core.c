@@ -36,9 +36,9 @@ sidx_status sidx__fail(sidx_error *err, sidx_status s, const char *fmt, ...)
 
 /* sidx_ray_init runs once per query — for an application that builds its
  * rays on the fly (as rtcIntersect1 callers do) it is part of every ray's
- * cost, about a tenth of a diffuse bunny ray through bvh8 when it was a
- * chain of branches and five scalar divisions.  So it is written to be
- * cheap while giving exactly the bits (and refusals) it always gave:
+ * cost (docs/performance.md, "Ray set-up").  So it is written to be
+ * cheap while giving exactly the bits and refusals of the plain
+ * formulas:
  *
  *  - one finiteness test for all six components: x − x is +0 for every
  *    finite x and NaN for ±inf and NaN, and a NaN survives the adds

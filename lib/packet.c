@@ -139,7 +139,7 @@ static void frustum_setup(packet *pkt, const sidx_ray *rays, uint32_t n, uint32_
     /* Every ray must start at the apex and lie inside the 4 planes:
      * n·d >= −1e-6 |n||d|, without a square root per ray.  One pass over
      * the rays with the 4 planes in the 4 SSE lanes (the same products in
-     * the same order as sidx_v3_dot): done plane by plane, this check was
+     * the same order as sidx_v3_dot): done plane by plane, this check is
      * most of the set-up (docs/performance.md, "Packets and frustums"). */
     if (!frustum_rays_inside(pkt, rays, n, len2)) return;
     pkt->apex[0] = rays[0].org.x;

@@ -58,7 +58,7 @@
  *
  * No events: the packet calls take no query and no hook, so there is
  * nothing to emit; a traced query goes through sidx_accel_intersect and
- * the traced copy of the single-ray walk (bvh_wide_walk.h), as before.
+ * the traced copy of the single-ray walk (bvh_wide_walk.h).
  *
  * Like packet.c the walk is written once and instantiated per width and
  * instruction set: AVX2 (8-lane ray groups; 8 boxes per pass for bvh8, 4

@@ -24,7 +24,7 @@
  *      larger ones, "mid tasks", are top-phase subtrees in their own right:
  *      the threads build them at the same time, each cutting its own
  *      subtrees of at most n / (8·threads) triangles into further tasks —
- *      so the top of the tree is no longer one thread's work.  The threads
+ *      so the top of the tree is not one thread's work.  The threads
  *      take the largest ready task first (longest processing time first
  *      balances them), and build each straight into a region of the final
  *      node array reserved in pre-order;

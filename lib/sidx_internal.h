@@ -338,7 +338,7 @@ static SIDX_INLINE sidx_vec3 sidx__vec3_at(const float *p, const int stride)
  * computed) and the test's own last step on them (sidx__tri_watertight_uv),
  * skipping T, t and the compares, which the hit already passed.  Same
  * arithmetic on the same floats, so the bits of forming u, v at every
- * accepted hit, which the walks no longer pay for.  When an edge function
+ * accepted hit, which the walks do not pay for.  When an edge function
  * is exactly 0 the test redid them in double, and with another test there
  * is no such split: then the whole test again, whose bound only has to
  * exceed the hit's t, so +inf does.  Returns 0, leaving u, v alone, if
