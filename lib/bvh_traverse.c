@@ -315,8 +315,8 @@ static SIDX_INLINE int stack_walk(const sidx_accel *a, const sidx_ray *r, const 
                     stack_t_far[stack_len] = far_t_far;
                 }
                 ++stack_len;
-                SIDX_EMIT(traced, q->hook, SIDX_EV_STACK_PUSH, e_.ray_id = q->ray_id; e_.node = far_child; e_.depth = stack_len;
-                          e_.t_near = far_t_near; e_.t_far = far_t_far);
+                SIDX_EMIT(traced, q->hook, SIDX_EV_STACK_PUSH, e_.ray_id = q->ray_id; e_.node = far_child;
+                          e_.depth = stack_len; e_.t_near = far_t_near; e_.t_far = far_t_far);
                 node = near_child;
                 ++depth;
                 continue;
