@@ -57,19 +57,11 @@ static SIDX_INLINE void refine_t(const sidx_mesh *m, const sidx_ray *r, sidx_hit
     if (SIDX_UNLIKELY(spread > 4.0f * hit->t * fabsf(sidx_v3_array(&r->dir)[kz]))) refine_t_plane(m, r, hit);
 }
 
-void sidx__hit_finish(const sidx_mesh *m, sidx_tri_method tri, const sidx_ray *r, uint32_t flags, uint32_t own,
-                      sidx_hit *hit)
+/* u, v (by test method tri on ray r) and the geometric normal of the
+ * hit, from the mesh, as `need` (SIDX_QUERY_UV | SIDX_QUERY_NORMAL) asks. */
+static SIDX_INLINE void hit_attrs(const sidx_mesh *m, sidx_tri_method tri, const sidx_ray *r, uint32_t need,
+                                  sidx_hit *hit)
 {
-    /* t first: u, v below come from the test's edge functions, which do
-     * not depend on t, so the order changes no bit of them. */
-    if (flags & SIDX__QUERY_REFINE_T) refine_t(m, r, hit);
-    /* The point is made from u, v and ng, so asking for it asks for them;
-     * what the structure filled itself counts only when the query asked
-     * it to. */
-    const uint32_t point = flags & SIDX_QUERY_POINT;
-    const uint32_t need = point ? (SIDX_QUERY_UV | SIDX_QUERY_NORMAL) & ~(own & flags)
-                                : flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL) & ~own;
-    if (!need && !point) return;
     const sidx_vec3 p0 = sidx_mesh_vertex(m, hit->prim, 0), p1 = sidx_mesh_vertex(m, hit->prim, 1),
                     p2 = sidx_mesh_vertex(m, hit->prim, 2);
     if (need & SIDX_QUERY_UV) {
@@ -81,12 +73,38 @@ void sidx__hit_finish(const sidx_mesh *m, sidx_tri_method tri, const sidx_ray *r
         }
     }
     if (need & SIDX_QUERY_NORMAL) hit->ng = sidx__tri_normal(p0, p1, p2);
-    if (!point) return;
-    /* A triangle refused by sidx_triangle_point (spawn.c) leaves p and
-     * p_err zero, which sidx_ray_spawn then refuses. */
+}
+
+/* SIDX_QUERY_POINT: u, v and ng first, where `need` says they are
+ * missing, then the point and its error bound.  A triangle refused by
+ * sidx_triangle_point (spawn.c) leaves p and p_err zero, which
+ * sidx_ray_spawn then refuses.  Out of line: the plain queries' finish
+ * stays short. */
+static SIDX_NOINLINE void hit_point(const sidx_mesh *m, sidx_tri_method tri, const sidx_ray *r, uint32_t need,
+                                    sidx_hit *hit)
+{
+    if (need) hit_attrs(m, tri, r, need, hit);
     sidx_vec3 p, e;
-    if (sidx_triangle_point(p0, p1, p2, hit->u, hit->v, &p, &e) == SIDX_OK) {
+    if (sidx_triangle_point(sidx_mesh_vertex(m, hit->prim, 0), sidx_mesh_vertex(m, hit->prim, 1),
+                            sidx_mesh_vertex(m, hit->prim, 2), hit->u, hit->v, &p, &e) == SIDX_OK) {
         hit->p = p;
         hit->p_err = e;
     }
+}
+
+void sidx__hit_finish(const sidx_mesh *m, sidx_tri_method tri, const sidx_ray *r, uint32_t flags, uint32_t own,
+                      sidx_hit *hit)
+{
+    /* t first: u, v below come from the test's edge functions, which do
+     * not depend on t, so the order changes no bit of them. */
+    if (flags & SIDX__QUERY_REFINE_T) refine_t(m, r, hit);
+    /* The point is made from u, v and ng, so asking for it asks for them;
+     * what the structure filled itself counts only when the query asked
+     * it to. */
+    if (SIDX_UNLIKELY(flags & SIDX_QUERY_POINT)) {
+        hit_point(m, tri, r, (SIDX_QUERY_UV | SIDX_QUERY_NORMAL) & ~(own & flags), hit);
+        return;
+    }
+    const uint32_t need = flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL) & ~own;
+    if (need) hit_attrs(m, tri, r, need, hit);
 }
