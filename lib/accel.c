@@ -1,6 +1,6 @@
 /* accel.c — the common accelerator interface: the registry, build,
- * queries (with RAY_BEGIN / RAY_END events and the optional u, v, normal
- * computed once for the final hit), statistics and "auto". */
+ * queries (with RAY_BEGIN / RAY_END events, the final hit finished once
+ * by sidx__hit_finish, hit.c), statistics and "auto". */
 #include <stdio.h>
 #include "sidx_internal.h"
 
@@ -166,81 +166,11 @@ sidx_status sidx_accel_auto(const sidx_mesh *mesh, const sidx_build_options *opt
 
 static const sidx_query default_query = {0, SIDX_TRAVERSE_DEFAULT, NULL, 0};
 
-/* u, v (sidx__tri_hit_uv_at: the accepting test's own floats, so its bits)
- * and the geometric normal, from the mesh, for what `need` asks. */
-void sidx__hit_attrs_from_mesh(const sidx_accel *a, const sidx_ray *r, uint32_t need, sidx_hit *hit)
-{
-    const sidx_mesh *m = a->mesh;
-    const sidx_vec3 p0 = sidx_mesh_vertex(m, hit->prim, 0), p1 = sidx_mesh_vertex(m, hit->prim, 1),
-                    p2 = sidx_mesh_vertex(m, hit->prim, 2);
-    if (need & SIDX_QUERY_UV) {
-        float u = 0.0f, v = 0.0f;
-        if (sidx__tri_hit_uv_at(a->opt.tri, r, sidx_v3_array(&p0), sidx_v3_array(&p1), sidx_v3_array(&p2), 1, &u, &v)) {
-            hit->u = u;
-            hit->v = v;
-        }
-    }
-    if (need & SIDX_QUERY_NORMAL) hit->ng = sidx__tri_normal(p0, p1, p2);
-}
-
-/* The closest hit's t recomputed on the triangle's plane in double,
- * t = n·(p0 − o) / n·d with n = (p1 − p0) × (p2 − p0): from float inputs
- * the differences are exact in double and the products nearly so, and t is
- * rounded to float once.  Kept only within 2^-12 (|p0 − o|₁ + |e1|₁ +
- * |e2|₁) / |d|₁ of the test's t, far above the test's own error: a ray
- * that grazes a triangle and is accepted on an edge has no meaningful
- * plane t (a thin prism's apex: 3.26 for the edge's 0.976).  Clamped to
- * [tmin, the float below tmax], where the walk accepted the test's t. */
-static SIDX_NOINLINE void refine_t_plane(const sidx_mesh *m, const sidx_ray *r, sidx_hit *hit)
-{
-    const sidx_vec3 p0 = sidx_mesh_vertex(m, hit->prim, 0), p1 = sidx_mesh_vertex(m, hit->prim, 1),
-                    p2 = sidx_mesh_vertex(m, hit->prim, 2);
-    const double ax = (double)p1.x - p0.x, ay = (double)p1.y - p0.y, az = (double)p1.z - p0.z;
-    const double bx = (double)p2.x - p0.x, by = (double)p2.y - p0.y, bz = (double)p2.z - p0.z;
-    const double wx = (double)p0.x - r->org.x, wy = (double)p0.y - r->org.y, wz = (double)p0.z - r->org.z;
-    const double nx = ay * bz - az * by, ny = az * bx - ax * bz, nz = ax * by - ay * bx;
-    const double den = nx * r->dir.x + ny * r->dir.y + nz * r->dir.z;
-    if (den == 0.0) return;
-    const double tr = (nx * wx + ny * wy + nz * wz) / den;
-    const double dist = fabs(wx) + fabs(wy) + fabs(wz) + fabs(ax) + fabs(ay) + fabs(az) + fabs(bx) + fabs(by) + fabs(bz);
-    const double dlen = fabs((double)r->dir.x) + fabs((double)r->dir.y) + fabs((double)r->dir.z);
-    if (!(fabs(tr - hit->t) * dlen <= 0x1p-12 * dist)) return;
-    float t = (float)tr;
-    if (t < r->tmin) t = r->tmin;
-    if (!(t < r->tmax)) t = nextafterf(r->tmax, -INFINITY);
-    hit->t = t;
-}
-
-/* The closest hit's t, as precise as the triangle's plane gives it.  The
- * watertight test (Woop, Benthin & Wald 2013) forms t = T/det from the
- * vertices sheared into the ray's frame in float, each off by about ε
- * times its distance from the origin: when the triangle reaches along the
- * ray far beyond the hit (a short bounce onto a long thin neighbour,
- * Sponza), t loses up to 1e-3 of itself.  The vertices' spread along the
- * ray's dominant axis measures it: when |az| + |bz| + |cz| exceeds 4 t |d_kz|
- * (1% of the bunny's diffuse hits, 25% of Sponza's), t is recomputed on
- * the plane in double (refine_t_plane); otherwise the test's t stands.
- * Runs once per ray, after the walk, for queries that ask
- * (SIDX_QUERY_PRECISE_T): which triangle is closest and its
- * u, v stay the test's (watertightness is the test's), only t changes.
- * Bound and figures: docs/spawning.md, "Precision of t". */
-static SIDX_INLINE void refine_t(const sidx_mesh *m, const sidx_ray *r, sidx_hit *hit)
-{
-    const uint32_t *ix = m->indices + 3u * hit->prim;
-    const int kz = r->kz;
-    const float oz = sidx_v3_array(&r->org)[kz];
-    const float spread = fabsf(sidx_v3_array(&m->positions[ix[0]])[kz] - oz) +
-                         fabsf(sidx_v3_array(&m->positions[ix[1]])[kz] - oz) +
-                         fabsf(sidx_v3_array(&m->positions[ix[2]])[kz] - oz);
-    if (SIDX_UNLIKELY(spread > 4.0f * hit->t * fabsf(sidx_v3_array(&r->dir)[kz]))) refine_t_plane(m, r, hit);
-}
-
-void sidx__hit_refine_t(const sidx_mesh *m, const sidx_ray *r, sidx_hit *hit) { refine_t(m, r, hit); }
-
-/* u, v and the geometric normal of the final hit only: the hot loop never
- * pays for them ("no u/v or normals unless asked").  A structure that
- * keeps them from its own traversal (a->fills_uv, a->fills_ng) has set
- * them already; the rest are computed here from the mesh. */
+/* The final hit finished once, after the walk: t refined, u, v, the
+ * geometric normal and the point, as the query asks (sidx__hit_finish,
+ * hit.c).  The hot loop never pays for them ("no u/v or normals unless
+ * asked").  A structure that keeps u, v or ng from its own traversal
+ * (a->fills_uv, a->fills_ng) has set them already. */
 static SIDX_INLINE void finish_hit(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
 {
     if (hit->prim == SIDX_NO_HIT) {
@@ -250,25 +180,19 @@ static SIDX_INLINE void finish_hit(const sidx_accel *a, const sidx_ray *r, const
         hit->t = INFINITY;
         return;
     }
-    /* Aggregates (instance.c) set the instance and fill u, v, ng in world
-     * space themselves: their a->mesh is not where the hit lies. */
+    /* Aggregates (instance.c) set the instance and finish their hit in
+     * world space themselves: their a->mesh is not where the hit lies, so
+     * an instanced hit gets no point. */
     if (hit->instance != SIDX_NO_HIT) return;
     /* On request only: the mesh read misses the cache on incoherent rays
      * (docs/performance.md, "Precision of the closest hit's t"). */
-    if (q->flags & SIDX__QUERY_REFINE_T) refine_t(a->mesh, r, hit);
-    if (!(q->flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL | SIDX_QUERY_POINT))) return;
-    if (SIDX_LIKELY(!(q->flags & SIDX_QUERY_POINT))) {
-        const uint32_t own = (a->fills_uv ? SIDX_QUERY_UV : 0u) | (a->fills_ng ? SIDX_QUERY_NORMAL : 0u);
-        const uint32_t need = q->flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL) & ~own;
-        if (need) sidx__hit_attrs_from_mesh(a, r, need, hit);
+    const uint32_t own = (a->fills_uv ? SIDX_QUERY_UV : 0u) | (a->fills_ng ? SIDX_QUERY_NORMAL : 0u);
+    /* a call only when there is something to do: a query asking for u, v
+     * from a structure that filled them (bvh, bvh8, kdtree) makes none */
+    if (!(q->flags & (SIDX__QUERY_REFINE_T | SIDX_QUERY_POINT)) &&
+        !(q->flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL) & ~own))
         return;
-    }
-    /* SIDX_QUERY_POINT (spawn.c): the point is made from u, v and ng, so
-     * asking for it asks for them; what the structure filled itself counts
-     * only when the query asked it to.  Instanced hits (returned above) get
-     * no point: their mesh is not a->mesh. */
-    const uint32_t own = ((a->fills_uv ? SIDX_QUERY_UV : 0u) | (a->fills_ng ? SIDX_QUERY_NORMAL : 0u)) & q->flags;
-    sidx__hit_point(a, r, (SIDX_QUERY_UV | SIDX_QUERY_NORMAL) & ~own, hit);
+    sidx__hit_finish(a->mesh, a->opt.tri, r, q->flags, own, hit);
 }
 
 /* A traced query: the same steps between its RAY_BEGIN and RAY_END

@@ -37,7 +37,7 @@
  * Traversal (front to back, as the kd-tree's, with a general plane): the
  * near child is the side holding the ray origin (sign of n·o − d), the
  * plane is crossed at t = (d − n·o)/(n·dir), and the same three cases as
- * the kd-tree decide which children the segment [t0, t1] visits.
+ * the kd-tree decide which children the segment [t_near, t_far] visits.
  *
  * Events: BUILD_CANDIDATE / BUILD_SPLIT carry axis = -1 and the plane as
  * bounds.min = unit normal n, pos = offset d (n·x = d; front is n·x > d);
@@ -213,8 +213,8 @@ static void cut_polygon(const bsp_build *b, const plane *pl, const sidx_vec3 *v,
  * of it).  A point of the piece farther from the plane than ε is farther
  * than ε from every region on the other side, so nothing is lost; the
  * whole piece, routed down the other subtree by its far vertices, would
- * land in leaves it comes nowhere near (that was 3/4 of the triangle
- * tests on the teapot). */
+ * land in leaves it comes nowhere near (docs/performance.md, "Octree,
+ * BSP"). */
 static uint32_t add_contact(bsp_build *b, const plane *pl, const sidx_vec3 *v, uint32_t n, uint32_t tri, int side)
 {
     if (side == 0) return add_extra(b, v, n, tri);
@@ -529,7 +529,7 @@ static sidx_status bsp_build_fn(sidx_accel *a, sidx_error *err)
 
 /* ---- ray traversal ------------------------------------------------------ */
 
-typedef struct bsp_entry { uint32_t node, depth; double t0, t1; } bsp_entry;
+typedef struct bsp_entry { uint32_t node, depth; double t_near, t_far; } bsp_entry;
 
 /* Mailbox (as the grid's and kd-tree's, Amanatides & Woo): a triangle
  * lies in many leaves here — every leaf whose cell it borders lists it —
@@ -547,54 +547,54 @@ static SIDX_INLINE int bsp_walk(const sidx_accel *a, const sidx_ray *r, const si
     const bsp_tree *t = a->impl;
     const sidx_mesh *m = a->mesh;
     float tmax = any_hit ? r->tmax : hit->t;
-    float bt0, bt1;
+    float root_t_near, root_t_far;
     if (t->num_nodes == 0 ||
-        !sidx__box_test(a->opt.box == SIDX_BOX_ROBUST, r, &t->bounds, r->tmin, tmax, &bt0, &bt1)) {
+        !sidx__box_test(a->opt.box == SIDX_BOX_ROBUST, r, &t->bounds, r->tmin, tmax, &root_t_near, &root_t_far)) {
         SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = SIDX_TERM_MISS_ROOT;
                   e_.count = 0);
         return 0;
     }
     const double o[3] = {r->org.x, r->org.y, r->org.z}, dir[3] = {r->dir.x, r->dir.y, r->dir.z};
     bsp_entry stack[BSP_STACK];
-    int sp = 0;
+    int stack_len = 0;
     uint32_t visited = 0;
     uint32_t mailbox[BSP_MAILBOX];
     memset(mailbox, 0xff, sizeof mailbox);
-    stack[sp].node = 0; stack[sp].depth = 0; stack[sp].t0 = bt0; stack[sp].t1 = bt1; ++sp;
-    while (sp > 0) {
-        --sp;
-        uint32_t node = stack[sp].node, depth = stack[sp].depth;
-        double t0 = stack[sp].t0, t1 = stack[sp].t1;
-        if (t0 > (double)tmax) continue; /* the segment starts behind the best hit */
+    stack[stack_len++] = (bsp_entry){0, 0, root_t_near, root_t_far};
+    while (stack_len > 0) {
+        --stack_len;
+        uint32_t node = stack[stack_len].node, depth = stack[stack_len].depth;
+        double t_near = stack[stack_len].t_near, t_far = stack[stack_len].t_far;
+        if (t_near > (double)tmax) continue; /* the segment starts behind the best hit */
         for (;;) {
             const bsp_node *nd = &t->nodes[node];
             ++visited;
             SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id; e_.node = node; e_.depth = depth;
-                      e_.t_near = (float)t0; e_.t_far = (float)t1);
+                      e_.t_near = (float)t_near; e_.t_far = (float)t_far);
             if (nd->child[0] == UINT32_MAX) break;
             const double dist = nd->n[0] * o[0] + nd->n[1] * o[1] + nd->n[2] * o[2] - nd->d;
             const double nd_dir = nd->n[0] * dir[0] + nd->n[1] * dir[1] + nd->n[2] * dir[2];
-            /* near side: the one holding the origin; on the plane, the one the ray heads into */
-            const int near = dist > 0.0 ? 0 : dist < 0.0 ? 1 : (nd_dir >= 0.0 ? 0 : 1);
-            const uint32_t cn = nd->child[near], cf = nd->child[1 - near];
+            /* the near side: the one holding the origin; on the plane, the one the ray heads into */
+            const int near_side = dist > 0.0 ? 0 : dist < 0.0 ? 1 : (nd_dir >= 0.0 ? 0 : 1);
+            const uint32_t near_child = nd->child[near_side], far_child = nd->child[1 - near_side];
             ++depth;
             if (nd_dir == 0.0 || dist == 0.0) {
-                /* parallel: never crosses; starting on the plane: heads into near.
+                /* parallel: never crosses; starting on the plane: heads into the near side.
                  * A ray lying in the plane visits both (its hits are on both sides' lists). */
-                if (nd_dir == 0.0 && dist == 0.0 && sp < BSP_STACK) {
-                    stack[sp].node = cf; stack[sp].depth = depth; stack[sp].t0 = t0; stack[sp].t1 = t1; ++sp;
+                if (nd_dir == 0.0 && dist == 0.0 && stack_len < BSP_STACK) {
+                    stack[stack_len++] = (bsp_entry){far_child, depth, t_near, t_far};
                 }
-                node = cn;
+                node = near_child;
                 continue;
             }
-            const double tp = -dist / nd_dir;
-            if (tp < 0.0 || tp > t1) { node = cn; continue; }  /* moving away, or crossing after the segment */
-            if (tp < t0) { node = cf; continue; }              /* crossed before the segment */
-            if (sp < BSP_STACK) {
-                stack[sp].node = cf; stack[sp].depth = depth; stack[sp].t0 = tp; stack[sp].t1 = t1; ++sp;
+            const double t_split = -dist / nd_dir;
+            if (t_split < 0.0 || t_split > t_far) { node = near_child; continue; } /* moving away, or crossing after */
+            if (t_split < t_near) { node = far_child; continue; }                  /* crossed before the segment */
+            if (stack_len < BSP_STACK) {
+                stack[stack_len++] = (bsp_entry){far_child, depth, t_split, t_far};
             }
-            node = cn;
-            t1 = tp;
+            node = near_child;
+            t_far = t_split;
         }
         /* leaf */
         const bsp_node *leaf = &t->nodes[node];
@@ -602,26 +602,26 @@ static SIDX_INLINE int bsp_walk(const sidx_accel *a, const sidx_ray *r, const si
             const uint32_t tri = t->refs[leaf->ref_first + i];
             if (mailbox[tri % BSP_MAILBOX] == tri) continue;
             mailbox[tri % BSP_MAILBOX] = tri;
-            float th;
-            const int h = sidx__mesh_tri_test(m, a->opt.tri, tri, r, tmax, &th);
+            float t_hit;
+            const int h = sidx__mesh_tri_test(m, a->opt.tri, tri, r, tmax, &t_hit);
             SIDX_EMIT(traced, q->hook, SIDX_EV_PRIM_TEST, e_.ray_id = q->ray_id; e_.prim = tri; e_.node = node;
-                      e_.result = h; e_.t = h ? th : INFINITY);
+                      e_.result = h; e_.t = h ? t_hit : INFINITY);
             if (!h) continue;
             if (any_hit) {
                 SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = SIDX_TERM_ANY_HIT;
-                          e_.t = th; e_.count = visited);
+                          e_.t = t_hit; e_.count = visited);
                 return 1;
             }
-            tmax = th;
-            hit->t = th;
+            tmax = t_hit;
+            hit->t = t_hit;
             hit->prim = tri;
-            SIDX_EMIT(traced, q->hook, SIDX_EV_HIT_UPDATE, e_.ray_id = q->ray_id; e_.prim = tri; e_.t = th);
+            SIDX_EMIT(traced, q->hook, SIDX_EV_HIT_UPDATE, e_.ray_id = q->ray_id; e_.prim = tri; e_.t = t_hit);
         }
         /* A hit before the ray leaves this leaf is final: everything the
          * ray meets earlier lies in leaves already visited.  The small
          * relative margin keeps a hit exactly on the exit plane (a
          * triangle lying in it) from ending the walk on rounding alone. */
-        if (!any_hit && hit->prim != SIDX_NO_HIT && (double)hit->t < t1 - 1e-6 * fabs(t1)) {
+        if (!any_hit && hit->prim != SIDX_NO_HIT && (double)hit->t < t_far - 1e-6 * fabs(t_far)) {
             SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = SIDX_TERM_HIT_IN_CELL;
                       e_.t = hit->t; e_.count = visited);
             return 1;
@@ -715,13 +715,13 @@ sidx_status sidx_bsp_paint(const sidx_accel *a, sidx_vec3 eye, sidx_bsp_order or
     const bsp_tree *t = a->impl;
     /* stack entries: node to expand, or (phase 1) node whose own pieces are due */
     struct { uint32_t node, depth, pieces_only; } stack[BSP_STACK + 2];
-    int sp = 0;
-    stack[sp].node = 0; stack[sp].depth = 0; stack[sp].pieces_only = 0; ++sp;
-    while (sp > 0) {
-        --sp;
-        const uint32_t node = stack[sp].node, depth = stack[sp].depth;
+    int stack_len = 0;
+    stack[stack_len].node = 0; stack[stack_len].depth = 0; stack[stack_len++].pieces_only = 0;
+    while (stack_len > 0) {
+        --stack_len;
+        const uint32_t node = stack[stack_len].node, depth = stack[stack_len].depth;
         const bsp_node *nd = &t->nodes[node];
-        if (stack[sp].pieces_only) {
+        if (stack[stack_len].pieces_only) {
             if (emit_pieces(t, node, depth, order == SIDX_BSP_FRONT_TO_BACK, fn, user, hook)) return SIDX_OK;
             continue;
         }
@@ -732,13 +732,13 @@ sidx_status sidx_bsp_paint(const sidx_accel *a, sidx_vec3 eye, sidx_bsp_order or
         }
         const double dist = nd->n[0] * eye.x + nd->n[1] * eye.y + nd->n[2] * eye.z - nd->d;
         const int eye_side = dist >= 0.0 ? 0 : 1; /* on the plane: its pieces are seen edge-on, any order works */
-        const uint32_t near = nd->child[eye_side], far = nd->child[1 - eye_side];
-        const uint32_t first = order == SIDX_BSP_BACK_TO_FRONT ? far : near;
-        const uint32_t last = order == SIDX_BSP_BACK_TO_FRONT ? near : far;
+        const uint32_t near_child = nd->child[eye_side], far_child = nd->child[1 - eye_side];
+        const uint32_t first = order == SIDX_BSP_BACK_TO_FRONT ? far_child : near_child;
+        const uint32_t last = order == SIDX_BSP_BACK_TO_FRONT ? near_child : far_child;
         /* pushed in reverse: first, then this node's pieces, then last */
-        stack[sp].node = last; stack[sp].depth = depth + 1; stack[sp].pieces_only = 0; ++sp;
-        stack[sp].node = node; stack[sp].depth = depth; stack[sp].pieces_only = 1; ++sp;
-        stack[sp].node = first; stack[sp].depth = depth + 1; stack[sp].pieces_only = 0; ++sp;
+        stack[stack_len].node = last; stack[stack_len].depth = depth + 1; stack[stack_len++].pieces_only = 0;
+        stack[stack_len].node = node; stack[stack_len].depth = depth; stack[stack_len++].pieces_only = 1;
+        stack[stack_len].node = first; stack[stack_len].depth = depth + 1; stack[stack_len++].pieces_only = 0;
     }
     return SIDX_OK;
 }

@@ -447,8 +447,8 @@ static sidx_status build_tree(sidx_accel *a, sidx_error *err)
     if (B->kind == BVH_BINNED && !(B->hook && B->hook->fn) && n > 0) {
         /* Untraced "bvh" builds, on one thread or several, go through
          * parallel.c: the same decisions on packed references that stream
-         * (Wald 2007), 2.1x faster on one thread than this recursion over
-         * idx[] (docs/performance.md, Binary BVH).  A build hook keeps
+         * (Wald 2007), faster on one thread than this recursion over idx[]
+         * (docs/performance.md, Binary BVH).  A build hook keeps
          * this builder, the one whose events the lessons print. */
         return sidx__bvh_build_parallel(a, &pp, err);
     }

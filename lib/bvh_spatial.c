@@ -7,7 +7,7 @@
  * overlap, and a ray crossing the overlap must visit both.  A spatial
  * split cuts space instead, as a kd-tree does: a triangle that straddles
  * the plane goes to both sides as two references, each bounded by the
- * part of the triangle on its side, and the siblings no longer overlap.
+ * part of the triangle on its side, and the siblings do not overlap.
  * More references, fewer visits.  Per node the SAH picks the cheapest of
  *
  *   - a leaf                                 ⌈N⌉ · C_tri
@@ -44,9 +44,7 @@
 #include <stdatomic.h>
 #include "bvh_internal.h"
 #include "pool.h"
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
+#include "simd_isa.h"
 
 #define SB_BINS 32u          /* object and spatial bins per axis (Wald 2007; Stich et al. use 32-256) */
 #define SB_ALPHA 1e-5f       /* try spatial splits when sibling overlap > α · root area (Stich et al.) */
@@ -169,6 +167,15 @@ static uint32_t sbin_of(float x, float lo, float scale, uint32_t nb)
     return f < (float)nb ? (uint32_t)f : nb - 1u;
 }
 
+/* The binning kernels: the centroid bounds, the object bins, a
+ * reference's spatial bins and the bins' growth.  SSE2 wherever it is
+ * there (every x86-64), bit for bit the reference's results. */
+#ifdef SIDX_SIMD_SSE2
+#include "simd_spatial_sse.h"
+#else
+#include "simd_spatial_scalar.h"
+#endif
+
 /* The plane between spatial bins p − 1 and p of nb over [lo, lo + ext]. */
 static float spatial_plane(float lo, float ext, uint32_t p, uint32_t nb) { return lo + ext * ((float)p / (float)nb); }
 
@@ -227,71 +234,12 @@ static void sweep(const sbuild *S, const sbin *bins, uint32_t nb, uint32_t n, fl
     }
 }
 
-#if defined(__SSE2__)
-/* object_bin with SSE2 for nodes of SB_SSE_MIN references or more (below
- * that, moving the bins in and out costs more than it saves): a box as
- * two 4-lane rows, the three axes' centroid, bin and growth in one set of
- * instructions (as simd_bin_sse.h does for bvh_build.c).  Bit for bit the
- * scalar loop's bins: the centroid is (min + max)·0.5 and the bin
- * coordinate (c − lo)·scale in the same float operations; max(f, 0) gives
- * 0 for a NaN f and min(f, nb − 1) then truncation gives sbin_of's clamp;
- * _mm_min_ps(bin, box) is sidx_aabb_union's `bin < box ? bin : box`.  The
- * bins come in cleared (object_clear), so only those it fills go back. */
-#define SB_SSE_MIN 24u
-
-static void object_bin_sse(const sref *refs, uint32_t i0, uint32_t i1, const float *lo, const float *scale,
-                           const int *use, sbin (*bins)[SB_BINS])
-{
-    __m128 blo[3][SB_BINS], bhi[3][SB_BINS];
-    uint32_t cnt[3][SB_BINS] = {{0}};
-    const __m128 inf = _mm_set1_ps(INFINITY), ninf = _mm_set1_ps(-INFINITY);
-    for (int k = 0; k < 3; ++k)
-        for (uint32_t b = 0; b < SB_BINS; ++b) {
-            blo[k][b] = inf;
-            bhi[k][b] = ninf;
-        }
-    const __m128 vlo = _mm_setr_ps(lo[0], lo[1], lo[2], 0.0f), vscale = _mm_setr_ps(scale[0], scale[1], scale[2], 0.0f);
-    const __m128 top = _mm_set1_ps((float)(SB_BINS - 1u)), half = _mm_set1_ps(0.5f), zero = _mm_setzero_ps();
-    const __m128 xyz = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0)); /* lane 3: max.x, or the id: zeroed */
-    for (uint32_t i = i0; i < i1; ++i) {
-        const __m128 mn = _mm_and_ps(_mm_loadu_ps(&refs[i].box.min.x), xyz);
-        const __m128 mx = _mm_and_ps(_mm_loadu_ps(&refs[i].box.max.x), xyz);
-        __m128 f = _mm_mul_ps(_mm_sub_ps(_mm_mul_ps(_mm_add_ps(mn, mx), half), vlo), vscale);
-        f = _mm_min_ps(_mm_max_ps(f, zero), top);
-        int32_t bin[4];
-        _mm_storeu_si128((__m128i *)(void *)bin, _mm_cvttps_epi32(f));
-        for (int k = 0; k < 3; ++k) {
-            blo[k][bin[k]] = _mm_min_ps(blo[k][bin[k]], mn);
-            bhi[k][bin[k]] = _mm_max_ps(bhi[k][bin[k]], mx);
-            cnt[k][bin[k]]++;
-        }
-    }
-    for (int k = 0; k < 3; ++k) {
-        if (!use[k]) continue;
-        for (uint32_t b = 0; b < SB_BINS; ++b) {
-            if (!cnt[k][b]) continue;
-            float l[4], h[4];
-            _mm_storeu_ps(l, blo[k][b]);
-            _mm_storeu_ps(h, bhi[k][b]);
-            bins[k][b].box = (sidx_aabb){{l[0], l[1], l[2]}, {h[0], h[1], h[2]}};
-            bins[k][b].enter += cnt[k][b];
-            bins[k][b].exit += cnt[k][b];
-        }
-    }
-}
-#endif
-
 /* The object bins of references [i0, i1) on the axes with use[k], one
  * pass (a centroid is computed once for all three axes). */
 static void object_bin(const sref *refs, uint32_t i0, uint32_t i1, const float *lo, const float *scale,
                        const int *use, sbin (*bins)[SB_BINS])
 {
-#if defined(__SSE2__)
-    if (i1 - i0 >= SB_SSE_MIN) {
-        object_bin_sse(refs, i0, i1, lo, scale, use, bins);
-        return;
-    }
-#endif
+    if (sb_object_bin_rows(refs, i0, i1, lo, scale, use, bins)) return;
     for (uint32_t i = i0; i < i1; ++i) {
         const sidx_vec3 c = sidx_aabb_centroid(refs[i].box);
         for (int k = 0; k < 3; ++k) {
@@ -323,26 +271,7 @@ static void par_bin(const sbuild *S, const sref *refs, uint32_t n, int kind, con
 /* Binned SAH over the references' box centroids, every axis. */
 static void object_split(const sbuild *S, const sref *refs, uint32_t n, float inv_area, ssplit *best)
 {
-    sidx_aabb cb = sidx_aabb_empty();
-#if defined(__SSE2__)
-    { /* sidx_aabb_grow of the centroids, as rows (the same operations, the same bits) */
-        const __m128 xyz = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0)), half = _mm_set1_ps(0.5f);
-        __m128 clo = _mm_set1_ps(INFINITY), chi = _mm_set1_ps(-INFINITY);
-        for (uint32_t i = 0; i < n; ++i) {
-            const __m128 mn = _mm_and_ps(_mm_loadu_ps(&refs[i].box.min.x), xyz);
-            const __m128 mx = _mm_and_ps(_mm_loadu_ps(&refs[i].box.max.x), xyz);
-            const __m128 c = _mm_mul_ps(_mm_add_ps(mn, mx), half);
-            clo = _mm_min_ps(clo, c);
-            chi = _mm_max_ps(chi, c);
-        }
-        float l[4], h[4];
-        _mm_storeu_ps(l, clo);
-        _mm_storeu_ps(h, chi);
-        cb = (sidx_aabb){{l[0], l[1], l[2]}, {h[0], h[1], h[2]}};
-    }
-#else
-    for (uint32_t i = 0; i < n; ++i) cb = sidx_aabb_grow(cb, sidx_aabb_centroid(refs[i].box));
-#endif
+    const sidx_aabb cb = sb_centroid_bounds(refs, n);
     float lo[3], ext[3], scale[3];
     int use[3];
     for (int k = 0; k < 3; ++k) {
@@ -414,44 +343,12 @@ static void spatial_clear(sspatial *A)
 static void spatial_bin(const sref *refs, uint32_t i0, uint32_t i1, const int *use, const float *lo,
                         const float *scale, uint32_t nb, float (*plane)[SB_BINS + 1], sspatial *A)
 {
-#if defined(__SSE2__)
-    /* `other` grown as 4-lane rows held here, one min and one max per part
-     * (sidx_aabb_union's operand order: the same bits), merged at the end;
-     * the six bin numbers of a box in two rows, clamped as sbin_of does
-     * (see object_bin_sse) */
-    __m128 olo[3][SB_BINS], ohi[3][SB_BINS];
-    for (int k = 0; k < 3; ++k)
-        for (uint32_t b = 0; b < nb; ++b) {
-            olo[k][b] = _mm_set1_ps(INFINITY);
-            ohi[k][b] = _mm_set1_ps(-INFINITY);
-        }
-    const __m128 xyz = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0)); /* lane 3: max.x, or the id: zeroed */
-    const __m128 vlo = _mm_setr_ps(lo[0], lo[1], lo[2], 0.0f), vscale = _mm_setr_ps(scale[0], scale[1], scale[2], 0.0f);
-    const __m128 top = _mm_set1_ps((float)(nb - 1u)), zero = _mm_setzero_ps();
-#define SB_OTHER_GROW(b)                                                                                             \
-    do {                                                                                                             \
-        olo[k][b] = _mm_min_ps(olo[k][b], mn);                                                                       \
-        ohi[k][b] = _mm_max_ps(ohi[k][b], mx);                                                                       \
-    } while (0)
-#else
-#define SB_OTHER_GROW(b) (A[k].other[b] = sidx_aabb_union(A[k].other[b], box))
-#endif
+    sb_rows rows; /* the bins' `other` boxes as the kernel grows them (simd_spatial_*.h) */
+    sb_rows_init(&rows, lo, scale, nb);
     for (uint32_t i = i0; i < i1; ++i) {
         const sidx_aabb box = refs[i].box;
         int32_t first[4], last[4];
-#if defined(__SSE2__)
-        const __m128 mn = _mm_and_ps(_mm_loadu_ps(&refs[i].box.min.x), xyz);
-        const __m128 mx = _mm_and_ps(_mm_loadu_ps(&refs[i].box.max.x), xyz);
-        const __m128 f0 = _mm_min_ps(_mm_max_ps(_mm_mul_ps(_mm_sub_ps(mn, vlo), vscale), zero), top);
-        const __m128 f1 = _mm_min_ps(_mm_max_ps(_mm_mul_ps(_mm_sub_ps(mx, vlo), vscale), zero), top);
-        _mm_storeu_si128((__m128i *)(void *)first, _mm_cvttps_epi32(f0));
-        _mm_storeu_si128((__m128i *)(void *)last, _mm_cvttps_epi32(f1));
-#else
-        for (int k = 0; k < 3; ++k) {
-            first[k] = (int32_t)sbin_of(sidx_v3_get(box.min, k), lo[k], scale[k], nb);
-            last[k] = (int32_t)sbin_of(sidx_v3_get(box.max, k), lo[k], scale[k], nb);
-        }
-#endif
+        const sb_box x = sb_ref_bins(&rows, &refs[i], first, last);
         for (int k = 0; k < 3; ++k) {
             if (!use[k]) continue;
             sspatial *Ak = &A[k];
@@ -466,30 +363,22 @@ static void spatial_bin(const sref *refs, uint32_t i0, uint32_t i1, const int *u
             for (; b < b1; ++b) {
                 const float p = plane[k][b + 1];
                 if (from <= p) { /* the part is not empty */
-                    SB_OTHER_GROW(b);
+                    sb_rows_grow(&rows, k, b, &x, &Ak->other[b]);
                     Ak->klo[b] = MINF(Ak->klo[b], from);
                     Ak->khi[b] = MAXF(Ak->khi[b], p);
                 }
                 if (p > bmax) break; /* nothing of the box beyond this plane: the rest goes to bin b1 whole */
                 from = p;
             }
-            SB_OTHER_GROW(b1);
+            sb_rows_grow(&rows, k, b1, &x, &Ak->other[b1]);
             Ak->klo[b1] = MINF(Ak->klo[b1], from);
             Ak->khi[b1] = MAXF(Ak->khi[b1], bmax);
         }
     }
-#undef SB_OTHER_GROW
-#if defined(__SSE2__)
     for (int k = 0; k < 3; ++k) {
         if (!use[k]) continue;
-        for (uint32_t b = 0; b < nb; ++b) {
-            float l[4], h[4];
-            _mm_storeu_ps(l, olo[k][b]);
-            _mm_storeu_ps(h, ohi[k][b]);
-            A[k].other[b] = sidx_aabb_union(A[k].other[b], (sidx_aabb){{l[0], l[1], l[2]}, {h[0], h[1], h[2]}});
-        }
+        for (uint32_t b = 0; b < nb; ++b) sb_rows_merge(&rows, k, b, &A[k].other[b]);
     }
-#endif
 }
 
 static void spatial_split(const sbuild *S, const sref *refs, uint32_t n, sidx_aabb box, float inv_area, ssplit *best)

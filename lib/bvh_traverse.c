@@ -13,7 +13,7 @@
  *   stack    (the default) the same ordered descent without recursion:
  *            go to the nearer child, push the farther with its entry
  *            distance, pop when a leaf is done and drop popped nodes whose
- *            entry is no longer closer than the best hit.  The stack is a
+ *            entry is not closer than the best hit.  The stack is a
  *            fixed array of BVH_DEPTH_LIMIT entries: the build never makes
  *            a deeper tree and a descent defers at most one sibling per
  *            level, so it cannot overflow and nothing is allocated.
@@ -31,10 +31,10 @@
 #define SIDX_STRUCTURE_NAME (a->name)
 
 static SIDX_INLINE int node_box(const bvh *b, const bvh_ray *br, const sidx_ray *r, uint32_t i, float tf_scale,
-                                float tmin, float tmax, float *tn, float *tf, const int obb)
+                                float tmin, float tmax, float *t_near, float *t_far, const int obb)
 {
-    if (obb) return bvh_obb_test(r, &b->obbs[i], tmin, tmax, tn, tf);
-    return bvh_slab(br, &b->nodes[i], tf_scale, tmin, tmax, tn, tf);
+    if (obb) return bvh_obb_test(r, &b->obbs[i], tmin, tmax, t_near, t_far);
+    return bvh_slab(br, &b->nodes[i], tf_scale, tmin, tmax, t_near, t_far);
 }
 
 /* Test a leaf's triangles (contiguous copies, original ids in prim_id).
@@ -105,10 +105,10 @@ typedef struct walk {
     int anyhit, obb;
 } walk;
 
-static SIDX_INLINE int walk_box(walk *w, uint32_t i, float *tn, float *tf)
+static SIDX_INLINE int walk_box(walk *w, uint32_t i, float *t_near, float *t_far)
 {
-    return w->obb ? node_box(w->b, &w->br, w->r, i, w->scale, w->r->tmin, w->best, tn, tf, 1)
-                  : node_box(w->b, &w->br, w->r, i, w->scale, w->r->tmin, w->best, tn, tf, 0);
+    return w->obb ? node_box(w->b, &w->br, w->r, i, w->scale, w->r->tmin, w->best, t_near, t_far, 1)
+                  : node_box(w->b, &w->br, w->r, i, w->scale, w->r->tmin, w->best, t_near, t_far, 0);
 }
 
 static SIDX_INLINE int walk_leaf(walk *w, const bvh_node *n, const int traced)
@@ -121,8 +121,8 @@ static SIDX_INLINE int walk_leaf(walk *w, const bvh_node *n, const int traced)
  * (and the same for ordered). */
 static int naive_rec0(walk *w, uint32_t node, uint32_t depth);
 static int naive_rec1(walk *w, uint32_t node, uint32_t depth);
-static int ordered_rec0(walk *w, uint32_t node, uint32_t depth, float tn, float tf);
-static int ordered_rec1(walk *w, uint32_t node, uint32_t depth, float tn, float tf);
+static int ordered_rec0(walk *w, uint32_t node, uint32_t depth, float t_near, float t_far);
+static int ordered_rec1(walk *w, uint32_t node, uint32_t depth, float t_near, float t_far);
 
 /* The deck's hit(ray, node, best): "test if ray hits node's bbox ... if
  * (hit.prim == NULL || hit.t > best.t) return" — the box is clipped to
@@ -133,13 +133,13 @@ static SIDX_INLINE int naive_body(walk *w, uint32_t node, uint32_t depth, const 
     const sidx_accel *a = w->a;
     const bvh *b = w->b;
     const sidx_query *q = w->q;
-    float tn, tf;
-    const int h = walk_box(w, node, &tn, &tf);
-    EMIT_BOX(node, h, tn, tf);
+    float t_near, t_far;
+    const int h = walk_box(w, node, &t_near, &t_far);
+    EMIT_BOX(node, h, t_near, t_far);
     if (!h) return 0;
     ++w->visited;
     SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id; e_.node = node; e_.depth = depth;
-              e_.t_near = tn; e_.t_far = tf);
+              e_.t_near = t_near; e_.t_far = t_far);
     const bvh_node *n = &b->nodes[node];
     if (bvh_is_leaf(n)) return walk_leaf(w, n, traced);
     const uint32_t right = n->left_or_first;
@@ -152,44 +152,44 @@ static int naive_rec1(walk *w, uint32_t node, uint32_t depth) { return naive_bod
 /* The deck's better hit(): the node's own box was tested by its parent
  * (or by the caller for the root), so test both children, visit the one
  * with the smaller entry t first, the other only if it can still win. */
-static SIDX_INLINE int ordered_body(walk *w, uint32_t node, uint32_t depth, float tn, float tf, const int traced)
+static SIDX_INLINE int ordered_body(walk *w, uint32_t node, uint32_t depth, float t_near, float t_far, const int traced)
 {
     const sidx_accel *a = w->a;
     const bvh *b = w->b;
     const sidx_query *q = w->q;
     ++w->visited;
     SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id; e_.node = node; e_.depth = depth;
-              e_.t_near = tn; e_.t_far = tf);
+              e_.t_near = t_near; e_.t_far = t_far);
     const bvh_node *n = &b->nodes[node];
     if (bvh_is_leaf(n)) return walk_leaf(w, n, traced);
     /* left and right child until sorted: then the nearer and the farther */
-    uint32_t near = node + 1, far = n->left_or_first;
-    float near_tn, near_tf, far_tn, far_tf;
-    int near_hit = walk_box(w, near, &near_tn, &near_tf);
-    int far_hit = walk_box(w, far, &far_tn, &far_tf);
-    EMIT_BOX(near, near_hit, near_tn, near_tf);
-    EMIT_BOX(far, far_hit, far_tn, far_tf);
-    if (far_hit && (!near_hit || far_tn < near_tn)) { /* the right child is the nearer one */
-        uint32_t tc = near; near = far; far = tc;
+    uint32_t near_child = node + 1, far_child = n->left_or_first;
+    float near_t_near, near_t_far, far_t_near, far_t_far;
+    int near_hit = walk_box(w, near_child, &near_t_near, &near_t_far);
+    int far_hit = walk_box(w, far_child, &far_t_near, &far_t_far);
+    EMIT_BOX(near_child, near_hit, near_t_near, near_t_far);
+    EMIT_BOX(far_child, far_hit, far_t_near, far_t_far);
+    if (far_hit && (!near_hit || far_t_near < near_t_near)) { /* the right child is the nearer one */
+        uint32_t tc = near_child; near_child = far_child; far_child = tc;
         int th = near_hit; near_hit = far_hit; far_hit = th;
-        float t = near_tn; near_tn = far_tn; far_tn = t;
-        t = near_tf; near_tf = far_tf; far_tf = t;
+        float t = near_t_near; near_t_near = far_t_near; far_t_near = t;
+        t = near_t_far; near_t_far = far_t_far; far_t_far = t;
     }
-    if (near_hit && (traced ? ordered_rec1(w, near, depth + 1, near_tn, near_tf)
-                            : ordered_rec0(w, near, depth + 1, near_tn, near_tf)))
+    if (near_hit && (traced ? ordered_rec1(w, near_child, depth + 1, near_t_near, near_t_far)
+                            : ordered_rec0(w, near_child, depth + 1, near_t_near, near_t_far)))
         return 1;
-    if (far_hit && far_tn < w->best * w->scale) /* best widened as in bvh_slab */
-        return traced ? ordered_rec1(w, far, depth + 1, far_tn, far_tf)
-                      : ordered_rec0(w, far, depth + 1, far_tn, far_tf);
+    if (far_hit && far_t_near < w->best * w->scale) /* best widened as in bvh_slab */
+        return traced ? ordered_rec1(w, far_child, depth + 1, far_t_near, far_t_far)
+                      : ordered_rec0(w, far_child, depth + 1, far_t_near, far_t_far);
     return 0;
 }
-static int ordered_rec0(walk *w, uint32_t node, uint32_t depth, float tn, float tf)
+static int ordered_rec0(walk *w, uint32_t node, uint32_t depth, float t_near, float t_far)
 {
-    return ordered_body(w, node, depth, tn, tf, 0);
+    return ordered_body(w, node, depth, t_near, t_far, 0);
 }
-static int ordered_rec1(walk *w, uint32_t node, uint32_t depth, float tn, float tf)
+static int ordered_rec1(walk *w, uint32_t node, uint32_t depth, float t_near, float t_far)
 {
-    return ordered_body(w, node, depth, tn, tf, 1);
+    return ordered_body(w, node, depth, t_near, t_far, 1);
 }
 
 /* Either recursion from the root, and the final hit. */
@@ -212,10 +212,10 @@ static SIDX_INLINE int recursive_walk(const sidx_accel *a, const sidx_ray *r, co
     int found = 0, missed_root = b->num_nodes == 0;
     if (!missed_root) {
         if (ordered) {
-            float tn, tf;
-            const int h = walk_box(&w, 0, &tn, &tf);
-            EMIT_BOX(0u, h, tn, tf);
-            if (h) found = traced ? ordered_rec1(&w, 0, 0, tn, tf) : ordered_rec0(&w, 0, 0, tn, tf);
+            float t_near, t_far;
+            const int h = walk_box(&w, 0, &t_near, &t_far);
+            EMIT_BOX(0u, h, t_near, t_far);
+            if (h) found = traced ? ordered_rec1(&w, 0, 0, t_near, t_far) : ordered_rec0(&w, 0, 0, t_near, t_far);
             else missed_root = 1;
         } else {
             found = traced ? naive_rec1(&w, 0, 0) : naive_rec0(&w, 0, 0);
@@ -235,10 +235,10 @@ static SIDX_INLINE int recursive_walk(const sidx_accel *a, const sidx_ray *r, co
  * arithmetic: a diffuse ray makes each inner node's near / both / none
  * choice at random, and every mispredict waits for the chain load ->
  * (plane − o)·(1/d) -> min/max -> compare of the boxes just loaded.  So the
- * loop stays this plain scalar one; two-box SIMD tests, branch-free
- * choices, per-octant copies, prefetches, SIMD leaves and other node
- * layouts were measured and none was faster.  Rejected alternatives:
- * docs/performance.md, Binary BVH.
+ * loop stays this plain scalar one: none of two-box SIMD tests,
+ * branch-free choices, per-octant copies, prefetches, SIMD leaves and
+ * other node layouts is faster (measured, with the figures:
+ * docs/performance.md, Binary BVH).
  *
  * attrs: the query asks for u, v and/or the normal (closest hit only).  A
  * copy of its own, so the walk for plain queries carries no u, v and no
@@ -260,23 +260,23 @@ static SIDX_INLINE int stack_walk(const sidx_accel *a, const sidx_ray *r, const 
                   e_.count = 0);
         return 0;
     }
-    float tn, tf;
-    const int hroot = node_box(b, &br, r, 0, scale, tmin, best, &tn, &tf, obb);
-    EMIT_BOX(0u, hroot, tn, tf);
-    if (!hroot) {
+    float t_near, t_far;
+    const int hit_root = node_box(b, &br, r, 0, scale, tmin, best, &t_near, &t_far, obb);
+    EMIT_BOX(0u, hit_root, t_near, t_far);
+    if (!hit_root) {
         SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = SIDX_TERM_MISS_ROOT;
                   e_.count = 0);
         return 0;
     }
     /* Deferred far children and their entry distances; depth and exit
      * distance only for the events (dead stores in the untraced copy). */
-    uint32_t stk[BVH_DEPTH_LIMIT], stk_depth[BVH_DEPTH_LIMIT];
-    float stk_tn[BVH_DEPTH_LIMIT], stk_tf[BVH_DEPTH_LIMIT];
-    uint32_t sp = 0, node = 0, depth = 0;
+    uint32_t stack[BVH_DEPTH_LIMIT], stack_depth[BVH_DEPTH_LIMIT];
+    float stack_t_near[BVH_DEPTH_LIMIT], stack_t_far[BVH_DEPTH_LIMIT];
+    uint32_t stack_len = 0, node = 0, depth = 0;
     for (;;) {
         ++visited;
         SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id; e_.node = node; e_.depth = depth;
-                  e_.t_near = tn; e_.t_far = tf);
+                  e_.t_near = t_near; e_.t_far = t_far);
         const bvh_node *n = &nodes[node];
         if (bvh_is_leaf(n)) {
             if (leaf_test(a, b, n, r, q, &best, &prim, attrs, anyhit, traced)) {
@@ -285,53 +285,53 @@ static SIDX_INLINE int stack_walk(const sidx_accel *a, const sidx_ray *r, const 
                 return 1;
             }
         } else {
-            /* Both children's boxes: hit (hl, hr), entry and exit t. */
+            /* Both children's boxes: hit (hit_left, hit_right), entry and exit t. */
             const uint32_t left = node + 1, right = n->left_or_first;
-            float ln, lf, rn, rf;
-            const int hl = node_box(b, &br, r, left, scale, tmin, best, &ln, &lf, obb);
-            const int hr = node_box(b, &br, r, right, scale, tmin, best, &rn, &rf, obb);
-            EMIT_BOX(left, hl, ln, lf);
-            EMIT_BOX(right, hr, rn, rf);
-            if (hl && hr) {
+            float left_t_near, left_t_far, right_t_near, right_t_far;
+            const int hit_left = node_box(b, &br, r, left, scale, tmin, best, &left_t_near, &left_t_far, obb);
+            const int hit_right = node_box(b, &br, r, right, scale, tmin, best, &right_t_near, &right_t_far, obb);
+            EMIT_BOX(left, hit_left, left_t_near, left_t_far);
+            EMIT_BOX(right, hit_right, right_t_near, right_t_far);
+            if (hit_left && hit_right) {
                 /* Both: nearer entry first (ties: left), the other waits.
                  * (A branch-free version of this choice measured no
                  * faster with gcc -O2; this one reads like the slide.) */
-                uint32_t near = left, far = right;
-                float far_tn = rn, far_tf = rf;
-                tn = ln;
-                tf = lf;
-                if (rn < ln) {
-                    near = right;
-                    far = left;
-                    far_tn = ln;
-                    far_tf = lf;
-                    tn = rn;
-                    tf = rf;
+                uint32_t near_child = left, far_child = right;
+                float far_t_near = right_t_near, far_t_far = right_t_far;
+                t_near = left_t_near;
+                t_far = left_t_far;
+                if (right_t_near < left_t_near) {
+                    near_child = right;
+                    far_child = left;
+                    far_t_near = left_t_near;
+                    far_t_far = left_t_far;
+                    t_near = right_t_near;
+                    t_far = right_t_far;
                 }
-                stk[sp] = far;
-                stk_tn[sp] = far_tn;
+                stack[stack_len] = far_child;
+                stack_t_near[stack_len] = far_t_near;
                 if (traced) {
-                    stk_depth[sp] = depth + 1;
-                    stk_tf[sp] = far_tf;
+                    stack_depth[stack_len] = depth + 1;
+                    stack_t_far[stack_len] = far_t_far;
                 }
-                ++sp;
-                SIDX_EMIT(traced, q->hook, SIDX_EV_STACK_PUSH, e_.ray_id = q->ray_id; e_.node = far; e_.depth = sp;
-                          e_.t_near = far_tn; e_.t_far = far_tf);
-                node = near;
+                ++stack_len;
+                SIDX_EMIT(traced, q->hook, SIDX_EV_STACK_PUSH, e_.ray_id = q->ray_id; e_.node = far_child;
+                          e_.depth = stack_len; e_.t_near = far_t_near; e_.t_far = far_t_far);
+                node = near_child;
                 ++depth;
                 continue;
             }
-            if (hl | hr) {
-                node = hl ? left : right;
-                tn = hl ? ln : rn;
-                tf = hl ? lf : rf;
+            if (hit_left | hit_right) {
+                node = hit_left ? left : right;
+                t_near = hit_left ? left_t_near : right_t_near;
+                t_far = hit_left ? left_t_far : right_t_far;
                 ++depth;
                 continue;
             }
         }
         /* Pop the next deferred node that can still hold a closer hit. */
         for (;;) {
-            if (sp == 0) {
+            if (stack_len == 0) {
                 SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id;
                           e_.reason = SIDX_TERM_STACK_EMPTY; e_.t = best; e_.count = visited);
                 if (!anyhit && prim != SIDX_NO_HIT) {
@@ -344,17 +344,17 @@ static SIDX_INLINE int stack_walk(const sidx_accel *a, const sidx_ray *r, const 
                 }
                 return 0;
             }
-            --sp;
+            --stack_len;
             /* result 0: dropped, its entry lies beyond the best hit (docs/events.md) */
-            SIDX_EMIT(traced, q->hook, SIDX_EV_STACK_POP, e_.ray_id = q->ray_id; e_.node = stk[sp];
-                      e_.depth = sp + 1; e_.t_near = stk_tn[sp]; e_.t_far = stk_tf[sp];
-                      e_.result = stk_tn[sp] < best * scale);
-            if (stk_tn[sp] < best * scale) { /* best widened as in bvh_slab */
-                node = stk[sp];
-                tn = stk_tn[sp];
+            SIDX_EMIT(traced, q->hook, SIDX_EV_STACK_POP, e_.ray_id = q->ray_id; e_.node = stack[stack_len];
+                      e_.depth = stack_len + 1; e_.t_near = stack_t_near[stack_len]; e_.t_far = stack_t_far[stack_len];
+                      e_.result = stack_t_near[stack_len] < best * scale);
+            if (stack_t_near[stack_len] < best * scale) { /* best widened as in bvh_slab */
+                node = stack[stack_len];
+                t_near = stack_t_near[stack_len];
                 if (traced) {
-                    tf = stk_tf[sp];
-                    depth = stk_depth[sp];
+                    t_far = stack_t_far[stack_len];
+                    depth = stack_depth[stack_len];
                 }
                 break;
             }

@@ -32,9 +32,6 @@
 #include <stdlib.h>
 #include <string.h>
 #include "bvh_wide_internal.h"
-#if defined(__x86_64__) || defined(__i386__)
-#include <immintrin.h>
-#endif
 
 #define SIDX_STRUCTURE_NAME (a->name)
 

@@ -91,8 +91,8 @@
  * on the first load of a node or block), so every hit child is fetched
  * as soon as it is known, the nearest for now and the others for when
  * they are popped, inside the code that handles it anyway (a separate
- * loop over the hit mask, and a branch-free leaf/node choice, were
- * rejected: docs/performance.md, "Wide BVHs").  A node is 2 (bvh4) or
+ * loop over the hit mask and a branch-free leaf/node choice are slower:
+ * docs/performance.md, "Wide BVHs").  A node is 2 (bvh4) or
  * 4 (bvh8) cache lines, a leaf block 2.5; prefetching a leaf's 4th line
  * is harmless. */
 WINL void WFN(prefetch_)(const wide_bvh *w, const float *nodes, uint32_t ref)
@@ -171,7 +171,7 @@ WINL int WFN(leaf_)(const sidx_accel *a, const wide_bvh *w, uint32_t first_block
 /* u, v and ng of the final hit, from the leaf block's copy of the
  * triangle (so no index and vertex look-ups in the mesh, which a diffuse
  * ray mostly misses in cache): the same test and normal the core would
- * compute (accel.c finish_hit), on the same floats, so the same bits.
+ * compute (hit.c, sidx__hit_finish), on the same floats, so the same bits.
  * In the walk that keeps u, v (keep_uv, for queries asking for them) the
  * SIMD kernel left the accepted lane's V, W, det in vw_det, and u, v are the
  * scalar test's last step on them (sidx__tri_watertight_uv).  A hit the
@@ -220,9 +220,9 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
     uint32_t prim = SIDX_NO_HIT, visited = 0;
     const wide_tri4 *hit_block = NULL;
     unsigned hit_lane = 0;
-    /* keep_uv: V, W, det of hit_block'slot lanes, which the SIMD kernel
+    /* keep_uv: V, W, det of hit_block's lanes, which the SIMD kernel
      * stores when it accepts a hit (uv_ turns them into u, v).  A separate
-     * instantiation, so the walk without u, v is the same code as before. */
+     * instantiation, so the walk without u, v carries none of it. */
     float vw_det_buf[12];
     float *const hit_vw_det = keep_uv ? vw_det_buf : NULL;
     if (w->num_inner == 0) {
@@ -231,7 +231,7 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
         return 0;
     }
     WFN(ray_consts_) consts;
-    /* Ize'slot factor also widens the best hit the boxes are clipped to (and
+    /* Ize's factor also widens the best hit the boxes are clipped to (and
      * the pop test): a rounded entry an ulp beyond a hit must not drop a
      * box holding a triangle an ulp nearer (bvh_slab says more). */
     const float scale = a->opt.box == SIDX_BOX_ROBUST ? SIDX_ROBUST_TFAR_SCALE : 1.0f;

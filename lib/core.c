@@ -36,9 +36,9 @@ sidx_status sidx__fail(sidx_error *err, sidx_status s, const char *fmt, ...)
 
 /* sidx_ray_init runs once per query — for an application that builds its
  * rays on the fly (as rtcIntersect1 callers do) it is part of every ray's
- * cost, about a tenth of a diffuse bunny ray through bvh8 when it was a
- * chain of branches and five scalar divisions.  So it is written to be
- * cheap while giving exactly the bits (and refusals) it always gave:
+ * cost (docs/performance.md, "Ray set-up").  So it is written to be
+ * cheap while giving exactly the bits and refusals of the plain
+ * formulas:
  *
  *  - one finiteness test for all six components: x − x is +0 for every
  *    finite x and NaN for ±inf and NaN, and a NaN survives the adds
@@ -51,28 +51,23 @@ sidx_status sidx__fail(sidx_error *err, sidx_status s, const char *fmt, ...)
  *  - the five divisions (1/dx, 1/dy, 1/dz, d[kx]/d[kz], d[ky]/d[kz]) as two
  *    SSE divisions where SSE2 is available.  IEEE 754 rounds a SIMD
  *    division exactly like a scalar one, so the quotients are the same
- *    bits; the portable path divides one at a time. */
-#if defined(__SSE2__) && (defined(__x86_64__) || defined(__i386__))
-#include <emmintrin.h>
-#define SIDX_RAY_INIT_SSE2 1
+ *    bits; the portable path divides one at a time.
+ * The finiteness test, the signs and the divisions are the kernels of
+ * simd_ray_sse.h and simd_ray_scalar.h (the reference). */
+#include "simd_isa.h"
+#ifdef SIDX_SIMD_SSE2
+#include "simd_ray_sse.h"
+#else
+#include "simd_ray_scalar.h"
 #endif
 
 sidx_status sidx_ray_init(sidx_ray *r, sidx_vec3 org, sidx_vec3 dir, float tmin, float tmax)
 {
     /* finite: all six components; signs: bit i set where dir[i] is
      * negative, -0.0 included (the near/far child order, sign[]). */
-#ifdef SIDX_RAY_INIT_SSE2
-    /* lane 3 is a harmless 1: finite, positive, and a quotient that raises no flag */
-    const __m128 o4 = _mm_setr_ps(org.x, org.y, org.z, 1.0f), d4 = _mm_setr_ps(dir.x, dir.y, dir.z, 1.0f);
-    const __m128 fin4 = _mm_add_ps(_mm_sub_ps(o4, o4), _mm_sub_ps(d4, d4));
-    const int finite = _mm_movemask_ps(_mm_cmpeq_ps(fin4, _mm_setzero_ps())) == 0xF;
-    const unsigned signs = (unsigned)_mm_movemask_ps(d4) & 7u;
-#else
-    const float fin = ((org.x - org.x) + (org.y - org.y)) + ((org.z - org.z) + (dir.x - dir.x)) +
-                      ((dir.y - dir.y) + (dir.z - dir.z));
-    const int finite = fin == 0.0f;
-    const unsigned signs = (signbit(dir.x) ? 1u : 0u) | (signbit(dir.y) ? 2u : 0u) | (signbit(dir.z) ? 4u : 0u);
-#endif
+    int finite;
+    unsigned signs;
+    const ray_row row = ray_row_check(org, dir, &finite, &signs);
     /* tmin >= 0 excludes a NaN tmin; then tmin <= tmax fails exactly when
      * tmax is NaN or tmin > tmax. */
     if (!r || !finite || !(tmin >= 0.0f && tmin <= tmax)) return SIDX_ERR_INVALID_ARG;
@@ -98,20 +93,7 @@ sidx_status sidx_ray_init(sidx_ray *r, sidx_vec3 org, sidx_vec3 dir, float tmin,
     r->tmax = tmax;
     /* 1/±0 = ±inf by IEEE 754: the sign of zero is the side the ray
      * "leans" to, which keeps near/far child order consistent. */
-#ifdef SIDX_RAY_INIT_SSE2
-    float inv[4], shear[4];
-    _mm_storeu_ps(inv, _mm_div_ps(_mm_set1_ps(1.0f), d4));
-    _mm_storeu_ps(shear, _mm_div_ps(_mm_setr_ps(d[kx], d[ky], 1.0f, 1.0f), _mm_set1_ps(d[kz])));
-    r->inv_dir = sidx_v3(inv[0], inv[1], inv[2]);
-    r->sx = shear[0];
-    r->sy = shear[1];
-    r->sz = shear[2]; /* 1/d[kz]: the same bits as inv[kz] */
-#else
-    r->inv_dir = sidx_v3(1.0f / dir.x, 1.0f / dir.y, 1.0f / dir.z);
-    r->sx = d[kx] / d[kz];
-    r->sy = d[ky] / d[kz];
-    r->sz = (sidx_v3_array(&r->inv_dir))[kz]; /* the same 1/d[kz], already computed: one division fewer per ray */
-#endif
+    ray_row_quotients(row, d, kx, ky, kz, r);
     r->sign[0] = (uint8_t)(signs & 1u);
     r->sign[1] = (uint8_t)(signs >> 1 & 1u);
     r->sign[2] = (uint8_t)(signs >> 2);

@@ -19,6 +19,11 @@
 
 #define SIDX_STRUCTURE_NAME "aggregate"
 
+/* What an aggregate's hit is finished with (sidx__hit_finish, hit.c):
+ * t refined, u, v and the normal.  An instanced hit carries no point:
+ * its triangle lies in the child's space, not in a->mesh. */
+#define AGG_FINISH (SIDX__QUERY_REFINE_T | SIDX_QUERY_UV | SIDX_QUERY_NORMAL)
+
 typedef struct agg_inst {
     const sidx_accel *accel;
     float m[12];            /* object to world */
@@ -274,36 +279,42 @@ static SIDX_INLINE int agg_walk(const sidx_accel *a, const sidx_ray *r, const si
     sidx_hit best_hit = sidx_hit_none();
     sidx_ray best_local;
     memset(&best_local, 0, sizeof best_local);
-    struct { uint32_t node; float tn; } stack[SIDX_BOXTREE_STACK];
-    int sp = 0;
+    struct { uint32_t node; float t_near; } stack[SIDX_BOXTREE_STACK];
+    int stack_len = 0;
     uint32_t visited = 0;
-    float tn, tf;
-    if (g->n && sidx__box_test(robust, r, &g->tree.nodes[0].box, r->tmin, best, &tn, &tf)) {
+    float t_near, t_far;
+    if (g->n && sidx__box_test(robust, r, &g->tree.nodes[0].box, r->tmin, best, &t_near, &t_far)) {
         stack[0].node = 0;
-        stack[0].tn = tn;
-        sp = 1;
+        stack[0].t_near = t_near;
+        stack_len = 1;
     }
-    while (sp > 0) {
-        --sp;
-        if (stack[sp].tn > best) continue;
-        const uint32_t node = stack[sp].node;
+    while (stack_len > 0) {
+        --stack_len;
+        if (stack[stack_len].t_near > best) continue;
+        const uint32_t node = stack[stack_len].node;
         const sidx__btnode *nd = &g->tree.nodes[node];
         ++visited;
-        SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id; e_.node = node; e_.t_near = stack[sp].tn);
+        SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id; e_.node = node;
+                  e_.t_near = stack[stack_len].t_near);
         if (nd->count == SIDX_BT_INNER) {
-            float t0[2], t1[2];
+            float child_t_near[2], child_t_far[2];
             int h[2];
             for (int c = 0; c < 2; ++c) {
-                h[c] = sidx__box_test(robust, r, &g->tree.nodes[nd->first + c].box, r->tmin, best, &t0[c], &t1[c]);
+                h[c] = sidx__box_test(robust, r, &g->tree.nodes[nd->first + c].box, r->tmin, best, &child_t_near[c],
+                                      &child_t_far[c]);
                 SIDX_EMIT(traced, q->hook, SIDX_EV_BOX_TEST, e_.ray_id = q->ray_id; e_.node = nd->first + (uint32_t)c;
                           e_.bounds = g->tree.nodes[nd->first + c].box; e_.result = h[c];
-                          e_.t_near = h[c] ? t0[c] : NAN; e_.t_far = h[c] ? t1[c] : NAN);
+                          e_.t_near = h[c] ? child_t_near[c] : NAN; e_.t_far = h[c] ? child_t_far[c] : NAN);
             }
             /* push the farther first so the nearer is walked first */
-            const int first = (h[0] && h[1]) ? (t0[1] < t0[0] ? 1 : 0) : (h[0] ? 0 : 1);
+            const int near_child = (h[0] && h[1]) ? (child_t_near[1] < child_t_near[0] ? 1 : 0) : (h[0] ? 0 : 1);
             for (int k = 1; k >= 0; --k) {
-                const int c = k ? 1 - first : first;
-                if (h[c] && sp < SIDX_BOXTREE_STACK) { stack[sp].node = nd->first + (uint32_t)c; stack[sp].tn = t0[c]; ++sp; }
+                const int c = k ? 1 - near_child : near_child;
+                if (h[c] && stack_len < SIDX_BOXTREE_STACK) {
+                    stack[stack_len].node = nd->first + (uint32_t)c;
+                    stack[stack_len].t_near = child_t_near[c];
+                    ++stack_len;
+                }
             }
             continue;
         }
@@ -342,32 +353,19 @@ static SIDX_INLINE int agg_walk(const sidx_accel *a, const sidx_ray *r, const si
     hit->t = best_hit.t;
     hit->prim = best_hit.prim;
     hit->instance = in->leaf_base + (in->nested ? best_hit.instance : 0u);
-    if (q->flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL)) {
-        if (in->nested) {
-            /* the child aggregate filled them in its own world space */
+    if (in->nested) {
+        /* the child aggregate finished its hit in its own world space */
+        if (q->flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL)) {
             hit->u = best_hit.u;
             hit->v = best_hit.v;
             hit->ng = xf_normal(in->inv, best_hit.ng);
-        } else {
-            const sidx_mesh *m = in->accel->mesh;
-            const sidx_vec3 p0 = sidx_mesh_vertex(m, hit->prim, 0), p1 = sidx_mesh_vertex(m, hit->prim, 1),
-                            p2 = sidx_mesh_vertex(m, hit->prim, 2);
-            float t, u = 0.0f, v = 0.0f;
-            /* same test, same local ray, bound just past the hit: same t (as accel.c does) */
-            if ((q->flags & SIDX_QUERY_UV) &&
-                sidx__tri_test(in->accel->opt.tri, &best_local, p0, p1, p2, nextafterf(hit->t, INFINITY), &t, &u, &v)) {
-                hit->u = u;
-                hit->v = v;
-            }
-            if (q->flags & SIDX_QUERY_NORMAL)
-                hit->ng = xf_normal(in->inv, sidx_v3_cross(sidx_v3_sub(p1, p0), sidx_v3_sub(p2, p0)));
         }
+    } else if (q->flags & AGG_FINISH) {
+        /* finished on the child's mesh and the local ray (the same t along
+         * the world ray), then the normal taken to world space */
+        sidx__hit_finish(in->accel->mesh, in->accel->opt.tri, &best_local, q->flags & AGG_FINISH, 0u, hit);
+        if (q->flags & SIDX_QUERY_NORMAL) hit->ng = xf_normal(in->inv, hit->ng);
     }
-    /* t refined on the plane as sidx_accel_intersect does (accel.c), on the
-     * local ray (the same t along the world ray), after the u, v re-test
-     * above, which is bounded just past the walk's t; a nested child
-     * refined its own final hit. */
-    if (!in->nested && (q->flags & SIDX__QUERY_REFINE_T)) sidx__hit_refine_t(in->accel->mesh, &best_local, hit);
     return 1;
 }
 

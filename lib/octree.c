@@ -12,11 +12,11 @@
  * Traversal: front to back in ray order, with early termination when the
  * hit lies in the current leaf.  The child order comes from the ray itself
  * (in the spirit of Revelles, Ureña, Lastra 2000, "An Efficient Parametric
- * Algorithm for Octree Traversal"): at a node entered over [t0, t1] the ray
- * crosses the three mid-planes at t_x, t_y, t_z; it starts in the child
- * that holds the entry point and flips one bit of the child index at each
- * crossing inside (t0, t1), in increasing t — at most 4 children, each with
- * its exact t interval, and no box test per child.  The children are
+ * Algorithm for Octree Traversal"): at a node entered over [t_near, t_far]
+ * the ray crosses the three mid-planes at t_x, t_y, t_z; it starts in the
+ * child that holds the entry point and flips one bit of the child index
+ * at each crossing inside (t_near, t_far), in increasing t — at most 4
+ * children, each with its exact t interval, and no box test per child.  The children are
  * pushed far-to-near on a small explicit stack. */
 #include "grid_internal.h"
 
@@ -208,7 +208,7 @@ fail:
 
 typedef struct oentry {
     sidx_aabb box;
-    float t0, t1;
+    float t_near, t_far;
     uint32_t node, depth;
 } oentry;
 
@@ -216,8 +216,8 @@ static SIDX_INLINE int octree_walk(const sidx_accel *a, const sidx_ray *r, const
                                    const int traced, const int any, const int use_mb)
 {
     const octree *T = a->impl;
-    float t0, t1;
-    if (!sidx__clip(a, r, &T->box, hit->t, &t0, &t1)) {
+    float t_near, t_far;
+    if (!sidx__clip(a, r, &T->box, hit->t, &t_near, &t_far)) {
         SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = SIDX_TERM_MISS_ROOT;
                   e_.t = hit->t; e_.count = 0);
         return 0;
@@ -226,25 +226,25 @@ static SIDX_INLINE int octree_walk(const sidx_accel *a, const sidx_ray *r, const
     const float *o = sidx_v3_array(&r->org), *dir = sidx_v3_array(&r->dir), *inv = sidx_v3_array(&r->inv_dir);
     /* Each level pushes at most 3 children beyond the one taken next. */
     oentry stack[3u * (OCT_MAX_DEPTH + 1u) + 4u];
-    uint32_t sp = 0;
-    stack[sp++] = (oentry){T->box, t0, t1, 0, 0};
+    uint32_t stack_len = 0;
+    stack[stack_len++] = (oentry){T->box, t_near, t_far, 0, 0};
     sidx__mailbox mb;
     if (use_mb) sidx__mailbox_clear(&mb);
     uint32_t visited = 0;
     int reason = SIDX_TERM_STACK_EMPTY;
-    while (sp) {
-        const oentry entry = stack[--sp];
+    while (stack_len) {
+        const oentry entry = stack[--stack_len];
         SIDX_EMIT(traced, q->hook, SIDX_EV_STACK_POP, e_.ray_id = q->ray_id; e_.node = entry.node;
-                  e_.depth = sp + 1; e_.t_near = entry.t0; e_.t_far = entry.t1);
+                  e_.depth = stack_len + 1; e_.t_near = entry.t_near; e_.t_far = entry.t_far);
         /* Front to back: everything left on the stack starts later. */
-        if (entry.t0 > hit->t) {
+        if (entry.t_near > hit->t) {
             reason = hit->prim != SIDX_NO_HIT ? SIDX_TERM_HIT_IN_CELL : SIDX_TERM_STACK_EMPTY;
             break;
         }
         const onode node = T->nodes[entry.node];
         ++visited;
         SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id; e_.node = entry.node;
-                  e_.depth = entry.depth; e_.t_near = entry.t0; e_.t_far = entry.t1; e_.bounds = entry.box);
+                  e_.depth = entry.depth; e_.t_near = entry.t_near; e_.t_far = entry.t_far; e_.bounds = entry.box);
         if (node.n != OCT_INNER) {
             /* a tree without references has refs NULL: no offset on it (UBSan, fuzz_build) */
             if (sidx__cell_prims(a, r, q, hit, node.n ? T->refs + node.a : NULL, node.n, entry.node, entry.depth,
@@ -253,7 +253,7 @@ static SIDX_INLINE int octree_walk(const sidx_accel *a, const sidx_ray *r, const
                           e_.count = visited);
                 return 1;
             }
-            if (hit->t <= entry.t1) {
+            if (hit->t <= entry.t_far) {
                 reason = hit->prim != SIDX_NO_HIT ? SIDX_TERM_HIT_IN_CELL : SIDX_TERM_STACK_EMPTY;
                 break;
             }
@@ -274,34 +274,34 @@ static SIDX_INLINE int octree_walk(const sidx_accel *a, const sidx_ray *r, const
                 continue;
             }
             t_mid[k] = (mk - o[k]) * inv[k];
-            const int crossed = t_mid[k] <= entry.t0;
+            const int crossed = t_mid[k] <= entry.t_near;
             if (crossed == (dir[k] > 0.0f)) child |= 1u << k;
-            if (t_mid[k] > entry.t0 && t_mid[k] < entry.t1) order[n_cross++] = k;
+            if (t_mid[k] > entry.t_near && t_mid[k] < entry.t_far) order[n_cross++] = k;
         }
-        /* Sort the crossings inside (t0, t1) by t (at most 3). */
+        /* Sort the crossings inside (t_near, t_far) by t (at most 3). */
         for (int i = 1; i < n_cross; ++i)
             for (int j = i; j > 0 && t_mid[order[j]] < t_mid[order[j - 1]]; --j) {
                 const int tmp = order[j];
                 order[j] = order[j - 1];
                 order[j - 1] = tmp;
             }
-        /* Children in ray order: c_0 over [t0, t_mid_0], c_1 = c_0 ^ bit over
+        /* Children in ray order: c_0 over [t_near, t_mid_0], c_1 = c_0 ^ bit over
          * [t_mid_0, t_mid_1], ...; pushed last-first so the first pops first. */
         uint32_t child_ids[4];
         float t_bounds[5];
         child_ids[0] = child;
-        t_bounds[0] = entry.t0;
+        t_bounds[0] = entry.t_near;
         for (int i = 0; i < n_cross; ++i) {
             t_bounds[i + 1] = t_mid[order[i]];
             child_ids[i + 1] = child_ids[i] ^ (1u << order[i]);
         }
-        t_bounds[n_cross + 1] = entry.t1;
+        t_bounds[n_cross + 1] = entry.t_far;
         for (int i = n_cross; i >= 0; --i) {
             const oentry c = {child_box(entry.box, child_ids[i], nsplit), t_bounds[i], t_bounds[i + 1],
                               node.a + child_ids[i], entry.depth + 1};
-            stack[sp++] = c;
-            SIDX_EMIT(traced, q->hook, SIDX_EV_STACK_PUSH, e_.ray_id = q->ray_id; e_.node = c.node; e_.depth = sp;
-                      e_.t_near = c.t0; e_.t_far = c.t1);
+            stack[stack_len++] = c;
+            SIDX_EMIT(traced, q->hook, SIDX_EV_STACK_PUSH, e_.ray_id = q->ray_id; e_.node = c.node;
+                      e_.depth = stack_len; e_.t_near = c.t_near; e_.t_far = c.t_far);
         }
     }
     SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = reason; e_.t = hit->t;

@@ -21,8 +21,8 @@
 #include "bvh_internal.h"
 #include "bvh_wide_internal.h"
 #include "packet_internal.h"
-#if defined(__x86_64__) || defined(__i386__)
-#include <immintrin.h>
+#include "simd_isa.h"
+#ifdef SIDX_SIMD_X86
 #define PKT_X86 1
 #endif
 
@@ -49,9 +49,9 @@ typedef struct packet {
     /* frustum: 4 inward plane normals through the common origin, the apex */
     int frustum;
     float apex[3], plane_n[4][3], plane_l1[4]; /* plane normals and their L1 norms */
-#if defined(__SSE2__)
+#ifdef SIDX_SIMD_SSE2
     /* the same, one plane per lane (simd_packet_sse.h); plane_pos_lanes: normal component >= 0 */
-    __m128 plane_n_lanes[3], plane_pos_lanes[3], plane_l1_lanes;
+    sidx__f32x4 plane_n_lanes[3], plane_pos_lanes[3], plane_l1_lanes;
 #endif
 } packet;
 
@@ -76,7 +76,7 @@ typedef struct pstack {
  * triangle, AVX2).  The choice is made here, once. */
 
 #include "simd_packet_scalar.h"
-#if defined(__SSE2__)
+#ifdef SIDX_SIMD_SSE2
 #include "simd_packet_sse.h"
 #endif
 #ifdef PKT_X86
@@ -95,7 +95,7 @@ static void tri8_avx2(const walkopt *walk, packet *pkt, uint32_t group, const bv
 #endif
 
 /* The frustum's kernels: SSE2 wherever it is there (every x86-64). */
-#if defined(__SSE2__)
+#ifdef SIDX_SIMD_SSE2
 static int frustum_overlap(const packet *pkt, const bvh_node *n) { return frustum_overlap_sse(pkt, n); }
 static SIDX_INLINE int frustum_rays_inside(const packet *pkt, const sidx_ray *rays, uint32_t n, const float len2[4])
 {
@@ -139,7 +139,7 @@ static void frustum_setup(packet *pkt, const sidx_ray *rays, uint32_t n, uint32_
     /* Every ray must start at the apex and lie inside the 4 planes:
      * n·d >= −1e-6 |n||d|, without a square root per ray.  One pass over
      * the rays with the 4 planes in the 4 SSE lanes (the same products in
-     * the same order as sidx_v3_dot): done plane by plane, this check was
+     * the same order as sidx_v3_dot): done plane by plane, this check is
      * most of the set-up (docs/performance.md, "Packets and frustums"). */
     if (!frustum_rays_inside(pkt, rays, n, len2)) return;
     pkt->apex[0] = rays[0].org.x;
@@ -400,17 +400,6 @@ int sidx__packet_have_avx2(void)
 #endif
 }
 
-void sidx__packet_finish(const sidx_accel *a, const sidx_ray *r, uint32_t flags, sidx_hit *h)
-{
-    if (h->prim == SIDX_NO_HIT) {
-        *h = sidx_hit_none();
-        return;
-    }
-    /* never touch the mesh unless asked; the packet walks keep no u, v */
-    const uint32_t need = flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL);
-    if (need) sidx__hit_attrs_from_mesh(a, r, need, h);
-}
-
 /* avx: 1 / 0 as decided by the caller, or −1 to ask have_avx2. */
 static sidx_status run_packet(const sidx_accel *a, const sidx_ray *rays, uint32_t n, uint32_t w,
                               const sidx_packet_options *opt, sidx_hit *hits, uint8_t *occ, sidx_packet_stats *stats,
@@ -468,10 +457,8 @@ static sidx_status run_packet(const sidx_accel *a, const sidx_ray *rays, uint32_
         if (pkt.prim[i] != SIDX_NO_HIT) {
             hits[i].t = pkt.best[i];
             hits[i].prim = pkt.prim[i];
-            if (o.flags & SIDX__QUERY_REFINE_T) /* as sidx_accel_intersect does */
-                sidx__hit_refine_t(a->mesh, &rays[i], &hits[i]);
-            if (o.flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL)) /* a call only when asked */
-                sidx__packet_finish(a, &rays[i], o.flags, &hits[i]);
+            if (o.flags & SIDX__PACKET_FINISH) /* a call only when asked */
+                sidx__hit_finish(a->mesh, a->opt.tri, &rays[i], o.flags & SIDX__PACKET_FINISH, 0u, &hits[i]);
         }
     }
     return SIDX_OK;

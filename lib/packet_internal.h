@@ -16,10 +16,11 @@
  * per call by the packet calls, once per image by sidx_trace_tiles. */
 int sidx__packet_have_avx2(void);
 
-/* u, v and the geometric normal of a finished hit when flags ask for
- * them (prim = SIDX_NO_HIT: the empty hit); the mesh is not touched
- * otherwise. */
-void sidx__packet_finish(const sidx_accel *a, const sidx_ray *r, uint32_t flags, sidx_hit *h);
+/* What a packet's hit is finished with (sidx__hit_finish, hit.c), when
+ * its options' flags ask: t refined, u, v and the geometric normal, all
+ * from the mesh (the packet walks keep no u, v).  A packet's hits carry
+ * no point: SIDX_QUERY_POINT is a single-ray query's. */
+#define SIDX__PACKET_FINISH (SIDX__QUERY_REFINE_T | SIDX_QUERY_UV | SIDX_QUERY_NORMAL)
 
 /* One packet over a bvh4 / bvh8 (sidx__is_wide(a)): rays are a tile of
  * w x (n / w) rays read in place, row y starting at rays + y·stride

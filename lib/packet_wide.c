@@ -58,7 +58,7 @@
  *
  * No events: the packet calls take no query and no hook, so there is
  * nothing to emit; a traced query goes through sidx_accel_intersect and
- * the traced copy of the single-ray walk (bvh_wide_walk.h), as before.
+ * the traced copy of the single-ray walk (bvh_wide_walk.h).
  *
  * Like packet.c the walk is written once and instantiated per width and
  * instruction set: AVX2 (8-lane ray groups; 8 boxes per pass for bvh8, 4
@@ -68,8 +68,8 @@
  * (the reference) and simd_packet_wide_avx2.h. */
 #include "bvh_wide_internal.h"
 #include "packet_internal.h"
-#if (defined(__x86_64__) || defined(__i386__)) && defined(__SSE2__)
-#include <immintrin.h>
+#include "simd_isa.h"
+#ifdef SIDX_SIMD_SSE2
 #define PW_X86 1 /* SSE2 (the set-up, the triangle blocks) always; AVX2 chosen at run time */
 #endif
 
@@ -530,7 +530,7 @@ void sidx__packet_wide(const sidx_accel *a, const sidx_ray *rays, uint32_t n, ui
             if (pkt.prim[i] == SIDX_NO_HIT) continue;
             hit->t = pkt.best[i];
             hit->prim = pkt.prim[i];
-            if (flags & SIDX__QUERY_REFINE_T) sidx__hit_refine_t(a->mesh, pkt.ray[i], hit); /* as sidx_accel_intersect does */
-            if (flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL)) sidx__packet_finish(a, pkt.ray[i], flags, hit);
+            if (flags & SIDX__PACKET_FINISH) /* a call only when asked */
+                sidx__hit_finish(a->mesh, a->opt.tri, pkt.ray[i], flags & SIDX__PACKET_FINISH, 0u, hit);
         }
 }

@@ -24,7 +24,7 @@
  *      larger ones, "mid tasks", are top-phase subtrees in their own right:
  *      the threads build them at the same time, each cutting its own
  *      subtrees of at most n / (8·threads) triangles into further tasks —
- *      so the top of the tree is no longer one thread's work.  The threads
+ *      so the top of the tree is not one thread's work.  The threads
  *      take the largest ready task first (longest processing time first
  *      balances them), and build each straight into a region of the final
  *      node array reserved in pre-order;
@@ -248,8 +248,8 @@ static uint32_t task_new(taskset *ts)
 }
 
 /* A bin's box as two 4-float rows (x, y, z, unused), so that the binning
- * loop can grow it with one SSE min and one max: _mm_min_ps(a, b) is
- * a < b ? a : b lane by lane, exactly sidx_v3_min's expression (and max
+ * loop can grow it with one SSE min and one max: the SSE min of a and b
+ * is a < b ? a : b lane by lane, exactly sidx_v3_min's expression (and max
  * sidx_v3_max's), so the boxes are bit for bit those of the scalar code
  * and of the sequential builder. */
 typedef struct binbox {

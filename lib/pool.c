@@ -34,12 +34,8 @@
 #include <stdatomic.h>
 #include <stdlib.h>
 #include "pool.h"
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#define POOL_PAUSE() _mm_pause()
-#else
-#define POOL_PAUSE() ((void)0)
-#endif
+#include "simd_isa.h"
+#define POOL_PAUSE() SIDX_SPIN_PAUSE()
 
 /* Spin iterations before sleeping: a few microseconds. */
 #define POOL_SPIN 4096

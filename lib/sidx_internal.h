@@ -79,7 +79,7 @@ struct sidx_accel {
      * own triangle test, ng from its own copy of the triangle — so the core
      * skips its re-test and the index and vertex look-ups in the mesh,
      * which a diffuse ray mostly misses in cache.  Either way the values
-     * are bit-identical to finish_hit's (accel.c): same test, same floats.
+     * are bit-identical to sidx__hit_finish's (hit.c): same test, same floats.
      * Bytes beside `variant`, in what would be padding, so that the labels
      * below do not make the structure bigger. */
     unsigned char fills_uv, fills_ng;
@@ -327,7 +327,7 @@ static SIDX_INLINE sidx_vec3 sidx__vec3_at(const float *p, const int stride)
 
 /* u, v of a hit that sidx__tri_test(m, r, p0, p1, p2, ...) accepted, for
  * a structure that finishes only the final hit — the one definition that
- * the mesh finish (accel.c), the binary BVH's leaf copies and the wide
+ * the mesh finish (hit.c), the binary BVH's leaf copies and the wide
  * BVH's and kd-tree's 4-triangle blocks share.  p0, p1, p2 point at the x
  * of each vertex, y and z `stride` floats apart (sidx__vec3_at): read in
  * place, since the edge functions index them by the ray's kx, ky, kz and
@@ -338,7 +338,7 @@ static SIDX_INLINE sidx_vec3 sidx__vec3_at(const float *p, const int stride)
  * computed) and the test's own last step on them (sidx__tri_watertight_uv),
  * skipping T, t and the compares, which the hit already passed.  Same
  * arithmetic on the same floats, so the bits of forming u, v at every
- * accepted hit, which the walks no longer pay for.  When an edge function
+ * accepted hit, which the walks do not pay for.  When an edge function
  * is exactly 0 the test redid them in double, and with another test there
  * is no such split: then the whole test again, whose bound only has to
  * exceed the hit's t, so +inf does.  Returns 0, leaving u, v alone, if
@@ -360,27 +360,28 @@ static SIDX_INLINE int sidx__tri_hit_uv_at(sidx_tri_method m, const sidx_ray *r,
 
 /* The geometric normal hit.ng: (p1 − p0) × (p2 − p0), unnormalized.  One
  * definition, so a structure computing it from its own copy of the
- * vertices gets the same bits as accel.c's finish_hit from the mesh. */
+ * vertices gets the same bits as sidx__hit_finish (hit.c) from the mesh. */
 static SIDX_INLINE sidx_vec3 sidx__tri_normal(sidx_vec3 p0, sidx_vec3 p1, sidx_vec3 p2)
 {
     return sidx_v3_cross(sidx_v3_sub(p1, p0), sidx_v3_sub(p2, p0));
 }
 
-/* accel.c: hit->t of a closest hit on triangle hit->prim of m, recomputed
- * on the triangle's plane when the test's t is coarse, as
- * sidx_accel_intersect does after every walk; for the walks that return
- * closest hits without it (packets, aggregates).  prim, u, v untouched. */
-void sidx__hit_refine_t(const sidx_mesh *m, const sidx_ray *r, sidx_hit *hit);
-/* The query flag that asks for it (the point of SIDX_QUERY_POINT is made
- * from u, v, not t, and does not need it). */
+/* The query flag that asks for the closest hit's t refined on its
+ * triangle's plane (the point of SIDX_QUERY_POINT is made from u, v, not
+ * t, and does not need it). */
 #define SIDX__QUERY_REFINE_T SIDX_QUERY_PRECISE_T
-/* accel.c: u, v and/or the normal (need: SIDX_QUERY_UV | SIDX_QUERY_NORMAL)
- * of a hit on a->mesh, recomputed from the mesh — the core's finish of a
- * query, and the packet walks'.  hit->prim and hit->t must be set. */
-void sidx__hit_attrs_from_mesh(const sidx_accel *a, const sidx_ray *r, uint32_t need, sidx_hit *hit);
-/* spawn.c: u, v and ng as `need` asks (sidx__hit_attrs_from_mesh), then
- * hit->p, hit->p_err of a hit on a->mesh (SIDX_QUERY_POINT). */
-void sidx__hit_point(const sidx_accel *a, const sidx_ray *r, uint32_t need, sidx_hit *hit);
+/* hit.c: finishes a closest hit on triangle hit->prim of m, found by a
+ * walk that set hit->t and hit->prim, as the query's flags ask:
+ * SIDX__QUERY_REFINE_T refines t on the triangle's plane; SIDX_QUERY_UV
+ * and SIDX_QUERY_NORMAL recompute u, v (by test method tri on ray r) and
+ * the geometric normal from the mesh, except what `own` (the same bits)
+ * says the walk set already; SIDX_QUERY_POINT sets hit->p and hit->p_err
+ * (and u, v, ng unless `own` and the flags both name them).  The one
+ * finish every query path calls once per hit ray: sidx_accel_intersect,
+ * the packet walks, the aggregate (on its local ray).  Never called on a
+ * miss. */
+void sidx__hit_finish(const sidx_mesh *m, sidx_tri_method tri, const sidx_ray *r, uint32_t flags, uint32_t own,
+                      sidx_hit *hit);
 
 /* Triangle `tri` of mesh m, tested with method m (t only). */
 static SIDX_INLINE int sidx__mesh_tri_test(const sidx_mesh *mesh, sidx_tri_method m, uint32_t tri,

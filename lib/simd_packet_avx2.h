@@ -7,6 +7,7 @@
  * Not a normal header: packet.c includes it after its types and
  * simd_packet_scalar.h, on x86 only; chosen at run time
  * (sidx__packet_have_avx2), inlined into the AVX2 copy of the walk. */
+#include <immintrin.h>
 
 __attribute__((target("avx2,fma"))) static unsigned box8_avx2(const packet *pkt, uint32_t group, const float planes[6])
 {

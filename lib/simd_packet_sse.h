@@ -5,6 +5,7 @@
  *
  * Not a normal header: packet.c includes it after its types where SSE2
  * is there. */
+#include <immintrin.h>
 
 /* The node box against the 4 planes (frustum_overlap_scalar, one plane
  * per lane). */

@@ -8,6 +8,7 @@
  * Not a normal header: packet_wide.c includes it after its types and the
  * reference, on x86 with SSE2; chosen at run time (avx = 1), inlined into
  * the AVX2 copies of the walk (walk8_avx, walk4_avx). */
+#include <immintrin.h>
 
 /* ---- set-up (SSE2) ---------------------------------------------------------------- */
 

@@ -9,6 +9,7 @@
  * names come out as boxes_8_avx2 and so on (lib/README.md).  The AVX-512
  * copy (simd_wide_avx512.h) is this code with the planes picked another
  * way. */
+#include <immintrin.h>
 
 /* ---- per-ray constants ------------------------------------------------------ */
 

@@ -15,6 +15,7 @@
  * through WINL; names come out as boxes_8_avx512 and so on
  * (lib/README.md).  popc_ and rank_ are AVX2's (simd_wide_avx2.h), compiled
  * again here; the triangle blocks are simd_wide_tri4.h's, as for AVX2. */
+#include <immintrin.h>
 
 /* ---- per-ray constants ------------------------------------------------------ */
 

@@ -7,6 +7,7 @@
  * Not a normal header: bvh_wide_walk.h includes it for WALK_ISA 1 (W = 4),
  * compiled with __attribute__((target("sse4.1"))) through WINL; names
  * come out as boxes_4_sse41 and so on (lib/README.md). */
+#include <immintrin.h>
 
 /* ---- per-ray constants ------------------------------------------------------ */
 

@@ -2,7 +2,8 @@
  * them (sidx/spawn.h has the derivation; Pharr, Jakob, Humphreys, PBR 3rd
  * ed. §3.9).  Nothing here runs inside a traversal: the point of a hit is
  * formed once, after the closest hit is known, and only when
- * SIDX_QUERY_POINT asks for it. */
+ * SIDX_QUERY_POINT asks for it (sidx__hit_finish, hit.c, calls
+ * sidx_triangle_point). */
 #include "sidx_internal.h"
 
 /* The multiple of ε in the test-resolution term of the bound (below). */
@@ -80,23 +81,6 @@ sidx_status sidx_triangle_point(sidx_vec3 p0, sidx_vec3 p1, sidx_vec3 p2, float 
     *p = pt;
     *p_err = e;
     return SIDX_OK;
-}
-
-/* The closest hit's point, after the query (accel.c's finish_hit, when
- * SIDX_QUERY_POINT asks): first u, v and ng where the structure has not
- * filled them (`need`).  A
- * triangle refused by sidx_triangle_point leaves p and p_err zero, which
- * sidx_ray_spawn then refuses. */
-void sidx__hit_point(const sidx_accel *a, const sidx_ray *r, uint32_t need, sidx_hit *hit)
-{
-    if (need) sidx__hit_attrs_from_mesh(a, r, need, hit);
-    const sidx_mesh *m = a->mesh;
-    sidx_vec3 p, e;
-    if (sidx_triangle_point(sidx_mesh_vertex(m, hit->prim, 0), sidx_mesh_vertex(m, hit->prim, 1),
-                            sidx_mesh_vertex(m, hit->prim, 2), hit->u, hit->v, &p, &e) == SIDX_OK) {
-        hit->p = p;
-        hit->p_err = e;
-    }
 }
 
 /* Away from the surface by one float: the offset's rounding to float can

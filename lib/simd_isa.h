@@ -1,0 +1,32 @@
+/* simd_isa.h — what the compiler targets, read in one place: the rest of
+ * the library tests SIDX_SIMD_X86 and SIDX_SIMD_SSE2, never the
+ * compiler's own __SSE2__ or __x86_64__, and names SIMD types and
+ * intrinsics only inside the simd_*.h kernel headers (docs/architecture.md,
+ * "SIMD kernels"; tests/check_simd_rules.sh checks it).
+ *
+ *   SIDX_SIMD_X86   x86 or x86-64: the CPU may have SSE4.1, AVX2 or
+ *                   AVX-512, picked at run time (__builtin_cpu_supports)
+ *   SIDX_SIMD_SSE2  SSE2 at compile time (baseline on x86-64)
+ *
+ * Also the two things plain code needs from SSE2: a 4-float row as a
+ * struct member (sidx__f32x4, for kernels' data kept in a structure's
+ * own types) and the spin-wait hint (SIDX_SPIN_PAUSE). */
+#ifndef SIDX_SIMD_ISA_H
+#define SIDX_SIMD_ISA_H
+
+#if defined(__x86_64__) || defined(__i386__)
+#define SIDX_SIMD_X86 1
+#if defined(__SSE2__)
+#define SIDX_SIMD_SSE2 1
+#endif
+#endif
+
+#ifdef SIDX_SIMD_SSE2
+#include <emmintrin.h>
+typedef __m128 sidx__f32x4;
+#define SIDX_SPIN_PAUSE() _mm_pause()
+#else
+#define SIDX_SPIN_PAUSE() ((void)0)
+#endif
+
+#endif
