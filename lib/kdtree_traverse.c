@@ -54,6 +54,14 @@ typedef struct kd_stack_entry {
     float t_near, t_far;
 } kd_stack_entry;
 
+/* The slide walk's entry also remembers whether the ray lies in the split
+ * plane that deferred it, so that its push and pop events can say so. */
+typedef struct kd_slide_entry {
+    uint32_t node, depth;
+    float t_near, t_far;
+    int in_plane;
+} kd_slide_entry;
+
 /* What both walks share: the state of the leaf tests, whose code
  * (kd_test_leaf and the rest) follows the two walks. */
 #define KD_MAILBOX 16u /* entries of the per-ray mailbox (kd_test_leaf) */
@@ -127,7 +135,7 @@ static SIDX_INLINE int kd_walk_slide(const sidx_accel *a, const sidx_ray *r, con
     uint32_t mbox[KD_MAILBOX];
     kd_leaves_init(&leaves, a, r, mbox, best_t, traced);
 
-    kd_stack_entry stack[KD_MAX_DEPTH + 2];
+    kd_slide_entry stack[KD_MAX_DEPTH + 2];
     unsigned stack_size = 0;
     uint32_t node = 0, depth = 0, visited = 0;
     int may_stop = !naive; /* early termination allowed (off once the ray runs inside a plane) */
@@ -157,17 +165,20 @@ static SIDX_INLINE int kd_walk_slide(const sidx_accel *a, const sidx_ray *r, con
                 /* both: push (far_child, t_split, t_far), go on with
                  * (near_child, t_near, t_split); t_split clamped into the
                  * interval (NaN keeps the whole interval on both sides) */
-                if (t_split != t_split) may_stop = 0;
-                kd_stack_entry far_entry = {far_child, depth, t_split > t_near ? t_split : t_near, t_far};
-                kd_stack_entry near_entry = {near_child, depth, t_near, t_split < t_far ? t_split : t_far};
+                const int in_plane = t_split != t_split; /* both children are near */
+                if (in_plane) may_stop = 0;
+                kd_slide_entry far_entry = {far_child, depth, t_split > t_near ? t_split : t_near, t_far, in_plane};
+                kd_slide_entry near_entry = {near_child, depth, t_near, t_split < t_far ? t_split : t_far, in_plane};
                 if (naive && negative) { /* naive: the left child first */
-                    const kd_stack_entry left_entry = far_entry;
+                    const kd_slide_entry left_entry = far_entry;
                     far_entry = near_entry;
                     near_entry = left_entry;
                 }
                 stack[stack_size++] = far_entry;
+                /* result SIDX_STACK_IN_PLANE: the ray lies in the split plane (docs/events.md) */
                 SIDX_EMIT(traced, q->hook, SIDX_EV_STACK_PUSH, e_.ray_id = q->ray_id; e_.node = far_entry.node;
-                          e_.depth = stack_size; e_.t_near = far_entry.t_near; e_.t_far = far_entry.t_far);
+                          e_.depth = stack_size; e_.t_near = far_entry.t_near; e_.t_far = far_entry.t_far;
+                          e_.result = in_plane ? SIDX_STACK_IN_PLANE : -1);
                 node = near_entry.node;
                 t_near = near_entry.t_near;
                 t_far = near_entry.t_far;
@@ -200,14 +211,21 @@ static SIDX_INLINE int kd_walk_slide(const sidx_accel *a, const sidx_ray *r, con
                 if (leaves.found && !any) kd_finish(a, r, q, &leaves, hit);
                 return leaves.found;
             }
-            const kd_stack_entry next = stack[--stack_size];
+            const kd_slide_entry next = stack[--stack_size];
+            const int enter = naive || next.t_near <= leaves.best_t;
+            /* result: dropped, entered, or entered with the ray in its parent's split plane */
             SIDX_EMIT(traced, q->hook, SIDX_EV_STACK_POP, e_.ray_id = q->ray_id; e_.node = next.node;
-                      e_.depth = stack_size + 1u; e_.t_near = next.t_near; e_.t_far = next.t_far);
-            node = next.node;
-            depth = next.depth;
-            t_near = next.t_near;
-            t_far = next.t_far;
-            if (naive || t_near <= leaves.best_t) break;
+                      e_.depth = stack_size + 1u; e_.t_near = next.t_near; e_.t_far = next.t_far;
+                      e_.result = !enter        ? SIDX_STACK_DROPPED
+                                  : next.in_plane ? SIDX_STACK_IN_PLANE
+                                                  : SIDX_STACK_ENTERED);
+            if (enter) {
+                node = next.node;
+                depth = next.depth;
+                t_near = next.t_near;
+                t_far = next.t_far;
+                break;
+            }
         }
     }
 }
