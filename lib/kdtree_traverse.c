@@ -35,12 +35,8 @@
 
 #define SIDX_STRUCTURE_NAME "kdtree"
 
-/* The SSE kernel for whole leaf blocks (bvh_wide_internal.h) where SSE2 is there. */
-#if defined(SIDX_WIDE_X86) && defined(__SSE2__)
-#define KD_SIMD 1
-#else
-#define KD_SIMD 0
-#endif
+/* The SSE kernel for whole leaf blocks (tri4.h) where SSE2 is there. */
+#define KD_SIMD SIDX_TRI4_SSE
 
 /* 2γ₃ (Ize 2013): the relative error bound of t_split against t_near /
  * t_far, all three computed as (plane − o)·inv_dir. */

@@ -35,6 +35,15 @@
 #include "common/testkit.h"
 #include "kdtree_internal.h"
 
+/* The kd-tree's leaf blocks come from the neutral tri4.h, not from the
+ * wide BVH's layout: the kd-tree does not depend on bvh4/bvh8. */
+#ifdef SIDX_BVH_WIDE_INTERNAL_H
+#error "kdtree_internal.h reaches into bvh_wide_internal.h"
+#endif
+#ifndef SIDX_TRI4_H
+#error "kdtree_internal.h does not use tri4.h"
+#endif
+
 static const char *const builders[] = {"kdtree", "kdtree-binned", "kdtree-median", "kdtree-middle"};
 #define N_BUILDERS (sizeof builders / sizeof builders[0])
 
@@ -1132,7 +1141,7 @@ static void slide_fn(const sidx_event *e, void *user)
 
 /* Same prim, t, u, v and normal, bit for bit — except the sign of a zero
  * t (a ray starting on the triangle): the SSE kernel reports +0 where the
- * scalar test reports −0 (bvh_wide_internal.h), which is not the walks'. */
+ * scalar test reports −0 (simd_tri4_sse.h), which is not the walks'. */
 static int same_bits(const sidx_hit *x, const sidx_hit *y)
 {
     const int same_t = memcmp(&x->t, &y->t, sizeof x->t) == 0 || (x->t == 0.0f && y->t == 0.0f);
