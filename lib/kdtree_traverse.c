@@ -24,7 +24,7 @@
  *   kd_walk_fast   the same decisions without branches, never entering an
  *                  empty leaf, leaves tested four references per SSE pass.
  *                  Used for every other query: it is what the measurements
- *                  chose, and it no longer reads like the slide.
+ *                  chose; it reads less like the slide.
  *
  * The rules for rounding, ±0 directions, rays inside a split plane and
  * empty leaves are written once, above kd_walk_slide; the fast walk keeps
@@ -395,7 +395,11 @@ static SIDX_NOINLINE int kd_block_scalar(const sidx_accel *a, const sidx_ray *r,
  * pass and a hit on it is a true hit (kdtree_internal.h).  Which of two
  * triangles hit at exactly the same t is kept depends on the order of the
  * tests, so the scalar loop of a traced walk tests the same lanes in the
- * same order (the lowest lane wins, as in the kernel).  It reports only
+ * same order (the lowest lane wins, as in the kernel): testing the leaf's
+ * own references alone keeps the other triangle when the ray meets an
+ * edge two triangles share and a neighbour's lane holds one of them
+ * (tests/test_kdtree.c, slide walk against fast walk, finds such rays on
+ * cornell and the icosphere).  It reports only
  * the leaf's own references (PRIM_TEST, MAILBOX_HIT: each test after a
  * NODE_ENTER is of a triangle the leaf lists); a neighbour's lane shows
  * only if it becomes the closest hit (HIT_UPDATE, with no PRIM_TEST
