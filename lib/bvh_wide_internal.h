@@ -26,12 +26,9 @@
  * it comes out as [+inf, -inf] (for either sign of the direction, and for
  * a ±0 direction too), so it is a miss without a per-slot valid mask.
  *
- * Leaves hold their triangles in blocks of 4 (structure of arrays, the
- * layout Embree's Triangle4 uses) so one SSE pass runs the watertight test
- * on 4 triangles; a leaf is a run of consecutive blocks, the last marked by
- * WIDE_LAST_BLOCK in prim[0].  Unused lanes have NaN vertices (every
- * comparison on them is false, so they never hit and never trigger the
- * double-precision fallback) and prim = WIDE_PAD_PRIM.
+ * Leaves hold their triangles in blocks of 4 (wide_tri4, tri4.h) so one
+ * SSE pass runs the watertight test on 4 triangles; a leaf is a run of
+ * consecutive blocks, the last marked by WIDE_LAST_BLOCK in prim[0].
  *
  * Plain float nodes and two separate arrays: quantized nodes, huge pages
  * and leaves stored beside their parents were measured and rejected
@@ -40,12 +37,10 @@
 #define SIDX_BVH_WIDE_INTERNAL_H
 
 #include "bvh_internal.h"
+#include "tri4.h" /* the leaves' blocks of four triangles */
 
 #define WIDE_LEAF_BIT 0x80000000u
 #define WIDE_EMPTY 0xFFFFFFFFu
-#define WIDE_LAST_BLOCK 0x80000000u
-#define WIDE_PRIM_MASK 0x7FFFFFFFu
-#define WIDE_PAD_PRIM 0x7FFFFFFFu
 
 /* Closest-hit traversal pushes at most W − 1 deferred children per level
  * and the tree is at most BVH_DEPTH_LIMIT deep: 64 · 7 + 1 < 512. */
@@ -56,62 +51,6 @@
  * simd_wide_avx2.h, simd_wide_avx512.h (the AVX2 code compiled with
  * AVX-512F/VL: the same bits, 32 vector registers instead of 16). */
 typedef enum wide_isa { WIDE_ISA_SCALAR = 0, WIDE_ISA_SSE41 = 1, WIDE_ISA_AVX2 = 2, WIDE_ISA_AVX512 = 3 } wide_isa;
-
-typedef struct wide_tri4 {
-    float v[3][3][4];  /* [vertex][axis][lane] */
-    uint32_t prim[4];  /* original triangle index (WIDE_PRIM_MASK bits); prim[0] also carries WIDE_LAST_BLOCK */
-} wide_tri4;
-_Static_assert(sizeof(wide_tri4) == 160, "wide_tri4 is 9 float4 + 4 ids");
-
-/* Lane l of a block: the triangle with corners p[0], p[1], p[2] and
- * original index prim, or padding (NaN corners, WIDE_PAD_PRIM) when p is
- * NULL.  Both block layouts (bvh4/bvh8 leaves, kd-tree references) are
- * filled by it. */
-static inline void wide_set_lane(wide_tri4 *block, unsigned lane, const sidx_vec3 *p, uint32_t prim)
-{
-    for (int v = 0; v < 3; ++v) {
-        const sidx_vec3 c = p ? p[v] : sidx_v3(NAN, NAN, NAN);
-        block->v[v][0][lane] = c.x;
-        block->v[v][1][lane] = c.y;
-        block->v[v][2][lane] = c.z;
-    }
-    block->prim[lane] = p ? prim : WIDE_PAD_PRIM;
-}
-
-/* Corner k (0, 1, 2) of lane lane of a block. */
-static SIDX_INLINE sidx_vec3 wide_lane_vertex(const wide_tri4 *block, int k, unsigned lane)
-{
-    return (sidx_vec3){block->v[k][0][lane], block->v[k][1][lane], block->v[k][2][lane]};
-}
-
-/* The geometric normal of lane lane (sidx__tri_normal: the mesh finish's bits). */
-static SIDX_INLINE sidx_vec3 wide_lane_normal(const wide_tri4 *block, unsigned lane)
-{
-    return sidx__tri_normal(wide_lane_vertex(block, 0, lane), wide_lane_vertex(block, 1, lane),
-                            wide_lane_vertex(block, 2, lane));
-}
-
-/* The scalar reference test on lane lane of a block: the same sidx__tri_test
- * brute force runs, on the block's copy of the vertices (bit-identical t,
- * u, v).  Used where a SIMD kernel is unavailable or declines (an exact
- * zero edge function). */
-static SIDX_INLINE int wide_lane_test(const sidx_accel *a, const sidx_ray *r, const wide_tri4 *block, unsigned lane,
-                                      float best, float *t, float *u, float *v)
-{
-    return sidx__tri_test(a->opt.tri, r, wide_lane_vertex(block, 0, lane), wide_lane_vertex(block, 1, lane),
-                          wide_lane_vertex(block, 2, lane), best, t, u, v);
-}
-
-/* u, v of the final hit on lane lane, whatever the triangle test: the
- * lane's corners at stride 4 given to sidx__tri_hit_uv_at (the watertight
- * test's own last step on its float edge functions, else the whole test
- * again).  Returns 0, leaving u, v alone, if the test misses. */
-static SIDX_INLINE int wide_lane_hit_uv(const sidx_accel *a, const sidx_ray *r, const wide_tri4 *block, unsigned lane,
-                                        float *u, float *v)
-{
-    return sidx__tri_hit_uv_at(a->opt.tri, r, &block->v[0][0][lane], &block->v[1][0][lane], &block->v[2][0][lane], 4,
-                               u, v);
-}
 
 struct wide_bvh;
 typedef void (*wide_isect_fn)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit);
@@ -162,10 +101,6 @@ extern const wide_kernels sidx__wide_kernels_4_scalar, sidx__wide_kernels_8_scal
 #if defined(__x86_64__) || defined(__i386__)
 #define SIDX_WIDE_X86 1
 extern const wide_kernels sidx__wide_kernels_4_sse41, sidx__wide_kernels_8_avx2, sidx__wide_kernels_8_avx512;
-#endif
-
-#if defined(SIDX_WIDE_X86) && defined(__SSE2__)
-#include "simd_tri4_sse.h" /* 4 triangles at once (watertight), one ray */
 #endif
 
 /* The instruction set bvh4/bvh8 pick on this machine: the best the CPU

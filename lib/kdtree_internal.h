@@ -21,8 +21,8 @@
  *   - nodes are written depth first as the build recurses, sibling pairs
  *     allocated together, so a subtree is one contiguous run of memory;
  *   - the leaves' triangles are copied, one copy per *reference*, into
- *     blocks of four in structure-of-arrays form (`blocks`, the wide BVH's
- *     wide_tri4, bvh_wide_internal.h): reference i of the leaf array sits
+ *     blocks of four in structure-of-arrays form (`blocks`, wide_tri4,
+ *     tri4.h, the wide BVH's leaf blocks too): reference i of the leaf array sits
  *     in block i / 4, lane i % 4.  The leaf's node already holds its
  *     reference offset, so a leaf reads its blocks directly: no index to
  *     chase ("Memory should be separated by rate of access": traversal
@@ -45,7 +45,7 @@
 
 #include "sidx_internal.h"
 #include "sidx/kdtree.h"
-#include "bvh_wide_internal.h" /* wide_tri4, wide_tri4_test */
+#include "tri4.h" /* wide_tri4, wide_tri4_test */
 
 /* Low 2 bits of kd_node.bits: the split axis, or 3 for a leaf. */
 #define KD_LEAF_FLAG 3u

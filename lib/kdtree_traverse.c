@@ -24,7 +24,7 @@
  *   kd_walk_fast   the same decisions without branches, never entering an
  *                  empty leaf, leaves tested four references per SSE pass.
  *                  Used for every other query: it is what the measurements
- *                  chose, and it no longer reads like the slide.
+ *                  chose; it reads less like the slide.
  *
  * The rules for rounding, ±0 directions, rays inside a split plane and
  * empty leaves are written once, above kd_walk_slide; the fast walk keeps
@@ -35,12 +35,8 @@
 
 #define SIDX_STRUCTURE_NAME "kdtree"
 
-/* The SSE kernel for whole leaf blocks (bvh_wide_internal.h) where SSE2 is there. */
-#if defined(SIDX_WIDE_X86) && defined(__SSE2__)
-#define KD_SIMD 1
-#else
-#define KD_SIMD 0
-#endif
+/* The SSE kernel for whole leaf blocks (tri4.h) where SSE2 is there. */
+#define KD_SIMD SIDX_TRI4_SSE
 
 /* 2γ₃ (Ize 2013): the relative error bound of t_split against t_near /
  * t_far, all three computed as (plane − o)·inv_dir. */
@@ -53,6 +49,14 @@ typedef struct kd_stack_entry {
     uint32_t node, depth;
     float t_near, t_far;
 } kd_stack_entry;
+
+/* The slide walk's entry also remembers whether the ray lies in the split
+ * plane that deferred it, so that its push and pop events can say so. */
+typedef struct kd_slide_entry {
+    uint32_t node, depth;
+    float t_near, t_far;
+    int in_plane;
+} kd_slide_entry;
 
 /* What both walks share: the state of the leaf tests, whose code
  * (kd_test_leaf and the rest) follows the two walks. */
@@ -127,7 +131,7 @@ static SIDX_INLINE int kd_walk_slide(const sidx_accel *a, const sidx_ray *r, con
     uint32_t mbox[KD_MAILBOX];
     kd_leaves_init(&leaves, a, r, mbox, best_t, traced);
 
-    kd_stack_entry stack[KD_MAX_DEPTH + 2];
+    kd_slide_entry stack[KD_MAX_DEPTH + 2];
     unsigned stack_size = 0;
     uint32_t node = 0, depth = 0, visited = 0;
     int may_stop = !naive; /* early termination allowed (off once the ray runs inside a plane) */
@@ -157,17 +161,20 @@ static SIDX_INLINE int kd_walk_slide(const sidx_accel *a, const sidx_ray *r, con
                 /* both: push (far_child, t_split, t_far), go on with
                  * (near_child, t_near, t_split); t_split clamped into the
                  * interval (NaN keeps the whole interval on both sides) */
-                if (t_split != t_split) may_stop = 0;
-                kd_stack_entry far_entry = {far_child, depth, t_split > t_near ? t_split : t_near, t_far};
-                kd_stack_entry near_entry = {near_child, depth, t_near, t_split < t_far ? t_split : t_far};
+                const int in_plane = t_split != t_split; /* both children are near */
+                if (in_plane) may_stop = 0;
+                kd_slide_entry far_entry = {far_child, depth, t_split > t_near ? t_split : t_near, t_far, in_plane};
+                kd_slide_entry near_entry = {near_child, depth, t_near, t_split < t_far ? t_split : t_far, in_plane};
                 if (naive && negative) { /* naive: the left child first */
-                    const kd_stack_entry left_entry = far_entry;
+                    const kd_slide_entry left_entry = far_entry;
                     far_entry = near_entry;
                     near_entry = left_entry;
                 }
                 stack[stack_size++] = far_entry;
+                /* result SIDX_STACK_IN_PLANE: the ray lies in the split plane (docs/events.md) */
                 SIDX_EMIT(traced, q->hook, SIDX_EV_STACK_PUSH, e_.ray_id = q->ray_id; e_.node = far_entry.node;
-                          e_.depth = stack_size; e_.t_near = far_entry.t_near; e_.t_far = far_entry.t_far);
+                          e_.depth = stack_size; e_.t_near = far_entry.t_near; e_.t_far = far_entry.t_far;
+                          e_.result = in_plane ? SIDX_STACK_IN_PLANE : -1);
                 node = near_entry.node;
                 t_near = near_entry.t_near;
                 t_far = near_entry.t_far;
@@ -200,14 +207,21 @@ static SIDX_INLINE int kd_walk_slide(const sidx_accel *a, const sidx_ray *r, con
                 if (leaves.found && !any) kd_finish(a, r, q, &leaves, hit);
                 return leaves.found;
             }
-            const kd_stack_entry next = stack[--stack_size];
+            const kd_slide_entry next = stack[--stack_size];
+            const int enter = naive || next.t_near <= leaves.best_t;
+            /* result: dropped, entered, or entered with the ray in its parent's split plane */
             SIDX_EMIT(traced, q->hook, SIDX_EV_STACK_POP, e_.ray_id = q->ray_id; e_.node = next.node;
-                      e_.depth = stack_size + 1u; e_.t_near = next.t_near; e_.t_far = next.t_far);
-            node = next.node;
-            depth = next.depth;
-            t_near = next.t_near;
-            t_far = next.t_far;
-            if (naive || t_near <= leaves.best_t) break;
+                      e_.depth = stack_size + 1u; e_.t_near = next.t_near; e_.t_far = next.t_far;
+                      e_.result = !enter        ? SIDX_STACK_DROPPED
+                                  : next.in_plane ? SIDX_STACK_IN_PLANE
+                                                  : SIDX_STACK_ENTERED);
+            if (enter) {
+                node = next.node;
+                depth = next.depth;
+                t_near = next.t_near;
+                t_far = next.t_far;
+                break;
+            }
         }
     }
 }
@@ -381,7 +395,11 @@ static SIDX_NOINLINE int kd_block_scalar(const sidx_accel *a, const sidx_ray *r,
  * pass and a hit on it is a true hit (kdtree_internal.h).  Which of two
  * triangles hit at exactly the same t is kept depends on the order of the
  * tests, so the scalar loop of a traced walk tests the same lanes in the
- * same order (the lowest lane wins, as in the kernel).  It reports only
+ * same order (the lowest lane wins, as in the kernel): testing the leaf's
+ * own references alone keeps the other triangle when the ray meets an
+ * edge two triangles share and a neighbour's lane holds one of them
+ * (tests/test_kdtree.c, slide walk against fast walk, finds such rays on
+ * cornell and the icosphere).  It reports only
  * the leaf's own references (PRIM_TEST, MAILBOX_HIT: each test after a
  * NODE_ENTER is of a triangle the leaf lists); a neighbour's lane shows
  * only if it becomes the closest hit (HIT_UPDATE, with no PRIM_TEST

@@ -12,10 +12,10 @@
  * function was 0, so it would not have switched to double) — from which
  * sidx__tri_watertight_uv forms the hit's u, v bit for bit.
  *
- * Included by bvh_wide_internal.h where SSE2 is there (every x86-64):
+ * Included by tri4.h where SSE2 is there (every x86-64):
  * the wide walks (simd_wide_tri4.h), the wide packets (packet_wide.c) and
  * the kd-tree's leaf blocks use it.  The reference is the scalar
- * watertight test on each lane (wide_lane_test, bvh_wide_internal.h);
+ * watertight test on each lane (wide_lane_test, tri4.h);
  * the names are the paper's (a, b, c the corners relative to the origin,
  * A, B, C sheared, U, V, W the edge functions, T the scaled distance). */
 #ifndef SIDX_SIMD_TRI4_SSE_H

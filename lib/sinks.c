@@ -367,7 +367,13 @@ static void format_event(sink_out *o, const sidx_event *ev, int show_bounds)
             out_printf(o, "  (stack %" PRIu32 " -> %" PRIu32 ")", ev->depth, ev->depth - 1);
         else
             out_printf(o, "  (stack %" PRIu32 ")", ev->depth);
-        if (!push && ev->result == 0) out_puts(o, "  dropped: t_near beyond the best hit");
+        if (!push && ev->result == SIDX_STACK_DROPPED) out_puts(o, "  dropped: t_near beyond the best hit");
+        /* a kd-tree ray inside a split plane: the two children overlap, so a
+         * hit in the one entered first does not end the walk */
+        if (ev->result == SIDX_STACK_IN_PLANE)
+            out_puts(o, push ? "  the ray lies in the split plane: both children are near"
+                             : "  the ray lies in the split plane: both children are near, so a hit in the other "
+                               "does not end the walk");
         break;
     }
     case SIDX_EV_PRIM_TEST:
@@ -706,7 +712,7 @@ static void json_event(sink_out *o, const sidx_event *ev, int unused)
         json_id(o, "depth", ev->depth);
         json_float(o, "t_near", ev->t_near);
         json_float(o, "t_far", ev->t_far);
-        if (ev->type == SIDX_EV_STACK_POP && ev->result != -1) json_i32(o, "result", ev->result);
+        if (ev->result != -1) json_i32(o, "result", ev->result);
         break;
     case SIDX_EV_PRIM_TEST:
         json_id(o, "prim", ev->prim);

@@ -35,6 +35,15 @@
 #include "common/testkit.h"
 #include "kdtree_internal.h"
 
+/* The kd-tree's leaf blocks come from the neutral tri4.h, not from the
+ * wide BVH's layout: the kd-tree does not depend on bvh4/bvh8. */
+#ifdef SIDX_BVH_WIDE_INTERNAL_H
+#error "kdtree_internal.h reaches into bvh_wide_internal.h"
+#endif
+#ifndef SIDX_TRI4_H
+#error "kdtree_internal.h does not use tri4.h"
+#endif
+
 static const char *const builders[] = {"kdtree", "kdtree-binned", "kdtree-median", "kdtree-middle"};
 #define N_BUILDERS (sizeof builders / sizeof builders[0])
 
@@ -560,6 +569,99 @@ static void test_ray_inside_split_plane(void **state)
     sidx_mesh_free(&m);
 }
 
+/* ---- what the traced walk says at its stack -------------------------------------------- */
+
+/* Replays one traced query's events: every pop says whether the node is
+ * entered (the next event enters it) or dropped (its t_near lies beyond
+ * the best hit, and nothing enters it); an entry pushed with the ray in
+ * the split plane says so at its push and again at its pop.  Counts what
+ * it saw in seen[result][pop]; sets *after_hit when an in-plane pop comes
+ * after a hit (the walk goes on where it would have stopped). */
+static void check_stack_events(const sidx_recorder *rec, int naive, int seen[3][2], int *after_hit)
+{
+    uint32_t node[KD_MAX_DEPTH + 2];
+    int in_plane[KD_MAX_DEPTH + 2];
+    size_t n = 0;
+    float best = INFINITY;
+    assert_false(rec->overflow);
+    for (size_t i = 0; i < rec->count; ++i) {
+        const sidx_event *e = &rec->events[i];
+        if (e->type == SIDX_EV_HIT_UPDATE) best = e->t;
+        if (e->type == SIDX_EV_STACK_PUSH) {
+            assert_true(e->result == -1 || e->result == SIDX_STACK_IN_PLANE);
+            assert_true(n < KD_MAX_DEPTH + 2);
+            node[n] = e->node;
+            in_plane[n++] = e->result == SIDX_STACK_IN_PLANE;
+            if (e->result == SIDX_STACK_IN_PLANE) seen[SIDX_STACK_IN_PLANE][0] = 1;
+        }
+        if (e->type != SIDX_EV_STACK_POP) continue;
+        assert_true(n > 0);
+        --n;
+        assert_int_equal(e->node, node[n]);
+        const int enter = naive || e->t_near <= best;
+        const sidx_event *next = i + 1 < rec->count ? &rec->events[i + 1] : NULL;
+        const int entered = next && next->type == SIDX_EV_NODE_ENTER && next->node == e->node;
+        assert_int_equal(entered, enter);
+        const int want = !enter ? SIDX_STACK_DROPPED : in_plane[n] ? SIDX_STACK_IN_PLANE : SIDX_STACK_ENTERED;
+        if (e->result != want)
+            fail_msg("pop of node %u t=[%g, %g], best %g: result %d, want %d", e->node, (double)e->t_near,
+                     (double)e->t_far, (double)best, e->result, want);
+        seen[want][1] = 1;
+        if (want == SIDX_STACK_IN_PLANE && best < INFINITY) *after_hit = 1;
+    }
+}
+
+/* The teapot ray of the stepper's example runs inside the root's split
+ * plane x = 0: both children span [3, 7], so after the hit in the first
+ * the walk goes on through the second, and the push and pop of that
+ * child say why; pops beyond the hit say they are dropped (a walk that
+ * stops at a hit in its cell drops only there).  Rays off the planes
+ * never say "in plane"; the naive walk drops nothing. */
+static void test_stack_events_say_why(void **state)
+{
+    (void)state;
+    sidx_mesh m;
+    make_scene("teapot", 0, &m);
+    sidx_accel *a = build("kdtree", &m, NULL);
+    sidx_recorder rec;
+    sidx_recorder_init(&rec);
+    const sidx_hook hook = sidx_recorder_hook(&rec);
+    for (int naive = 0; naive < 2; ++naive) {
+        const sidx_query q = {0, naive ? SIDX_TRAVERSE_NAIVE : SIDX_TRAVERSE_DEFAULT, &hook, 0};
+        sidx_ray r;
+        assert_int_equal(sidx_ray_init(&r, sidx_v3(0, 0.5f, 5), sidx_v3(0, 0, -1), 0, INFINITY), SIDX_OK);
+        sidx_hit hit;
+        sidx_recorder_clear(&rec);
+        assert_int_equal(sidx_accel_intersect(a, &r, &q, &hit), SIDX_OK);
+        assert_true(hit.prim != SIDX_NO_HIT);
+        int seen[3][2] = {{0}}, after_hit = 0;
+        check_stack_events(&rec, naive, seen, &after_hit);
+        assert_true(seen[SIDX_STACK_IN_PLANE][0] && seen[SIDX_STACK_IN_PLANE][1] && after_hit);
+        assert_int_equal(seen[SIDX_STACK_DROPPED][1], !naive);
+
+        /* off the planes: entered or dropped, never "in plane" */
+        const size_t nrays = 300;
+        tk_rayrec *rays = malloc(nrays * sizeof *rays);
+        assert_non_null(rays);
+        tk_make_rays(&m, TK_RAYS_DIFFUSE, nrays, 4242, rays);
+        int any[3][2] = {{0}};
+        for (size_t i = 0; i < nrays; ++i) {
+            r = ray_of(&rays[i]);
+            sidx_recorder_clear(&rec);
+            assert_int_equal(sidx_accel_intersect(a, &r, &q, &hit), SIDX_OK);
+            int ah = 0;
+            check_stack_events(&rec, naive, any, &ah);
+        }
+        assert_false(any[SIDX_STACK_IN_PLANE][0] || any[SIDX_STACK_IN_PLANE][1]);
+        assert_true(any[SIDX_STACK_ENTERED][1]);
+        if (naive) assert_false(any[SIDX_STACK_DROPPED][1]);
+        free(rays);
+    }
+    sidx_recorder_free(&rec);
+    sidx_accel_destroy(a);
+    sidx_mesh_free(&m);
+}
+
 /* ---- teapot in a stadium -------------------------------------------------------------- */
 
 typedef struct walk_ctx {
@@ -1039,7 +1141,7 @@ static void slide_fn(const sidx_event *e, void *user)
 
 /* Same prim, t, u, v and normal, bit for bit — except the sign of a zero
  * t (a ray starting on the triangle): the SSE kernel reports +0 where the
- * scalar test reports −0 (bvh_wide_internal.h), which is not the walks'. */
+ * scalar test reports −0 (simd_tri4_sse.h), which is not the walks'. */
 static int same_bits(const sidx_hit *x, const sidx_hit *y)
 {
     const int same_t = memcmp(&x->t, &y->t, sizeof x->t) == 0 || (x->t == 0.0f && y->t == 0.0f);
@@ -1370,6 +1472,7 @@ int main(void)
         cmocka_unit_test(test_public_view),
         cmocka_unit_test(test_cannot_terminate),
         cmocka_unit_test(test_ray_inside_split_plane),
+        cmocka_unit_test(test_stack_events_say_why),
         cmocka_unit_test(test_zero_dirs_and_origin_on_split),
         cmocka_unit_test(test_against_brute),
         cmocka_unit_test(test_against_brute_options),

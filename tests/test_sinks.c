@@ -281,6 +281,15 @@ static void test_format_traversal(void **state)
     expect_format(&e, "  pop node 7  t=[0.5, 2]  (stack 2 -> 1)");
     e.result = 0; /* the BVH stack walk drops it: it starts beyond the best hit */
     expect_format(&e, "  pop node 7  t=[0.5, 2]  (stack 2 -> 1)  dropped: t_near beyond the best hit");
+    e.result = SIDX_STACK_ENTERED;
+    expect_format(&e, "  pop node 7  t=[0.5, 2]  (stack 2 -> 1)");
+    /* a kd-tree ray inside a split plane: both children are near, said at the push and at the pop */
+    e.result = SIDX_STACK_IN_PLANE;
+    expect_format(&e, "  pop node 7  t=[0.5, 2]  (stack 2 -> 1)  the ray lies in the split plane: both children are "
+                      "near, so a hit in the other does not end the walk");
+    e.type = SIDX_EV_STACK_PUSH;
+    expect_format(&e, "  push node 7  t=[0.5, 2]  (stack 1 -> 2)  the ray lies in the split plane: both children are "
+                      "near");
 
     e = ev_prim(42, 1, 0.734f);
     expect_format(&e, "    prim 42 test: hit t=0.734");
@@ -596,6 +605,13 @@ static void test_json_fields_per_type(void **state)
     expect_json_keys(&e, stack);
     e = sidx_event_blank(SIDX_EV_STACK_POP);
     expect_json_keys(&e, stack);
+    /* a result where the walk gives one: dropped, or the kd-tree's ray inside a split plane */
+    const char *const stack_result[] = {"type", "structure", "ray", "node", "depth", "t_near", "t_far", "result", NULL};
+    e.result = SIDX_STACK_DROPPED;
+    expect_json_keys(&e, stack_result);
+    e = sidx_event_blank(SIDX_EV_STACK_PUSH);
+    e.result = SIDX_STACK_IN_PLANE;
+    expect_json_keys(&e, stack_result);
 
     e = ev_prim(1, 1, 2.0f);
     expect_json_keys(&e, (const char *const[]){"type", "structure", "ray", "prim", "result", "t", NULL});
@@ -1230,6 +1246,28 @@ static void test_json_read_round_trip(void **state)
     sidx_accel_intersect(a, &r, &q, &hit);
     assert_true(rec.count > 10);
     for (size_t i = 0; i < rec.count; ++i) json_round_trip(&rec.events[i], store, sizeof store);
+    sidx_recorder_free(&rec);
+    sidx_accel_destroy(a);
+    sidx_mesh_free(&m);
+
+    /* a kd-tree ray inside the root's split plane x = 0: pushes and pops
+     * that say so, and pops dropped beyond the best hit, read back alike */
+    assert_int_equal(sidx_scene_open("teapot", &m, NULL), SIDX_OK);
+    sidx_recorder_init(&rec);
+    h = sidx_recorder_hook(&rec);
+    assert_int_equal(sidx_accel_build("kdtree", &m, NULL, &a, NULL), SIDX_OK);
+    assert_int_equal(sidx_ray_init(&r, sidx_v3(0, 0.5f, 5), sidx_v3(0, 0, -1), 0, INFINITY), SIDX_OK);
+    q.hook = &h;
+    sidx_accel_intersect(a, &r, &q, &hit);
+    int seen[3][2] = {{0}}; /* [result][pop] */
+    for (size_t i = 0; i < rec.count; ++i) {
+        const sidx_event *e = &rec.events[i];
+        const sidx_event back = json_round_trip(e, store, sizeof store);
+        assert_int_equal(back.result, e->result);
+        if ((e->type == SIDX_EV_STACK_PUSH || e->type == SIDX_EV_STACK_POP) && e->result >= 0 && e->result < 3)
+            seen[e->result][e->type == SIDX_EV_STACK_POP] = 1;
+    }
+    assert_true(seen[SIDX_STACK_IN_PLANE][0] && seen[SIDX_STACK_IN_PLANE][1] && seen[SIDX_STACK_DROPPED][1]);
     sidx_recorder_free(&rec);
     sidx_accel_destroy(a);
     sidx_mesh_free(&m);

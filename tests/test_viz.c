@@ -1625,6 +1625,42 @@ static void step_panel_step_break(void **state)
     }
 }
 
+/* The stepper's kd-tree example ray runs inside the root's split plane
+ * x = 0: the push of the second child and its pop after the hit say why
+ * the walk goes on; the pops beyond the hit say they are dropped, and the
+ * Current column shows nothing for them (a dropped node is never entered). */
+static void step_kdtree_says_why(void **state)
+{
+    (void)state;
+    if (!sidx_accel_is_registered("kdtree")) skip();
+    char cmd[1024];
+    snprintf(cmd, sizeof cmd, "%s/sidx-step --accel kdtree teapot --ray 0,0.5,5,0,0,-1 --panel </dev/null", bin_dir);
+    char *out = run_capture(cmd);
+    assert_non_null(strstr(out, "  push node 2  t=[3, 7]  (stack 0 -> 1)  the ray lies in the split plane: both "
+                                "children are near "));
+    const char *hit = strstr(out, "closest hit -> prim 459 t=3.1284");
+    assert_non_null(hit);
+    assert_non_null(strstr(hit, "  pop node 2  t=[3, 7]  (stack 1 -> 0)  the ray lies in the split plane: both "
+                                "children are near, so a hit in the other does not end the walk | 2 [3, 7]"));
+    size_t dropped = 0;
+    for (const char *line = out; *line; line = strchr(line, '\n') + 1) {
+        const char *end = strchr(line, '\n');
+        assert_non_null(end);
+        const char *d = strstr(line, "dropped: t_near beyond the best hit");
+        if (d && d < end) {
+            const char *bar = strstr(d, " | ");
+            assert_true(bar && bar < end);
+            for (const char *c = bar + 3; *c != '|'; ++c)
+                if (*c != ' ') fail_msg("a dropped node shown as current: %.*s", (int)(end - line), line);
+            ++dropped;
+        }
+    }
+    assert_true(dropped >= 3);
+    assert_non_null(strstr(out, "pop node 447  t=[3.35164, 3.97861]  (stack 4 -> 3)  dropped: t_near beyond the best "
+                                "hit"));
+    free(out);
+}
+
 /* kd-slide with kdtree is deck 000's tree, and the programs name its nodes
  * as the slide does ("kD-Tree Traversal (1)-(11)": Current L4, Stack L5 L3). */
 static void kd_slide_programs_show_labels(void **state)
@@ -1703,6 +1739,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(build_knobs_fill_options),
         cmocka_unit_test(step_panel_step_break),
         cmocka_unit_test(kd_slide_programs_show_labels),
+        cmocka_unit_test(step_kdtree_says_why),
     };
     return cmocka_run_group_tests_name("viz", tests, NULL, NULL);
 }

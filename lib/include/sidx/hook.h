@@ -92,6 +92,15 @@ typedef enum sidx_term_reason {
     SIDX_TERM_REASON_COUNT
 } sidx_term_reason;
 
+/* `result` of STACK_POP (and of a kd-tree's STACK_PUSH) where the walk
+ * reports it; other walks leave it blank (-1).  docs/events.md. */
+typedef enum sidx_stack_result {
+    SIDX_STACK_DROPPED = 0,  /* pop: t_near lies beyond the best hit, the node is not entered */
+    SIDX_STACK_ENTERED = 1,  /* pop: the node is entered */
+    SIDX_STACK_IN_PLANE = 2  /* kd-tree: the ray lies in the split plane, both children are near (the push,
+                                and the pop, which enters the node) */
+} sidx_stack_result;
+
 typedef struct sidx_event {
     sidx_event_type type;
     const char *structure; /* "bvh", "kdtree", ... (static) */
