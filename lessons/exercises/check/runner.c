@@ -24,6 +24,7 @@
 #include <stdint.h>
 #include <time.h>
 #include <ucontext.h>
+#include <sys/mman.h>
 #include <sys/resource.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -206,7 +207,14 @@ static void crash_handler(int sig, siginfo_t *si, void *ucv)
     pc[n++] = NULL;
 #endif
     n += backtrace(pc + n, EX_CRASH_FRAMES);
-    if (write(crash_fd, pc, (size_t)n * sizeof pc[0]) < 0) {
+    /* Out of memory?  Under RLIMIT_AS a mapping of a quarter of the limit
+     * fails when the student's allocations have used the rest up (a NULL
+     * from malloc is a usual cause of the crash). */
+    const size_t probe = (size_t)cx.memory_mb << 18;
+    void *m = mmap(NULL, probe, PROT_NONE, MAP_PRIVATE | MAP_ANONYMOUS | MAP_NORESERVE, -1, 0);
+    const char oom = m == MAP_FAILED;
+    if (!oom) munmap(m, probe);
+    if (write(crash_fd, &oom, 1) < 0 || write(crash_fd, pc, (size_t)n * sizeof pc[0]) < 0) {
     }
     raise(sig); /* SA_RESETHAND: delivered with the default action once the handler returns */
 }
@@ -353,7 +361,7 @@ static void locate_crash(int fd)
     cx.where[0] = '\0';
     cx.where_is_student = 0;
     void *pc[EX_CRASH_FRAMES + 1];
-    const ssize_t got = pread(fd, pc, sizeof pc, 0);
+    const ssize_t got = pread(fd, pc, sizeof pc, 1); /* after the out-of-memory byte */
     if (got < (ssize_t)sizeof pc[0]) return;
     const int n = (int)(got / (ssize_t)sizeof pc[0]);
     exe_span span = {0, 0, 0};
@@ -504,8 +512,6 @@ static run_status run_student(size_t i, unsigned timeout, ex_trace *out, int *si
     size_t bytes = 0;
     int killed_output = 0, killed_time = 0, open_ = 1, st = 0, reaped = 0, busy = 0;
     char buf[65536];
-    struct rusage ru;
-    memset(&ru, 0, sizeof ru);
     while (!reaped) {
         const double left = deadline - now_s();
         if (left <= 0) {
@@ -535,14 +541,14 @@ static run_status run_student(size_t i, unsigned timeout, ex_trace *out, int *si
                 break;
             }
         } else {
-            const pid_t w = wait4(pid, &st, WNOHANG, &ru);
+            const pid_t w = waitpid(pid, &st, WNOHANG);
             if (w == pid) reaped = 1;
             else if (w < 0 && errno != EINTR) break;
             else poll(NULL, 0, 5);
         }
     }
     if (!reaped)
-        while (wait4(pid, &st, 0, &ru) < 0 && errno == EINTR) {
+        while (waitpid(pid, &st, 0) < 0 && errno == EINTR) {
         }
     kill(-pid, SIGKILL); /* whatever it left behind */
     close(pfd[0]);
@@ -598,15 +604,9 @@ static run_status run_student(size_t i, unsigned timeout, ex_trace *out, int *si
         *code = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
         rs = RUN_CRASH;
     }
+    char oom = 0;
+    if (rs == RUN_CRASH && !EX_SANITIZED && pread(cfd, &oom, 1, 0) == 1 && oom) rs = RUN_MEMORY;
     close(cfd);
-    if (rs == RUN_CRASH && !EX_SANITIZED) {
-        /* a crash once malloc failed under RLIMIT_AS: the child's peak
-         * resident size (beyond the checker's own) tells */
-        struct rusage self;
-        if (getrusage(RUSAGE_SELF, &self) == 0 && ru.ru_maxrss > self.ru_maxrss &&
-            (unsigned long)(ru.ru_maxrss - self.ru_maxrss) / 1024 >= cx.memory_mb / 2)
-            rs = RUN_MEMORY;
-    }
     return rs;
 }
 
@@ -848,8 +848,9 @@ int main(int argc, char **argv)
                          "endless loop?)", EX_MAX_OUTPUT >> 20);
                 result = "output";
             } else if (rs == RUN_MEMORY) {
-                snprintf(detail, sizeof detail, "ran out of memory (the limit is %lu MiB per case)%s%s",
-                         cx.memory_mb, sig ? ": " : "", sig ? strsignal(sig) : "");
+                snprintf(detail, sizeof detail, "ran out of memory (the limit is %lu MiB per case)%s%s%s%s",
+                         cx.memory_mb, sig ? ": " : "", sig ? strsignal(sig) : "", cx.where[0] ? " at " : "",
+                         cx.where);
                 result = "memory";
             } else if (sig && cx.where[0]) {
                 snprintf(detail, sizeof detail, "crashed: signal %d (%s) at %s%s", sig, strsignal(sig), cx.where,
