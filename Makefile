@@ -222,6 +222,9 @@ test-run:
 	if [ -x tests/run_lessons.sh ]; then \
 	  echo "== lessons"; BUILD=$(BUILD) sh tests/run_lessons.sh || { echo "!! FAILED: lessons"; failed=$$((failed+1)); }; \
 	fi; \
+	if [ -f tests/run_class.sh ]; then \
+	  echo "== sidx-check --class"; BUILD=$(BUILD) sh tests/run_class.sh </dev/null || { echo "!! FAILED: sidx-check --class"; failed=$$((failed+1)); }; \
+	fi; \
 	if [ -f tests/run_step_tmux.sh ]; then \
 	  echo "== sidx-step in tmux"; BUILD=$(BUILD) sh tests/run_step_tmux.sh </dev/null || { echo "!! FAILED: sidx-step in tmux"; failed=$$((failed+1)); }; \
 	fi; \
