@@ -1,10 +1,12 @@
 /* runner.c — the checker program sidx-check builds around a student's file.
  *
  *   run [--case K] [--trace DIR] [--viewer PATH] [--timeout SECONDS] [--verbose]
+ *       [--source FILE] [--memory MB] [--summary FILE]
  *
  * For each case of the driver's battery: the reference trace is recorded
- * here, the student's function runs in a child process (fork) under a
- * time limit (alarm), reporting its events through a temporary file one
+ * here, the student's function runs in a child process (fork), contained
+ * (limits, its own directory, its output captured: "containment" below),
+ * reporting its events through a temporary file one
  * write at a time, so a crash or an endless loop loses nothing already
  * reported and cannot take the checker down.  The two traces are then
  * compared event by event; the first divergence is printed with the
@@ -182,6 +184,7 @@ static struct containment {
     unsigned long memory_mb;
     /* the student's output over all cases */
     char shown[EX_SHOW_LINES][EX_SHOW_WIDTH + 1];
+    unsigned char cut[EX_SHOW_LINES]; /* the line was longer than EX_SHOW_WIDTH */
     size_t nshown, shown_len;
     int in_line, line_shown;
     unsigned long long more_lines;
@@ -287,6 +290,8 @@ static void take_output(const char *p, size_t n)
         } else if (cx.line_shown && cx.shown_len < EX_SHOW_WIDTH) {
             const unsigned char c = (unsigned char)p[k];
             cx.shown[cx.nshown][cx.shown_len++] = (c < 32 && c != '\t') || c == 127 ? '?' : (char)c;
+        } else if (cx.line_shown) {
+            cx.cut[cx.nshown] = 1;
         }
     }
 }
@@ -315,7 +320,7 @@ static void print_student_output(void)
     if (!cx.nshown) return;
     char num[40];
     printf("your output%s:\n", cx.more_lines ? " (the first lines)" : "");
-    for (size_t k = 0; k < cx.nshown; ++k) printf("  | %s\n", cx.shown[k]);
+    for (size_t k = 0; k < cx.nshown; ++k) printf("  | %s%s\n", cx.shown[k], cx.cut[k] ? "\u2026" : "");
     if (cx.more_lines)
         printf("  \u2026 %s more line%s of your output not shown\n", thousands(cx.more_lines, num, sizeof num),
                cx.more_lines == 1 ? "" : "s");
