@@ -635,6 +635,12 @@ int main(int argc, char **argv)
             fprintf(stderr, "sidx-check: --class takes no NAME or FILE\n");
             return 2;
         }
+        for (int j = 0; j < npass; ++j)
+            if (!strcmp(pass[j], "--trace") || !strcmp(pass[j], "--case")) {
+                fprintf(stderr, "sidx-check: --class checks whole files: no %s (check one student's file for that)\n",
+                        pass[j]);
+                return 2;
+            }
         return class_mode(class_dir, out, jobs, pass, npass);
     }
     if (!name || !file) {
