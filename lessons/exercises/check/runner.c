@@ -924,7 +924,7 @@ int main(int argc, char **argv)
     }
     if (rc == 0) {
         print_student_output();
-        write_summary("pass", ran, n, steps, "", "", NULL);
+        write_summary("pass", 0, n, 0, "", "", NULL);
     }
     remove_tree(cx.dir);
     if (rc == 0)
