@@ -18,6 +18,7 @@
  *    (tests/exercises/mutants.sh --sample) is killed, or listed as
  *    equivalent in tests/exercises/equivalent.txt (the full run is make
  *    exercise-mutants).
+ *  - CC may be a command of several words ("ccache gcc").
  * sidx-check compiles each file, so this suite runs the compiler: it is
  * found through the build directory's bin/sidx-check (the sibling of this
  * binary's tests/), and it compiles with that build's sanitizer flags.
@@ -471,6 +472,25 @@ static void mutant_sample_killed(void **state)
     free(out);
 }
 
+/* CC may be a command of several words, as make's CC="ccache gcc" is:
+ * "env CC" runs the same compiler through env.  The stub builds and fails
+ * at step 1; the compiler's command taken as one program name would not
+ * run at all (BUILD FAILED, exit 2). */
+static void cc_of_several_words(void **state)
+{
+    (void)state;
+    char cmd[2 * PATH_MAX];
+    snprintf(cmd, sizeof cmd, "CC=\"env ${CC:-cc}\" '%s' 03_ray_box lessons/exercises/03_ray_box.c 2>&1", checker);
+    FILE *p = popen(cmd, "r");
+    assert_non_null(p);
+    char *out;
+    const int rc = drain(p, &out);
+    if (rc != 1) print_message("%s\n", out);
+    assert_int_equal(rc, 1);
+    assert_non_null(strstr(out, "leaves the reference at step 1"));
+    free(out);
+}
+
 int main(void)
 {
     if (find_checker() != 0) {
@@ -486,6 +506,7 @@ int main(void)
         cmocka_unit_test(kd_walk_bit_exact),
         cmocka_unit_test(variants_pass),
         cmocka_unit_test(mutant_sample_killed),
+        cmocka_unit_test(cc_of_several_words),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

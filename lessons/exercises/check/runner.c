@@ -1,18 +1,33 @@
 /* runner.c — the checker program sidx-check builds around a student's file.
  *
  *   run [--case K] [--trace DIR] [--viewer PATH] [--timeout SECONDS] [--verbose]
+ *       [--source FILE] [--memory MB] [--summary FILE]
  *
  * For each case of the driver's battery: the reference trace is recorded
- * here, the student's function runs in a child process (fork) under a
- * time limit (alarm), reporting its events through a temporary file one
+ * here, the student's function runs in a child process (fork), contained
+ * (limits, its own directory, its output captured: "containment" below),
+ * reporting its events through a temporary file one
  * write at a time, so a crash or an endless loop loses nothing already
  * reported and cannot take the checker down.  The two traces are then
  * compared event by event; the first divergence is printed with the
  * case's input and a hint.  Exit status: 0 every case agrees, 1 a
  * divergence, 2 the student's code crashed or ran out of time (or the
  * checker could not run). */
+#define _GNU_SOURCE /* REG_RIP, dl_iterate_phdr */
 #include <errno.h>
+#include <execinfo.h>
+#include <fcntl.h>
+#include <ftw.h>
+#include <grp.h>
+#include <limits.h>
+#include <link.h>
+#include <poll.h>
 #include <signal.h>
+#include <stdint.h>
+#include <time.h>
+#include <ucontext.h>
+#include <sys/mman.h>
+#include <sys/resource.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -131,26 +146,367 @@ static void child_hook_fn(const sidx_event *ev, void *user)
     if (++o->n >= EX_MAX_EVENTS) _exit(3);
 }
 
+/* ---- containment -------------------------------------------------------------- */
+
+/* The student's code runs in a child process, one per case, in a fresh
+ * temporary directory (removed after the case) under limits: CPU time
+ * (RLIMIT_CPU) and wall time (the parent's deadline), memory
+ * (RLIMIT_AS, beyond what the checker itself holds), the size of any file
+ * it writes (RLIMIT_FSIZE), no new process (RLIMIT_NPROC = 0: a fork bomb
+ * gets EAGAIN) and no core file.  Run as root, the child also enters the
+ * directory with chroot and drops to the user nobody, so that it can
+ * neither write outside the directory nor escape RLIMIT_NPROC (which does
+ * not bind root).  Its stdout and stderr go to a pipe the parent reads:
+ * the first lines are kept to be shown before the verdict, the rest only
+ * counted, and a case writing more than EX_MAX_OUTPUT bytes is stopped.
+ * A crash writes the faulting address and the backtrace to a file; the
+ * parent names the student's file:line with addr2line (the student's file
+ * is compiled with -g). */
+
+#define EX_SHOW_LINES 20             /* lines of the student's output shown */
+#define EX_SHOW_WIDTH 160            /* characters kept of each shown line */
+#define EX_MAX_OUTPUT (1u << 20)     /* bytes of output per case */
+#define EX_MEMORY_MB 1024ul          /* memory per case beyond the checker's own */
+#define EX_CRASH_FRAMES 48
+
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#define EX_SANITIZED 1 /* the sanitizers reserve terabytes of address space: no RLIMIT_AS */
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
+#define EX_SANITIZED 1
+#endif
+#endif
+#ifndef EX_SANITIZED
+#define EX_SANITIZED 0
+#endif
+
+static struct containment {
+    char dir[64];                /* this run's temporary directory */
+    const char *source;          /* the student's file, as given */
+    char source_real[PATH_MAX];  /* and its real path, as the debug information names it */
+    char exe[PATH_MAX];          /* this program */
+    unsigned long memory_mb;
+    /* the student's output over all cases */
+    char shown[EX_SHOW_LINES][EX_SHOW_WIDTH + 1];
+    unsigned char cut[EX_SHOW_LINES]; /* the line was longer than EX_SHOW_WIDTH */
+    size_t nshown, shown_len;
+    int in_line, line_shown;
+    unsigned long long more_lines;
+    /* the last crash: "at FILE:LINE in f()" or "" */
+    char where[2200];
+    int where_is_student;
+} cx = {.memory_mb = EX_MEMORY_MB};
+
+static int crash_fd = -1;
+
+static void crash_handler(int sig, siginfo_t *si, void *ucv)
+{
+    (void)si;
+    void *pc[EX_CRASH_FRAMES + 1];
+    int n = 0;
+    const ucontext_t *uc = ucv;
+#if defined(__x86_64__)
+    pc[n++] = (void *)uc->uc_mcontext.gregs[REG_RIP];
+#elif defined(__aarch64__)
+    pc[n++] = (void *)uc->uc_mcontext.pc;
+#else
+    (void)uc;
+    pc[n++] = NULL;
+#endif
+    n += backtrace(pc + n, EX_CRASH_FRAMES);
+    /* Out of memory?  Under RLIMIT_AS a mapping of a quarter of the limit
+     * fails when the student's allocations have used the rest up (a NULL
+     * from malloc is a usual cause of the crash). */
+    const size_t probe = (size_t)cx.memory_mb << 18;
+    void *m = mmap(NULL, probe, PROT_NONE, MAP_PRIVATE | MAP_ANONYMOUS | MAP_NORESERVE, -1, 0);
+    const char oom = m == MAP_FAILED;
+    if (!oom) munmap(m, probe);
+    if (write(crash_fd, &oom, 1) < 0 || write(crash_fd, pc, (size_t)n * sizeof pc[0]) < 0) {
+    }
+    raise(sig); /* SA_RESETHAND: delivered with the default action once the handler returns */
+}
+
+/* In the child, before the student's code: the directory, the limits, the
+ * crash handler. */
+static void contain_child(const char *casedir, unsigned timeout, int out_fd, int fd_crash)
+{
+    setpgid(0, 0);
+    const int null = open("/dev/null", O_RDONLY);
+    if (null >= 0) {
+        dup2(null, 0);
+        close(null);
+    }
+    dup2(out_fd, 1);
+    dup2(out_fd, 2);
+    close(out_fd);
+    setvbuf(stdout, NULL, _IOLBF, 0); /* a crash loses no line already printed */
+    crash_fd = fd_crash;
+    static char altstack[1 << 16]; /* the handler runs even on a stack overflow */
+    stack_t ss = {.ss_sp = altstack, .ss_size = sizeof altstack};
+    sigaltstack(&ss, NULL);
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_sigaction = crash_handler;
+    sa.sa_flags = SA_SIGINFO | SA_ONSTACK | SA_RESETHAND;
+    const int sigs[] = {SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT, SIGTRAP};
+    for (size_t k = 0; k < sizeof sigs / sizeof sigs[0]; ++k) sigaction(sigs[k], &sa, NULL);
+    unsigned long pages = 0; /* the checker's own address space, read before /proc is out of reach */
+    FILE *statm = fopen("/proc/self/statm", "r");
+    if (statm) {
+        if (fscanf(statm, "%lu", &pages) != 1) pages = 0;
+        fclose(statm);
+    }
+    if (geteuid() == 0 && chroot(casedir) == 0 && chdir("/") == 0) {
+        if (setgroups(0, NULL) != 0 || setgid(65534) != 0 || setuid(65534) != 0) _exit(5);
+    } else if (chdir(casedir) != 0) {
+        _exit(5);
+    }
+    struct rlimit rl;
+    rl.rlim_cur = timeout;
+    rl.rlim_max = timeout + 1;
+    setrlimit(RLIMIT_CPU, &rl);
+    rl.rlim_cur = rl.rlim_max = (rlim_t)EX_MAX_EVENTS * sizeof(sidx_event) + (16u << 20);
+    setrlimit(RLIMIT_FSIZE, &rl);
+    rl.rlim_cur = rl.rlim_max = 0;
+    setrlimit(RLIMIT_NPROC, &rl);
+    setrlimit(RLIMIT_CORE, &rl);
+    if (!EX_SANITIZED) {
+        rl.rlim_cur = rl.rlim_max = (rlim_t)pages * (rlim_t)sysconf(_SC_PAGESIZE) + (rlim_t)cx.memory_mb * (1u << 20);
+        setrlimit(RLIMIT_AS, &rl);
+    }
+    signal(SIGXCPU, SIG_DFL);
+    signal(SIGXFSZ, SIG_DFL);
+}
+
+/* Keeps the first lines of the student's output, counts the rest. */
+static void take_output(const char *p, size_t n)
+{
+    for (size_t k = 0; k < n; ++k) {
+        if (!cx.in_line) {
+            cx.in_line = 1;
+            cx.line_shown = cx.nshown < EX_SHOW_LINES;
+            cx.shown_len = 0;
+            if (!cx.line_shown) ++cx.more_lines;
+        }
+        if (p[k] == '\n') {
+            cx.in_line = 0;
+            if (cx.line_shown) cx.shown[cx.nshown++][cx.shown_len] = '\0';
+        } else if (cx.line_shown && cx.shown_len < EX_SHOW_WIDTH) {
+            const unsigned char c = (unsigned char)p[k];
+            cx.shown[cx.nshown][cx.shown_len++] = (c < 32 && c != '\t') || c == 127 ? '?' : (char)c;
+        } else if (cx.line_shown) {
+            cx.cut[cx.nshown] = 1;
+        }
+    }
+}
+
+/* 19950 -> "19,950" */
+static const char *thousands(unsigned long long v, char *buf, size_t size)
+{
+    char raw[32];
+    const int n = snprintf(raw, sizeof raw, "%llu", v);
+    size_t o = 0;
+    for (int k = 0; k < n && o + 2 < size; ++k) {
+        if (k && (n - k) % 3 == 0) buf[o++] = ',';
+        buf[o++] = raw[k];
+    }
+    buf[o] = '\0';
+    return buf;
+}
+
+/* The student's output so far, before the verdict. */
+static void print_student_output(void)
+{
+    if (cx.in_line && cx.line_shown) { /* a last line without its newline */
+        cx.shown[cx.nshown++][cx.shown_len] = '\0';
+        cx.in_line = 0;
+    }
+    if (!cx.nshown) return;
+    char num[40];
+    printf("your output%s:\n", cx.more_lines ? " (the first lines)" : "");
+    for (size_t k = 0; k < cx.nshown; ++k) printf("  | %s%s\n", cx.shown[k], cx.cut[k] ? "\u2026" : "");
+    if (cx.more_lines)
+        printf("  \u2026 %s more line%s of your output not shown\n", thousands(cx.more_lines, num, sizeof num),
+               cx.more_lines == 1 ? "" : "s");
+}
+
+static int remove_entry(const char *path, const struct stat *sb, int flag, struct FTW *ftw)
+{
+    (void)sb;
+    (void)flag;
+    (void)ftw;
+    return remove(path) == 0 ? 0 : 0; /* remove what can be removed */
+}
+
+static void remove_tree(const char *dir) { nftw(dir, remove_entry, 16, FTW_DEPTH | FTW_PHYS); }
+
+/* This program's load bias (a PIE: an address minus the bias is the one
+ * addr2line reads in the file) and the addresses its segments span. */
+typedef struct exe_span {
+    uintptr_t bias, lo, hi;
+} exe_span;
+
+static int span_cb(struct dl_phdr_info *info, size_t size, void *data)
+{
+    (void)size;
+    exe_span *s = data;
+    s->bias = (uintptr_t)info->dlpi_addr;
+    s->lo = UINTPTR_MAX;
+    s->hi = 0;
+    for (int k = 0; k < info->dlpi_phnum; ++k) {
+        const ElfW(Phdr) *ph = &info->dlpi_phdr[k];
+        if (ph->p_type != PT_LOAD) continue;
+        const uintptr_t a = s->bias + (uintptr_t)ph->p_vaddr, b = a + (uintptr_t)ph->p_memsz;
+        if (a < s->lo) s->lo = a;
+        if (b > s->hi) s->hi = b;
+    }
+    return 1; /* the first object is the program */
+}
+
+/* Names the crash's place from the addresses in fd: the first frame in
+ * the student's file, else the innermost frame with a known line. */
+static void locate_crash(int fd)
+{
+    cx.where[0] = '\0';
+    cx.where_is_student = 0;
+    void *pc[EX_CRASH_FRAMES + 1];
+    const ssize_t got = pread(fd, pc, sizeof pc, 1); /* after the out-of-memory byte */
+    if (got < (ssize_t)sizeof pc[0]) return;
+    const int n = (int)(got / (ssize_t)sizeof pc[0]);
+    exe_span span = {0, 0, 0};
+    dl_iterate_phdr(span_cb, &span);
+    char *argv[EX_CRASH_FRAMES + 8];
+    char addr[EX_CRASH_FRAMES + 1][32];
+    int a = 0;
+    argv[a++] = "addr2line";
+    argv[a++] = "-f";
+    argv[a++] = "-e";
+    argv[a++] = cx.exe;
+    /* pc[0] is the faulting instruction; the frames after the signal
+     * frame are return addresses, whose call lies one byte before */
+    int past_signal = 0;
+    for (int k = 0; k < n; ++k) {
+        uintptr_t p = (uintptr_t)pc[k];
+        if (k > 0 && !past_signal) {
+            if (p == (uintptr_t)pc[0]) past_signal = 1;
+            continue;
+        }
+        if (p < span.lo || p >= span.hi) continue; /* in a shared library: libc's abort, ... */
+        if (k > 0) --p;
+        snprintf(addr[a - 4], sizeof addr[0], "%#jx", (uintmax_t)(p - span.bias));
+        argv[a] = addr[a - 4];
+        ++a;
+    }
+    argv[a] = NULL;
+    if (a == 4) return;
+    int pfd[2];
+    if (pipe(pfd) != 0) return;
+    fflush(stdout);
+    const pid_t pid = fork();
+    if (pid < 0) {
+        close(pfd[0]);
+        close(pfd[1]);
+        return;
+    }
+    if (pid == 0) {
+        dup2(pfd[1], 1);
+        close(pfd[0]);
+        close(pfd[1]);
+        const int null = open("/dev/null", O_WRONLY);
+        if (null >= 0) dup2(null, 2);
+        execvp(argv[0], argv);
+        _exit(127);
+    }
+    close(pfd[1]);
+    FILE *f = fdopen(pfd[0], "r");
+    char fn[512], loc[PATH_MAX + 64], first[sizeof cx.where] = "";
+    while (f && fgets(fn, sizeof fn, f) && fgets(loc, sizeof loc, f)) {
+        fn[strcspn(fn, "\n")] = '\0';
+        loc[strcspn(loc, " \n")] = '\0'; /* drops " (discriminator N)" */
+        char *colon = strrchr(loc, ':');
+        if (!colon || loc[0] == '?' || colon[1] == '?' || colon[1] == '0') continue;
+        *colon = '\0';
+        if (!strcmp(loc, cx.source_real)) {
+            snprintf(cx.where, sizeof cx.where, "%.2000s:%.16s, in %.120s()", cx.source, colon + 1, fn);
+            cx.where_is_student = 1;
+            break;
+        }
+        if (!first[0]) snprintf(first, sizeof first, "%.2000s:%.16s, in %.120s()", loc, colon + 1, fn);
+    }
+    if (f) fclose(f);
+    int st;
+    while (waitpid(pid, &st, 0) < 0 && errno == EINTR) {
+    }
+    if (!cx.where_is_student) snprintf(cx.where, sizeof cx.where, "%s", first);
+}
+
 static const char done_mark[8] = "EX-DONE";
 
-typedef enum run_status { RUN_OK = 0, RUN_CRASH, RUN_TIMEOUT, RUN_TOO_MANY, RUN_ERROR } run_status;
+typedef enum run_status {
+    RUN_OK = 0,
+    RUN_CRASH,
+    RUN_TIMEOUT,    /* CPU time (an endless loop) or wall time (sleeping) */
+    RUN_TOO_MANY,
+    RUN_OUTPUT,     /* more than EX_MAX_OUTPUT bytes of output, or a file past RLIMIT_FSIZE */
+    RUN_MEMORY,     /* out of memory */
+    RUN_ERROR
+} run_status;
 
-static run_status run_student(size_t i, unsigned timeout, ex_trace *out, int *sig, int *code)
+/* 1 if the process is running or ready to run (an endless loop), 0 if it
+ * waits (sleep, a read): /proc/PID/stat's state after the command name. */
+static int running_state(pid_t pid)
 {
-    char path[] = "/tmp/sidx-check-XXXXXX";
-    int fd = mkstemp(path);
-    if (fd < 0) return RUN_ERROR;
-    unlink(path);
+    char path[64], buf[512];
+    snprintf(path, sizeof path, "/proc/%d/stat", (int)pid);
+    FILE *f = fopen(path, "r");
+    if (!f) return 0;
+    const size_t n = fread(buf, 1, sizeof buf - 1, f);
+    fclose(f);
+    buf[n] = '\0';
+    const char *paren = strrchr(buf, ')');
+    return paren && paren[1] == ' ' && paren[2] == 'R';
+}
+
+static double now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* *cpu: the time-out was spent computing (an endless loop), not waiting. */
+static run_status run_student(size_t i, unsigned timeout, ex_trace *out, int *sig, int *code, int *cpu)
+{
+    char casedir[sizeof cx.dir + 16], path[sizeof cx.dir + 16], cpath[sizeof cx.dir + 16];
+    snprintf(casedir, sizeof casedir, "%s/case-XXXXXX", cx.dir);
+    snprintf(path, sizeof path, "%s/ev-XXXXXX", cx.dir);
+    snprintf(cpath, sizeof cpath, "%s/bt-XXXXXX", cx.dir);
+    int pfd[2] = {-1, -1};
+    if (!mkdtemp(casedir)) return RUN_ERROR;
+    chmod(casedir, 0777); /* the child runs as nobody */
+    const int fd = mkstemp(path), cfd = mkstemp(cpath);
+    if (fd >= 0) unlink(path);
+    if (cfd >= 0) unlink(cpath);
+    if (fd < 0 || cfd < 0 || pipe(pfd) != 0) {
+        if (fd >= 0) close(fd);
+        if (cfd >= 0) close(cfd);
+        remove_tree(casedir);
+        return RUN_ERROR;
+    }
     fflush(stdout);
     fflush(stderr);
-    pid_t pid = fork();
+    const pid_t pid = fork();
     if (pid < 0) {
         close(fd);
+        close(cfd);
+        close(pfd[0]);
+        close(pfd[1]);
+        remove_tree(casedir);
         return RUN_ERROR;
     }
     if (pid == 0) {
-        signal(SIGALRM, SIG_DFL);
-        alarm(timeout);
+        close(pfd[0]);
+        contain_child(casedir, timeout, pfd[1], cfd);
         child_out o = {fd, 0};
         sidx_hook h = {child_hook_fn, &o, 0};
         ex_driver_this.student(i, &h);
@@ -158,13 +514,59 @@ static run_status run_student(size_t i, unsigned timeout, ex_trace *out, int *si
         fflush(stdout);
         _exit(0);
     }
-    int st = 0;
-    while (waitpid(pid, &st, 0) < 0 && errno == EINTR) {
+    close(pfd[1]);
+    /* Reads the output until the child closes it, within the time limit;
+     * stops a child that writes too much or runs out of time. */
+    const double deadline = now_s() + timeout;
+    size_t bytes = 0;
+    int killed_output = 0, killed_time = 0, open_ = 1, st = 0, reaped = 0, busy = 0;
+    char buf[65536];
+    while (!reaped) {
+        const double left = deadline - now_s();
+        if (left <= 0) {
+            busy = running_state(pid);
+            kill(-pid, SIGKILL);
+            kill(pid, SIGKILL);
+            killed_time = 1;
+            break;
+        }
+        if (open_) {
+            struct pollfd p = {pfd[0], POLLIN, 0};
+            const int r = poll(&p, 1, (int)(left * 1000) + 1);
+            if (r < 0 && errno != EINTR) break;
+            if (r <= 0) continue;
+            const ssize_t k = read(pfd[0], buf, sizeof buf);
+            if (k < 0 && errno == EINTR) continue;
+            if (k <= 0) {
+                open_ = 0;
+                continue;
+            }
+            take_output(buf, (size_t)k);
+            bytes += (size_t)k;
+            if (bytes > EX_MAX_OUTPUT) {
+                kill(-pid, SIGKILL);
+                kill(pid, SIGKILL);
+                killed_output = 1;
+                break;
+            }
+        } else {
+            const pid_t w = waitpid(pid, &st, WNOHANG);
+            if (w == pid) reaped = 1;
+            else if (w < 0 && errno != EINTR) break;
+            else poll(NULL, 0, 5);
+        }
     }
+    if (!reaped)
+        while (waitpid(pid, &st, 0) < 0 && errno == EINTR) {
+        }
+    kill(-pid, SIGKILL); /* whatever it left behind */
+    close(pfd[0]);
+    remove_tree(casedir);
     struct stat sb;
     run_status rs = RUN_OK;
     if (fstat(fd, &sb) != 0) {
         close(fd);
+        close(cfd);
         return RUN_ERROR;
     }
     size_t size = (size_t)sb.st_size;
@@ -187,15 +589,33 @@ static run_status run_student(size_t i, unsigned timeout, ex_trace *out, int *si
     close(fd);
     *sig = 0;
     *code = 0;
-    if (WIFSIGNALED(st)) {
+    *cpu = 0;
+    cx.where[0] = '\0';
+    if (killed_output) {
+        rs = RUN_OUTPUT;
+    } else if (killed_time) {
+        rs = RUN_TIMEOUT;
+        *cpu = busy;
+    } else if (WIFSIGNALED(st)) {
         *sig = WTERMSIG(st);
-        rs = *sig == SIGALRM ? RUN_TIMEOUT : RUN_CRASH;
+        if (*sig == SIGALRM || *sig == SIGXCPU || *sig == SIGKILL) {
+            rs = RUN_TIMEOUT;
+            *cpu = *sig == SIGXCPU;
+        } else if (*sig == SIGXFSZ) {
+            rs = RUN_OUTPUT;
+        } else {
+            rs = RUN_CRASH;
+            locate_crash(cfd);
+        }
     } else if (WIFEXITED(st) && WEXITSTATUS(st) == 3) {
         rs = RUN_TOO_MANY;
     } else if (!WIFEXITED(st) || WEXITSTATUS(st) != 0 || !done) {
         *code = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
         rs = RUN_CRASH;
     }
+    char oom = 0;
+    if (rs == RUN_CRASH && !EX_SANITIZED && pread(cfd, &oom, 1, 0) == 1 && oom) rs = RUN_MEMORY;
+    close(cfd);
     return rs;
 }
 
@@ -313,7 +733,34 @@ static void usage(FILE *f)
             "                  (or for case K)\n"
             "  --viewer PATH   sidx-view, to print the commands that step through the traces\n"
             "  --timeout S     time limit per case (default 2 s)\n"
-            "  --verbose       one line per case\n");
+            "  --verbose       one line per case\n"
+            "  --source FILE   the student's file (to name a crash's FILE:LINE)\n"
+            "  --memory MB     memory per case (default %lu MiB)\n"
+            "  --summary FILE  write the verdict as one tab-separated line: result, case, cases, step,\n"
+            "                  case name, detail, hint\n",
+            EX_MEMORY_MB);
+}
+
+/* The verdict as one line of --summary FILE (for sidx-check --class). */
+static const char *summary_path;
+
+static void put_field(FILE *f, const char *s, int last)
+{
+    for (; s && *s; ++s) fputc(*s == '\t' || *s == '\n' || *s == '\r' ? ' ' : *s, f);
+    fputc(last ? '\n' : '\t', f);
+}
+
+static void write_summary(const char *result, size_t case_, size_t cases, size_t step, const char *name,
+                          const char *detail, const char *hint)
+{
+    if (!summary_path) return;
+    FILE *f = fopen(summary_path, "w");
+    if (!f) return;
+    fprintf(f, "%s\t%zu\t%zu\t%zu\t", result, case_, cases, step);
+    put_field(f, name, 0);
+    put_field(f, detail, 0);
+    put_field(f, hint, 1);
+    fclose(f);
 }
 
 int main(int argc, char **argv)
@@ -335,6 +782,13 @@ int main(int argc, char **argv)
             only = strtol(argv[++i], NULL, 10);
         } else if (!strcmp(argv[i], "--verbose")) {
             verbose = 1;
+        } else if (!strcmp(argv[i], "--source") && i + 1 < argc) {
+            cx.source = argv[++i];
+        } else if (!strcmp(argv[i], "--summary") && i + 1 < argc) {
+            summary_path = argv[++i];
+        } else if (!strcmp(argv[i], "--memory") && i + 1 < argc) {
+            cx.memory_mb = strtoul(argv[++i], NULL, 10);
+            if (cx.memory_mb == 0) cx.memory_mb = EX_MEMORY_MB;
         } else if (!strcmp(argv[i], "-h") || !strcmp(argv[i], "--help")) {
             usage(stdout);
             return 0;
@@ -342,6 +796,19 @@ int main(int argc, char **argv)
             usage(stderr);
             return 2;
         }
+    }
+    if (cx.source && !realpath(cx.source, cx.source_real)) cx.source_real[0] = '\0';
+    const ssize_t len = readlink("/proc/self/exe", cx.exe, sizeof cx.exe - 1);
+    cx.exe[len > 0 ? len : 0] = '\0';
+    snprintf(cx.dir, sizeof cx.dir, "/tmp/sidx-check-run-XXXXXX");
+    if (!mkdtemp(cx.dir)) {
+        fprintf(stderr, "sidx-check %s: cannot make a temporary directory: %s\n", d->name, strerror(errno));
+        return 2;
+    }
+    chmod(cx.dir, 0711); /* the child, as nobody, reaches its case directory only */
+    {
+        void *warm[2]; /* loads the unwinder now: the crash handler runs where it cannot load it */
+        (void)backtrace(warm, 2);
     }
     if (d->setup && d->setup() != 0) {
         fprintf(stderr, "sidx-check %s: the checker could not set up its scenes\n", d->name);
@@ -363,7 +830,8 @@ int main(int argc, char **argv)
         sidx_hook rh = {ex_trace_hook_fn, &ref, 0};
         d->reference(i, &rh);
         int sig = 0, code = 0;
-        const run_status rs = run_student(i, timeout, &stu, &sig, &code);
+        int cpu = 0;
+        const run_status rs = run_student(i, timeout, &stu, &sig, &code, &cpu);
         ++ran;
         if (rs == RUN_ERROR) {
             fprintf(stderr, "sidx-check %s: cannot run case %zu: %s\n", d->name, i + 1, strerror(errno));
@@ -371,15 +839,40 @@ int main(int argc, char **argv)
             break;
         }
         if (rs != RUN_OK) {
+            char detail[sizeof cx.where + 160];
+            const char *result = "crash";
+            if (rs == RUN_TIMEOUT && cpu) {
+                snprintf(detail, sizeof detail, "did not finish within %u s: it kept computing (an endless loop?)",
+                         timeout);
+                result = "timeout";
+            } else if (rs == RUN_TIMEOUT) {
+                snprintf(detail, sizeof detail, "did not finish within %u s: it was waiting (sleep? reading input?)",
+                         timeout);
+                result = "timeout";
+            } else if (rs == RUN_TOO_MANY) {
+                snprintf(detail, sizeof detail, "reported more than %u steps (an endless loop?)", EX_MAX_EVENTS);
+                result = "timeout";
+            } else if (rs == RUN_OUTPUT) {
+                snprintf(detail, sizeof detail, "wrote too much: more than %u MiB of output in one case (a print in an "
+                         "endless loop?)", EX_MAX_OUTPUT >> 20);
+                result = "output";
+            } else if (rs == RUN_MEMORY) {
+                snprintf(detail, sizeof detail, "ran out of memory (the limit is %lu MiB per case)%s%s%s%s",
+                         cx.memory_mb, sig ? ": " : "", sig ? strsignal(sig) : "", cx.where[0] ? " at " : "",
+                         cx.where);
+                result = "memory";
+            } else if (sig && cx.where[0]) {
+                snprintf(detail, sizeof detail, "crashed: signal %d (%s) at %s%s", sig, strsignal(sig), cx.where,
+                         cx.where_is_student ? "" : " (outside your file)");
+            } else if (sig) {
+                snprintf(detail, sizeof detail, "crashed: signal %d (%s)", sig, strsignal(sig));
+            } else {
+                snprintf(detail, sizeof detail, "crashed: it stopped with exit status %d before returning", code);
+            }
+            print_student_output();
             printf("sidx-check %s: case %zu of %zu, \"%s\":\n", d->name, i + 1, n, info.name);
-            if (rs == RUN_TIMEOUT)
-                printf("  your code did not finish within %u s (an endless loop?)\n", timeout);
-            else if (rs == RUN_TOO_MANY)
-                printf("  your code reported more than %u steps (an endless loop?)\n", EX_MAX_EVENTS);
-            else if (sig)
-                printf("  your code crashed: signal %d (%s)\n", sig, strsignal(sig));
-            else
-                printf("  your code crashed: it stopped with exit status %d before returning\n", code);
+            printf("  your code %s\n", detail);
+            write_summary(result, i + 1, n, stu.n, info.name, detail, NULL);
             printf("  %-10s %s\n", "input", info.what);
             if (stu.n) {
                 printf("  the last steps your code reported (of %zu):\n", stu.n);
@@ -407,6 +900,8 @@ int main(int argc, char **argv)
         const sidx_event *re = k < ref.n ? &ref.ev[k] : NULL, *se = k < stu.n ? &stu.ev[k] : NULL;
         const char *hint = d->hint ? d->hint(i, re, se) : NULL;
         if (!hint) hint = info.hint;
+        print_student_output();
+        write_summary("fail", i + 1, n, k + 1, info.name, info.what, hint);
         printf("sidx-check %s: case %zu of %zu, \"%s\": your trace leaves the reference at step %zu\n", d->name,
                i + 1, n, info.name, k + 1);
         printf("  %-10s %s\n", "input", info.what);
@@ -431,6 +926,11 @@ int main(int argc, char **argv)
         rc = 1;
         break;
     }
+    if (rc == 0) {
+        print_student_output();
+        write_summary("pass", 0, n, 0, "", "", NULL);
+    }
+    remove_tree(cx.dir);
     if (rc == 0)
         printf("sidx-check %s: all %zu case%s pass (%zu steps compared)\n", d->name, ran, ran == 1 ? "" : "s", steps);
     free(ref.ev);
