@@ -359,7 +359,7 @@ static void check_wide_tiles(const char *label, const sidx_accel *a, const sidx_
 static void test_wide_tiles_match_single(void **state)
 {
     (void)state;
-    const uint32_t W = 48, H = 40; /* edge tiles are partial */
+    const uint32_t W = tk_fast_tests() ? 22 : 48, H = tk_fast_tests() ? 18 : 40;
     sidx_ray *rays = malloc((size_t)W * H * sizeof *rays);
     assert_non_null(rays);
     const char *names[] = {"bvh4", "bvh8"};
@@ -492,7 +492,7 @@ static void test_single_rays_keep_nearest(void **state)
     sidx_mesh m;
     sidx_error err;
     if (sidx_scene_make("soup", 40000, &m, &err) != SIDX_OK) fail_msg("soup: %s", err.message);
-    const uint32_t W = 160, H = 160;
+    const uint32_t W = tk_fast_tests() ? 32 : 160, H = W; /* brute force: W * H * 40000 triangle tests */
     const size_t n = (size_t)W * H;
     sidx_ray *rays = malloc(n * sizeof *rays);
     sidx_hit *ref = malloc(n * sizeof *ref);
@@ -534,7 +534,7 @@ static void test_wide_dense_mesh(void **state)
     sidx_mesh m;
     sidx_error err;
     if (sidx_scene_make("soup", 40000, &m, &err) != SIDX_OK) fail_msg("soup: %s", err.message);
-    const uint32_t W = 40, H = 40;
+    const uint32_t W = tk_fast_tests() ? 24 : 40, H = W;
     sidx_ray *rays = malloc((size_t)W * H * sizeof *rays);
     assert_non_null(rays);
     primary_rays(&m, W, H, rays);
