@@ -36,6 +36,10 @@
 static const char *const scenes[] = {"icosphere", "teapot", "soup", "menger", "stadium", "cornell"};
 #define NSCENES (sizeof scenes / sizeof scenes[0])
 
+/* The dense soup: many triangles per pixel of the small images below (at
+ * the small sizes, fewer triangles for fewer pixels). */
+static uint32_t dense_soup(void) { return tk_fast_tests() ? 12000u : 40000u; }
+
 static sidx_mesh scene(const char *name)
 {
     sidx_mesh m;
@@ -256,14 +260,14 @@ static void test_dense_mesh_switch(void **state)
     (void)state;
     sidx_mesh m;
     sidx_error err;
-    if (sidx_scene_make("soup", 40000, &m, &err) != SIDX_OK) fail_msg("soup: %s", err.message);
-    const uint32_t W = 40, H = 40;
+    if (sidx_scene_make("soup", dense_soup(), &m, &err) != SIDX_OK) fail_msg("soup: %s", err.message);
+    const uint32_t W = tk_fast_tests() ? 24 : 40, H = W;
     sidx_ray *rays = malloc((size_t)W * H * sizeof *rays);
     assert_non_null(rays);
     primary_rays(&m, W, H, rays);
     sidx_accel *a = NULL;
     assert_int_equal(sidx_accel_build("bvh", &m, NULL, &a, NULL), SIDX_OK);
-    check_tiles("soup 40000", a, a, rays, W, H, 0);
+    check_tiles("dense soup", a, a, rays, W, H, 0);
     sidx_hit *h = malloc((size_t)W * H * sizeof *h);
     assert_non_null(h);
     const sidx_packet_options of = {SIDX_PACKET_FRUSTUM, 0, 0};
@@ -359,7 +363,7 @@ static void check_wide_tiles(const char *label, const sidx_accel *a, const sidx_
 static void test_wide_tiles_match_single(void **state)
 {
     (void)state;
-    const uint32_t W = 48, H = 40; /* edge tiles are partial */
+    const uint32_t W = tk_fast_tests() ? 22 : 48, H = tk_fast_tests() ? 18 : 40;
     sidx_ray *rays = malloc((size_t)W * H * sizeof *rays);
     assert_non_null(rays);
     const char *names[] = {"bvh4", "bvh8"};
@@ -491,8 +495,8 @@ static void test_single_rays_keep_nearest(void **state)
     (void)state;
     sidx_mesh m;
     sidx_error err;
-    if (sidx_scene_make("soup", 40000, &m, &err) != SIDX_OK) fail_msg("soup: %s", err.message);
-    const uint32_t W = 160, H = 160;
+    if (sidx_scene_make("soup", dense_soup(), &m, &err) != SIDX_OK) fail_msg("soup: %s", err.message);
+    const uint32_t W = tk_fast_tests() ? 32 : 160, H = W; /* brute force: W * H * dense_soup() triangle tests */
     const size_t n = (size_t)W * H;
     sidx_ray *rays = malloc(n * sizeof *rays);
     sidx_hit *ref = malloc(n * sizeof *ref);
@@ -533,8 +537,8 @@ static void test_wide_dense_mesh(void **state)
     (void)state;
     sidx_mesh m;
     sidx_error err;
-    if (sidx_scene_make("soup", 40000, &m, &err) != SIDX_OK) fail_msg("soup: %s", err.message);
-    const uint32_t W = 40, H = 40;
+    if (sidx_scene_make("soup", dense_soup(), &m, &err) != SIDX_OK) fail_msg("soup: %s", err.message);
+    const uint32_t W = tk_fast_tests() ? 24 : 40, H = W;
     sidx_ray *rays = malloc((size_t)W * H * sizeof *rays);
     assert_non_null(rays);
     primary_rays(&m, W, H, rays);
@@ -543,10 +547,10 @@ static void test_wide_dense_mesh(void **state)
     assert_int_equal(sidx_accel_build("bvh8", &m, NULL, &a, NULL), SIDX_OK);
     sidx_packet_stats st;
     memset(&st, 0, sizeof st);
-    check_wide_tiles("soup 40000 bvh8", a, brute, rays, W, H, 0, &st);
+    check_wide_tiles("dense soup bvh8", a, brute, rays, W, H, 0, &st);
     assert_true(st.interval_culls > 0);
     assert_true(st.interval_culls < st.interval_tests);
-    print_message("soup 40000, bvh8: interval test culled %llu of %llu child boxes\n",
+    print_message("soup %u, bvh8: interval test culled %llu of %llu child boxes\n", (unsigned)m.num_triangles,
                   (unsigned long long)st.interval_culls, (unsigned long long)st.interval_tests);
     sidx_accel_destroy(a);
     sidx_accel_destroy(brute);

@@ -176,6 +176,12 @@ static void test_parallel_build_identical(void **state)
         sidx_build_options o;
         memset(&o, 0, sizeof o);
         check_same_tree(&m, &o);
+        /* at the small sizes the option sets below run on every scene but
+         * the 96,000-triangle sponge (the soup takes the parallel passes) */
+        if (tk_fast_tests() && m.num_triangles > 50000) {
+            sidx_mesh_free(&m);
+            continue;
+        }
         o.leaf_size = 1;
         o.bins = 8;
         check_same_tree(&m, &o);

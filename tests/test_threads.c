@@ -13,9 +13,12 @@
 #include <stdlib.h>
 #include <string.h>
 #include "sidx/sidx.h"
+#include "common/testkit.h"
 
 #define NTHREADS 8
-#define NRAYS 1500
+#define NRAYS 1500 /* at the small sizes (valgrind, the sanitizers): nrays() of them */
+
+static int nrays(void) { return tk_fast_tests() ? 300 : NRAYS; }
 
 typedef struct {
     const sidx_accel *a;
@@ -32,7 +35,7 @@ static void *run(void *arg)
     sidx_counters_init(&j->counts);
     sidx_hook hook = sidx_counters_hook(&j->counts);
     sidx_query q = {SIDX_QUERY_UV, SIDX_TRAVERSE_DEFAULT, j->traced ? &hook : NULL, 0};
-    for (int i = 0; i < NRAYS; ++i) {
+    for (int i = 0; i < nrays(); ++i) {
         sidx_accel_intersect(j->a, &j->rays[i], &q, &j->hits[i]);
         sidx_accel_occluded(j->a, &j->rays[i], &q, &j->occluded[i]);
     }
@@ -57,7 +60,7 @@ static void every_structure_is_thread_safe(void **state)
     const sidx_vec3 c = sidx_aabb_centroid(box), e = sidx_aabb_extent(box);
     sidx_ray *rays = malloc(sizeof *rays * NRAYS);
     assert_non_null(rays);
-    for (int i = 0; i < NRAYS; ++i) {
+    for (int i = 0; i < nrays(); ++i) {
         /* one draw per statement, y first: the order gcc evaluated the
          * arguments in (C leaves it open; clang goes the other way) */
         const float oy = frand(), ox = frand();
@@ -88,10 +91,10 @@ static void every_structure_is_thread_safe(void **state)
                 fail_msg("%s: thread %d differs from the single-threaded run", name, k);
             if (jobs[k].traced)
                 /* each traced thread saw exactly its own rays: 2 queries per ray */
-                assert_int_equal(jobs[k].counts.n[SIDX_EV_RAY_BEGIN], 2 * NRAYS);
+                assert_int_equal(jobs[k].counts.n[SIDX_EV_RAY_BEGIN], 2 * nrays());
         }
-        for (int i = 0; i < NRAYS; ++i) hits += jobs[NTHREADS].hits[i].prim != SIDX_NO_HIT;
-        assert_true(hits > NRAYS / 10); /* the rays do reach the teapot */
+        for (int i = 0; i < nrays(); ++i) hits += jobs[NTHREADS].hits[i].prim != SIDX_NO_HIT;
+        assert_true(hits > nrays() / 10); /* the rays do reach the teapot */
         sidx_accel_destroy(a);
     }
     free(jobs);
