@@ -37,10 +37,13 @@ static SIDX_INLINE void brute_intersect_impl(const sidx_accel *a, const sidx_ray
               e_.t = hit->t; e_.count = m->num_triangles);
 }
 
-static void brute_intersect(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
+static void brute_intersect_plain(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
 {
-    if (SIDX_QUERY_TRACED(q)) brute_intersect_impl(a, r, q, hit, 1);
-    else brute_intersect_impl(a, r, q, hit, 0);
+    brute_intersect_impl(a, r, q, hit, 0);
+}
+static void brute_intersect_traced(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
+{
+    brute_intersect_impl(a, r, q, hit, 1);
 }
 
 static SIDX_INLINE int brute_occluded_impl(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
@@ -63,9 +66,27 @@ static SIDX_INLINE int brute_occluded_impl(const sidx_accel *a, const sidx_ray *
     return 0;
 }
 
+static int brute_occluded_plain(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
+{
+    return brute_occluded_impl(a, r, q, 0);
+}
+static int brute_occluded_traced(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
+{
+    return brute_occluded_impl(a, r, q, 1);
+}
+
+/* The walk table (sidx_internal.h): the same for every build. */
+static const sidx__walk_table brute_walks = {brute_intersect_plain, brute_intersect_traced, brute_occluded_plain,
+                                             brute_occluded_traced};
+
+static void brute_intersect(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
+{
+    sidx__walk_intersect(&brute_walks, a, r, q, hit);
+}
+
 static int brute_occluded(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
 {
-    return SIDX_QUERY_TRACED(q) ? brute_occluded_impl(a, r, q, 1) : brute_occluded_impl(a, r, q, 0);
+    return sidx__walk_occluded(&brute_walks, a, r, q);
 }
 
 static void brute_stats(const sidx_accel *a, sidx_accel_stats *s)

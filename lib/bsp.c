@@ -632,16 +632,37 @@ static SIDX_INLINE int bsp_walk(const sidx_accel *a, const sidx_ray *r, const si
     return 0;
 }
 
+static void bsp_intersect_plain(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
+{
+    (void)bsp_walk(a, r, q, hit, 0, 0);
+}
+static void bsp_intersect_traced(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
+{
+    (void)bsp_walk(a, r, q, hit, 0, 1);
+}
+static int bsp_occluded_plain(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
+{
+    sidx_hit dummy = sidx_hit_none();
+    return bsp_walk(a, r, q, &dummy, 1, 0);
+}
+static int bsp_occluded_traced(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
+{
+    sidx_hit dummy = sidx_hit_none();
+    return bsp_walk(a, r, q, &dummy, 1, 1);
+}
+
+/* The walk table (sidx_internal.h): the same for every build. */
+static const sidx__walk_table bsp_walks = {bsp_intersect_plain, bsp_intersect_traced, bsp_occluded_plain,
+                                            bsp_occluded_traced};
+
 static void bsp_intersect(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
 {
-    if (SIDX_QUERY_TRACED(q)) bsp_walk(a, r, q, hit, 0, 1);
-    else bsp_walk(a, r, q, hit, 0, 0);
+    sidx__walk_intersect(&bsp_walks, a, r, q, hit);
 }
 
 static int bsp_occluded(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
 {
-    sidx_hit dummy = sidx_hit_none();
-    return SIDX_QUERY_TRACED(q) ? bsp_walk(a, r, q, &dummy, 1, 1) : bsp_walk(a, r, q, &dummy, 1, 0);
+    return sidx__walk_occluded(&bsp_walks, a, r, q);
 }
 
 static void bsp_stats(const sidx_accel *a, sidx_accel_stats *s)

@@ -120,11 +120,10 @@ static void set_kernels(wide_bvh *w, sidx_tri_method tri)
 #endif
     /* The triangle test is fixed at build: decide here, not per ray. */
     const int simd_tri = tri == SIDX_TRI_WATERTIGHT;
-    w->isect = simd_tri ? k->isect_simd : k->isect_other;
-    w->isect_uv = simd_tri ? k->isect_simd_uv : k->isect_other;
-    w->occl = simd_tri ? k->occl_simd : k->occl_other;
-    w->isect_traced = k->isect_traced;
-    w->occl_traced = k->occl_traced;
+    const wide_occl_fn occl = simd_tri ? k->occl_simd : k->occl_other;
+    w->walks[0] = (sidx__walk_table){simd_tri ? k->isect_simd : k->isect_other, k->isect_traced, occl, k->occl_traced};
+    w->walks[1] = (sidx__walk_table){simd_tri ? k->isect_simd_uv : k->isect_other, k->isect_traced, occl,
+                                     k->occl_traced};
 }
 
 /* ---- collapse ------------------------------------------------------------------ */
@@ -607,15 +606,13 @@ static void wide_stats(const sidx_accel *a, sidx_accel_stats *s)
 static void wide_intersect(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
 {
     const wide_bvh *w = a->impl;
-    if (SIDX_QUERY_TRACED(q)) w->isect_traced(a, r, q, hit);
-    else if (q->flags & SIDX_QUERY_UV) w->isect_uv(a, r, q, hit);
-    else w->isect(a, r, q, hit);
+    sidx__walk_intersect(&w->walks[(q->flags & SIDX_QUERY_UV) != 0], a, r, q, hit);
 }
 
 static int wide_occluded(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
 {
     const wide_bvh *w = a->impl;
-    return SIDX_QUERY_TRACED(q) ? w->occl_traced(a, r, q) : w->occl(a, r, q);
+    return sidx__walk_occluded(&w->walks[0], a, r, q);
 }
 
 const sidx_accel_vtable sidx__wide_vtable = {wide_build, wide_intersect, wide_occluded,

@@ -75,9 +75,10 @@ typedef struct wide_bvh {
     uint32_t num_blocks;
     double sah_cost;
     sidx_aabb bounds;      /* scene box (union of the root's slots) */
-    wide_isect_fn isect, isect_uv, isect_traced; /* untraced walk for the structure's triangle test (and for
-                                                    queries with SIDX_QUERY_UV); traced walk */
-    wide_occl_fn occl, occl_traced;
+    /* The walk tables (sidx_internal.h): [0] for queries without u, v,
+     * [1] for SIDX_QUERY_UV; the untraced walks use the structure's
+     * triangle test, fixed at build. */
+    sidx__walk_table walks[2];
 } wide_bvh;
 
 static SIDX_INLINE const float *wide_node(const wide_bvh *w, uint32_t i) { return w->nodes + (size_t)i * 8u * w->width; }

@@ -369,16 +369,37 @@ static SIDX_INLINE int agg_walk(const sidx_accel *a, const sidx_ray *r, const si
     return 1;
 }
 
+static void agg_intersect_plain(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
+{
+    (void)agg_walk(a, r, q, hit, 0, 0);
+}
+static void agg_intersect_traced(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
+{
+    (void)agg_walk(a, r, q, hit, 0, 1);
+}
+static int agg_occluded_plain(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
+{
+    sidx_hit dummy = sidx_hit_none();
+    return agg_walk(a, r, q, &dummy, 1, 0);
+}
+static int agg_occluded_traced(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
+{
+    sidx_hit dummy = sidx_hit_none();
+    return agg_walk(a, r, q, &dummy, 1, 1);
+}
+
+/* The walk table (sidx_internal.h): the same for every build. */
+static const sidx__walk_table agg_walks = {agg_intersect_plain, agg_intersect_traced, agg_occluded_plain,
+                                            agg_occluded_traced};
+
 static void agg_intersect(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
 {
-    if (SIDX_QUERY_TRACED(q)) agg_walk(a, r, q, hit, 0, 1);
-    else agg_walk(a, r, q, hit, 0, 0);
+    sidx__walk_intersect(&agg_walks, a, r, q, hit);
 }
 
 static int agg_occluded(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
 {
-    sidx_hit dummy = sidx_hit_none();
-    return SIDX_QUERY_TRACED(q) ? agg_walk(a, r, q, &dummy, 1, 1) : agg_walk(a, r, q, &dummy, 1, 0);
+    return sidx__walk_occluded(&agg_walks, a, r, q);
 }
 
 static size_t own_bytes(const sidx_accel *a)

@@ -493,22 +493,51 @@ static SIDX_INLINE int kd_enter_root(const sidx_accel *a, const sidx_ray *r, con
 
 /* ==== entry points =========================================================== */
 
+/* The walks by traversal and hook.  The untraced default is the fast
+ * walk; a traced query, or one asking for the naive walk (which re-enters
+ * from the root, as the deck's first version does), takes the slide's. */
+static void kd_isect_fast(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
+{
+    (void)kd_walk_fast(a, r, q, hit, 0);
+}
+static void kd_isect_slide_traced(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
+{
+    (void)kd_walk_slide(a, r, q, hit, 1, 0, 0);
+}
+static void kd_isect_naive(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
+{
+    (void)kd_walk_slide(a, r, q, hit, 0, 0, 1);
+}
+static void kd_isect_naive_traced(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
+{
+    (void)kd_walk_slide(a, r, q, hit, 1, 0, 1);
+}
+static int kd_occl_fast(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
+{
+    sidx_hit dummy = sidx_hit_none();
+    return kd_walk_fast(a, r, q, &dummy, 1);
+}
+static int kd_occl_slide_traced(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
+{
+    sidx_hit dummy = sidx_hit_none();
+    return kd_walk_slide(a, r, q, &dummy, 1, 1, 0);
+}
+
+/* The walk tables (sidx_internal.h): [0] every traversal but the naive
+ * one, [1] the naive one; any-hit queries always take [0]. */
+static const sidx__walk_table kd_walks[2] = {
+    {kd_isect_fast, kd_isect_slide_traced, kd_occl_fast, kd_occl_slide_traced},
+    {kd_isect_naive, kd_isect_naive_traced, kd_occl_fast, kd_occl_slide_traced},
+};
+
 static void kd_intersect(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
 {
-    const int naive = q->traversal == SIDX_TRAVERSE_NAIVE;
-    if (SIDX_QUERY_TRACED(q)) {
-        if (naive) kd_walk_slide(a, r, q, hit, 1, 0, 1);
-        else kd_walk_slide(a, r, q, hit, 1, 0, 0);
-    } else {
-        if (naive) kd_walk_slide(a, r, q, hit, 0, 0, 1);
-        else kd_walk_fast(a, r, q, hit, 0);
-    }
+    sidx__walk_intersect(&kd_walks[q->traversal == SIDX_TRAVERSE_NAIVE], a, r, q, hit);
 }
 
 static int kd_occluded(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
 {
-    sidx_hit dummy = sidx_hit_none();
-    return SIDX_QUERY_TRACED(q) ? kd_walk_slide(a, r, q, &dummy, 1, 1, 0) : kd_walk_fast(a, r, q, &dummy, 1);
+    return sidx__walk_occluded(&kd_walks[0], a, r, q);
 }
 
 /* One vtable serves all four builders (a->variant); the tree they produce

@@ -372,16 +372,37 @@ static SIDX_INLINE int rc_query(const sidx_accel *a, const sidx_ray *r, const si
     return hit->prim != SIDX_NO_HIT;
 }
 
+static void rc_intersect_plain(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
+{
+    (void)rc_query(a, r, q, hit, 0, 0);
+}
+static void rc_intersect_traced(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
+{
+    (void)rc_query(a, r, q, hit, 0, 1);
+}
+static int rc_occluded_plain(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
+{
+    sidx_hit dummy = sidx_hit_none();
+    return rc_query(a, r, q, &dummy, 1, 0);
+}
+static int rc_occluded_traced(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
+{
+    sidx_hit dummy = sidx_hit_none();
+    return rc_query(a, r, q, &dummy, 1, 1);
+}
+
+/* The walk table (sidx_internal.h): the same for every build. */
+static const sidx__walk_table rc_walks = {rc_intersect_plain, rc_intersect_traced, rc_occluded_plain,
+                                            rc_occluded_traced};
+
 static void rc_intersect(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
 {
-    if (SIDX_QUERY_TRACED(q)) rc_query(a, r, q, hit, 0, 1);
-    else rc_query(a, r, q, hit, 0, 0);
+    sidx__walk_intersect(&rc_walks, a, r, q, hit);
 }
 
 static int rc_occluded(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
 {
-    sidx_hit dummy = sidx_hit_none();
-    return SIDX_QUERY_TRACED(q) ? rc_query(a, r, q, &dummy, 1, 1) : rc_query(a, r, q, &dummy, 1, 0);
+    return sidx__walk_occluded(&rc_walks, a, r, q);
 }
 
 static void rc_stats(const sidx_accel *a, sidx_accel_stats *s)
