@@ -108,7 +108,7 @@ static int setup(void)
     add("zero dir of -0 components", hint_errors, 0, V(0, 0, 0), V(1e-6f, 1e-6f, 1e-6f), V(0, 0, 1),
         V(-0.0f, -0.0f, -0.0f));
     add("zero normal", hint_errors, 0, V(0, 0, 0), V(1e-6f, 1e-6f, 1e-6f), V(0, 0, 0), V(0, 0, 1));
-    add("origin overflows float", hint_errors, 0, V(3.4e38f, 0, 0), V(1e32f, 0, 0), V(1, 0, 0), V(1, 0, 0));
+    add("origin overflows float", hint_errors, 0, V(3.4028e38f, 0, 0), V(1e35f, 0, 0), V(1, 0, 0), V(1, 0, 0));
     add("near FLT_MAX, leaving towards 0 (no overflow)", hint_offset, 0, V(3.4e38f, 0, 0), V(1e32f, 0, 0),
         V(1, 0, 0), V(-1, 0, 0));
     /* shadow rays */
@@ -117,6 +117,10 @@ static int setup(void)
     on_tri("shadow ray from a million units out", hint_to, 1, fa, fb, fc, 0.3f, 0.3f, V(0, 0, 1e6f));
     add("shadow ray to a light at infinity", hint_errors, 1, V(0, 0, 0), V(1e-6f, 1e-6f, 1e-6f), V(0, 0, 1),
         V(0, 0, inf));
+    add("shadow ray from a point with a zero normal", hint_errors, 1, V(0, 0, 0), V(1e-6f, 1e-6f, 1e-6f), V(0, 0, 0),
+        V(0, 0, 1));
+    add("shadow ray from an origin that overflows float", hint_errors, 1, V(3.4028e38f, 0, 0), V(1e35f, 0, 0),
+        V(1, 0, 0), V(0, 0, 0));
     uint32_t st = 1717u;
     for (int i = 0; i < 30; ++i) {
         sidx_vec3 t[3];
