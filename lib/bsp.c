@@ -703,6 +703,33 @@ sidx_status sidx_bsp_info_get(const sidx_accel *a, sidx_bsp_info *out)
     return SIDX_OK;
 }
 
+sidx_status sidx_bsp_node_get(const sidx_accel *a, uint32_t node, sidx_bsp_node_view *out)
+{
+    if (!is_bsp(a) || !out) return SIDX_ERR_INVALID_ARG;
+    const bsp_tree *t = a->impl;
+    if (node >= t->num_nodes) return SIDX_ERR_INVALID_ARG;
+    const bsp_node *nd = &t->nodes[node];
+    for (int k = 0; k < 3; ++k) out->n[k] = nd->n[k];
+    out->d = nd->d;
+    out->child[0] = nd->child[0];
+    out->child[1] = nd->child[1];
+    out->piece_count = nd->piece_count;
+    return SIDX_OK;
+}
+
+sidx_status sidx_bsp_node_piece(const sidx_accel *a, uint32_t node, uint32_t i, sidx_bsp_piece *out)
+{
+    if (!is_bsp(a) || !out) return SIDX_ERR_INVALID_ARG;
+    const bsp_tree *t = a->impl;
+    if (node >= t->num_nodes || i >= t->nodes[node].piece_count) return SIDX_ERR_INVALID_ARG;
+    const bsp_piece *p = &t->pieces[t->piece_refs[t->nodes[node].piece_first + i]];
+    out->tri = p->tri;
+    out->num_verts = p->num;
+    out->verts = t->verts + p->first;
+    out->node = node;
+    return SIDX_OK;
+}
+
 /* A node's own pieces do not overlap in depth (they lie in one plane, or
  * are the single piece of a leaf), so any order among them is right; the
  * two orders walk them in opposite directions so that front-to-back is

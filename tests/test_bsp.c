@@ -354,6 +354,79 @@ static void paint_arguments(void **state)
     sidx_mesh_free(&m);
 }
 
+/* ---- the read-only node view ------------------------------------------------- */
+
+typedef struct view_walk {
+    const sidx_accel *bsp;
+    uint32_t *next; /* per node: the index of its next piece */
+    uint32_t pieces, mismatches;
+} view_walk;
+
+static int check_piece(const sidx_bsp_piece *p, void *user)
+{
+    view_walk *w = user;
+    sidx_bsp_piece q;
+    ++w->pieces;
+    if (sidx_bsp_node_piece(w->bsp, p->node, w->next[p->node]++, &q) != SIDX_OK || q.tri != p->tri ||
+        q.num_verts != p->num_verts || q.verts != p->verts || q.node != p->node)
+        ++w->mismatches;
+    return 0;
+}
+
+/* sidx_bsp_node_get / _piece describe the tree sidx_bsp_paint walks: the
+ * painter draws each node's pieces in the view's order, every node's
+ * pieces once; out-of-range ids and other structures are refused. */
+static void node_view(void **state)
+{
+    (void)state;
+    sidx_mesh m;
+    make_scene("cornell", 0, &m);
+    sidx_accel *bsp = build_bsp(&m, NULL), *brute = NULL;
+    assert_int_equal(sidx_accel_build("brute", &m, NULL, &brute, NULL), SIDX_OK);
+    sidx_bsp_info info;
+    assert_int_equal(sidx_bsp_info_get(bsp, &info), SIDX_OK);
+    uint32_t leaves = 0, total = 0;
+    for (uint32_t i = 0; i < info.nodes; ++i) {
+        sidx_bsp_node_view v;
+        assert_int_equal(sidx_bsp_node_get(bsp, i, &v), SIDX_OK);
+        if (v.child[0] == UINT32_MAX) {
+            ++leaves;
+            assert_int_equal(v.child[1], UINT32_MAX);
+        } else {
+            assert_true(v.child[0] < info.nodes && v.child[1] < info.nodes);
+            assert_true(fabs(v.n[0] * v.n[0] + v.n[1] * v.n[1] + v.n[2] * v.n[2] - 1.0) < 1e-9);
+        }
+        total += v.piece_count;
+    }
+    assert_int_equal(leaves, info.leaves);
+    view_walk w = {bsp, calloc(info.nodes, sizeof(uint32_t)), 0, 0};
+    assert_non_null(w.next);
+    assert_int_equal(sidx_bsp_paint(bsp, sidx_v3(2.5f, 2.5f, -3.0f), SIDX_BSP_BACK_TO_FRONT, check_piece, &w, NULL),
+                     SIDX_OK);
+    assert_int_equal(w.mismatches, 0);
+    assert_int_equal(w.pieces, total);
+    for (uint32_t i = 0; i < info.nodes; ++i) {
+        sidx_bsp_node_view v;
+        assert_int_equal(sidx_bsp_node_get(bsp, i, &v), SIDX_OK);
+        assert_int_equal(w.next[i], v.piece_count);
+    }
+    free(w.next);
+    sidx_bsp_node_view v;
+    sidx_bsp_piece q;
+    assert_int_equal(sidx_bsp_node_get(bsp, info.nodes, &v), SIDX_ERR_INVALID_ARG);
+    assert_int_equal(sidx_bsp_node_get(brute, 0, &v), SIDX_ERR_INVALID_ARG);
+    assert_int_equal(sidx_bsp_node_get(bsp, 0, NULL), SIDX_ERR_INVALID_ARG);
+    assert_int_equal(sidx_bsp_node_get(NULL, 0, &v), SIDX_ERR_INVALID_ARG);
+    assert_int_equal(sidx_bsp_node_get(bsp, 0, &v), SIDX_OK);
+    assert_int_equal(sidx_bsp_node_piece(bsp, 0, v.piece_count, &q), SIDX_ERR_INVALID_ARG);
+    assert_int_equal(sidx_bsp_node_piece(bsp, info.nodes, 0, &q), SIDX_ERR_INVALID_ARG);
+    assert_int_equal(sidx_bsp_node_piece(brute, 0, 0, &q), SIDX_ERR_INVALID_ARG);
+    assert_int_equal(sidx_bsp_node_piece(bsp, 0, 0, NULL), SIDX_ERR_INVALID_ARG);
+    sidx_accel_destroy(brute);
+    sidx_accel_destroy(bsp);
+    sidx_mesh_free(&m);
+}
+
 /* ---- allocation failure ------------------------------------------------------ */
 
 
@@ -401,6 +474,7 @@ int main(void)
         cmocka_unit_test(painter_3d_soup),
         cmocka_unit_test(painter_2d),
         cmocka_unit_test(paint_arguments),
+        cmocka_unit_test(node_view),
         cmocka_unit_test(nomem_leaks_nothing),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

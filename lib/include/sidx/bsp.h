@@ -68,6 +68,23 @@ sidx_status sidx_bsp_info_get(const sidx_accel *a, sidx_bsp_info *out);
 sidx_status sidx_bsp_paint(const sidx_accel *a, sidx_vec3 eye, sidx_bsp_order order, sidx_bsp_piece_fn fn,
                            void *user, const sidx_hook *hook);
 
+/* A read-only view of one node, for code that walks the tree itself
+ * (lessons/exercises/14_bsp_painter): node ids run from 0 (the root) to
+ * sidx_bsp_info.nodes - 1. */
+typedef struct sidx_bsp_node_view {
+    double n[3], d;          /* inner nodes: the plane n·x = d (unit n); the front side is n·x > d */
+    uint32_t child[2];       /* [0] front, [1] back; UINT32_MAX for a leaf */
+    uint32_t piece_count;    /* pieces kept here: those lying in the plane (inner) or the leaf's */
+} sidx_bsp_node_view;
+
+/* SIDX_ERR_INVALID_ARG if a is not a "bsp" structure, out is NULL or node
+ * is out of range. */
+sidx_status sidx_bsp_node_get(const sidx_accel *a, uint32_t node, sidx_bsp_node_view *out);
+/* Piece i (0 <= i < piece_count) of node, in the node's order (the one
+ * sidx_bsp_paint draws back to front); verts stay valid as long as the
+ * structure.  SIDX_ERR_INVALID_ARG as above, or for i out of range. */
+sidx_status sidx_bsp_node_piece(const sidx_accel *a, uint32_t node, uint32_t i, sidx_bsp_piece *out);
+
 #ifdef __cplusplus
 }
 #endif
