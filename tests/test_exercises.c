@@ -156,7 +156,9 @@ static void stubs_fail_cleanly(void **state)
     check_every("lessons/exercises", 1, expect);
 }
 
-/* One planted mistake of tests/exercises/mistakes.txt. */
+/* One planted mistake of tests/exercises/mistakes.txt; the file holds at
+ * most MAX_MISTAKES of them. */
+#define MAX_MISTAKES 256
 typedef struct mistake {
     char name[64], slug[64], old[512], new_[512];
     int exit_;
@@ -246,8 +248,8 @@ static int read_mistakes(mistake *ms, int max)
 static void planted_mistakes_caught(void **state)
 {
     (void)state;
-    static mistake ms[64];
-    const int n = read_mistakes(ms, 64);
+    static mistake ms[MAX_MISTAKES];
+    const int n = read_mistakes(ms, MAX_MISTAKES);
     if (n == -1 || access("lessons/exercises/solutions", R_OK) != 0) {
         print_message("skipped: no tests/exercises/ or no solutions (a handout tree)\n");
         return;
@@ -255,10 +257,10 @@ static void planted_mistakes_caught(void **state)
     assert_true(n >= 8);
     char dir[] = "/tmp/sidx-test-ex-XXXXXX";
     assert_non_null(mkdtemp(dir));
-    static char files[64][PATH_MAX];
-    const char *names_[64] = {0}, *files_[64] = {0};
-    char *out[64];
-    int rc[64];
+    static char files[MAX_MISTAKES][PATH_MAX];
+    const char *names_[MAX_MISTAKES] = {0}, *files_[MAX_MISTAKES] = {0};
+    char *out[MAX_MISTAKES];
+    int rc[MAX_MISTAKES];
     for (int i = 0; i < n; ++i) {
         assert_true(ms[i].exit_ == 1 || ms[i].exit_ == 2);
         assert_int_equal(plant(&ms[i], dir, files[i], sizeof files[i]), 0);
@@ -316,8 +318,8 @@ static void traces_and_diff(void **state)
     assert_non_null(mkdtemp(dir));
     char cmd[4 * PATH_MAX], step[PATH_MAX + 32];
     step_path(step, sizeof step);
-    static mistake ms[64];
-    const int n = read_mistakes(ms, 64);
+    static mistake ms[MAX_MISTAKES];
+    const int n = read_mistakes(ms, MAX_MISTAKES);
     int k = 0;
     while (k < n && strcmp(ms[k].slug, "far-wrong-t") != 0) ++k;
     char file[PATH_MAX];

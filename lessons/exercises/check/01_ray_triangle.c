@@ -100,9 +100,35 @@ static void student(size_t i, const sidx_hook *h)
     tri_emit(h, i, hit, t);
 }
 
+static const char *const hint_plane_t =
+    "the same plane hit at another t: plug the ray o + t·d into N·x = c, N·o + t·(N·d) = c, so t = (c - N·o) / "
+    "(N·d) with the ray's own d (not normalised) and N as given (not normalised either)";
+static const char *const hint_tri_t =
+    "the same triangle hit at another t: step i) is the ray-plane test, the plane through the triangle is "
+    "N = e1 x e2, c = N·p0, and t = (c - N·o) / (N·d) with the ray's own d; t is the plane's, step ii) only "
+    "decides hit or miss";
+
+/* What differs decides: another t is the formula for t; a hit whose t
+ * lies outside [tmin, tmax) is the range rule (t < tmin: behind the
+ * origin, t >= tmax: beyond the best hit); any other hit for a miss, or
+ * miss for a hit, is the case's own rule. */
+static const char *hint(size_t i, const sidx_event *ref, const sidx_event *stu)
+{
+    if (!ref || !stu || ref->type != SIDX_EV_PRIM_TEST || stu->type != SIDX_EV_PRIM_TEST) return NULL;
+    const int plane = i < NP;
+    if (ref->result == 1 && stu->result == 1) return plane ? hint_plane_t : hint_tri_t;
+    if (ref->result == 0 && stu->result == 1) {
+        const sidx_ray *r = plane ? &planes[i].ray : &tri_cases[i - NP].ray;
+        const float tmax = plane ? r->tmax : tri_cases[i - NP].tmax;
+        if (!(stu->t >= r->tmin)) return plane ? hint_plane_range : hint_behind;
+        if (!(stu->t < tmax)) return plane ? hint_plane_range : hint_tmax;
+    }
+    return NULL;
+}
+
 const ex_driver ex_driver_this = {
     "01_ray_triangle",
     "ray-plane intersection, then the two-step ray-triangle test",
     "deck 001, \"Ray-Plane Intersection\" and \"Ray-Triangle Intersection\"",
-    setup, num_cases, describe, reference, student, NULL, NULL, NULL,
+    setup, num_cases, describe, reference, student, hint, NULL, NULL,
 };

@@ -141,6 +141,16 @@ static const char *const hint_update =
 static const char *const hint_prims =
     "test each primitive of the leaf against the best hit so far: sidx_ex_test_triangle(ex, prim, best->t, &t)";
 
+static const char *const hint_interval =
+    "the same child entered with another interval: \"pick node with better time\" uses the times its box "
+    "test gave, so enter each child over (t_near, t_far) of that test, hit(child, t_near, t_far)";
+
+/* What differs decides: the same box tested over another interval is the
+ * culling by best.t; a hit update, or another primitive step, is the
+ * leaf; in the ordered walk the same child entered with another interval
+ * is the box test's interval, another child at the same depth is the
+ * near-first order, and a child entered or skipped is the far-child rule;
+ * in the naive walk anything else is its order. */
 static const char *hint(size_t i, const sidx_event *ref, const sidx_event *stu)
 {
     const int ordered = i >= PER_PART;
@@ -150,6 +160,9 @@ static const char *hint(size_t i, const sidx_event *ref, const sidx_event *stu)
     if (stu && stu->type == SIDX_EV_HIT_UPDATE) return hint_update;
     if (ref && stu && ref->type == SIDX_EV_PRIM_TEST && stu->type == SIDX_EV_PRIM_TEST) return hint_prims;
     if (ordered) {
+        if (ref && stu && ref->type == SIDX_EV_NODE_ENTER && stu->type == SIDX_EV_NODE_ENTER &&
+            ref->node == stu->node)
+            return hint_interval;
         if (ref && stu && ref->type == SIDX_EV_NODE_ENTER && stu->type == SIDX_EV_NODE_ENTER &&
             ref->depth == stu->depth)
             return hint_nearer;

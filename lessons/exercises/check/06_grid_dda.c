@@ -155,11 +155,22 @@ static void student(size_t i, const sidx_hook *h)
     grid_student_ray((int)(i / GRID_RAYS), (int)(i % GRID_RAYS), 0, h, "grid-nomailbox", walk, NULL);
 }
 
+/* What differs decides: another first cell, or the first cell over
+ * another interval, is the start (the clip and the cell holding the entry
+ * point); another cell or interval later on is the t_max step; a stop
+ * where the reference goes on (or the reverse) is the termination rule; a
+ * triangle step is the cell's list. */
 static const char *hint(size_t i, const sidx_event *ref, const sidx_event *stu)
 {
     if (i < RES_CASES) return NULL;
-    if (ref && stu && ref->type == SIDX_EV_NODE_ENTER && stu->type == SIDX_EV_NODE_ENTER)
-        return ref->t_near == stu->t_near ? hint_step : hint_start; /* same entry t: a wrong step */
+    if (ref && stu && ref->type == SIDX_EV_NODE_ENTER && stu->type == SIDX_EV_NODE_ENTER) {
+        i -= RES_CASES;
+        const int s = (int)(i / GRID_RAYS), r = (int)(i % GRID_RAYS);
+        float t0 = NAN, t1 = NAN;
+        const int in = sidx_intersect_aabb(SIDX_BOX_PLAIN, &grid_rays[s][r], &grid_views[s].box,
+                                           grid_rays[s][r].tmin, grid_rays[s][r].tmax, &t0, &t1);
+        return in && ref->t_near == t0 ? hint_start : hint_step; /* the first cell, or a later one */
+    }
     if ((ref && ref->type == SIDX_EV_TERMINATE && ref->reason == SIDX_TERM_MISS_ROOT) ||
         (stu && stu->type == SIDX_EV_TERMINATE && stu->reason == SIDX_TERM_MISS_ROOT))
         return hint_start;

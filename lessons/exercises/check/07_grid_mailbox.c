@@ -117,11 +117,23 @@ static void student(size_t i, const sidx_hook *h)
     for (int k = 0; k < PER_CASE; ++k) grid_student_ray(s, r + k, (uint32_t)k, h, "grid", walk, &mb);
 }
 
+static const char *const hint_again =
+    "\"Single primitive can be referenced in many cells — avoid multiple intersections\": this triangle was "
+    "tested already for this ray, in an earlier cell; look in its slot (prim mod 32) before testing, and "
+    "record every triangle you test, hit or miss, so the next cell finds it there";
+
+/* What differs decides: a triangle skipped that this ray has not tested
+ * is a stale cache (a later ray: the clearing) or a slot written before
+ * the check (the first ray); a triangle tested again that the ray has
+ * tested is the mailbox check and the recording; anything else is the
+ * check's order. */
 static const char *hint(size_t i, const sidx_event *ref, const sidx_event *stu)
 {
     (void)i;
     if (stu && stu->type == SIDX_EV_MAILBOX_HIT && ref && ref->type == SIDX_EV_PRIM_TEST)
         return stu->ray_id > 0 ? hint_clear : hint_stamp; /* the first ray has a fresh cache */
+    if (ref && ref->type == SIDX_EV_MAILBOX_HIT && stu && stu->type == SIDX_EV_PRIM_TEST && stu->prim == ref->prim)
+        return hint_again;
     if (ref && ref->type == SIDX_EV_MAILBOX_HIT) return hint_stamp;
     return hint_skip;
 }

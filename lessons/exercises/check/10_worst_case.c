@@ -35,6 +35,10 @@ static const char *const hint_kd =
     "a kd-tree splits space, and cannot separate triangles that all straddle every plane: slivers crossing "
     "the whole scene end in one leaf (or in every leaf)";
 
+static const char *const hint_count =
+    "worst_case_scene(structure, n, out) must give a valid mesh of exactly n triangles: n·3 vertices, n "
+    "index triples each naming vertices that exist, passed to sidx_mesh_from_arrays with n triangles";
+
 static void describe(size_t i, ex_case_info *out)
 {
     const int s = (int)(i / NSIZES);
@@ -108,7 +112,9 @@ static void student(size_t i, const sidx_hook *h)
     sidx_mesh m;
     memset(&m, 0, sizeof m);
     worst_case_scene(structures[s], n, &m);
-    if (m.num_triangles != n || sidx_mesh_validate(&m, NULL) != SIDX_OK) {
+    if (sidx_mesh_validate(&m, NULL) != SIDX_OK) {
+        note(h, n, (uint32_t)-1, 0, -1.0f, 0); /* cell[1] = -1: an invalid mesh */
+    } else if (m.num_triangles != n) {
         note(h, n, m.num_triangles, 0, -1.0f, 0);
     } else {
         const float t = tests_per_ray(structures[s], &m);
@@ -117,12 +123,22 @@ static void student(size_t i, const sidx_hook *h)
     sidx_mesh_free(&m);
 }
 
+/* What differs decides: a scene of another size (or an invalid mesh) is
+ * the size rule, too few tests per ray the structure's own weakness. */
+static const char *hint(size_t i, const sidx_event *ref, const sidx_event *stu)
+{
+    (void)i;
+    if (ref && stu && stu->type == SIDX_EV_NOTE && stu->cell[1] != ref->cell[1]) return hint_count;
+    return NULL;
+}
+
 static int format(const sidx_event *e, char *buf, size_t size)
 {
     if (e->type != SIDX_EV_NOTE) return 0;
-    if (e->cell[0] != e->cell[1])
-        snprintf(buf, size, "n = %d: a scene of %d triangles (or an invalid mesh); n wanted", (int)e->cell[0],
-                 (int)e->cell[1]);
+    if (e->cell[1] < 0)
+        snprintf(buf, size, "n = %d: an invalid mesh (sidx_mesh_validate fails)", (int)e->cell[0]);
+    else if (e->cell[0] != e->cell[1])
+        snprintf(buf, size, "n = %d: a scene of %d triangles; n wanted", (int)e->cell[0], (int)e->cell[1]);
     else if (e->aux == 1)
         snprintf(buf, size, "n = %d: at least %g triangle tests per ray (n/2: O(n))", (int)e->cell[0], (double)e->cost);
     else
@@ -136,5 +152,5 @@ const ex_driver ex_driver_this = {
     "the private exercise: a worst-case scene, where tests per ray grow like n",
     "deck 000, \"Spatial index structures\" (\"worst case complexity is still O(n). Private exercise: come up "
     "with a worst case example\")",
-    NULL, num_cases, describe, reference, student, NULL, NULL, format,
+    NULL, num_cases, describe, reference, student, hint, NULL, format,
 };
