@@ -164,7 +164,7 @@ grep -q 'more lines of your output not shown' "$R/s24-spam.txt" || bad "the endl
 [ "$(tail -n 2 "$R/s24-spam.txt" | head -n 1)" = "CRASH (exit 2)" ] || bad "the verdict is not the last line of s24-spam's report"
 grep -q 'more than 1 MiB of output' "$R/s24-spam.txt" || bad "too much output is not said"
 grep -q 'ray_box called' "$R/s28-chatty.txt" || bad "a passing student's output is not shown"
-grep -q 'all 56 cases pass' "$R/s28-chatty.txt" || bad "the chatty student does not pass"
+grep -Eq 'all [0-9]+ cases pass' "$R/s28-chatty.txt" || bad "the chatty student does not pass"
 grep -q 'it kept computing' "$R/s22-spin.txt" || bad "the endless loop is not named"
 grep -q 'it was waiting' "$R/s23-sleep.txt" || bad "the sleep is not named"
 grep -q 'ran out of memory' "$R/s27-hog.txt" || bad "the memory hog is not named"
