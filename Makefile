@@ -226,6 +226,9 @@ test-run:
 	if [ -f tests/run_step_tmux.sh ]; then \
 	  echo "== sidx-step in tmux"; BUILD=$(BUILD) sh tests/run_step_tmux.sh </dev/null || { echo "!! FAILED: sidx-step in tmux"; failed=$$((failed+1)); }; \
 	fi; \
+	if [ -f tests/run_handout.sh ]; then \
+	  echo "== exercises hand-out"; sh tests/run_handout.sh || { echo "!! FAILED: exercises hand-out"; failed=$$((failed+1)); }; \
+	fi; \
 	if [ -f tests/run_bench.sh ]; then \
 	  echo "== sidx-bench timing"; BUILD=$(BUILD) sh tests/run_bench.sh || { echo "!! FAILED: sidx-bench timing"; failed=$$((failed+1)); }; \
 	fi; \
