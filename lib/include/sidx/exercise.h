@@ -82,7 +82,7 @@ int sidx_ex_test_triangle(const sidx_ex *ex, uint32_t prim, float tmax, float *t
  * e2 = p2 - p0, s = o - p0, D = (e1 x d)·e2; no hit when D = 0; u =
  * -(s x e2)·d / D, v = (e1 x d)·s / D, t = -(s x e2)·e1 / D; a hit when
  * u, v >= 0, u + v <= 1 and ray.tmin <= t < tmax, then *t, *u, *v are
- * filled (each may be NULL).  sidx_intersect_triangle's Möller–Trumbore
+ * filled (each may be NULL); r NULL: 0.  sidx_intersect_triangle's Möller–Trumbore
  * is the paper's arrangement of the same solution, which rounds
  * differently; exercise 02 is held against this one. */
 int sidx_ex_reference_moller_cramer(const sidx_ray *r, sidx_vec3 p0, sidx_vec3 p1, sidx_vec3 p2, float tmax,
