@@ -156,3 +156,35 @@ int sidx_ex_test_triangle(const sidx_ex *ex, uint32_t prim, float tmax, float *t
     sidx_ex_prim_test(ex, prim, hit, tt);
     return hit;
 }
+
+/* ---- references the checker compares with -------------------------------- */
+
+int sidx_ex_reference_moller_cramer(const sidx_ray *r, sidx_vec3 p0, sidx_vec3 p1, sidx_vec3 p2, float tmax,
+                                    float *t_out, float *u_out, float *v_out)
+{
+    if (!r) return 0;
+    /* deck 001, "Moller-Trumbore Algorithm": o + t·d = p0 + u·e1 + v·e2
+     * solved by Cramer's rule, each unknown a determinant over D, term by
+     * term as the slide writes it. */
+    const sidx_vec3 e1 = sidx_v3_sub(p1, p0), e2 = sidx_v3_sub(p2, p0), s = sidx_v3_sub(r->org, p0);
+    const sidx_vec3 e1xd = sidx_v3_cross(e1, r->dir), sxe2 = sidx_v3_cross(s, e2);
+    const float D = sidx_v3_dot(e1xd, e2);
+    if (D == 0.0f) return 0;
+    const float u = -sidx_v3_dot(sxe2, r->dir) / D;
+    const float v = sidx_v3_dot(e1xd, s) / D;
+    const float t = -sidx_v3_dot(sxe2, e1) / D;
+    if (!(u >= 0.0f && v >= 0.0f && u + v <= 1.0f)) return 0;
+    if (!(t >= r->tmin && t < tmax)) return 0;
+    if (t_out) *t_out = t;
+    if (u_out) *u_out = u;
+    if (v_out) *v_out = v;
+    return 1;
+}
+
+float sidx_ex_reference_sah_cost(sidx_aabb parent, sidx_aabb left, uint32_t n_left, sidx_aabb right,
+                                 uint32_t n_right, float c_trav, float c_tri)
+{
+    /* bvh_build.c's sah(): C_trav + C_tri·(A_L·N_L + A_R·N_R)·(1/A). */
+    const float inv = 1.0f / sidx_aabb_area(parent);
+    return c_trav + c_tri * (sidx_aabb_area(left) * (float)n_left + sidx_aabb_area(right) * (float)n_right) * inv;
+}

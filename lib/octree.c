@@ -18,7 +18,9 @@
  * at each crossing inside (t_near, t_far), in increasing t — at most 4
  * children, each with its exact t interval, and no box test per child.  The children are
  * pushed far-to-near on a small explicit stack. */
+#include <stddef.h>
 #include "grid_internal.h"
+#include "sidx/octree.h"
 
 #define OCT_DEFAULT_LEAF 8u
 /* The slides suggest ~10 levels; the teapot in a stadium needs more: the
@@ -351,3 +353,49 @@ static void octree_destroy(sidx_accel *a)
 
 const sidx_accel_vtable sidx__octree_vtable = {octree_build, octree_intersect, octree_occluded, octree_stats,
                                                octree_destroy, NULL};
+
+/* ---- sidx/octree.h: the read-only view ----------------------------------- */
+
+_Static_assert(sizeof(sidx_oct_node) == sizeof(onode) && offsetof(sidx_oct_node, a) == offsetof(onode, a) &&
+                   offsetof(sidx_oct_node, n) == offsetof(onode, n) && SIDX_OCT_INNER == OCT_INNER,
+               "sidx/octree.h's node is octree.c's node");
+
+static sidx_status oct_view(const sidx_accel *a, const void *p, const void *q, sidx_error *err, const char *fn,
+                            const octree **out)
+{
+    if (!a || !p || !q) return sidx__fail(err, SIDX_ERR_INVALID_ARG, "%s: NULL argument", fn);
+    if (a->vt != &sidx__octree_vtable || !a->impl)
+        return sidx__fail(err, SIDX_ERR_INVALID_ARG, "%s: '%s' is not an octree", fn, a->name ? a->name : "?");
+    *out = a->impl;
+    return SIDX_OK;
+}
+
+sidx_status sidx_octree_nodes(const sidx_accel *a, const sidx_oct_node **nodes, uint32_t *count, sidx_error *err)
+{
+    const octree *T = NULL;
+    const sidx_status s = oct_view(a, nodes, count, err, "sidx_octree_nodes", &T);
+    if (s != SIDX_OK) return s;
+    *nodes = (const sidx_oct_node *)T->nodes;
+    *count = T->n_nodes;
+    return SIDX_OK;
+}
+
+sidx_status sidx_octree_refs(const sidx_accel *a, const uint32_t **refs, uint32_t *count, sidx_error *err)
+{
+    const octree *T = NULL;
+    const sidx_status s = oct_view(a, refs, count, err, "sidx_octree_refs", &T);
+    if (s != SIDX_OK) return s;
+    *refs = T->n_refs ? T->refs : NULL;
+    *count = T->n_refs;
+    return SIDX_OK;
+}
+
+sidx_status sidx_octree_info(const sidx_accel *a, sidx_aabb *root_box, int *axes_cut, sidx_error *err)
+{
+    const octree *T = NULL;
+    const sidx_status s = oct_view(a, root_box, axes_cut, err, "sidx_octree_info", &T);
+    if (s != SIDX_OK) return s;
+    *root_box = T->box;
+    *axes_cut = T->nsplit;
+    return SIDX_OK;
+}

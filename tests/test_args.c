@@ -27,6 +27,7 @@
 #include "sidx/bsp.h"
 #include "sidx/instance.h"
 #include "sidx/kdtree.h"
+#include "sidx/octree.h"
 #include "sidx/lightbuffer.h"
 #include "sidx/packet.h"
 #include "sidx/parallel.h"
@@ -719,6 +720,45 @@ static void test_kdtree_view_bad_arguments(void **state)
     sidx_mesh_free(&m);
 }
 
+/* ---- octree.h ------------------------------------------------------------------ */
+
+static void test_octree_view_bad_arguments(void **state)
+{
+    (void)state;
+    sidx_mesh m = tiny_mesh();
+    sidx_accel *oct = NULL, *bvh = NULL;
+    CHECK_EQ(sidx_accel_build("octree", &m, NULL, &oct, NULL), SIDX_OK);
+    CHECK_EQ(sidx_accel_build("bvh", &m, NULL, &bvh, NULL), SIDX_OK);
+    const sidx_oct_node *nodes = (const sidx_oct_node *)&m;
+    const uint32_t *refs = (const uint32_t *)&m;
+    uint32_t count = 77;
+    sidx_aabb box = {{1, 2, 3}, {4, 5, 6}};
+    int axes = 77;
+    sidx_error err;
+    ASSERT_FAILS(sidx_octree_nodes(NULL, &nodes, &count, &err), SIDX_ERR_INVALID_ARG, &err);
+    ASSERT_FAILS(sidx_octree_nodes(bvh, &nodes, &count, &err), SIDX_ERR_INVALID_ARG, &err);
+    ASSERT_FAILS(sidx_octree_nodes(oct, NULL, &count, &err), SIDX_ERR_INVALID_ARG, &err);
+    ASSERT_FAILS(sidx_octree_nodes(oct, &nodes, NULL, &err), SIDX_ERR_INVALID_ARG, &err);
+    ASSERT_FAILS(sidx_octree_refs(NULL, &refs, &count, &err), SIDX_ERR_INVALID_ARG, &err);
+    ASSERT_FAILS(sidx_octree_refs(bvh, &refs, &count, &err), SIDX_ERR_INVALID_ARG, &err);
+    ASSERT_FAILS(sidx_octree_refs(oct, NULL, &count, &err), SIDX_ERR_INVALID_ARG, &err);
+    ASSERT_FAILS(sidx_octree_refs(oct, &refs, NULL, &err), SIDX_ERR_INVALID_ARG, &err);
+    ASSERT_FAILS(sidx_octree_info(NULL, &box, &axes, &err), SIDX_ERR_INVALID_ARG, &err);
+    ASSERT_FAILS(sidx_octree_info(bvh, &box, &axes, &err), SIDX_ERR_INVALID_ARG, &err);
+    ASSERT_FAILS(sidx_octree_info(oct, NULL, &axes, &err), SIDX_ERR_INVALID_ARG, &err);
+    ASSERT_FAILS(sidx_octree_info(oct, &box, NULL, &err), SIDX_ERR_INVALID_ARG, &err);
+    /* outputs untouched on failure */
+    CHECK(nodes == (const sidx_oct_node *)&m && refs == (const uint32_t *)&m && count == 77 && axes == 77 &&
+          box.min.x == 1.0f && box.max.z == 6.0f);
+    CHECK_EQ(sidx_octree_nodes(oct, &nodes, &count, NULL), SIDX_OK);
+    CHECK(count > 0);
+    CHECK_EQ(sidx_octree_info(oct, &box, &axes, NULL), SIDX_OK);
+    CHECK(axes == 3);
+    sidx_accel_destroy(oct);
+    sidx_accel_destroy(bvh);
+    sidx_mesh_free(&m);
+}
+
 /* ---- lightbuffer.h ---------------------------------------------------------- */
 
 static void test_lightbuffer_bad_arguments(void **state)
@@ -938,6 +978,7 @@ int main(void)
         cmocka_unit_test_teardown(test_beam_bad_arguments, teardown),
         cmocka_unit_test_teardown(test_structure_extras_bad_arguments, teardown),
         cmocka_unit_test_teardown(test_kdtree_view_bad_arguments, teardown),
+        cmocka_unit_test_teardown(test_octree_view_bad_arguments, teardown),
         cmocka_unit_test_teardown(test_lightbuffer_bad_arguments, teardown),
         cmocka_unit_test_teardown(test_packets_and_parallel_bad_arguments, teardown),
         cmocka_unit_test_teardown(test_viz_bad_arguments, teardown),

@@ -9,7 +9,10 @@
  * OCT_NODES_PER_TRI·n + 1 — past that, nodes become leaves (reason
  * max_depth).  Checked: node count within the documented budget,
  * identical hits to brute force, and an allocation failure anywhere is
- * reported, never a crash or a leak (the test kit's failing allocator). */
+ * reported, never a crash or a leak (the test kit's failing allocator).
+ * The read-only view (sidx/octree.h): the cell of every node the traced
+ * walk enters, cut from the root's box through the view's nodes, is the
+ * box the walk reports, and every leaf's references lie in refs[]. */
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -199,11 +202,109 @@ static void test_specks_budget(void **state)
     sidx_mesh_free(&m);
 }
 
+/* Cell of every node from the view: children a + c, bit k of c = the
+ * upper half on axis k, cut at 0.5·(lo + hi). */
+static void view_cells(const sidx_oct_node *nodes, uint32_t count, int axes, sidx_aabb *cells)
+{
+    for (uint32_t i = 0; i < count; ++i) {
+        if (nodes[i].n != SIDX_OCT_INNER) continue;
+        const uint32_t nch = 1u << axes;
+        assert_true(nodes[i].a > i && nodes[i].a + nch <= count);
+        for (uint32_t c = 0; c < nch; ++c) {
+            sidx_aabb b = cells[i];
+            float *lo = &b.min.x, *hi = &b.max.x;
+            for (int k = 0; k < axes; ++k) {
+                const float m = 0.5f * (lo[k] + hi[k]);
+                if (c & (1u << k)) lo[k] = m;
+                else hi[k] = m;
+            }
+            cells[nodes[i].a + c] = b;
+        }
+    }
+}
+
+typedef struct enter_check {
+    const sidx_aabb *cells;
+    uint32_t count, entered;
+} enter_check;
+
+static void enter_fn(const sidx_event *ev, void *user)
+{
+    enter_check *c = user;
+    if (ev->type != SIDX_EV_NODE_ENTER) return;
+    assert_true(ev->node < c->count);
+    const sidx_aabb *b = &c->cells[ev->node];
+    assert_true(ev->bounds.min.x == b->min.x && ev->bounds.min.y == b->min.y && ev->bounds.min.z == b->min.z &&
+                ev->bounds.max.x == b->max.x && ev->bounds.max.y == b->max.y && ev->bounds.max.z == b->max.z);
+    ++c->entered;
+}
+
+static void test_view(void **state)
+{
+    (void)state;
+    const char *const names[2] = {"octree", "quadtree"};
+    const char *const scenes[2] = {"soup:300", "flat2d"};
+    for (int s = 0; s < 2; ++s) {
+        sidx_mesh m;
+        sidx_accel *a = NULL;
+        sidx_error err;
+        assert_int_equal(sidx_scene_open(scenes[s], &m, &err), SIDX_OK);
+        assert_int_equal(sidx_accel_build(names[s], &m, NULL, &a, &err), SIDX_OK);
+        const sidx_oct_node *nodes = NULL;
+        const uint32_t *refs = NULL;
+        uint32_t count = 0, nrefs = 0;
+        sidx_aabb root;
+        int axes = 0;
+        assert_int_equal(sidx_octree_nodes(a, &nodes, &count, &err), SIDX_OK);
+        assert_int_equal(sidx_octree_refs(a, &refs, &nrefs, &err), SIDX_OK);
+        assert_int_equal(sidx_octree_info(a, &root, &axes, &err), SIDX_OK);
+        assert_int_equal(axes, s == 0 ? 3 : 2);
+        assert_true(count > 1 && nodes[0].n == SIDX_OCT_INNER);
+        for (uint32_t i = 0; i < count; ++i)
+            if (nodes[i].n != SIDX_OCT_INNER) {
+                assert_true((uint64_t)nodes[i].a + nodes[i].n <= nrefs);
+                for (uint32_t j = 0; j < nodes[i].n; ++j) assert_true(refs[nodes[i].a + j] < m.num_triangles);
+            }
+        sidx_aabb *cells = malloc(count * sizeof *cells);
+        assert_non_null(cells);
+        cells[0] = root;
+        view_cells(nodes, count, axes, cells);
+        enter_check c = {cells, count, 0};
+        sidx_hook h = {enter_fn, &c, 0};
+        sidx_query q;
+        memset(&q, 0, sizeof q);
+        q.hook = &h;
+        const sidx_aabb b = sidx_mesh_bounds(&m);
+        uint32_t st = 5u;
+        for (int r = 0; r < 50; ++r) {
+            sidx_ray ray;
+            /* From outside the scene box to a point inside it. */
+            const sidx_vec3 p = sidx_v3(b.min.x + lcg(&st) * (b.max.x - b.min.x), b.min.y + lcg(&st) * (b.max.y - b.min.y),
+                                        b.min.z + lcg(&st) * (b.max.z - b.min.z));
+            const sidx_vec3 o = sidx_v3(b.min.x - 1.0f, b.min.y - 0.5f + lcg(&st), p.z);
+            sidx_ray_init(&ray, o, sidx_v3_sub(p, o), 0.0f, INFINITY);
+            sidx_hit hit;
+            assert_int_equal(sidx_accel_intersect(a, &ray, &q, &hit), SIDX_OK);
+        }
+        assert_true(c.entered > 50);
+        free(cells);
+        sidx_accel *bvh = NULL;
+        assert_int_equal(sidx_accel_build("bvh", &m, NULL, &bvh, &err), SIDX_OK);
+        assert_int_equal(sidx_octree_nodes(bvh, &nodes, &count, &err), SIDX_ERR_INVALID_ARG);
+        assert_int_equal(sidx_octree_refs(a, NULL, &nrefs, &err), SIDX_ERR_INVALID_ARG);
+        assert_int_equal(sidx_octree_info(NULL, &root, &axes, &err), SIDX_ERR_INVALID_ARG);
+        sidx_accel_destroy(bvh);
+        sidx_accel_destroy(a);
+        sidx_mesh_free(&m);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_star_bounded),
         cmocka_unit_test(test_specks_budget),
+        cmocka_unit_test(test_view),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

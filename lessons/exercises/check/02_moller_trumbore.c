@@ -1,30 +1,12 @@
 /* 02_moller_trumbore.c — checker driver: Möller–Trumbore in the slide's
- * Cramer form (deck 001, "Moller-Trumbore Algorithm").  Reference: that
- * form computed here, term by term as on the slide (the library's
- * sidx_intersect_triangle_moller is the same solution arranged as
- * Möller and Trumbore's paper does, which rounds differently). */
+ * Cramer form (deck 001, "Moller-Trumbore Algorithm").  Reference: the
+ * library's sidx_ex_reference_moller_cramer (sidx/exercise.h), that form
+ * term by term as on the slide (sidx_intersect_triangle's Möller–Trumbore
+ * is the paper's arrangement, which rounds differently). */
 #include "tri_cases.h"
 
 int moller_trumbore(const sidx_ray *r, sidx_vec3 p0, sidx_vec3 p1, sidx_vec3 p2, float tmax, float *t, float *u,
                     float *v);
-
-static int cramer(const sidx_ray *r, sidx_vec3 p0, sidx_vec3 p1, sidx_vec3 p2, float tmax, float *t_out, float *u_out,
-                  float *v_out)
-{
-    const sidx_vec3 e1 = sidx_v3_sub(p1, p0), e2 = sidx_v3_sub(p2, p0), s = sidx_v3_sub(r->org, p0);
-    const sidx_vec3 e1xd = sidx_v3_cross(e1, r->dir), sxe2 = sidx_v3_cross(s, e2);
-    const float D = sidx_v3_dot(e1xd, e2);
-    if (D == 0.0f) return 0;
-    const float u = -sidx_v3_dot(sxe2, r->dir) / D;
-    const float v = sidx_v3_dot(e1xd, s) / D;
-    const float t = -sidx_v3_dot(sxe2, e1) / D;
-    if (!(u >= 0.0f && v >= 0.0f && u + v <= 1.0f)) return 0;
-    if (!(t >= r->tmin && t < tmax)) return 0;
-    *t_out = t;
-    *u_out = u;
-    *v_out = v;
-    return 1;
-}
 
 /* A hit's barycentrics, the outputs *u and *v: a NOTE with u in t_near
  * and v in t_far (compared within the tolerance of t). */
@@ -50,7 +32,7 @@ static void reference(size_t i, const sidx_hook *h)
 {
     const tri_case *c = &tri_cases[i];
     float t = INFINITY, u = NAN, v = NAN;
-    const int hit = cramer(&c->ray, c->p0, c->p1, c->p2, c->tmax, &t, &u, &v);
+    const int hit = sidx_ex_reference_moller_cramer(&c->ray, c->p0, c->p1, c->p2, c->tmax, &t, &u, &v);
     tri_emit(h, i, hit, t);
     if (hit) emit_uv(h, u, v);
 }

@@ -2,8 +2,8 @@
  * split choice of the deck's three "Building Partitions" loops (deck 001,
  * "Surface Area Heuristic" and "Building Partitions"): the full sweep over
  * sorted centroids, the sweep at every B-th position, and binning.
- * References: the cost as bvh_build.c computes it (C_trav + C_tri·(A_L·N_L
- * + A_R·N_R)/A), and for the splits the library's own builds ("bvh-sweep",
+ * References: the cost as the "bvh" builds compute it
+ * (sidx_ex_reference_sah_cost, C_trav + C_tri·(A_L·N_L + A_R·N_R)/A), and for the splits the library's own builds ("bvh-sweep",
  * "bvh-everyb", "bvh"), whose BUILD_CANDIDATE and BUILD_SPLIT events of
  * one node are the student's candidates and choice for that node's
  * triangles, one for one. */
@@ -41,12 +41,6 @@ static sidx_aabb box6(float x0, float y0, float z0, float x1, float y1, float z1
 {
     sidx_aabb b = {{x0, y0, z0}, {x1, y1, z1}};
     return b;
-}
-
-static float ref_cost(const cost_case *c)
-{
-    const float inv = 1.0f / sidx_aabb_area(c->parent);
-    return C_TRAV + C_TRI * (sidx_aabb_area(c->left) * (float)c->nl + sidx_aabb_area(c->right) * (float)c->nr) * inv;
 }
 
 static void cost_setup(void)
@@ -273,7 +267,9 @@ static void reference(size_t i, const sidx_hook *h)
         memset(&ex, 0, sizeof ex);
         ex.hook = h;
         ex.structure = "bvh";
-        sidx_ex_candidate(&ex, 0, 0, 0.0f, ref_cost(c), c->nl, c->nr);
+        sidx_ex_candidate(&ex, 0, 0, 0.0f,
+                          sidx_ex_reference_sah_cost(c->parent, c->left, c->nl, c->right, c->nr, C_TRAV, C_TRI), c->nl,
+                          c->nr);
         return;
     }
     if (i >= COST_CASES + num_split_cases()) return; /* no candidate, no split */

@@ -75,6 +75,23 @@ int sidx_ex_test_box(const sidx_ex *ex, uint32_t node, const sidx_aabb *box, flo
  * hits in [ray.tmin, tmax), then PRIM_TEST.  Returns 1 and fills *t on a hit. */
 int sidx_ex_test_triangle(const sidx_ex *ex, uint32_t prim, float tmax, float *t);
 
+/* ---- references sidx-check compares a student's function with ------------ */
+
+/* Möller–Trumbore in the slide's Cramer form (deck 001, "Moller-Trumbore
+ * Algorithm"), computed term by term as the slide writes it: e1 = p1 - p0,
+ * e2 = p2 - p0, s = o - p0, D = (e1 x d)·e2; no hit when D = 0; u =
+ * -(s x e2)·d / D, v = (e1 x d)·s / D, t = -(s x e2)·e1 / D; a hit when
+ * u, v >= 0, u + v <= 1 and ray.tmin <= t < tmax, then *t, *u, *v are
+ * filled (each may be NULL); r NULL: 0.  sidx_intersect_triangle's Möller–Trumbore
+ * is the paper's arrangement of the same solution, which rounds
+ * differently; exercise 02 is held against this one. */
+int sidx_ex_reference_moller_cramer(const sidx_ray *r, sidx_vec3 p0, sidx_vec3 p1, sidx_vec3 p2, float tmax,
+                                    float *t, float *u, float *v);
+/* The SAH cost of one split (deck 001, "Surface Area Heuristic"), with the
+ * arithmetic of the "bvh" builds: C_trav + C_tri·(A_L·N_L + A_R·N_R)·(1/A). */
+float sidx_ex_reference_sah_cost(sidx_aabb parent, sidx_aabb left, uint32_t n_left, sidx_aabb right,
+                                 uint32_t n_right, float c_trav, float c_tri);
+
 #ifdef __cplusplus
 }
 #endif

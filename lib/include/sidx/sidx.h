@@ -19,6 +19,7 @@
 #include "grid.h"
 #include "instance.h"
 #include "kdtree.h"
+#include "octree.h"
 #include "lightbuffer.h"
 #include "packet.h"
 #include "parallel.h"
