@@ -6,8 +6,8 @@
 # no tests/exercises/ (the planted mistakes quote the solutions), and no
 # shipped file under lessons/exercises/ (the stubs, the check drivers),
 # docs/ or tests/ holds MIN (3) or more of the body lines of a solution (the lines of lessons/exercises/solutions/NAME.c that are not
-# in the stub lessons/exercises/NAME.c, comments and lines shorter than
-# 16 characters left out, all whitespace removed before comparing).  The
+# in the stub lessons/exercises/NAME.c, comments, preprocessor lines and
+# lines shorter than 24 characters left out, all whitespace removed before comparing).  The
 # library (lib/) holds the references the checker compares with
 # (sidx/exercise.h), and the lesson programs (lessons/NN_*.c) show the
 # library's algorithms at work: both are the course's material.
@@ -31,7 +31,7 @@ for sol in lessons/exercises/solutions/*.c; do
     [ -f "$stub" ] || continue
     # The solution's own lines: not in the stub, not a comment, not short.
     sed -e 's/[[:space:]]//g' "$stub" | sort -u >"$tmp/stub"
-    sed -e 's/[[:space:]]//g' "$sol" | grep -v -e '^/\*' -e '^\*' -e '^//' | awk 'length($0) >= 16' | sort -u |
+    sed -e 's/[[:space:]]//g' "$sol" | grep -v -e '^/\*' -e '^\*' -e '^//' -e '^#' | awk 'length($0) >= 24' | sort -u |
         comm -23 - "$tmp/stub" | sed "s|^|$name	|" >>"$tmp/body"
 done
 [ -s "$tmp/body" ] || { echo "run_handout: no solution lines to look for"; exit 2; }
