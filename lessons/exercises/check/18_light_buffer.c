@@ -42,6 +42,7 @@ typedef struct lb_case {
     int npts;            /* 0: random points on the scene's triangles, filled in setup */
     lb_point pts[MAXPTS];
     const char *hint;
+    int tie;             /* setup moves pts[0].tmin until reach equals a listed triangle's dist */
 } lb_case;
 
 static const char *const hint_first =
@@ -65,29 +66,65 @@ static const char *const hint_skip =
     "the cached occluder was tested first: skip it in the list (tris[k] == the cached one)";
 
 static lb_case cases[] = {
-    {"hand: a cell with no cached occluder (the first shadow ray)", 0, 2, 0, 1, {{{0.5f, 0.5f, 0}, 1e-3f, 1}}, NULL},
+    {"hand: a cell with no cached occluder (the first shadow ray)", 0, 2, 0, 1, {{{0.5f, 0.5f, 0}, 1e-3f, 1}}, NULL, 0},
     {"hand: the same occluder twice (the cache hits)", 0, 2, 0, 2,
-     {{{0.5f, 0.5f, 0}, 1e-3f, 1}, {{0.25f, 0.75f, 0}, 1e-3f, 1}}, NULL},
+     {{{0.5f, 0.5f, 0}, 1e-3f, 1}, {{0.75f, 0.25f, 0}, 1e-3f, 1}}, NULL, 0},
     {"hand: a cached occluder that misses this ray, then another occluder in the same cell", 0, 2, 0, 5,
      {{{0.5f, 0.5f, 0}, 1e-3f, 1}, {{5.0f, 0.5f, 0}, 1e-3f, 1}, {{4.5f, 4.5f, 0}, 1e-3f, 1},
-      {{0.5f, 0.25f, 0}, 1e-3f, 1}, {{4.5f, 4.5f, 0}, 1e-3f, 1}}, NULL},
+      {{0.5f, 0.25f, 0}, 1e-3f, 1}, {{4.5f, 4.5f, 0}, 1e-3f, 1}}, NULL, 0},
     {"hand: an occluder exactly at tmax (t = 0.5 = tmax), then inside", 0, 2, 0, 3,
-     {{{-3, -3, 0}, 1e-3f, 0.5f}, {{-3, -3, 0}, 1e-3f, 0.5000001f}, {{-3, -3, 0}, 1e-3f, 1}}, NULL},
+     {{{-3, -3, 0}, 1e-3f, 0.5f}, {{-3, -3, 0}, 1e-3f, 0.5000001f}, {{-3, -3, 0}, 1e-3f, 1}}, NULL, 0},
     {"hand: a triangle through the light (t = 1 = tmax)", 0, 2, 1, 3,
-     {{{0.5f, 0, 1}, 0, 1}, {{0, 3, 5}, 1e-3f, 1}, {{0.5f, -0.5f, 6}, 1e-3f, 1}}, NULL},
+     {{{0.5f, 0, 1}, 0, 1}, {{0, 3, 5}, 1e-3f, 1}, {{0.5f, -0.5f, 6}, 1e-3f, 1}}, NULL, 0},
     {"hand: rays starting on a surface (on occluder A and the floor; tmin = 0 and 1e-3)", 0, 2, 1, 4,
      {{{0.5f, 0.5f, 2}, 0, 1}, {{0.5f, 0.5f, 2}, 1e-3f, 1}, {{3.5f, -4, 0}, 0, 1}, {{-1.5f, -1.5f, 4}, 0, 1}},
-     NULL},
+     NULL, 0},
     {"hand: rays from above the occluders (nothing in reach)", 0, 4, 0, 3,
-     {{{0.5f, 0.5f, 6}, 1e-3f, 1}, {{2.5f, 2.5f, 5}, 1e-3f, 1}, {{-1.5f, -1.5f, 7.5f}, 1e-3f, 1}}, NULL},
-    {"cornell, light under the ceiling, res 4, lazy: points on the surfaces", 1, 4, 0, 0, {{{0, 0, 0}, 0, 0}}, NULL},
-    {"cornell, res 2, eager: many rays per cell", 1, 2, 1, 0, {{{0, 0, 0}, 0, 0}}, NULL},
-    {"cornell, res 16, lazy", 1, 16, 0, 0, {{{0, 0, 0}, 0, 0}}, NULL},
-    {"soup:60, light inside the soup, res 2, lazy", 2, 2, 0, 0, {{{0, 0, 0}, 0, 0}}, NULL},
-    {"soup:60, res 4, eager, tmin = 0 (rays start on their triangle)", 2, 4, 1, 0, {{{0, 0, 0}, 0, 0}}, NULL},
+     {{{0.5f, 0.5f, 6}, 1e-3f, 1}, {{2.5f, 2.5f, 5}, 1e-3f, 1}, {{-1.5f, -1.5f, 7.5f}, 1e-3f, 1}}, NULL, 0},
+    {"hand: a triangle exactly at reach (dist == reach: it is still tested)", 0, 2, 0, 1, {{{3.5f, -4, 0}, 0, 1}},
+     NULL, 1},
+    {"cornell, light under the ceiling, res 4, lazy: points on the surfaces", 1, 4, 0, 0, {{{0, 0, 0}, 0, 0}}, NULL, 0},
+    {"cornell, res 2, eager: many rays per cell", 1, 2, 1, 0, {{{0, 0, 0}, 0, 0}}, NULL, 0},
+    {"cornell, res 16, lazy", 1, 16, 0, 0, {{{0, 0, 0}, 0, 0}}, NULL, 0},
+    {"soup:60, light inside the soup, res 2, lazy", 2, 2, 0, 0, {{{0, 0, 0}, 0, 0}}, NULL, 0},
+    {"soup:60, res 4, eager, tmin = 0 (rays start on their triangle)", 2, 4, 1, 0, {{{0, 0, 0}, 0, 0}}, NULL, 0},
 };
 #define NCASES (sizeof cases / sizeof cases[0])
 static sidx_lightbuffer *lbs[NCASES];
+
+static float reach_at(const sidx_lightbuffer *lb, sidx_vec3 p, float tmin, sidx_lightbuffer_cell_view *v)
+{
+    sidx_ray r;
+    if (sidx_lightbuffer_shadow_ray(lb, p, tmin, 1.0f, &r) != SIDX_OK || sidx_lightbuffer_cell_get(lb, &r, v) != SIDX_OK)
+        return -1.0f;
+    return v->reach;
+}
+
+/* The tmin (by bisection over the floats of [0, 1)) at which the reach of
+ * pts[0]'s shadow ray equals the distance of the farthest listed triangle
+ * within reach at tmin = 0: the tie of "dist > reach". */
+static int make_tie(lb_case *c, const sidx_lightbuffer *lb)
+{
+    sidx_lightbuffer_cell_view v;
+    const float r0 = reach_at(lb, c->pts[0].p, 0.0f, &v);
+    float target = -1.0f;
+    for (uint32_t k = 0; k < v.count; ++k)
+        if (v.dist[k] < r0 && v.dist[k] > target) target = v.dist[k];
+    if (!(target > 0.0f)) return -1;
+    uint32_t lo = 0, hi = 0x3f800000u; /* the bits of 0 and 1 */
+    while (hi - lo > 1) {
+        const uint32_t mid = lo + (hi - lo) / 2;
+        float t;
+        memcpy(&t, &mid, sizeof t);
+        if (reach_at(lb, c->pts[0].p, t, &v) <= target) hi = mid;
+        else lo = mid;
+    }
+    float t;
+    memcpy(&t, &hi, sizeof t);
+    if (reach_at(lb, c->pts[0].p, t, &v) != target) return -1;
+    c->pts[0].tmin = t;
+    return 0;
+}
 
 static int setup(void)
 {
@@ -102,6 +139,7 @@ static int setup(void)
         if (sidx_lightbuffer_build(&meshes[c->scene], lights[c->scene], c->res, c->eager, NULL, &lbs[i], NULL) !=
             SIDX_OK)
             return -1;
+        if (c->tie && make_tie(c, lbs[i]) != 0) return -1;
         if (c->npts) continue;
         const sidx_mesh *m = &meshes[c->scene];
         const int zero_tmin = strstr(c->name, "tmin = 0") != NULL;
