@@ -437,6 +437,14 @@ sidx_status sidx_lightbuffer_shadow_ray(const sidx_lightbuffer *lb, sidx_vec3 p,
     return sidx_ray_init(out, p, sidx_v3_sub(lb->light, p), tmin, tmax);
 }
 
+/* The farthest a blocking triangle can lie from the light: a point at ray
+ * parameter t is (1 - t)·|light - p| from it (+ margin for float distances). */
+static SIDX_INLINE float lb_reach(const sidx_ray *r)
+{
+    const double seg = sqrt((double)r->dir.x * r->dir.x + (double)r->dir.y * r->dir.y + (double)r->dir.z * r->dir.z);
+    return (float)((1.0 - (double)r->tmin) * seg * (1.0 + 1e-5) + 1e-30);
+}
+
 static SIDX_INLINE int lb_query(sidx_lightbuffer *lb, const sidx_ray *r, sidx_lightbuffer_cache *cache,
                                 const sidx_query *q, const int traced)
 {
@@ -478,8 +486,7 @@ static SIDX_INLINE int lb_query(sidx_lightbuffer *lb, const sidx_ray *r, sidx_li
      * t is (1 − t)·|light − p| from the light, so for t >= tmin no
      * triangle farther than (1 − tmin)·|light − p| can block (+ margin
      * for float distances). */
-    const double seg = sqrt((double)r->dir.x * r->dir.x + (double)r->dir.y * r->dir.y + (double)r->dir.z * r->dir.z);
-    const float reach = (float)((1.0 - (double)r->tmin) * seg * (1.0 + 1e-5) + 1e-30);
+    const float reach = lb_reach(r);
     const uint32_t n = have_list ? cell->count : lb->num_entries[f];
     for (uint32_t k = 0; k < n; ++k) {
         uint32_t tri;
@@ -533,6 +540,27 @@ sidx_status sidx_lightbuffer_occluded(const sidx_lightbuffer *lb, sidx_vec3 p, f
         cache->occluded += (uint64_t)*occluded;
     }
     SIDX_EMIT(traced, q->hook, SIDX_EV_RAY_END, e_.ray_id = q->ray_id; e_.result = *occluded);
+    return SIDX_OK;
+}
+
+sidx_status sidx_lightbuffer_cell_get(const sidx_lightbuffer *lb, const sidx_ray *shadow_ray,
+                                      sidx_lightbuffer_cell_view *out)
+{
+    if (!lb || !shadow_ray || !out) return SIDX_ERR_INVALID_ARG;
+    sidx_lightbuffer *mlb = (sidx_lightbuffer *)(uintptr_t)lb;
+    int f, ci, cj;
+    const uint32_t id = cell_of(lb, sidx_v3_scale(shadow_ray->dir, -1.0f), &f, &ci, &cj);
+    lb_cell *cell = &mlb->cells[id];
+    if (!atomic_load_explicit(&cell->ready, memory_order_acquire) && !fill_cell(mlb, id, f, ci, cj))
+        return SIDX_ERR_NOMEM;
+    out->id = id;
+    out->face = f;
+    out->i = ci;
+    out->j = cj;
+    out->count = cell->count;
+    out->tris = cell->tris;
+    out->dist = cell->dist;
+    out->reach = lb_reach(shadow_ray);
     return SIDX_OK;
 }
 

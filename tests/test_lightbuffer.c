@@ -242,6 +242,20 @@ static void events_and_arguments(void **state)
     /* a point between the triangle and the light is lit */
     assert_int_equal(sidx_lightbuffer_occluded(lb, sidx_v3(0, 2, 0), TMIN, TMAX, &c, NULL, &occ), SIDX_OK);
     assert_int_equal(occ, 0);
+    /* the cell view names the cell the query enters, its list, and the reach */
+    sidx_ray sr;
+    assert_int_equal(sidx_lightbuffer_shadow_ray(lb, sidx_v3(0, 0, 0), TMIN, TMAX, &sr), SIDX_OK);
+    sidx_lightbuffer_cell_view cv;
+    assert_int_equal(sidx_lightbuffer_cell_get(lb, &sr, &cv), SIDX_OK);
+    assert_int_equal(cv.id, rec.events[1].node);
+    assert_int_equal(cv.face, 3);
+    assert_int_equal(cv.count, 1);
+    assert_int_equal(cv.tris[0], 0);
+    assert_true(cv.dist[0] > 3.9f && cv.dist[0] < 4.1f); /* the triangle lies in y = 1, the light at y = 5 */
+    assert_true(cv.reach > 4.99f * (1.0f - TMIN) && cv.reach < 5.01f);
+    assert_int_equal(sidx_lightbuffer_cell_get(NULL, &sr, &cv), SIDX_ERR_INVALID_ARG);
+    assert_int_equal(sidx_lightbuffer_cell_get(lb, NULL, &cv), SIDX_ERR_INVALID_ARG);
+    assert_int_equal(sidx_lightbuffer_cell_get(lb, &sr, NULL), SIDX_ERR_INVALID_ARG);
     /* arguments */
     assert_int_equal(sidx_lightbuffer_occluded(lb, sidx_v3(0, 5, 0), TMIN, TMAX, &c, NULL, &occ), SIDX_ERR_INVALID_ARG);
     assert_int_equal(sidx_lightbuffer_occluded(lb, sidx_v3(NAN, 0, 0), TMIN, TMAX, &c, NULL, &occ), SIDX_ERR_INVALID_ARG);

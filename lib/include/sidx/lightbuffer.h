@@ -83,6 +83,24 @@ sidx_status sidx_lightbuffer_shadow_ray(const sidx_lightbuffer *lb, sidx_vec3 p,
 sidx_status sidx_lightbuffer_occluded(const sidx_lightbuffer *lb, sidx_vec3 p, float tmin, float tmax,
                                       sidx_lightbuffer_cache *cache, const sidx_query *q, int *occluded);
 
+/* A read-only view of the cell a shadow ray looks up (exercise
+ * 18_light_buffer walks it as the query does): the cell of the direction
+ * light -> ray origin, its list (filled now if the cell is lazy), and the
+ * distance from the light beyond which no listed triangle can block the
+ * ray, (1 - tmin)·|dir| widened for the float distances: the bound the
+ * query stops at.  SIDX_ERR_INVALID_ARG for NULL, SIDX_ERR_NOMEM if a lazy
+ * cell cannot be filled.  The pointers stay valid while lb lives. */
+typedef struct sidx_lightbuffer_cell_view {
+    uint32_t id;            /* (face·res + j)·res + i: the index of the cache's `last` */
+    int face, i, j;         /* faces +x, -x, +y, -y, +z, -z */
+    uint32_t count;         /* triangles in the list */
+    const uint32_t *tris;   /* nearest to the light first */
+    const float *dist;      /* their distances from the light */
+    float reach;            /* a triangle with dist > reach cannot block */
+} sidx_lightbuffer_cell_view;
+sidx_status sidx_lightbuffer_cell_get(const sidx_lightbuffer *lb, const sidx_ray *shadow_ray,
+                                      sidx_lightbuffer_cell_view *out);
+
 typedef struct sidx_lightbuffer_stats {
     uint32_t res, cells;
     uint32_t cells_filled;     /* lists made so far (all of them when eager) */
