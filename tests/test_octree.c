@@ -211,14 +211,16 @@ static void view_cells(const sidx_oct_node *nodes, uint32_t count, int axes, sid
         const uint32_t nch = 1u << axes;
         assert_true(nodes[i].a > i && nodes[i].a + nch <= count);
         for (uint32_t c = 0; c < nch; ++c) {
-            sidx_aabb b = cells[i];
-            float *lo = &b.min.x, *hi = &b.max.x;
+            const sidx_aabb parent = cells[i];
+            float lo[3], hi[3];
+            sidx_v3_to_array(parent.min, lo);
+            sidx_v3_to_array(parent.max, hi);
             for (int k = 0; k < axes; ++k) {
                 const float m = 0.5f * (lo[k] + hi[k]);
                 if (c & (1u << k)) lo[k] = m;
                 else hi[k] = m;
             }
-            cells[nodes[i].a + c] = b;
+            cells[nodes[i].a + c] = (sidx_aabb){sidx_v3(lo[0], lo[1], lo[2]), sidx_v3(hi[0], hi[1], hi[2])};
         }
     }
 }
