@@ -483,6 +483,20 @@ static const char *format_of(const char *path, const char *forced)
     return NULL;
 }
 
+#if SIDX_HAVE_GRAPHVIZ
+/* One Graphviz context for the whole process, made on first use and kept.
+ * The pango text plugin caches a pointer to the last font name it measured,
+ * and that name belongs to the context: a second context made after the
+ * first was freed would compare against freed memory (AddressSanitizer
+ * shows it in the tour, which draws several trees). */
+static GVC_t *dot_context(void)
+{
+    static GVC_t *gvc;
+    if (!gvc) gvc = gvContext();
+    return gvc;
+}
+#endif
+
 sidx_status sidx_dot_write_events(const sidx_event *build, size_t nbuild, const sidx_event *trav, size_t ntrav,
                                   const sidx_dot_options *opt, const char *path, sidx_error *err)
 {
@@ -605,13 +619,12 @@ sidx_status sidx_dot_write_events(const sidx_event *build, size_t nbuild, const 
     if (text) {
         rc = agwrite(c.g, f);
     } else {
-        GVC_t *gvc = gvContext();
+        GVC_t *gvc = dot_context();
         rc = gvc ? gvLayout(gvc, c.g, "dot") : -1;
         if (rc == 0) {
             rc = gvRender(gvc, c.g, fmt, f);
             gvFreeLayout(gvc, c.g);
         }
-        if (gvc) gvFreeContext(gvc);
     }
     int close_rc = f == stdout ? fflush(f) : fclose(f);
     agclose(c.g);
