@@ -114,16 +114,7 @@ int main(int argc, char **argv)
 {
     (void)argc;
     /* BUILD/tests/test_view_display -> BUILD/bin */
-    if (argv[0] && strchr(argv[0], '/')) {
-        snprintf(bin_dir, sizeof bin_dir, "%s", argv[0]);
-        char *slash = strrchr(bin_dir, '/');
-        *slash = '\0';
-        slash = strrchr(bin_dir, '/');
-        if (slash)
-            snprintf(slash + 1, sizeof bin_dir - (size_t)(slash + 1 - bin_dir), "bin");
-        else
-            snprintf(bin_dir, sizeof bin_dir, "bin");
-    }
+    tk_bin_dir(argv[0], bin_dir, sizeof bin_dir);
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(no_display_variables),
         cmocka_unit_test(display_without_server),

@@ -1709,16 +1709,7 @@ int main(int argc, char **argv)
 {
     (void)argc;
     /* build/tests/test_viz -> build/bin (also build/san/...) */
-    if (argv[0] && strchr(argv[0], '/')) {
-        snprintf(bin_dir, sizeof bin_dir, "%s", argv[0]);
-        char *slash = strrchr(bin_dir, '/');
-        *slash = '\0';
-        slash = strrchr(bin_dir, '/');
-        if (slash)
-            snprintf(slash + 1, sizeof bin_dir - (size_t)(slash + 1 - bin_dir), "bin");
-        else
-            snprintf(bin_dir, sizeof bin_dir, "bin");
-    }
+    tk_bin_dir(argv[0], bin_dir, sizeof bin_dir);
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(tree_from_synthetic_events),
         cmocka_unit_test(tree_errors),

@@ -765,3 +765,16 @@ char *tk_read_all(FILE *f)
     buf[n] = '\0';
     return buf;
 }
+
+void tk_bin_dir(const char *argv0, char *out, size_t size)
+{
+    if (!argv0 || !strchr(argv0, '/')) return;
+    snprintf(out, size, "%s", argv0);
+    char *slash = strrchr(out, '/');
+    *slash = '\0';
+    slash = strrchr(out, '/');
+    if (slash)
+        snprintf(slash + 1, size - (size_t)(slash + 1 - out), "bin");
+    else
+        snprintf(out, size, "bin");
+}

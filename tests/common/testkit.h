@@ -128,6 +128,10 @@ sidx_status tk_mesh_duplicate_tris(const sidx_mesh *m, sidx_mesh *out);
 /* Every vertex projected onto z = z0 (a flat scene). */
 sidx_status tk_mesh_flatten(const sidx_mesh *m, float z0, sidx_mesh *out);
 
+/* The programs' directory beside a suite's: BUILD/tests/NAME (argv0)
+ * gives BUILD/bin in out; out is kept when argv0 names no directory. */
+void tk_bin_dir(const char *argv0, char *out, size_t size);
+
 /* 1 when the environment asks for fast tests (SIDX_FAST_TESTS=1, valgrind). */
 int tk_fast_tests(void);
 /* Monotonic wall-clock time in milliseconds. */
