@@ -16,17 +16,20 @@ int oct_walk(const sidx_ex *ex, const sidx_oct_node *nodes, const uint32_t *refs
              float t_near, float t_far, sidx_hit *best);
 
 #define NSCENES 5
-#define RAYS 34
-/* flat2d: the slide's 2D board as an octree and as a quadtree (z never
- * cut); soup: overlapping triangles straddling cells; cornell: walls on
- * the cells' faces; ties: small triangles at integer coordinates in
- * [0, 4]^3, some lying in the root's mid-planes, so that crossings, cell
- * faces and hits meet at exactly the same t. */
-static const char *const scene_names[NSCENES] = {"flat2d", "flat2d", "soup:200", "cornell", "ties"};
+#define RAYS 35
+/* icosphere: a closed surface, rays meet it in cells far from the root;
+ * flat2d: the slide's 2D board as a quadtree (z never cut); soup:
+ * overlapping triangles straddling cells; kd-slide: deck 000's 2D scene
+ * as an octree, whose z mid-plane is the board's own plane (rays across
+ * the board lie in it, d.z = ±0); ties: small triangles at integer
+ * coordinates in [0, 4]^3, some in the root's mid-planes, so that
+ * crossings, cell faces and hits meet at exactly the same t.  Leaf sizes
+ * that give each tree two to four levels. */
+static const char *const scene_names[NSCENES] = {"icosphere:2", "flat2d", "soup:200", "kd-slide", "ties"};
 static const char *const accel_names[NSCENES] = {"octree", "quadtree", "octree", "octree", "octree"};
-static const uint32_t leaf_sizes[NSCENES] = {2, 2, 0, 2, 1};
-static const char *const view_knobs[NSCENES] = {"--no-mailbox --leaf-size 2", "--no-mailbox --leaf-size 2",
-                                                "--no-mailbox", "--no-mailbox --leaf-size 2",
+static const uint32_t leaf_sizes[NSCENES] = {8, 2, 0, 1, 1};
+static const char *const view_knobs[NSCENES] = {"--no-mailbox --leaf-size 8", "--no-mailbox --leaf-size 2",
+                                                "--no-mailbox", "--no-mailbox --leaf-size 1",
                                                 "--no-mailbox --leaf-size 1"};
 static sidx_mesh meshes[NSCENES];
 static sidx_accel *accels[NSCENES];
@@ -34,7 +37,8 @@ static sidx_ray rays[NSCENES][RAYS];
 static const char *ray_kind[NSCENES][RAYS];
 
 enum { K_OUTSIDE = 0, K_BEYOND = 8, K_INSIDE = 12, K_ON_MID = 16, K_TMAX_MID = 20, K_ZERO = 22, K_ZERO_ON = 26,
-       K_DIAG = 28, K_DIAG2 = 29, K_ENTRY_TIE = 30, K_TMAX = 31, K_MISS = 32, K_HIT_TIE = 33 };
+       K_DIAG = 28, K_DIAG2 = 29, K_ENTRY_TIE = 30, K_TMAX = 31, K_MISS = 32, K_HIT_TIE = 33,
+       K_EXIT_TIE = 34 };
 
 /* The "ties" scene: triangles at integer and half-integer coordinates. */
 static int make_ties(sidx_mesh *m)
@@ -137,7 +141,7 @@ static int setup(void)
                 d = sidx_v3_sub(p, o);
                 ray_kind[s][i] = "from outside, front to back";
                 if (s == 4 && i == K_HIT_TIE) { /* along x onto the triangle in the plane x = 2 */
-                    o = sidx_v3(0.5f, 1.5f, 1.25f);
+                    o = sidx_v3(0.5f, 1.25f, 1.625f);
                     d = sidx_v3(1.0f, 0.0f, 0.0f);
                     ray_kind[s][i] = "a hit on the face between two cells (best->t == t_far)";
                 }
@@ -192,6 +196,13 @@ static int setup(void)
                 d = sidx_v3(1.0f, flat ? 0.0f : (ex_rand(&st) - 0.5f) * 0.3f, 0.0f);
                 tmax = e.x;
                 ray_kind[s][i] = "with a finite tmax";
+            } else if (i == K_EXIT_TIE) { /* leaving the lower child through the root's plane x at its own y */
+                const float qy = 0.5f * (lo[1] + c.y); /* the lower child's mid-plane y */
+                d = sidx_v3(1.0f, 1.0f, flat ? 0.0f : 0.125f);
+                o = sidx_v3(c.x - 0.5f * e.x, qy - 0.5f * e.x, flat ? c.z : lo[2] + 0.0625f * e.z);
+                const float t = t_plane(o, d, 0, c.x);
+                tie_to(&o, d, 1, qy, t);
+                ray_kind[s][i] = "leaving a child where its own mid-plane meets the root's (t_k = t_far)";
             } else { /* K_MISS */
                 o = sidx_v3(lo[0] - e.x, hi[1] + 0.5f * e.y + 1.0f, c.z);
                 d = sidx_v3(1.0f, 0.25f, 0.0f);
@@ -259,7 +270,7 @@ static void reference(size_t i, const sidx_hook *h)
 static const char *const hint_order =
     "children in the order the ray meets them: start in the child holding the entry point (bit k set = the "
     "upper half: t_k <= t_near with d_k > 0, or t_k > t_near with d_k < 0), then flip bit k at each crossing "
-    "t_k strictly inside (t_near, t_far), in increasing t";
+    "t_k strictly inside (t_near, t_far), in increasing t (k < axes: a quadtree never cuts z)";
 static const char *const hint_zero =
     "a direction component +0 or -0 never crosses its mid-plane (t_k = +inf, whatever the sign of inv_dir): "
     "the child is on the origin's side, the upper one when the origin lies on the plane";
@@ -316,13 +327,13 @@ static const char *hint(size_t i, const sidx_event *ref, const sidx_event *stu)
         return hint_leaf;
     if (ref && ref->type == SIDX_EV_NODE_ENTER && stu && stu->type == SIDX_EV_TERMINATE) return hint_missing;
     if (ref && ref->type == SIDX_EV_TERMINATE && stu && stu->type == SIDX_EV_NODE_ENTER)
-        return r >= K_TMAX_MID && r < K_ZERO ? hint_end_tie : hint_extra;
+        return (r >= K_TMAX_MID && r < K_ZERO) || r == K_EXIT_TIE ? hint_end_tie : hint_extra;
     if (ref && stu && ref->type == SIDX_EV_NODE_ENTER && stu->type == SIDX_EV_NODE_ENTER) {
         if (ref->node == stu->node) return ref->depth != stu->depth ? hint_depth : hint_interval;
         if (r >= K_ZERO && r < K_DIAG) return hint_zero;
         if (r == K_DIAG || r == K_DIAG2) return hint_tie;
         if ((r >= K_ON_MID && r < K_TMAX_MID) || r == K_ENTRY_TIE) return hint_start_tie;
-        if (r >= K_TMAX_MID && r < K_ZERO) return hint_end_tie;
+        if ((r >= K_TMAX_MID && r < K_ZERO) || r == K_EXIT_TIE) return hint_end_tie;
         return hint_order;
     }
     return hint_order;
