@@ -8,8 +8,9 @@
  * compared in array order (depth-first pre-order, the order the nodes
  * are made in), each as NOTEs:
  *   cell[2] 0..2  its box on axis k: [t_near, t_far] = [bmin[k], bmax[k]],
- *                 count = the triangles under it (read through the
- *                 child links; 0xFFFFFFFF when they do not make a tree)
+ *                 count = the triangles under it (from the array's
+ *                 pre-order, not the links: a marker when the nodes
+ *                 make no tree or the leaves' ranges do not tile prims[])
  *   cell[2] 3     its kind: cell[1] = count_axis, count = first (a leaf)
  *   cell[2] 4     a leaf's triangle j: cell[1] = j, count = prims[first + j]
  * then every inner node's right child (cell[2] 5, count = left_or_first)
@@ -38,7 +39,7 @@ static const char *const scene_names[NSCENES] = {
     "centroids on the middle (x = 0, 2, 4, 6, 8)",
     "centroid bounds a cube (ties between axes)",
     "flat2d",
-    "soup:200",
+    "soup:80",
     "cornell"};
 
 typedef struct build_case {
@@ -48,6 +49,7 @@ typedef struct build_case {
     sidx_bvh_node *nodes; /* the library's tree */
     uint32_t *prims;
     uint32_t *under;      /* triangles under each node */
+    uint32_t *parent;     /* each node's parent, UINT32_MAX for the root */
     uint32_t num_nodes;
     uint32_t leaf_size;
 } build_case;
@@ -99,21 +101,42 @@ static int open_scene(int s, sidx_mesh *m)
     return from_tris(m, xyz, n);
 }
 
-/* Triangles under node i through the child links; UINT32_MAX when the
- * links leave the array or loop (depth is bounded by n). */
-static uint32_t count_under(const sidx_bvh_node *nd, uint32_t n, uint32_t i, uint32_t *under, uint32_t depth)
+/* Triangles under each node, from the array alone (not the links): the
+ * pre-order sequence of leaves and inner nodes fixes each subtree, and
+ * in pre-order the leaves' ranges tile prims[0 .. np).  Returns the index
+ * after node i's subtree, or UINT32_MAX when the array ends inside it. */
+static uint32_t parse(const sidx_bvh_node *nd, uint32_t n, uint32_t i, uint32_t *under, uint32_t depth)
 {
     if (i >= n || depth > n) return UINT32_MAX;
-    uint32_t c;
     if (nd[i].count_axis & SIDX_BVH_COUNT_MASK) {
-        c = nd[i].count_axis & SIDX_BVH_COUNT_MASK;
-    } else {
-        const uint32_t l = count_under(nd, n, i + 1, under, depth + 1);
-        const uint32_t r = count_under(nd, n, nd[i].left_or_first, under, depth + 1);
-        c = l == UINT32_MAX || r == UINT32_MAX ? UINT32_MAX : l + r;
+        under[i] = nd[i].count_axis & SIDX_BVH_COUNT_MASK;
+        return i + 1;
     }
-    under[i] = c;
-    return c;
+    const uint32_t r = parse(nd, n, i + 1, under, depth + 1);
+    const uint32_t end = r == UINT32_MAX ? UINT32_MAX : parse(nd, n, r, under, depth + 1);
+    if (end != UINT32_MAX) under[i] = under[i + 1] + under[r];
+    return end;
+}
+
+#define UNDER_NO_TREE UINT32_MAX       /* the nodes do not make one tree */
+#define UNDER_NO_TILE (UINT32_MAX - 1) /* the leaves' ranges do not tile prims[] */
+
+/* under[i] for the n nodes (the markers above when it is not defined). */
+static void count_under(const sidx_bvh_node *nd, uint32_t n, uint32_t np, uint32_t *under)
+{
+    for (uint32_t i = 0; i < n; ++i) under[i] = UNDER_NO_TREE;
+    if (n == 0 || parse(nd, n, 0, under, 0) != n) {
+        for (uint32_t i = 0; i < n; ++i) under[i] = UNDER_NO_TREE;
+        return;
+    }
+    uint64_t next = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        if (!(nd[i].count_axis & SIDX_BVH_COUNT_MASK)) continue;
+        if (nd[i].left_or_first != next) next = UINT64_MAX;
+        if (next != UINT64_MAX) next += nd[i].count_axis & SIDX_BVH_COUNT_MASK;
+    }
+    if (next != np)
+        for (uint32_t i = 0; i < n; ++i) under[i] = UNDER_NO_TILE;
 }
 
 static void *dup(const void *p, size_t n)
@@ -147,16 +170,21 @@ static int setup(void)
             const sidx_bvh_node *nd;
             const uint32_t *pr;
             uint32_t np = 0;
-            if (sidx_bvh_nodes(a, &nd, &c->num_nodes, NULL) != SIDX_OK || sidx_bvh_prims(a, &pr, &np, NULL) != SIDX_OK) {
+            if (sidx_bvh_nodes(a, &nd, &c->num_nodes, NULL) != SIDX_OK ||
+                sidx_bvh_prims(a, &pr, &np, NULL) != SIDX_OK) {
                 sidx_accel_destroy(a);
                 return -1;
             }
             c->nodes = dup(nd, c->num_nodes * sizeof *nd);
             c->prims = dup(pr, np * sizeof *pr);
             c->under = malloc(c->num_nodes * sizeof *c->under);
+            c->parent = malloc(c->num_nodes * sizeof *c->parent);
             sidx_accel_destroy(a);
-            if (!c->nodes || !c->prims || !c->under) return -1;
-            count_under(c->nodes, c->num_nodes, 0, c->under, 0);
+            if (!c->nodes || !c->prims || !c->under || !c->parent) return -1;
+            count_under(c->nodes, c->num_nodes, n, c->under);
+            c->parent[0] = UINT32_MAX;
+            for (uint32_t k = 0; k < c->num_nodes; ++k)
+                if (!sidx_bvh_is_leaf(&c->nodes[k])) c->parent[k + 1] = c->parent[c->nodes[k].left_or_first] = k;
         }
     return 0;
 }
@@ -169,6 +197,7 @@ static void teardown(void)
         free(cases[i].nodes);
         free(cases[i].prims);
         free(cases[i].under);
+        free(cases[i].parent);
         sidx_mesh_free(&cases[i].mesh);
     }
 }
@@ -179,8 +208,9 @@ static void describe(size_t i, ex_case_info *out)
 {
     const build_case *c = &cases[i];
     snprintf(out->name, sizeof out->name, "scene %s, leaf size %u", scene_names[i / NLEAF], c->leaf_size);
-    snprintf(out->what, sizeof out->what, "%u triangles, leaf_size = %u, max_leaf = %u; the library's tree has %u nodes",
-             c->mesh.num_triangles, c->leaf_size, MAX_LEAF, c->num_nodes);
+    snprintf(out->what, sizeof out->what,
+             "%u triangles, leaf_size = %u, max_leaf = %u; the library's tree has %u nodes", c->mesh.num_triangles,
+             c->leaf_size, MAX_LEAF, c->num_nodes);
     out->hint = NULL;
 }
 
@@ -203,8 +233,7 @@ static void emit(const sidx_hook *h, const sidx_bvh_node *nd, uint32_t n, const 
 {
     uint32_t *under = malloc((n ? n : 1) * sizeof *under);
     if (!under) return;
-    for (uint32_t i = 0; i < n; ++i) under[i] = UINT32_MAX;
-    if (n) count_under(nd, n, 0, under, 0);
+    count_under(nd, n, np, under);
     for (uint32_t i = 0; i < n; ++i) {
         for (int k = 0; k < 3; ++k) note(h, (int32_t)i, 0, k, under[i], nd[i].bmin[k], nd[i].bmax[k]);
         const uint32_t ca = nd[i].count_axis, cnt = ca & SIDX_BVH_COUNT_MASK, first = nd[i].left_or_first;
@@ -268,7 +297,8 @@ static const char *const hint_axis =
     "then y), stored as axis << 30 with a count of 0";
 static const char *const hint_range =
     "\"Only need to store 2 integers per leaf node!\": a leaf stores left_or_first = first, its first index into "
-    "prims[], and count_axis = count";
+    "prims[], and count_axis = count, so that the leaves, in the order they are made, cover prims[0 .. n) one "
+    "after another";
 static const char *const hint_order =
     "\"After re-indexing (sorting) based on leaf nodes\": the leaf's triangles are prims[first .. first + count) "
     "as the partition leaves them: one walk from the front, a triangle going right swapped with prims[--j]";
@@ -276,8 +306,9 @@ static const char *const hint_links =
     "\"Recurse with each child node\": the node takes its slot before its children, the left child is the next "
     "node (i + 1), and the inner node stores the index its right child's build returned in left_or_first";
 static const char *const hint_count =
-    "each node takes the slot nodes[*num_nodes] and counts it (++*num_nodes) before its children are built; "
-    "return the index of the subtree's root";
+    "\"Recurse with each child node\": each node takes the slot nodes[*num_nodes] and counts it (++*num_nodes) "
+    "before its children are built; a leaf's count_axis is its count, an inner node's axis << 30 (a count of "
+    "0); return the index of the subtree's root";
 
 /* Whether node i of the library's tree holds triangles of one centroid. */
 static int equal_centroids(const build_case *c, uint32_t i, uint32_t first)
@@ -309,8 +340,13 @@ static const char *hint(size_t i, const sidx_event *ref, const sidx_event *stu)
     case 0:
     case 1:
     case 2:
-        if (stu->count == UINT32_MAX) return hint_links;
-        return stu->count != ref->count ? hint_partition : hint_box;
+        if (stu->count == UNDER_NO_TREE) return hint_count;
+        if (stu->count == UNDER_NO_TILE) return hint_range;
+        if (stu->count == ref->count) return hint_box;
+        /* other triangles: the parent's split put them there */
+        if (c->parent[node] != UINT32_MAX && equal_centroids(c, c->parent[node], first_under(c, c->parent[node])))
+            return hint_equal_split;
+        return hint_partition;
     case 3: {
         const uint32_t sca = (uint32_t)stu->cell[1], rca = (uint32_t)ref->cell[1];
         const int sleaf = (sca & SIDX_BVH_COUNT_MASK) != 0, rleaf = (rca & SIDX_BVH_COUNT_MASK) != 0;
@@ -334,9 +370,11 @@ static int format(const sidx_event *e, char *buf, size_t size)
     case 0:
     case 1:
     case 2:
-        if (e->count == UINT32_MAX)
-            snprintf(buf, size, "node %d  %c in [%g, %g]  (its links do not make a tree)", e->cell[0],
-                     "xyz"[e->cell[2]], (double)e->t_near, (double)e->t_far);
+        if (e->count >= UNDER_NO_TILE)
+            snprintf(buf, size, "node %d  %c in [%g, %g]  (%s)", e->cell[0], "xyz"[e->cell[2]], (double)e->t_near,
+                     (double)e->t_far,
+                     e->count == UNDER_NO_TILE ? "the leaves' (first, count) do not tile prims[] in order"
+                                               : "the nodes in pre-order do not make one tree");
         else
             snprintf(buf, size, "node %d  %c in [%g, %g]  (%u triangles under it)", e->cell[0], "xyz"[e->cell[2]],
                      (double)e->t_near, (double)e->t_far, e->count);

@@ -48,7 +48,8 @@ uint32_t bvh_build(sidx_bvh_node *nodes, uint32_t *num_nodes, uint32_t *prims, u
         return ni;
     }
     bvh_build(nodes, num_nodes, prims, first, nl, boxes, cents, leaf_size, max_leaf);
-    const uint32_t right = bvh_build(nodes, num_nodes, prims, first + nl, count - nl, boxes, cents, leaf_size, max_leaf);
+    const uint32_t right =
+        bvh_build(nodes, num_nodes, prims, first + nl, count - nl, boxes, cents, leaf_size, max_leaf);
     n->left_or_first = right;
     n->count_axis = (uint32_t)axis << 30;
     return ni;
