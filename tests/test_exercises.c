@@ -474,6 +474,41 @@ static void mutant_sample_killed(void **state)
     free(out);
 }
 
+/* mutate.awk's field operator: a write to a struct field that is no
+ * output of the other operators is dropped, or given 0, one mutant each;
+ * an output (*t = E) is not mutated twice. */
+static void mutate_field_writes(void **state)
+{
+    (void)state;
+    if (access("tests/exercises/mutate.awk", R_OK) != 0) {
+        print_message("skipped: no tests/exercises/ (a handout tree)\n");
+        return;
+    }
+    char dir[] = "/tmp/sidx-mutate-XXXXXX";
+    assert_non_null(mkdtemp(dir));
+    char src[PATH_MAX], cmd[3 * PATH_MAX];
+    snprintf(src, sizeof src, "%s/f.c", dir);
+    FILE *f = fopen(src, "w");
+    assert_non_null(f);
+    fputs("void f(node *n, node *nodes, float *t, float v)\n{\n    n->bmin[0] = v;\n    nodes[2].count = 0;\n"
+          "    *t = v;\n}\n",
+          f);
+    fclose(f);
+    snprintf(cmd, sizeof cmd, "awk -v out='%s' -v name=f -f tests/exercises/mutate.awk '%s' 2>&1", dir, src);
+    FILE *p = popen(cmd, "r");
+    assert_non_null(p);
+    char *out;
+    assert_int_equal(drain(p, &out), 0);
+    assert_non_null(strstr(out, "field dropped n->bmin[0] | n->bmin[0] = v;"));
+    assert_non_null(strstr(out, "field n->bmin[0] = 0 | n->bmin[0] = v;"));
+    assert_non_null(strstr(out, "field dropped nodes[2].count | nodes[2].count = 0;"));
+    assert_null(strstr(out, "field nodes[2].count = 0")); /* already 0 */
+    assert_null(strstr(out, "field *t"));
+    free(out);
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+    assert_int_equal(system(cmd), 0);
+}
+
 /* CC may be a command of several words, as make's CC="ccache gcc" is:
  * "env CC" runs the same compiler through env.  The stub builds and fails
  * at step 1; the compiler's command taken as one program name would not
@@ -508,6 +543,7 @@ int main(void)
         cmocka_unit_test(kd_walk_bit_exact),
         cmocka_unit_test(variants_pass),
         cmocka_unit_test(mutant_sample_killed),
+        cmocka_unit_test(mutate_field_writes),
         cmocka_unit_test(cc_of_several_words),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

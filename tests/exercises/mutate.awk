@@ -15,6 +15,9 @@
 #   bound    a loop bound (the for's condition) plus or minus one
 #   noreturn an early return (if (...) return ...;) removed
 #   noupdate an update of a best / t_max / t_far / t_near / interval dropped
+#   field    a write to a struct field (n->bmin[k] = E, node->count = E,
+#            a[i].f = E) that is no output above: dropped, or its value
+#            replaced by the constant 0
 # Comment lines, preprocessor lines and lines holding a string are skipped.
 
 function trim(s) { sub(/^[ \t]+/, "", s); sub(/[ \t]+$/, "", s); return s }
@@ -134,6 +137,8 @@ function statements(s,    n, rest, off, m, lhs, eq, semi, pre) {
     return n
 }
 
+# A struct field written through -> or . (a node's box, its links, ...).
+function is_field(lhs) { return lhs ~ /(->|\.)[A-Za-z_]/ }
 function is_output(lhs) { return lhs ~ /^\*[A-Za-z_]/ || lhs ~ /^(best|b|out|res|ex|mb)->/ }
 function is_update(lhs) {
     return lhs ~ /best|t_?max|t_far|t_near|^t[01]$|tmax|cost/ && lhs !~ /^(t_split|tt|t)$/
@@ -232,6 +237,8 @@ END {
                 if (rhs != "1") emit(ln, before lhs " = 1;" after, "const output " lhs " = 1")
             }
             if (is_update(lhs) || is_output(lhs)) emit(ln, before "(void)0;" after, "noupdate " lhs)
+            else if (is_field(lhs)) emit(ln, before "(void)0;" after, "field dropped " lhs)
+            if (is_field(lhs) && !is_output(lhs) && rhs != "0") emit(ln, before lhs " = 0;" after, "field " lhs " = 0")
         }
     }
     # siblings: an output assignment given the right-hand side of another
