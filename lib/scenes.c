@@ -125,6 +125,43 @@ static float rnd01(uint64_t *state) { return (float)(splitmix64(state) >> 40) * 
 
 static const float PI_F = 3.14159265358979323846f;
 
+/* Sine and cosine of an angle, the same bits on every platform.  Libms
+ * round sinf and cosf differently in the last bit (glibc and the musl of
+ * the WebAssembly build disagree on about one angle in forty of the
+ * teapot's), and a built-in scene must be one set of vertices wherever it
+ * is built, so a trace on the web page equals sidx-step's.  The angle is
+ * reduced by π/2 in double (π/2 in two parts, Cody and Waite 1980), both
+ * Taylor series run to degree 17/18 on |r| <= π/4 (error below 1e-17),
+ * and the result is rounded to float once.  Only + and * in double: with
+ * no contraction (-ffp-contract=off) every compiler gives these bits. */
+static void scene_sincos(float angle, float *sine, float *cosine)
+{
+    static const double factorial[19] = {1.0, 1.0, 2.0, 6.0, 24.0, 120.0, 720.0, 5040.0, 40320.0, 362880.0,
+                                         3628800.0, 39916800.0, 479001600.0, 6227020800.0, 87178291200.0,
+                                         1307674368000.0, 20922789888000.0, 355687428096000.0,
+                                         6402373705728000.0};
+    const double half_pi_hi = 1.57079632679489655800e+00, half_pi_lo = 6.12323399573676603587e-17;
+    const double x = (double)angle;
+    const double quarter_turns = nearbyint(x / half_pi_hi);
+    const double r = (x - quarter_turns * half_pi_hi) - quarter_turns * half_pi_lo;
+    const double r2 = r * r;
+    /* sin r = r (1 - r²/3! + r⁴/5! - ...), cos r = 1 - r²/2! + r⁴/4! - ... */
+    double sin_series = 1.0 / factorial[17], cos_series = 1.0 / factorial[18];
+    for (int k = 15; k >= 1; k -= 2) sin_series = sin_series * -r2 + 1.0 / factorial[k];
+    for (int k = 16; k >= 0; k -= 2) cos_series = cos_series * -r2 + 1.0 / factorial[k];
+    const double sin_r = r * sin_series, cos_r = cos_series;
+    /* sin(r + qπ/2), cos(r + qπ/2) by the quarter turn q mod 4 */
+    double s, c;
+    switch ((int)((long long)quarter_turns & 3)) {
+    case 0: s = sin_r; c = cos_r; break;
+    case 1: s = cos_r; c = -sin_r; break;
+    case 2: s = -sin_r; c = -cos_r; break;
+    default: s = -cos_r; c = sin_r; break;
+    }
+    *sine = (float)s;
+    *cosine = (float)c;
+}
+
 /* ---- icosphere --------------------------------------------------------------- */
 
 /* Midpoint cache: open addressing on the edge (lo, hi), so an edge shared
@@ -238,7 +275,9 @@ static void revolve(builder *b, const float (*key)[2], int nkey, int per_seg, in
             if (y > key[nkey - 1][1]) y = key[nkey - 1][1];
             for (int k = 0; k < around; ++k) {
                 const float phi = 2.0f * PI_F * (float)k / (float)around;
-                const uint32_t v = vtx(b, at.x + s * r * cosf(phi), at.y + s * y, at.z + s * r * sinf(phi));
+                float sin_phi, cos_phi;
+                scene_sincos(phi, &sin_phi, &cos_phi);
+                const uint32_t v = vtx(b, at.x + s * r * cos_phi, at.y + s * y, at.z + s * r * sin_phi);
                 if (rings == 0 && k == 0) first_ring = v;
             }
             ++rings;
@@ -288,7 +327,9 @@ static void sweep(builder *b, path_fn path, int along, int around, sidx_vec3 at,
         const sidx_vec3 n = sidx_v3(-d.y / len, d.x / len, 0.0f);
         for (int k = 0; k < around; ++k) {
             const float th = 2.0f * PI_F * (float)k / (float)around;
-            const float cn = r * cosf(th), sn = r * sinf(th);
+            float sin_th, cos_th;
+            scene_sincos(th, &sin_th, &cos_th);
+            const float cn = r * cos_th, sn = r * sin_th;
             const sidx_vec3 p = sidx_v3(c.x + cn * n.x, c.y + cn * n.y, c.z + sn);
             const uint32_t v = vtx(b, at.x + s * p.x, at.y + s * p.y, at.z + s * p.z);
             if (i == 0 && k == 0) first = v;
@@ -332,7 +373,9 @@ static void handle_path(float u, sidx_vec3 *c, float *r)
 {
     const float a0 = 40.0f * PI_F / 180.0f, a1 = 320.0f * PI_F / 180.0f;
     const float a = a0 + (a1 - a0) * u;
-    *c = sidx_v3(-1.9f + 0.75f * cosf(a), 1.3f + 0.75f * sinf(a), 0.0f);
+    float sin_a, cos_a;
+    scene_sincos(a, &sin_a, &cos_a);
+    *c = sidx_v3(-1.9f + 0.75f * cos_a, 1.3f + 0.75f * sin_a, 0.0f);
     *r = 0.13f;
 }
 
@@ -380,7 +423,9 @@ static void make_stadium(builder *b, unsigned detail)
     for (int i = 0; i < np; ++i)
         for (int k = 0; k < around; ++k) {
             const float phi = 2.0f * PI_F * (float)k / (float)around;
-            vtx(b, prof[i][0] * cosf(phi), prof[i][1], prof[i][0] * sinf(phi));
+            float sin_phi, cos_phi;
+            scene_sincos(phi, &sin_phi, &cos_phi);
+            vtx(b, prof[i][0] * cos_phi, prof[i][1], prof[i][0] * sin_phi);
         }
     /* Facing the centre (the side the teapot sees). */
     for (int i = 0; i + 1 < np; ++i)
