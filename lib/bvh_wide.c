@@ -32,6 +32,9 @@
 #include <stdlib.h>
 #include <string.h>
 #include "bvh_wide_internal.h"
+#ifdef __linux__
+#include <sys/mman.h>
+#endif
 
 #define SIDX_STRUCTURE_NAME (a->name)
 
@@ -469,6 +472,32 @@ static void *aligned_in(void *mem, uintptr_t align)
     return (void *)(((uintptr_t)mem + align - 1u) & ~(align - 1u));
 }
 
+/* Node and block arrays of WIDE_HUGE_MIN bytes or more are whole 2 MB
+ * pages, 2 MB-aligned, offered to the kernel as transparent huge pages
+ * (madvise(MADV_HUGEPAGE), before the first write, so the pages are huge
+ * from the first fault where the system allows it; elsewhere the advice
+ * is ignored and nothing changes): at millions of triangles a diffuse
+ * ray's nodes and blocks lie on pages far apart, and one 2 MB page maps
+ * in one TLB entry what takes 512 small ones (docs/performance.md, "Wide
+ * BVHs": 4M-triangle height field, diffuse rays).  Smaller arrays keep
+ * 64-byte alignment (a node is whole cache lines) and small pages. */
+#define WIDE_HUGE_PAGE ((size_t)2u << 20)
+#define WIDE_HUGE_MIN ((size_t)8u << 20)
+
+static void *alloc_array(const sidx_accel *a, size_t bytes, void **mem)
+{
+    const int huge = bytes >= WIDE_HUGE_MIN;
+    const size_t align = huge ? WIDE_HUGE_PAGE : 64u;
+    if (huge) bytes = (bytes + WIDE_HUGE_PAGE - 1u) & ~(WIDE_HUGE_PAGE - 1u); /* whole huge pages */
+    *mem = sidx__alloc(a, bytes + align, 1);
+    if (!*mem) return NULL;
+    void *p = aligned_in(*mem, align);
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+    if (huge) (void)madvise(p, bytes, MADV_HUGEPAGE);
+#endif
+    return p;
+}
+
 static sidx_status wide_build(sidx_accel *a, sidx_error *err)
 {
     const sidx_mesh *m = a->mesh;
@@ -527,11 +556,9 @@ static sidx_status wide_build(sidx_accel *a, sidx_error *err)
         uint32_t num_inner = 0, num_blocks = 0;
         count_node(&C, 0, &num_inner, &num_blocks);
         /* Exact-size, aligned arrays: a node is whole cache lines. */
-        w->nodes_mem = sidx__alloc(a, (size_t)num_inner * 8u * W * sizeof(float) + 64u, 1);
-        w->blocks_mem = sidx__alloc(a, (size_t)num_blocks * sizeof(wide_tri4) + 64u, 1);
-        if (!w->nodes_mem || !w->blocks_mem) goto fail;
-        w->nodes = aligned_in(w->nodes_mem, 64);
-        w->blocks = aligned_in(w->blocks_mem, 64);
+        w->nodes = alloc_array(a, (size_t)num_inner * 8u * W * sizeof(float), &w->nodes_mem);
+        w->blocks = alloc_array(a, (size_t)num_blocks * sizeof(wide_tri4), &w->blocks_mem);
+        if (!w->nodes || !w->blocks) goto fail;
         C.nodes = w->nodes;
         C.blocks = w->blocks;
         make_node(&C, 0, 0);

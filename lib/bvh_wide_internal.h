@@ -30,9 +30,10 @@
  * SSE pass runs the watertight test on 4 triangles; a leaf is a run of
  * consecutive blocks, the last marked by WIDE_LAST_BLOCK in prim[0].
  *
- * Plain float nodes and two separate arrays: quantized nodes, huge pages
- * and leaves stored beside their parents were measured and rejected
- * (docs/performance.md, "Wide BVHs"). */
+ * Plain float nodes and two separate arrays, on 2 MB pages when they are
+ * large (bvh_wide.c, alloc_array): quantized nodes and leaves stored
+ * beside their parents were measured and rejected (docs/performance.md,
+ * "Wide BVHs"). */
 #ifndef SIDX_BVH_WIDE_INTERNAL_H
 #define SIDX_BVH_WIDE_INTERNAL_H
 

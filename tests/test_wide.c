@@ -600,6 +600,44 @@ static void test_tiny_and_empty(void **state)
     sidx_mesh_free(&md);
 }
 
+/* ---- large arrays on 2 MB pages ------------------------------------------------------
+ * A height field big enough that the leaf blocks pass WIDE_HUGE_MIN: the
+ * block array starts on a 2 MB boundary (bvh_wide.c, alloc_array), the
+ * small node array of a small scene does not have to, and the walk over
+ * the large tree still agrees with brute force, closest and any hit. */
+
+static void test_huge_arrays(void **state)
+{
+    (void)state;
+    sidx_mesh m;
+    sidx_error err;
+    if (sidx_scene_make("grid", 420, &m, &err) != SIDX_OK) fail_msg("grid: %s", err.message);
+    sidx_accel *a = build("bvh8", &m, NULL, 1), *brute = NULL;
+    const wide_bvh *w = a->impl;
+    const uintptr_t page = (uintptr_t)2u << 20;
+    assert_true((size_t)w->num_blocks * sizeof(wide_tri4) >= ((size_t)8u << 20));
+    assert_int_equal((uintptr_t)w->blocks & (page - 1u), 0);
+    assert_true((uintptr_t)w->blocks >= (uintptr_t)w->blocks_mem);
+    assert_int_equal(sidx_accel_build("brute", &m, NULL, &brute, NULL), SIDX_OK);
+    sidx_ray *rays;
+    const size_t n = make_rays(&m, per_kind(40), 11, &rays);
+    for (size_t i = 0; i < n; ++i) {
+        sidx_hit ref, h;
+        int oref, o;
+        sidx_accel_intersect(brute, &rays[i], NULL, &ref);
+        sidx_accel_intersect(a, &rays[i], NULL, &h);
+        sidx_accel_occluded(brute, &rays[i], NULL, &oref);
+        sidx_accel_occluded(a, &rays[i], NULL, &o);
+        if (!tk_hits_agree(&ref, &h))
+            fail_msg("ray %zu: prim %u t %.9g, brute prim %u t %.9g", i, h.prim, (double)h.t, ref.prim, (double)ref.t);
+        assert_int_equal(o, oref);
+    }
+    free(rays);
+    sidx_accel_destroy(brute);
+    sidx_accel_destroy(a);
+    sidx_mesh_free(&m);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -608,6 +646,7 @@ int main(void)
         cmocka_unit_test(test_no_leaks_icosphere), cmocka_unit_test(test_structure),
         cmocka_unit_test(test_event_ids),          cmocka_unit_test(test_refit_matches_rebuild),
         cmocka_unit_test(test_alloc_failures),     cmocka_unit_test(test_tiny_and_empty),
+        cmocka_unit_test(test_huge_arrays),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
