@@ -107,6 +107,7 @@ function makeLab(M) {
     },
     accels: function () { return json(M._sidx_lab_structures()).structures; },
     build: function (slot, accel, knobs) {
+      var t0 = now();
       var k = {};
       for (var n in knobs) {
         if (n === 'mailbox') { if (!knobs.mailbox) k.mailbox = false; }
@@ -117,14 +118,16 @@ function makeLab(M) {
         return cstr(JSON.stringify(k), function (q) { return M._sidx_lab_build(slot, p, q); });
       });
       if (rc !== 0) return { ok: false, error: err() };
-      var b = json(M._sidx_lab_build_json(slot));
+      var t1 = now(), bj = M._sidx_lab_build_json(slot), t2 = now(), b = json(bj);
+      T.parts = { build: t1 - t0, build_json: t2 - t1, build_parse: now() - t2 };
       return { ok: true, stats: b.stats, args: b.args, build: b.build, labels: b.labels || {},
                cand_total: b.cand_total, cand_kept: b.cand_kept };
     },
     trace: function (slot, ray) {
-      var rc = M._sidx_lab_trace(slot, ray[0], ray[1], ray[2], ray[3], ray[4], ray[5]);
+      var t0 = now(), rc = M._sidx_lab_trace(slot, ray[0], ray[1], ray[2], ray[3], ray[4], ray[5]);
       if (rc !== 0) return { ok: false, error: err(), events: [] };
-      var t = json(M._sidx_lab_trace_json(slot));
+      var t1 = now(), t = json(M._sidx_lab_trace_json(slot));
+      T.tparts = { trace: t1 - t0, trace_json: now() - t1 };
       return { ok: true, events: t.events, counts: t.counts, hit: t.hit, ray_arg: t.ray_arg, truncated: t.truncated };
     },
     diverge: function () { return json(M._sidx_lab_diverge_json()); },
@@ -254,7 +257,8 @@ function retrace(keepStep) {
 function replay(s, k) {
   var ntris = SC ? SC.ntris : 0;
   var r = { current: null, box: null, tn: NaN, tf: NaN, stack: [], more: 0, best: null, bestT: Infinity,
-            prims: 0, boxes: 0, entered: 0, mailbox: 0, primMark: new Uint8Array(ntris || 1), nodeMark: {} };
+            prims: 0, boxes: 0, entered: 0, mailbox: 0, primMark: new Uint8Array(ntris || 1), nodeMark: {},
+            cells: [], missed: [] };
   if (!s) return r;
   var trav = s.trace;
   for (var i = 0; i < k && i < trav.length; ++i) {
@@ -266,10 +270,12 @@ function replay(s, k) {
       r.tn = num(e.t_near); r.tf = num(e.t_far);
       r.entered++;
       if (inTree) r.nodeMark[e.node] = 1;
+      else if (e.box6) r.cells.push(e.box6);     /* grid cells: not in the tree, the event has the box */
       break;
     case 'box_test':
       r.boxes++;
       if (inTree && r.nodeMark[e.node] !== 1) r.nodeMark[e.node] = e.result === 1 ? 3 : 2;
+      else if (!inTree && e.result !== 1 && e.bounds) r.missed.push(boxOf(e.bounds));
       break;
     case 'stack_push':
       if (r.stack.length < 64) r.stack.push({ node: e.node, tn: num(e.t_near), tf: num(e.t_far) });
@@ -464,6 +470,8 @@ function draw2d(vp, r, s) {
       if (r.nodeMark[id] === 1) rect2d(cx, m, s.nodeBox[id], null, '#e0b000', 2);
       else if (r.nodeMark[id] === 2) rect2d(cx, m, s.nodeBox[id], null, '#d02020', 1, true);
     }
+    r.cells.forEach(function (b) { rect2d(cx, m, b, null, '#e0b000', 2); });
+    r.missed.forEach(function (b) { rect2d(cx, m, b, null, '#d02020', 1, true); });
     triangles2d(cx, m, r.primMark, true);
     if (r.box) rect2d(cx, m, r.box, 'rgba(255,153,0,0.31)', '#ff7f00', 3);
   }
@@ -886,7 +894,10 @@ function nextWhere(dir, pred) {
 function nextOfType(dir) { var t = $('evtype').value; nextWhere(dir, function (e) { return e.type === t; }); }
 function nextLeaf(dir) {
   var s = SLOT[0];
-  nextWhere(dir, function (e) { return e.type === 'node_enter' && s && s.leaf[e.node] === 1; });
+  /* a leaf entered, as sidx-step's "leaf": a grid cell, or a node the build made a leaf */
+  nextWhere(dir, function (e) {
+    return e.type === 'node_enter' && ((e.cell && e.cell[0] >= 0) || (s && s.leaf[e.node] === 1));
+  });
 }
 function setMode(m) {
   stop();
@@ -1119,7 +1130,7 @@ window.sidxLab = {
       error: S.error || (window.sidxErrors.length ? window.sidxErrors.join('\n') : '')
     };
   },
-  timings: function () { return { rebuild: T.rebuild, trace: T.trace, heat: T.heat, draw: T.draw }; },
+  timings: function () { return { rebuild: T.rebuild, trace: T.trace, heat: T.heat, draw: T.draw, parts: T.parts, tparts: T.tparts }; },
   /* for a program: the same as the inputs, without the mouse */
   setRay: function (r) { return setRay(r, false); },
   heat: function () { if (S.mode !== 'heat') S.mode = 'heat'; heat(); return T.heat; }
