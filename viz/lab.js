@@ -660,7 +660,7 @@ function drawHeat(vp, r, s) {
   cx.drawImage(H.canvas, q.x, q.y, q.s, q.s);
   if (S.ray && s) {             /* the ray, drawn with the heat map's camera */
     var cam = camera(q.s, q.s);
-    cx.save(); cx.translate(q.x, q.y);
+    cx.save(); cx.beginPath(); cx.rect(q.x, q.y, q.s, q.s); cx.clip(); cx.translate(q.x, q.y);
     var tEnd = isFinite(r.bestT) ? r.bestT : rayEnd();
     var pa = project(cam, at(1e-3)), pb = project(cam, at(tEnd));
     if (pa && pb) line(cx, pa[0], pa[1], pb[0], pb[1], 2, '#00ffff');
@@ -849,6 +849,7 @@ function fmt(x) {
   for (var p = 1; p < 9; ++p) { var t = +x.toPrecision(p); if (Math.fround(t) === x) return String(t); }
   return String(+x.toPrecision(9));
 }
+var LAST_HASH = '';
 function writeHash() {
   var p = ['scene=' + encodeURIComponent(S.scene), 'accel=' + encodeURIComponent(S.accel)];
   if (S.accel2) p.push('accel2=' + encodeURIComponent(S.accel2));
@@ -860,6 +861,7 @@ function writeHash() {
   if (S.ray) p.push('ray=' + S.ray.map(fmt).join(','));
   if (S.ray) p.push('step=' + S.step);
   var h = '#' + p.join('&');
+  LAST_HASH = h;
   if (location.hash !== h) try { history.replaceState(null, '', h); } catch (e) { /* some browsers refuse on file: */ }
 }
 function readHash() {
@@ -962,7 +964,7 @@ function loadScene(name, bytes, ray) {
   var msg = openScene(name, bytes);
   if (msg) { setError(msg); return false; }
   S.scene = name;
-  fillSceneSelect(bytes ? name : null);
+  fillSceneSelect(bytes ? name : FILE ? FILE.name : null);
   fillAccelSelects();
   if (S.mode === '2d' && !SC.flat && !ray) S.mode = '3d';
   if (SC.flat && S.mode !== '2d' && !ray) S.mode = '2d';
@@ -983,11 +985,15 @@ function loadFile(file) {
   }
   var rd = new FileReader();
   rd.onload = function () {
-    var saved = { scene: S.scene };
+    var saved = { scene: S.scene }, link = PENDING && PENDING.scene === file.name ? PENDING : null;
     if (!loadScene(file.name, new Uint8Array(rd.result), null)) {
       S.scene = saved.scene;          /* the scene before stays open */
       $('scene').value = S.scene;
+      return;
     }
+    FILE = { name: file.name, bytes: new Uint8Array(rd.result) };
+    setError('');
+    if (link) { PENDING = null; applyLink(link, true); }
   };
   rd.onerror = function () { setError(file.name + ': the browser could not read the file'); };
   rd.readAsArrayBuffer(file);
@@ -995,7 +1001,9 @@ function loadFile(file) {
 
 /* ---- input ------------------------------------------------------------------------------ */
 function bindInputs() {
-  $('scene').onchange = function () { loadScene(this.value, null, null); };
+  $('scene').onchange = function () {
+    loadScene(this.value, FILE && FILE.name === this.value ? FILE.bytes : null, null);
+  };
   $('accel').onchange = function () { S.accel = this.value; rebuild(); };
   $('accel2').onchange = function () { S.accel2 = this.value; rebuild(); };
   KNOBS.forEach(function (name) {
@@ -1137,36 +1145,72 @@ window.sidxLab = {
 };
 
 /* ---- start ------------------------------------------------------------------------------ */
+/* The view an address describes: {scene, accel, accel2, knobs, mode, cam, level, heat, ray, step}. */
+function linkOf(q) {
+  var v = { scene: q.scene || 'kd-slide', accel: q.accel || '', accel2: q.accel2 || '', knobs: {}, mode: null,
+            cam: null, level: -1, heat: null, ray: null, step: null };
+  KNOBS.forEach(function (k) { if (q[k] !== undefined && q[k] !== '' && isFinite(+q[k])) v.knobs[k] = +q[k]; });
+  if (q.mode === '2d' || q.mode === '3d' || q.mode === 'heat') v.mode = q.mode;
+  if (q.cam) { var c = q.cam.split(',').map(Number); if (c.length === 3 && c.every(isFinite)) v.cam = c; }
+  if (q.level && /^\d+$/.test(q.level)) v.level = +q.level;
+  if (q.heat) {
+    var hp = q.heat.split(',');
+    v.heat = [hp[0] === 'tris' ? 'tris' : 'steps', +hp[1] > 0 ? Math.min(1024, +hp[1] | 0) : 256];
+  }
+  var ray = q.ray ? q.ray.split(',').map(Number) : null;
+  if (ray && ray.length === 6 && ray.every(isFinite)) v.ray = ray;
+  if (q.step && /^\d+$/.test(q.step)) v.step = +q.step;
+  return v;
+}
+/* Opens the view of a link: its scene, structures, knobs, camera, ray and step.  A scene that
+ * was a file cannot come back by itself: the page says so, and applies the rest of the link
+ * when a file of that name is opened. */
+var PENDING = null;
+var FILE = null;             /* the OBJ opened last, {name, bytes}: the scene list offers it again */
+function applyLink(v, sceneLoaded) {
+  S.accel = v.accel; S.accel2 = v.accel2; S.knobs = v.knobs;
+  writeKnobs();
+  if (v.cam) { S.yaw = v.cam[0]; S.pitch = v.cam[1]; S.zoom = v.cam[2]; }
+  S.level = v.level;
+  if (v.heat) { S.heatMetric = v.heat[0]; S.heatSize = v.heat[1]; }
+  $('heat-metric').value = S.heatMetric; $('heat-size').value = String(S.heatSize);
+  if (v.mode) S.mode = v.mode;
+  if (sceneLoaded) {
+    fillAccelSelects();
+    S.ray = v.ray ? v.ray.map(f32) : defaultRay().map(f32);
+    S.step = Infinity;
+    rebuild();
+  } else {
+    var msgErr = S.error;
+    if (!loadScene(v.scene, null, v.ray)) return;
+    if (msgErr && !S.error) setError(msgErr);
+  }
+  if (v.mode) S.mode = v.mode;
+  if (v.step !== null) S.step = Math.min(v.step, count());
+  if (S.mode === 'heat') heat(); else render();
+}
+function onHash() {
+  var h = location.hash;
+  if (h === LAST_HASH) return;          /* the page's own address */
+  var v = linkOf(readHash());
+  if (L.scenes().indexOf(v.scene) < 0) {
+    if (v.scene === S.scene && SC) { applyLink(v, true); return; }
+    PENDING = v;
+    setError('The scene "' + v.scene + '" of this link is a file: open it with "open OBJ..." (or drop it here) and ' +
+             'the link\'s structures, knobs, ray and step follow.');
+    if (!SC) { v = linkOf({}); applyLink(v, false); setError(S.error); }
+    return;
+  }
+  applyLink(v, false);
+}
+
 function start(lab) {
   L = lab;
   bindInputs();
-  var q = readHash();
-  S.accel = q.accel || '';
-  S.accel2 = q.accel2 || '';
-  S.knobs = {};
-  KNOBS.forEach(function (k) { if (q[k] !== undefined && q[k] !== '' && isFinite(+q[k])) S.knobs[k] = +q[k]; });
-  writeKnobs();
-  if (q.mode === '2d' || q.mode === '3d' || q.mode === 'heat') S.mode = q.mode;
-  if (q.cam) { var c = q.cam.split(',').map(Number); if (c.length === 3 && c.every(isFinite)) { S.yaw = c[0]; S.pitch = c[1]; S.zoom = c[2]; } }
-  if (q.level && /^\d+$/.test(q.level)) S.level = +q.level;
-  if (q.heat) { var hp = q.heat.split(','); if (hp[0] === 'tris' || hp[0] === 'steps') S.heatMetric = hp[0]; if (+hp[1] > 0) S.heatSize = Math.min(1024, +hp[1] | 0); }
-  $('heat-metric').value = S.heatMetric; $('heat-size').value = String(S.heatSize);
-  var ray = q.ray ? q.ray.split(',').map(Number) : null;
-  if (ray && (ray.length !== 6 || !ray.every(isFinite))) ray = null;
-  var scenes = L.scenes(), scene = q.scene || 'kd-slide';
-  var mode = S.mode;
-  if (scenes.indexOf(scene) < 0) {
-    setError('The scene "' + scene + '" of this link is a file: open it again with the file picker (the link keeps ' +
-             'the structure, knobs and ray).');
-    scene = 'kd-slide';
-    ray = null;
-  }
-  var prevErr = S.error;
-  loadScene(scene, null, ray);
-  if (q.mode) { S.mode = mode; }
-  if (q.step && /^\d+$/.test(q.step)) S.step = Math.min(+q.step, count());
-  if (prevErr && !S.error) setError(prevErr);
+  onHash();
+  if (!SC) applyLink(linkOf({}), false);
   $('loading').style.display = 'none';
+  window.addEventListener('hashchange', onHash);
   render();
 }
 
