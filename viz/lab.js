@@ -831,8 +831,7 @@ function statsHtml() {
   });
   h.push('</table>');
   cols.forEach(function (i) {
-    if (SLOT[i].error) h.push('<div class="bad">' + esc(SLOT[i].accel + ': ' + SLOT[i].error) + '</div>');
-    else h.push('<div class="dim">= sidx-step --accel ' + esc(SLOT[i].accel) + ' ' + esc(S.scene) +
+    if (!SLOT[i].error) h.push('<div class="dim">= sidx-step --accel ' + esc(SLOT[i].accel) + ' ' + esc(S.scene) +
                 (SLOT[i].args ? ' ' + esc(SLOT[i].args) : '') + '</div>');
   });
   return h.join('');
