@@ -103,6 +103,7 @@ int sidx_lab_trace(int slot, double ox, double oy, double oz, double dx, double 
  * "ray_arg":"ox,oy,oz,dx,dy,dz","hit":{"prim","t"} or null,
  * "counts":{"nodes" (NODE_ENTER),"boxes" (BOX_TEST),"triangles"
  * (PRIM_TEST),"mailbox" (MAILBOX_HIT),"events"},"truncated":false,
+ * "ms" (the recorded query's wall time),
  * "events":[one object per event: sidx_event_to_json's (sidx-step --json)
  * plus "box" on NODE_ENTER and "line", the printer's text]}; "null"
  * when the slot has no trace. */
