@@ -1,0 +1,390 @@
+// lab_test.js — the lab page (build/web/sidx-lab.html) in headless Chromium.
+//
+//   node tests/web/lab_test.js [BUILD]          (tests/run_web_page.sh runs it)
+//
+// Drives the page through the DevTools protocol (cdp.js) with real mouse
+// and keyboard events and checks what it shows against the native
+// programs of the same build:
+//   - a ray dragged on #view in the 2D scene kd-slide: the page's trace
+//     equals `sidx-step --accel kdtree kd-slide --ray R --json` event for
+//     event (R the page's ray, each float written so that strtof gives it
+//     back exactly);
+//   - a build knob typed into its input: the node count equals the
+//     build_end count of `sidx-step --build` with the same knob;
+//   - another structure picked: the trace follows it (against sidx-step);
+//   - a malformed OBJ given to #obj-file: #error holds the library's
+//     message and the page still traces afterwards;
+//   - the page from file:// with networking off (offline, and a dead proxy):
+//     it starts and no request leaves it;
+//   - heat map and side-by-side modes draw without an error.
+// Each mode's screenshot goes to BUILD/web/screens/*.png; the page's
+// timings() are printed, never compared with a limit.  Every wait gives up
+// after a fixed time.  Exit status: 0 all passed, 1 a check failed.
+'use strict';
+
+const cdp = require('./cdp');
+const { execFileSync } = require('child_process');
+const fs = require('fs');
+const os = require('os');
+const path = require('path');
+
+const BUILD = process.argv[2] || process.env.BUILD || 'build';
+const PAGE = path.resolve(BUILD, 'web/sidx-lab.html');
+const STEP = path.resolve(BUILD, 'bin/sidx-step');
+const SCREENS = path.resolve(BUILD, 'web/screens');
+const URL0 = 'file://' + PAGE;
+const WAIT_MS = 20000;
+
+let failures = 0;
+function ok(name) { console.log('  ok    ' + name); }
+function bad(name, why) {
+    console.log('  FAIL  ' + name + ': ' + why);
+    failures++;
+}
+
+const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
+
+// ---- the native side ------------------------------------------------------------------------
+
+function native(args) {
+    return execFileSync(STEP, args, { encoding: 'utf8', timeout: 60000, maxBuffer: 64 << 20 });
+}
+
+// A float of the ray as sidx-step --ray reads it (strtof): the page's value
+// rounded to float, written in the shortest form that reads back as that
+// double, which strtof rounds to the same float.
+function rayArg(ray) { return ray.map((v) => String(Math.fround(v))).join(','); }
+
+function nativeTrace(accel, scene, ray, knobArgs) {
+    const out = native(['--accel', accel, scene, '--ray', rayArg(ray), '--json', ...(knobArgs || [])]);
+    return out.split('\n').filter((l) => l.trim()).map((l) => JSON.parse(l));
+}
+
+function nativeNodes(accel, scene, knobArgs) {
+    const out = native(['--accel', accel, scene, '--build', '--json', ...(knobArgs || [])]);
+    const end = out.split('\n').filter((l) => l.includes('"build_end"')).map((l) => JSON.parse(l)).pop();
+    if (!end) throw new Error('no build_end in sidx-step --build');
+    return end.node;
+}
+
+// ---- comparing ------------------------------------------------------------------------------
+
+const traceOnly = (evs) => evs.filter((e) => !String(e.type).startsWith('build_'));
+
+function sameValue(a, b) { return JSON.stringify(a) === JSON.stringify(b); }
+
+// null if the two traces agree event for event, else where they part.
+function traceDiff(page, want) {
+    const n = Math.max(page.length, want.length);
+    for (let i = 0; i < n; ++i) {
+        if (!sameValue(page[i], want[i])) {
+            return `event ${i + 1} of ${page.length} (page) / ${want.length} (sidx-step):\n` +
+                `        page:      ${JSON.stringify(page[i])}\n        sidx-step: ${JSON.stringify(want[i])}`;
+        }
+    }
+    return null;
+}
+
+// The first value of key anywhere in obj (the page's stats may nest it).
+function findKey(obj, key) {
+    if (!obj || typeof obj !== 'object') return undefined;
+    if (key in obj && typeof obj[key] !== 'object') return obj[key];
+    for (const k of Object.keys(obj)) {
+        const v = findKey(obj[k], key);
+        if (v !== undefined) return v;
+    }
+    return undefined;
+}
+
+// ---- the page -------------------------------------------------------------------------------
+
+const state = (p) => p.eval('sidxLab.state()');
+
+// Polls the page's state until pred(state) holds; the last state, or throws.
+async function until(p, what, pred, ms) {
+    const t0 = Date.now();
+    let s;
+    for (;;) {
+        s = await state(p);
+        if (pred(s)) return s;
+        if (Date.now() - t0 > (ms || WAIT_MS)) throw new Error(`waited ${ms || WAIT_MS} ms for ${what}; state: ${JSON.stringify(s).slice(0, 400)}`);
+        await sleep(50);
+    }
+}
+
+async function open(b, opts) {
+    const p = await b.newPage(null, opts);
+    await p.goto(URL0);
+    await p.eval('sidxLab.ready', WAIT_MS);
+    return p;
+}
+
+// Picks value in a <select> the way a user's choice reaches the page: the
+// value set and a change event.
+async function choose(p, sel, value) {
+    const r = await p.eval(`(() => {
+        const e = document.querySelector(${JSON.stringify(sel)});
+        if (!e) return 'no ' + ${JSON.stringify(sel)};
+        if (![...e.options].some((o) => o.value === ${JSON.stringify(value)}))
+            return ${JSON.stringify(sel)} + ' has no option ' + ${JSON.stringify(value)} + ' (has ' + [...e.options].map((o) => o.value).join(' ') + ')';
+        e.focus();
+        e.value = ${JSON.stringify(value)};
+        e.dispatchEvent(new Event('input', {bubbles: true}));
+        e.dispatchEvent(new Event('change', {bubbles: true}));
+        return '';
+    })()`);
+    if (r) throw new Error(r);
+}
+
+// Types text into an <input> with real key events: a triple click selects
+// what is there, the text replaces it, Enter and Tab commit it.
+async function typeInto(p, sel, text) {
+    const bx = await p.box(sel);
+    const x = bx.x + bx.w / 2, y = bx.y + bx.h / 2;
+    await p.send('Input.dispatchMouseEvent', { type: 'mousePressed', x, y, button: 'left', buttons: 1, clickCount: 3 });
+    await p.send('Input.dispatchMouseEvent', { type: 'mouseReleased', x, y, button: 'left', buttons: 0, clickCount: 3 });
+    await p.eval(`document.querySelector(${JSON.stringify(sel)}).select && document.querySelector(${JSON.stringify(sel)}).select()`);
+    await p.send('Input.insertText', { text });
+    for (const key of [['Enter', 13, '\r'], ['Tab', 9, '\t']]) {
+        await p.send('Input.dispatchKeyEvent', { type: 'rawKeyDown', key: key[0], code: key[0], windowsVirtualKeyCode: key[1] });
+        if (key[0] === 'Enter') await p.send('Input.dispatchKeyEvent', { type: 'char', key: key[0], text: key[2] });
+        await p.send('Input.dispatchKeyEvent', { type: 'keyUp', key: key[0], code: key[0], windowsVirtualKeyCode: key[1] });
+    }
+}
+
+// Drags a ray on #view from fraction (fx0,fy0) of the canvas to (fx1,fy1).
+async function dragRay(p, fx0, fy0, fx1, fy1) {
+    const bx = await p.box('#view');
+    await p.drag(bx.x + bx.w * fx0, bx.y + bx.h * fy0, bx.x + bx.w * fx1, bx.y + bx.h * fy1, 10);
+}
+
+async function shot(p, name) {
+    const f = await p.screenshot(path.join(SCREENS, name + '.png'));
+    console.log('        screenshot ' + path.relative(process.cwd(), f));
+}
+
+async function timings(p, what) {
+    const t = await p.eval('JSON.stringify(sidxLab.timings())');
+    console.log(`        timings after ${what}: ${t}`);
+}
+
+// Runs one check; a thrown error fails it with its message.
+async function check(name, fn) {
+    try {
+        const why = await fn();
+        if (why) bad(name, why);
+        else ok(name);
+    } catch (e) {
+        bad(name, e.message);
+    }
+}
+
+// The page's trace of its current ray against sidx-step's.
+async function compareTrace(p, s) {
+    const want = traceOnly(nativeTrace(s.accel, s.scene, s.ray, knobArgs(s.knobs)));
+    const got = traceOnly(s.events || []);
+    const d = traceDiff(got, want);
+    if (d) return `ray ${rayArg(s.ray)}: ${d}`;
+    console.log(`        ${s.accel} on ${s.scene}, ray ${rayArg(s.ray)}: ${got.length} events agree` +
+        ` (${got.filter((e) => e.type === 'prim_test').length} triangle tests, ${got.some((e) => e.type === 'prim_hit') ? 'a hit' : 'no hit'})`);
+    return null;
+}
+
+// The page's knobs as sidx-step flags (only those the page has set away
+// from the default 0 / off).
+function knobArgs(k) {
+    const a = [];
+    if (!k) return a;
+    const num = { bins: '--bins', c_trav: '--c-trav', c_tri: '--c-tri', leaf_size: '--leaf-size', max_depth: '--max-depth', lambda: '--lambda', empty_bonus: '--empty-bonus', optimize: '--optimize' };
+    for (const [key, flag] of Object.entries(num)) {
+        if (k[key] !== undefined && k[key] !== null && Number(k[key]) !== 0) a.push(flag, String(k[key]));
+    }
+    if (k.mailbox === false || k.mailbox === 0) a.push('--no-mailbox');
+    return a;
+}
+
+// ---- the checks -----------------------------------------------------------------------------
+
+async function main() {
+    const b = await cdp.launch({ timeoutMs: WAIT_MS, lifeMs: 240000 });
+    try {
+        const p = await open(b);
+        const s0 = await state(p);
+        if (s0.error) bad('page starts', 'error at start: ' + s0.error);
+        if (p.exceptions.length) bad('page starts', 'script errors: ' + p.exceptions.join('; '));
+
+        await check('2D: a dragged ray on kd-slide traces as sidx-step does', async () => {
+            await choose(p, '#scene', 'kd-slide');
+            await choose(p, '#accel', 'kdtree');
+            await until(p, 'kd-slide with kdtree', (s) => s.scene === 'kd-slide' && s.accel === 'kdtree');
+            await shot(p, '2d-kd-slide');
+            const drags = [[0.05, 0.5, 0.95, 0.45], [0.1, 0.15, 0.9, 0.85], [0.5, 0.95, 0.45, 0.05]];
+            let prev = JSON.stringify((await state(p)).ray);
+            let hits = 0;
+            for (const d of drags) {
+                await dragRay(p, ...d);
+                const s = await until(p, 'a new ray after the drag', (x) => JSON.stringify(x.ray) !== prev);
+                prev = JSON.stringify(s.ray);
+                if (s.ray[2] !== 0 || s.ray[5] !== 0) return `a 2D ray leaves the plane z = 0: ${s.ray}`;
+                const why = await compareTrace(p, s);
+                if (why) return why;
+                if (traceOnly(s.events).some((e) => e.type === 'prim_hit')) ++hits;
+            }
+            await timings(p, 'a dragged ray');
+            await shot(p, '2d-dragged-ray');
+            return hits ? null : 'none of the dragged rays hit a shape: the drags test too little';
+        });
+
+        await check('knob: max_depth typed in rebuilds the kd-tree with the native node count', async () => {
+            await choose(p, '#scene', 'teapot');
+            await choose(p, '#accel', 'kdtree');
+            await until(p, 'teapot with kdtree', (s) => s.scene === 'teapot' && s.accel === 'kdtree');
+            for (const depth of ['3', '8']) {
+                await typeInto(p, '#knob-max_depth', depth);
+                const s = await until(p, 'max_depth ' + depth, (x) => String(x.knobs && x.knobs.max_depth) === depth);
+                const want = nativeNodes('kdtree', 'teapot', ['--max-depth', depth]);
+                const got = await until(p, 'a node count', (x) => findKey(x.stats, 'nodes') !== undefined)
+                    .then((x) => findKey(x.stats, 'nodes'));
+                if (got !== want) return `max_depth ${depth}: the page shows ${got} nodes, sidx-step --build ${want}`;
+                console.log(`        kdtree on teapot, max_depth ${depth}: ${got} nodes on both (stats ${JSON.stringify(s.stats).slice(0, 200)})`);
+                await timings(p, 'rebuilding teapot, max_depth ' + depth);
+            }
+            await shot(p, 'knob-max-depth');
+            return null;
+        });
+
+        await check('knob: leaf_size typed in rebuilds the BVH with the native node count', async () => {
+            await choose(p, '#accel', 'bvh');
+            await until(p, 'bvh', (s) => s.accel === 'bvh');
+            for (const leaf of ['1', '16']) {
+                await typeInto(p, '#knob-leaf_size', leaf);
+                await until(p, 'leaf_size ' + leaf, (x) => String(x.knobs && x.knobs.leaf_size) === leaf);
+                const want = nativeNodes('bvh', 'teapot', ['--leaf-size', leaf]);
+                const got = findKey((await state(p)).stats, 'nodes');
+                if (got !== want) return `leaf_size ${leaf}: the page shows ${got} nodes, sidx-step --build ${want}`;
+                console.log(`        bvh on teapot, leaf_size ${leaf}: ${got} nodes on both`);
+            }
+            return null;
+        });
+
+        await check('structures: each picked structure traces kd-slide as sidx-step does', async () => {
+            await choose(p, '#scene', 'kd-slide');
+            const s0 = await until(p, 'kd-slide', (s) => s.scene === 'kd-slide');
+            const names = await p.eval(`[...document.querySelector('#accel').options].map((o) => o.value)`);
+            const want = ['bvh', 'kdtree', 'grid', 'quadtree', 'brute'].filter((n) => names.includes(n));
+            if (want.length < 3) return `#accel on kd-slide offers only ${names.join(' ')}`;
+            for (const name of want) {
+                await choose(p, '#accel', name);
+                const s = await until(p, name, (x) => x.accel === name && x.scene === 'kd-slide');
+                if (!sameValue(s.ray, s0.ray)) return `picking ${name} changed the ray`;
+                const why = await compareTrace(p, s);
+                if (why) return name + ': ' + why;
+            }
+            await timings(p, 'rebuilding kd-slide');
+            await shot(p, 'structures-' + want[want.length - 1]);
+            return null;
+        });
+
+        await check('malformed OBJ: #error shows the library\'s message, the page goes on', async () => {
+            const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'sidx-lab-'));
+            const obj = path.join(dir, 'bad.obj');
+            fs.writeFileSync(obj, 'v 0 0 0\nv 1 0 0\nf 1 2 7\n');
+            let msg;
+            try {
+                native(['--accel', 'bvh', obj, '--build']);
+                return 'sidx-step accepted the malformed OBJ';
+            } catch (e) {
+                // "sidx-step: PATH:LINE: MESSAGE": the page names the file its own way
+                msg = String(e.stderr).trim().replace(/^sidx-step: /, '').replace(obj + ':', '').replace(/^\d+: /, '');
+            }
+            await p.setFiles('#obj-file', [obj]);
+            let err = '';
+            const t0 = Date.now();
+            while (!err && Date.now() - t0 < WAIT_MS) {
+                err = await p.eval(`document.querySelector('#error').textContent.trim()`);
+                if (!err) await sleep(50);
+            }
+            fs.rmSync(dir, { recursive: true, force: true });
+            if (!err.includes(msg)) return `#error says '${err}', the library says '${msg}'`;
+            console.log(`        #error: ${err}`);
+            await shot(p, 'bad-obj');
+            if (p.exceptions.length) return 'script errors: ' + p.exceptions.join('; ');
+            await choose(p, '#scene', 'kd-slide');
+            await choose(p, '#accel', 'kdtree');
+            const before = JSON.stringify((await state(p)).ray);
+            await dragRay(p, 0.05, 0.3, 0.95, 0.6);
+            const s = await until(p, 'a ray after the bad file', (x) => x.scene === 'kd-slide' && JSON.stringify(x.ray) !== before);
+            return compareTrace(p, s);
+        });
+
+        await check('heat map: drawn for teapot without an error', async () => {
+            await choose(p, '#scene', 'teapot');
+            await choose(p, '#accel', 'bvh');
+            await until(p, 'teapot', (s) => s.scene === 'teapot' && s.accel === 'bvh');
+            const kind = await p.eval(`(() => { const e = document.querySelector('#heatmap'); return e ? e.tagName + ':' + (e.type || '') : ''; })()`);
+            if (!kind) return 'no #heatmap in the page';
+            if (!kind.startsWith('CANVAS')) {
+                const bx = await p.box('#heatmap');
+                await p.click(bx.x + bx.w / 2, bx.y + bx.h / 2);
+            }
+            const t0 = Date.now();
+            let t;
+            do {
+                t = await p.eval('sidxLab.timings()');
+                if (t && typeof t.heatmap === 'number' && t.heatmap > 0) break;
+                await sleep(100);
+            } while (Date.now() - t0 < WAIT_MS);
+            const s = await state(p);
+            if (s.error) return 'error: ' + s.error;
+            await timings(p, 'the heat map');
+            await shot(p, 'heatmap');
+            return null;
+        });
+
+        await check('side by side: two structures on one ray', async () => {
+            await choose(p, '#scene', 'kd-slide');
+            await choose(p, '#accel', 'kdtree');
+            await choose(p, '#accel2', 'bvh');
+            const s = await until(p, 'kdtree beside bvh', (x) => x.accel === 'kdtree' && x.accel2 === 'bvh');
+            if (s.error) return 'error: ' + s.error;
+            const why = await compareTrace(p, s);
+            if (why) return why;
+            await shot(p, 'side-by-side');
+            return null;
+        });
+
+        if (p.exceptions.length) bad('no script errors', p.exceptions.join('; '));
+    } finally {
+        await b.close();
+    }
+
+    // A browser of its own: a dead proxy for every request and the
+    // network emulated offline; the page must start from file:// alone.
+    await check('offline: the page starts from file:// and asks the network for nothing', async () => {
+        const b2 = await cdp.launch({ timeoutMs: WAIT_MS, lifeMs: 120000, proxy: '127.0.0.1:9' });
+        try {
+            const p2 = await open(b2, { offline: true });
+            const s = await state(p2);
+            if (s.error) return 'error: ' + s.error;
+            const out = p2.requests.filter((u) => !/^(file|data|blob|about):/.test(u));
+            if (out.length) return 'requests: ' + out.join(' ');
+            await shot(p2, 'offline');
+            console.log(`        requests: ${p2.requests.length} (${[...new Set(p2.requests.map((u) => u.split(':')[0]))].join(', ')})`);
+            return null;
+        } finally {
+            await b2.close();
+        }
+    });
+}
+
+if (!fs.existsSync(PAGE)) {
+    console.log(`web-page: skipped: no ${PAGE} (make web builds it)`);
+    process.exit(0);
+}
+main().then(() => {
+    console.log(failures ? `web-page: ${failures} check(s) failed` : 'web-page: all checks passed');
+    process.exit(failures ? 1 : 0);
+}, (e) => {
+    console.log('  FAIL  ' + e.message);
+    process.exit(1);
+});
