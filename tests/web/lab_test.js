@@ -47,7 +47,7 @@ const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
 // ---- the native side ------------------------------------------------------------------------
 
 function native(args) {
-    return execFileSync(STEP, args, { encoding: 'utf8', timeout: 60000, maxBuffer: 64 << 20 });
+    return execFileSync(STEP, args, { encoding: 'utf8', timeout: 60000, maxBuffer: 64 << 20, stdio: ['ignore', 'pipe', 'pipe'] });
 }
 
 // A float of the ray as sidx-step --ray reads it (strtof): the page's value
