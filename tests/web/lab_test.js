@@ -5,10 +5,11 @@
 // Drives the page through the DevTools protocol (cdp.js) with real mouse
 // and keyboard events and checks what it shows against the native
 // programs of the same build:
-//   - a ray dragged on #view in the 2D scene kd-slide: the page's trace
-//     equals `sidx-step --accel kdtree kd-slide --ray R --json` event for
-//     event (R the page's ray, each float written so that strtof gives it
-//     back exactly);
+//   - a ray and step given in the address: the page's trace equals
+//     `sidx-step --accel kdtree kd-slide --ray R --json` event for event;
+//   - rays dragged on #view in the 2D scene kd-slide: the same, with R the
+//     page's ray, each float written so that strtof gives it back exactly;
+//     the page's address then opens the same walk in a new tab;
 //   - a build knob typed into its input: the node count equals the
 //     build_end count of `sidx-step --build` with the same knob;
 //   - another structure picked: the trace follows it (against sidx-step);
@@ -16,7 +17,10 @@
 //     message and the page still traces afterwards;
 //   - the page from file:// with networking off (offline, and a dead proxy):
 //     it starts and no request leaves it;
-//   - heat map and side-by-side modes draw without an error.
+//   - the heat map: 256 x 256, not empty, no error;
+//   - side by side: the second structure's walk against sidx-step, the
+//     counts shown for both against their traces, and the step where the
+//     walks part against sidx-step --diff.
 // Each mode's screenshot goes to BUILD/web/screens/*.png; the page's
 // timings() are printed, never compared with a limit.  Every wait gives up
 // after a fixed time.  Exit status: 0 all passed, 1 a check failed.
@@ -213,6 +217,19 @@ async function main() {
         if (s0.error) bad('page starts', 'error at start: ' + s0.error);
         if (p.exceptions.length) bad('page starts', 'script errors: ' + p.exceptions.join('; '));
 
+        await check('address: a ray and step given in the URL trace as sidx-step does', async () => {
+            const ray = [0, 4.2, 0, 1, 0.15, 0];
+            const p2 = await b.newPage(null);
+            await p2.goto(URL0 + '#scene=kd-slide&accel=kdtree&ray=' + ray.join(',') + '&step=5');
+            await p2.eval('sidxLab.ready', WAIT_MS);
+            const s = await state(p2);
+            await p2.send('Target.closeTarget', { targetId: p2.targetId }).catch(() => null);
+            if (s.scene !== 'kd-slide' || s.accel !== 'kdtree') return `the page opened ${s.scene} with ${s.accel}`;
+            if (!sameValue(s.ray, ray.map(Math.fround))) return `the page traces ${s.ray}, the address says ${ray}`;
+            if (s.step !== 5) return `the page is at step ${s.step}, the address says 5`;
+            return compareTrace(p2, s);
+        });
+
         await check('2D: a dragged ray on kd-slide traces as sidx-step does', async () => {
             await choose(p, '#scene', 'kd-slide');
             await choose(p, '#accel', 'kdtree');
@@ -232,6 +249,17 @@ async function main() {
             }
             await timings(p, 'a dragged ray');
             await shot(p, '2d-dragged-ray');
+            // the address keeps the state: the same link in a new tab shows the same walk
+            const href = await p.eval('location.href');
+            const s1 = await state(p);
+            const p3 = await b.newPage(null);
+            await p3.goto(href);
+            await p3.eval('sidxLab.ready', WAIT_MS);
+            const s3 = await state(p3);
+            await p3.send('Target.closeTarget', { targetId: p3.targetId }).catch(() => null);
+            for (const k of ['scene', 'accel', 'ray', 'step', 'events']) {
+                if (!sameValue(s3[k], s1[k])) return `the link ${href} opens with another ${k}: ${JSON.stringify(s3[k]).slice(0, 200)}`;
+            }
             return hits ? null : 'none of the dragged rays hit a shape: the drags test too little';
         });
 
@@ -331,25 +359,65 @@ async function main() {
             let t;
             do {
                 t = await p.eval('sidxLab.timings()');
-                if (t && typeof t.heatmap === 'number' && t.heatmap > 0) break;
+                if (t && typeof t.heat === 'number' && t.heat > 0) break;
                 await sleep(100);
             } while (Date.now() - t0 < WAIT_MS);
             const s = await state(p);
             if (s.error) return 'error: ' + s.error;
-            await timings(p, 'the heat map');
+            if (s.mode !== 'heat') return `the page is in mode ${s.mode}, not heat, after a click on #heatmap`;
+            if (!s.heat || s.heat.n !== 256) return `the heat map is ${JSON.stringify(s.heat)}, not 256 x 256`;
+            if (!(s.heat.max > 0)) return `the heat map is empty: ${JSON.stringify(s.heat)}`;
+            console.log(`        teapot, bvh: 256 x 256 heat map, max ${s.heat.max}, mean ${s.heat.mean}`);
+            await timings(p, 'the 256 x 256 heat map');
             await shot(p, 'heatmap');
             return null;
         });
 
-        await check('side by side: two structures on one ray', async () => {
+        await check('side by side: both walks, their counts and where they part as sidx-step --diff', async () => {
             await choose(p, '#scene', 'kd-slide');
             await choose(p, '#accel', 'kdtree');
-            await choose(p, '#accel2', 'bvh');
-            const s = await until(p, 'kdtree beside bvh', (x) => x.accel === 'kdtree' && x.accel2 === 'bvh');
+            const names = await p.eval(`[...document.querySelector('#accel2').options].map((o) => o.value)`);
+            const other = ['kdtree-median', 'kdtree-middle', 'bvh'].find((n) => names.includes(n));
+            if (!other) return '#accel2 offers only ' + names.join(' ');
+            await choose(p, '#accel2', other);
+            const s = await until(p, 'kdtree beside ' + other, (x) => x.accel === 'kdtree' && x.accel2 === other);
             if (s.error) return 'error: ' + s.error;
-            const why = await compareTrace(p, s);
+            let why = await compareTrace(p, s);
             if (why) return why;
+            const want2 = nativeTrace(other, s.scene, s.ray, knobArgs(s.knobs));
+            why = traceDiff(traceOnly(s.events2 || []), traceOnly(want2));
+            if (why) return other + ': ' + why;
+            // the counts shown beside each other: events of the walk
+            const counts = (evs) => ({
+                nodes: evs.filter((e) => e.type === 'node_enter').length,
+                boxes: evs.filter((e) => e.type === 'box_test').length,
+                triangles: evs.filter((e) => e.type === 'prim_test').length,
+                mailbox: evs.filter((e) => e.type === 'mailbox_hit').length,
+            });
+            for (const [st, evs, name] of [[s.stats, s.events, 'kdtree'], [s.stats2, want2, other]]) {
+                const want = counts(traceOnly(evs)), got = (st && st.walk) || {};
+                for (const k of Object.keys(want)) {
+                    if (got[k] !== want[k]) return `${name}: the page counts ${k} ${got[k]}, the trace has ${want[k]}`;
+                }
+            }
+            // where they part: sidx-step --diff of the two native traces
+            const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'sidx-lab-'));
+            const a = path.join(dir, 'a.jsonl'), b2 = path.join(dir, 'b.jsonl');
+            fs.writeFileSync(a, native(['--accel', 'kdtree', s.scene, '--ray', rayArg(s.ray), '--json']));
+            fs.writeFileSync(b2, native(['--accel', other, s.scene, '--ray', rayArg(s.ray), '--json']));
+            let part = -1;
+            try {
+                native(['--diff', a, b2]);
+            } catch (e) {
+                const m = /part at event (\d+)/.exec(String(e.stdout));
+                if (!m) throw new Error('sidx-step --diff: ' + e.message);
+                part = Number(m[1]);
+            }
+            fs.rmSync(dir, { recursive: true, force: true });
+            if (s.part !== part) return `the page says the walks part at step ${s.part}, sidx-step --diff at ${part}`;
+            console.log(`        kdtree and ${other}: counts ${JSON.stringify(s.stats.walk)} and ${JSON.stringify(s.stats2.walk)}; they part at step ${part}`);
             await shot(p, 'side-by-side');
+            await choose(p, '#accel2', '');
             return null;
         });
 
