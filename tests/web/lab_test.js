@@ -10,6 +10,7 @@
 //   - rays dragged on #view in the 2D scene kd-slide: the same, with R the
 //     page's ray, each float written so that strtof gives it back exactly;
 //     the page's address then opens the same walk in a new tab;
+//   - a click on the 3D view of teapot: the ray through that pixel, the same;
 //   - a build knob typed into its input: the node count equals the
 //     build_end count of `sidx-step --build` with the same knob;
 //   - another structure picked: the trace follows it (against sidx-step);
@@ -261,6 +262,21 @@ async function main() {
                 if (!sameValue(s3[k], s1[k])) return `the link ${href} opens with another ${k}: ${JSON.stringify(s3[k]).slice(0, 200)}`;
             }
             return hits ? null : 'none of the dragged rays hit a shape: the drags test too little';
+        });
+
+        await check('3D: a click on teapot shoots a ray that traces as sidx-step does', async () => {
+            await choose(p, '#scene', 'teapot');
+            await choose(p, '#accel', 'bvh');
+            let s = await until(p, 'teapot in 3D', (x) => x.scene === 'teapot' && x.accel === 'bvh' && x.mode === '3d');
+            const before = JSON.stringify(s.ray);
+            const bx = await p.box('#view');
+            await p.click(bx.x + bx.w * 0.52, bx.y + bx.h * 0.48);
+            s = await until(p, 'a new ray after the click', (x) => JSON.stringify(x.ray) !== before);
+            const why = await compareTrace(p, s);
+            if (why) return why;
+            await timings(p, 'a clicked ray on teapot');
+            await shot(p, '3d-teapot-clicked-ray');
+            return null;
         });
 
         await check('knob: max_depth typed in rebuilds the kd-tree with the native node count', async () => {
