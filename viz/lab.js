@@ -151,8 +151,11 @@ var S = {
 var SC = null;               /* the open scene: {name, ntris, pos, idx, bounds, flat} */
 var SLOT = [null, null];     /* per structure: {accel, stats, tree, nodeBox, nodeDepth, leaf, maxDepth, trace, error} */
 var T = { rebuild: NaN, trace: NaN, heat: NaN, draw: NaN };
-var HEAT = null;             /* the last heat map: {key, n, counts, max, img} */
-var base = { key: '', canvas: null };   /* the scene layer, redrawn only when it changes */
+var HEATS = [null, null];    /* the heat maps per slot: {key, n, max, scaleMax, mean, canvas, ms} */
+var BASE = [{ key: '', canvas: null }, { key: '', canvas: null }];  /* per viewport: the layer that changes
+                                                                        only with the scene, tree or camera */
+var ORBITING = false;        /* a 3D drag is under way: quicker, coarser drawing */
+var GEN = 0;                 /* counts builds and scenes opened: a layer drawn for an older one is stale */
 
 function setError(msg) {
   S.error = msg || '';
@@ -167,8 +170,8 @@ function openScene(name, bytes) {
   if (!r.ok) return r.error;
   SC = L.mesh();
   SC.name = name;
-  base.key = '';
-  HEAT = null;
+  SC.gen = ++GEN;
+  HEATS = [null, null];
   return '';
 }
 
@@ -179,6 +182,7 @@ function buildSlot(i) {
   var s = { accel: accel, stats: null, tree: [], nodeBox: {}, nodeDepth: {}, leaf: {}, maxDepth: 0, trace: [], error: '',
             labels: {}, build: [] };
   SLOT[i] = s;
+  s.gen = ++GEN;
   if (!r.ok) { s.error = r.error; return accel + ': ' + r.error; }
   s.stats = r.stats;
   s.args = r.args;
@@ -224,8 +228,7 @@ function traceSlot(i) {
 /* Rebuilds both structures (after a scene, structure or knob change), then traces. */
 function rebuild() {
   var t0 = now(), msgs = [];
-  HEAT = null;
-  base.key = '';
+  HEATS = [null, null];
   [0, 1].forEach(function (i) { var m = buildSlot(i); if (m) msgs.push(m); });
   retrace(true);
   T.rebuild = now() - t0;
@@ -433,7 +436,8 @@ function rayEnd() {
 function at(t) { return [S.ray[0] + t * S.ray[3], S.ray[1] + t * S.ray[4], S.ray[2] + t * S.ray[5]]; }
 
 /* The layer that changes only with the scene, the structure or the view size. */
-function baseLayer(key, w, h, paint) {
+function baseLayer(slot, key, w, h, paint) {
+  var base = BASE[slot];
   if (!base.canvas) base.canvas = document.createElement('canvas');
   if (base.key !== key) {
     base.canvas.width = w; base.canvas.height = h;
@@ -446,21 +450,15 @@ function baseLayer(key, w, h, paint) {
 
 function draw2d(vp, r, s) {
   var w = vp.w, h = vp.h, m = makeMap(w, h);
-  var key = '2d|' + w + 'x' + h + '|' + S.mode + '|' + (s ? s.accel : '') + '|' + (S.ray ? S.ray[2] : '') + '|' + vp.slot + '|' + cv.width;
+  var key = ['2d', w, h, SC.gen, s ? s.gen : 0, S.ray ? S.ray[2] : '', S.ray ? S.ray[5] : ''].join('|');
   cx.save();
   cx.beginPath(); cx.rect(vp.x, vp.y, w, h); cx.clip();
   cx.translate(vp.x, vp.y);
-  if (vp.slot === 0 || !S.accel2) {
-    cx.drawImage(baseLayer(key, w, h, function (c) {
-      c.fillStyle = '#f7f6f0'; c.fillRect(0, 0, w, h);
-      triangles2d(c, m, null, false);
-      structure2d(c, m, s);
-    }), 0, 0);
-  } else {  /* the second viewport paints its own layer (the cache holds one) */
-    cx.fillStyle = '#f7f6f0'; cx.fillRect(0, 0, w, h);
-    triangles2d(cx, m, null, false);
-    structure2d(cx, m, s);
-  }
+  cx.drawImage(baseLayer(vp.slot, key, w, h, function (c) {
+    c.fillStyle = '#f7f6f0'; c.fillRect(0, 0, w, h);
+    triangles2d(c, m, null, false);
+    structure2d(c, m, s);
+  }), 0, 0);
   if (S.ray && s) {
     for (var id in r.nodeMark) {
       if (r.nodeMark[id] === 1) rect2d(cx, m, s.nodeBox[id], null, '#e0b000', 2);
@@ -520,46 +518,65 @@ function box3d(c, cam, b, w, col) {
     p.push(project(cam, [i & 1 ? b.max[0] : b.min[0], i & 2 ? b.max[1] : b.min[1], i & 4 ? b.max[2] : b.min[2]]));
   EDGES.forEach(function (e) { var a = p[e[0]], q = p[e[1]]; if (a && q) line(c, a[0], a[1], q[0], q[1], w, col); });
 }
-/* The shaded triangles (painter's order, shaded by normal), mark: null or per-triangle marks;
- * with a mark only the marked ones are drawn, over the cached picture. */
-function shade3d(c, cam, mark) {
+/* The shaded triangles in painter's order, coloured by normal; with mark (per-triangle marks)
+ * only the marked ones, in their mark's colour, over the cached picture.  Every vertex is
+ * projected once; fast (while orbiting) leaves out the edge strokes that hide the seams. */
+function shade3d(c, cam, mark, fast) {
   var light = norm([cam.up[0] * 0.6 + cam.right[0] - cam.fwd[0], cam.up[1] * 0.6 + cam.right[1] - cam.fwd[1],
                     cam.up[2] * 0.6 + cam.right[2] - cam.fwd[2]]);
-  var list = [], ntris = SC.ntris;
-  for (var t = 0; t < ntris; ++t) {
-    if (mark && !mark[t]) continue;
-    var a = vtx(t, 0), b = vtx(t, 1), q = vtx(t, 2);
-    var pa = project(cam, a), pb = project(cam, b), pq = project(cam, q);
-    if (!pa || !pb || !pq) continue;
-    list.push([pa[2] + pb[2] + pq[2], t, pa, pb, pq, a, b, q]);
+  var P = SC.pos, I = SC.idx, nv = P.length / 3, ntris = SC.ntris;
+  var sx = new Float32Array(nv), sy = new Float32Array(nv), sz = new Float32Array(nv);
+  var e = cam.eye, fw = cam.fwd, rt = cam.right, up = cam.up, t, k;
+  for (k = 0; k < nv; ++k) {
+    var dx = P[3 * k] - e[0], dy = P[3 * k + 1] - e[1], dz = P[3 * k + 2] - e[2];
+    var z = dx * fw[0] + dy * fw[1] + dz * fw[2];
+    sz[k] = z;
+    if (z < 1e-3) continue;
+    sx[k] = cam.cx + (dx * rt[0] + dy * rt[1] + dz * rt[2]) / z * cam.f;
+    sy[k] = cam.cy - (dx * up[0] + dy * up[1] + dz * up[2]) / z * cam.f;
   }
-  list.sort(function (u, v) { return v[0] - u[0]; });
-  list.forEach(function (it) {
-    var n = norm(cross(sub(it[6], it[5]), sub(it[7], it[5])));
-    var cen = [(it[5][0] + it[6][0] + it[7][0]) / 3, (it[5][1] + it[6][1] + it[7][1]) / 3, (it[5][2] + it[6][2] + it[7][2]) / 3];
-    if (dot(n, sub(cen, cam.eye)) > 0) n = [-n[0], -n[1], -n[2]];
-    var lam = 0.35 + 0.65 * Math.max(0, dot(n, light)), k = mark ? mark[it[1]] : 0;
-    var col = k === 2 ? [92, 184, 92] : k === 1 ? [143, 179, 232] : k === 3 ? [196, 154, 232]
+  var order = [], depth = new Float32Array(ntris);
+  for (t = 0; t < ntris; ++t) {
+    if (mark && !mark[t]) continue;
+    var a = I[3 * t], b = I[3 * t + 1], q = I[3 * t + 2];
+    if (sz[a] < 1e-3 || sz[b] < 1e-3 || sz[q] < 1e-3) continue;
+    depth[t] = sz[a] + sz[b] + sz[q];
+    order.push(t);
+  }
+  order.sort(function (u, v) { return depth[v] - depth[u]; });
+  for (var o = 0; o < order.length; ++o) {
+    t = order[o];
+    var ia = 3 * I[3 * t], ib = 3 * I[3 * t + 1], iq = 3 * I[3 * t + 2];
+    var ux = P[ib] - P[ia], uy = P[ib + 1] - P[ia + 1], uz = P[ib + 2] - P[ia + 2];
+    var vx = P[iq] - P[ia], vy = P[iq + 1] - P[ia + 1], vz = P[iq + 2] - P[ia + 2];
+    var n = norm([uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx]);
+    var cen = [(P[ia] + P[ib] + P[iq]) / 3 - e[0], (P[ia + 1] + P[ib + 1] + P[iq + 1]) / 3 - e[1],
+               (P[ia + 2] + P[ib + 2] + P[iq + 2]) / 3 - e[2]];
+    if (dot(n, cen) > 0) n = [-n[0], -n[1], -n[2]];
+    var lam = 0.35 + 0.65 * Math.max(0, dot(n, light)), mk = mark ? mark[t] : 0;
+    var col = mk === 2 ? [92, 184, 92] : mk === 1 ? [143, 179, 232] : mk === 3 ? [196, 154, 232]
             : [255 * (0.5 + 0.5 * n[0]), 255 * (0.5 + 0.5 * n[1]), 255 * (0.5 + 0.5 * n[2])];
-    c.beginPath(); c.moveTo(it[2][0], it[2][1]); c.lineTo(it[3][0], it[3][1]); c.lineTo(it[4][0], it[4][1]); c.closePath();
+    var a0 = I[3 * t], b0 = I[3 * t + 1], q0 = I[3 * t + 2];
+    c.beginPath(); c.moveTo(sx[a0], sy[a0]); c.lineTo(sx[b0], sy[b0]); c.lineTo(sx[q0], sy[q0]); c.closePath();
     c.fillStyle = 'rgb(' + Math.round(col[0] * lam) + ',' + Math.round(col[1] * lam) + ',' + Math.round(col[2] * lam) + ')';
-    c.fill(); c.lineWidth = 0.5; c.strokeStyle = c.fillStyle; c.stroke();
-  });
+    c.fill();
+    if (!fast) { c.lineWidth = 0.5; c.strokeStyle = c.fillStyle; c.stroke(); }
+  }
 }
 function draw3d(vp, r, s) {
   var w = vp.w, h = vp.h, cam = camera(w, h);
-  var key = '3d|' + w + 'x' + h + '|' + S.yaw + '|' + S.pitch + '|' + S.zoom + '|' + SC.name;
+  var key = ['3d', w, h, S.yaw, S.pitch, S.zoom, SC.gen, ORBITING].join('|');
   cx.save();
   cx.beginPath(); cx.rect(vp.x, vp.y, w, h); cx.clip();
   cx.translate(vp.x, vp.y);
-  cx.drawImage(baseLayer(key, w, h, function (c) {
+  cx.drawImage(baseLayer(vp.slot, key, w, h, function (c) {
     c.fillStyle = '#30343c'; c.fillRect(0, 0, w, h);
-    shade3d(c, cam, null);
+    shade3d(c, cam, null, ORBITING);
   }), 0, 0);
   if (S.ray) {
     var any = false;
     for (var t = 0; t < r.primMark.length; ++t) if (r.primMark[t]) { any = true; break; }
-    if (any) shade3d(cx, cam, r.primMark);
+    if (any) shade3d(cx, cam, r.primMark, false);
   }
   if (s && S.level >= 0) s.tree.forEach(function (n) { if (n.depth === S.level) box3d(cx, cam, n.box, 1, depthColor(n.id, 0.8)); });
   if (S.ray && s) {
@@ -583,24 +600,39 @@ function heatColor(f) {       /* 0..1 -> dark blue, red, yellow, white */
   var x = Math.max(0, Math.min(1, f)) * (st.length - 1), i = Math.min(Math.floor(x), st.length - 2), u = x - i;
   return [st[i][0] + u * (st[i + 1][0] - st[i][0]), st[i][1] + u * (st[i + 1][1] - st[i][1]), st[i][2] + u * (st[i + 1][2] - st[i][2])];
 }
-function heatKey() { return [S.scene, S.accel, JSON.stringify(S.knobs), S.yaw, S.pitch, S.zoom, S.heatMetric, S.heatSize].join('|'); }
+function heatKey(slot) {
+  var sl = SLOT[slot];
+  return [SC ? SC.gen : 0, sl ? sl.gen : 0, S.yaw, S.pitch, S.zoom, S.heatMetric, S.heatSize].join('|');
+}
+/* The heat maps of both structures, coloured on one scale (the larger maximum), so two
+ * structures compare pixel for pixel. */
 function heat() {
-  var s = SLOT[0];
-  if (!s || s.error) return;
-  var n = S.heatSize, t0 = now();
-  var r = L.heat(0, S.yaw, S.pitch, S.zoom, n, n, S.heatMetric === 'tris' ? 1 : 0);
-  if (!r.ok) { setError(r.error); return; }
-  var counts = r.counts, max = r.max, i;
-  var cnv = document.createElement('canvas');
-  cnv.width = n; cnv.height = n;
-  var c = cnv.getContext('2d'), img = c.createImageData(n, n), lm = Math.log(1 + max) || 1;
-  for (i = 0; i < n * n; ++i) {
-    var col = heatColor(Math.log(1 + counts[i]) / lm);
-    img.data[4 * i] = col[0]; img.data[4 * i + 1] = col[1]; img.data[4 * i + 2] = col[2]; img.data[4 * i + 3] = 255;
+  var n = S.heatSize, res = [null, null], max = 0;
+  HEATS = [null, null];
+  for (var k = 0; k < 2; ++k) {
+    var s = SLOT[k];
+    if (!s || s.error) continue;
+    var t0 = now(), r = L.heat(k, S.yaw, S.pitch, S.zoom, n, n, S.heatMetric === 'tris' ? 1 : 0);
+    if (!r.ok) { setError(r.error); continue; }
+    r.t0 = t0;
+    res[k] = r;
+    if (r.max > max) max = r.max;
   }
-  c.putImageData(img, 0, 0);
-  HEAT = { key: heatKey(), n: n, max: max, mean: r.total / (n * n), canvas: cnv, ms: r.ms };
-  T.heat = now() - t0;
+  var lm = Math.log(1 + max) || 1;
+  for (k = 0; k < 2; ++k) {
+    r = res[k];
+    if (!r) continue;
+    var cnv = document.createElement('canvas');
+    cnv.width = n; cnv.height = n;
+    var c = cnv.getContext('2d'), img = c.createImageData(n, n), counts = r.counts, d = img.data;
+    for (var i = 0; i < n * n; ++i) {
+      var col = heatColor(Math.log(1 + counts[i]) / lm);
+      d[4 * i] = col[0]; d[4 * i + 1] = col[1]; d[4 * i + 2] = col[2]; d[4 * i + 3] = 255;
+    }
+    c.putImageData(img, 0, 0);
+    HEATS[k] = { key: heatKey(k), n: n, max: r.max, scaleMax: max, mean: r.total / (n * n), canvas: cnv, ms: r.ms };
+    if (k === 0) T.heat = now() - r.t0;
+  }
   render();
 }
 /* Where the n x n heat image lies in the viewport: centred, as large as fits. */
@@ -610,13 +642,14 @@ function heatRect(vp) {
 }
 function drawHeat(vp, r, s) {
   cx.fillStyle = '#30343c'; cx.fillRect(vp.x, vp.y, vp.w, vp.h);
-  if (!HEAT || HEAT.key !== heatKey()) {
+  var H = HEATS[vp.slot];
+  if (!H || H.key !== heatKey(vp.slot)) {
     cx.fillStyle = '#fff'; cx.font = '14px monospace'; cx.fillText('computing the heat map...', vp.x + 10, vp.y + 50);
     return;
   }
   var q = heatRect(vp);
   cx.imageSmoothingEnabled = false;
-  cx.drawImage(HEAT.canvas, q.x, q.y, q.s, q.s);
+  cx.drawImage(H.canvas, q.x, q.y, q.s, q.s);
   if (S.ray && s) {             /* the ray, drawn with the heat map's camera */
     var cam = camera(q.s, q.s);
     cx.save(); cx.translate(q.x, q.y);
@@ -639,8 +672,13 @@ function heatLegend() {
     c.fillStyle = 'rgb(' + (col[0] | 0) + ',' + (col[1] | 0) + ',' + (col[2] | 0) + ')';
     c.fillRect(x, 0, 1, bar.height);
   }
-  $('heat-note').textContent = HEAT ? 'log scale, 0 .. ' + HEAT.max + ' ' + (S.heatMetric === 'tris' ? 'triangle tests' : 'steps') +
-    ' per pixel (mean ' + g(HEAT.mean) + '), ' + HEAT.n + '\u00d7' + HEAT.n + ' rays in ' + g(T.heat) + ' ms' : '';
+  var what = S.heatMetric === 'tris' ? 'triangle tests' : 'steps (nodes entered + triangle tests)', note = [];
+  HEATS.forEach(function (H, k) {
+    if (H) note.push(SLOT[k].accel + ': max ' + H.max + ', mean ' + g(H.mean) + ' per pixel, ' + H.n + '\u00d7' + H.n +
+                     ' rays in ' + g(H.ms) + ' ms');
+  });
+  $('heat-note').textContent = note.length ? 'log scale 0 .. ' + HEATS.reduce(function (m, H) { return H ? Math.max(m, H.scaleMax) : m; }, 0) +
+    ' ' + what + '\n' + note.join('\n') : '';
 }
 
 /* ---- the panel ------------------------------------------------------------------------ */
@@ -667,16 +705,18 @@ function statsRows(s) {
 function statsHtml() {
   var cols = [0, 1].filter(function (i) { return SLOT[i]; });
   if (!cols.length) return '<span class="dim">no structure</span>';
-  var rows = [['nodes', 'nodes'], ['leaves', 'leaves'], ['depth', 'max_depth'], ['SAH cost', 'sah_cost'],
-              ['prim refs', 'prim_refs'], ['bytes', 'bytes'], ['build ms', 'build_ms']];
+  var keys = [['nodes', 'nodes'], ['leaves', 'leaves'], ['depth', 'max_depth'], ['SAH', 'sah_cost'],
+              ['refs', 'prim_refs'], ['KiB', 'bytes'], ['build ms', 'build_ms']];
   var h = ['<table><tr><td></td>'];
-  cols.forEach(function (i) { h.push('<th>' + esc(SLOT[i].accel) + '</th>'); });
+  keys.forEach(function (k) { h.push('<th>' + k[0] + '</th>'); });
   h.push('</tr>');
-  rows.forEach(function (rw) {
-    h.push('<tr><td>' + rw[0] + '</td>');
-    cols.forEach(function (i) {
-      var s = SLOT[i], v = s.stats ? s.stats[rw[1]] : undefined;
-      h.push('<td>' + (s.error ? '<span class="bad">-</span>' : v === undefined || v === null ? '' :
+  cols.forEach(function (i) {
+    var s = SLOT[i];
+    h.push('<tr><td>' + esc(s.accel) + '</td>');
+    keys.forEach(function (k) {
+      var v = s.stats ? s.stats[k[1]] : undefined;
+      if (k[1] === 'bytes' && typeof v === 'number') v = v / 1024;
+      h.push('<td data-key="' + k[1] + '">' + (s.error ? '<span class="bad">-</span>' : v === undefined || v === null ? '' :
         typeof v === 'number' && !Number.isInteger(v) ? g(v) : esc(v)) + '</td>');
     });
     h.push('</tr>');
@@ -684,8 +724,8 @@ function statsHtml() {
   h.push('</table>');
   cols.forEach(function (i) {
     if (SLOT[i].error) h.push('<div class="bad">' + esc(SLOT[i].accel + ': ' + SLOT[i].error) + '</div>');
-    else if (SLOT[i].args) h.push('<div class="dim">sidx-step --accel ' + esc(SLOT[i].accel) + ' ' + esc(S.scene) +
-                                  (SLOT[i].args ? ' ' + esc(SLOT[i].args) : '') + '</div>');
+    else h.push('<div class="dim">= sidx-step --accel ' + esc(SLOT[i].accel) + ' ' + esc(S.scene) +
+                (SLOT[i].args ? ' ' + esc(SLOT[i].args) : '') + '</div>');
   });
   return h.join('');
 }
@@ -702,10 +742,17 @@ function compareHtml() {
     h.push('<tr><td>' + rw[0] + '</td><td>' + (a[rw[1]] === undefined ? '' : a[rw[1]]) + '</td><td>' +
            (b[rw[1]] === undefined ? '' : b[rw[1]]) + '</td></tr>');
   });
-  function hitOf(s) { return s.hit ? 'prim ' + s.hit.prim + ' t=' + g(num(s.hit.t)) : 'miss'; }
-  h.push('<tr><td>hit</td><td>' + hitOf(SLOT[0]) + '</td><td>' + hitOf(SLOT[1]) + '</td></tr></table>');
-  h.push(DIFF > 0 ? '<div>the walks part at step <a href="#" id="goto-part" class="hi">' + DIFF + '</a></div>'
-                  : '<div class="good">the two walks are the same, event for event</div>');
+  function hitOf(s) { return s.hit ? 'prim ' + s.hit.prim : 'miss'; }
+  function tOf(s) { return s.hit ? g(num(s.hit.t)) : ''; }
+  h.push('<tr><td>hit</td><td>' + hitOf(SLOT[0]) + '</td><td>' + hitOf(SLOT[1]) + '</td></tr>');
+  h.push('<tr><td>t</td><td>' + tOf(SLOT[0]) + '</td><td>' + tOf(SLOT[1]) + '</td></tr></table>');
+  if (DIFF > 0) {
+    h.push('<div>the walks part at step <a href="#" id="goto-part" class="hi">' + DIFF + '</a>:</div>');
+    [0, 1].forEach(function (k) {
+      var e = SLOT[k].trace[DIFF - 1];
+      h.push('<div class="dim">&nbsp;&nbsp;' + esc(SLOT[k].accel) + ': ' + (e ? esc(lineOf(e).trim()) : '(its walk has ended)') + '</div>');
+    });
+  } else h.push('<div class="good">the two walks are the same, event for event</div>');
   return h.join('');
 }
 function panel(r) {
@@ -766,14 +813,13 @@ function render() {
   var t0 = now(), v = $('viewbox');
   if (cv.width !== v.clientWidth || cv.height !== v.clientHeight) {
     cv.width = Math.max(200, v.clientWidth); cv.height = Math.max(200, v.clientHeight);
-    base.key = '';
   }
   if (!SC) { cx.fillStyle = '#f7f6f0'; cx.fillRect(0, 0, cv.width, cv.height); panel(replay(null, 0)); return; }
   var r0 = null;
   viewports().forEach(function (vp) {
     var s = SLOT[vp.slot], r = replay(s, S.step);
     if (vp.slot === 0) r0 = r;
-    if (S.mode === 'heat' && vp.slot === 0) drawHeat(vp, r, s);
+    if (S.mode === 'heat' && !ORBITING) drawHeat(vp, r, s);
     else if (S.mode === '2d') draw2d(vp, r, s);
     else draw3d(vp, r, s);
     if (s && s.error) {
@@ -789,7 +835,12 @@ function render() {
   T.draw = now() - t0;
 }
 
-function fmt(x) { return String(x); }
+/* A float as the shortest decimal that reads back to the same float (at most 9 digits). */
+function fmt(x) {
+  if (!isFinite(x) || x !== Math.fround(x)) return String(x);
+  for (var p = 1; p < 9; ++p) { var t = +x.toPrecision(p); if (Math.fround(t) === x) return String(t); }
+  return String(+x.toPrecision(9));
+}
 function writeHash() {
   var p = ['scene=' + encodeURIComponent(S.scene), 'accel=' + encodeURIComponent(S.accel)];
   if (S.accel2) p.push('accel2=' + encodeURIComponent(S.accel2));
@@ -840,8 +891,7 @@ function nextLeaf(dir) {
 function setMode(m) {
   stop();
   S.mode = m;
-  base.key = '';
-  if (m === 'heat' && (!HEAT || HEAT.key !== heatKey())) { render(); setTimeout(heat, 0); return; }
+  if (m === 'heat' && (!HEATS[0] || HEATS[0].key !== heatKey(0))) { render(); setTimeout(heat, 0); return; }
   render();
 }
 
@@ -906,6 +956,7 @@ function loadScene(name, bytes, ray) {
   if (S.mode === '2d' && !SC.flat && !ray) S.mode = '3d';
   if (SC.flat && S.mode !== '2d' && !ray) S.mode = '2d';
   S.ray = (ray || defaultRay()).map(f32);
+  S.step = Infinity;          /* a new scene shows the whole walk */
   rebuild();
   return true;
 }
@@ -935,7 +986,7 @@ function loadFile(file) {
 function bindInputs() {
   $('scene').onchange = function () { loadScene(this.value, null, null); };
   $('accel').onchange = function () { S.accel = this.value; rebuild(); };
-  $('accel2').onchange = function () { S.accel2 = this.value; base.key = ''; rebuild(); };
+  $('accel2').onchange = function () { S.accel2 = this.value; rebuild(); };
   KNOBS.forEach(function (name) {
     $('knob-' + name).addEventListener('change', function () { S.knobs = readKnobs(); rebuild(); });
   });
@@ -1011,7 +1062,8 @@ function bindInputs() {
     drag.moved = drag.moved || Math.abs(e.clientX - drag.cx) + Math.abs(e.clientY - drag.cy) > 3;
     if (!drag.moved) return;
     if (S.mode === '2d') setRay(ray2d(drag), false);   /* the walk follows the mouse */
-    else if (S.mode === '3d') {
+    else {                     /* 3D and the heat map: orbit (the heat map is recomputed on release) */
+      ORBITING = true;
       S.yaw = drag.yaw - (e.clientX - drag.cx) * 0.01;
       S.pitch = Math.max(-1.5, Math.min(1.5, drag.pitch + (e.clientY - drag.cy) * 0.01));
       render();
@@ -1024,11 +1076,12 @@ function bindInputs() {
     var p = local(e);
     d.x1 = p[0]; d.y1 = p[1];
     if (S.mode === '2d') { if (d.moved) setRay(ray2d(d), false); return; }
-    if (d.moved) { if (S.mode === 'heat') heat(); return; }
+    if (ORBITING) { ORBITING = false; if (S.mode === 'heat') heat(); else render(); return; }
+    if (d.moved) return;
     /* a click: the camera ray through that pixel */
     var vp = d.vp;
-    if (S.mode === 'heat' && vp.slot === 0) {   /* the heat map's pixel: its image is n x n */
-      var q = heatRect(vp), n = HEAT ? HEAT.n : S.heatSize;
+    if (S.mode === 'heat') {   /* the heat map's pixel: its image is n x n */
+      var q = heatRect(vp), n = S.heatSize;
       if (d.x1 < q.x || d.y1 < q.y || d.x1 >= q.x + q.s || d.y1 >= q.y + q.s) return;
       setRay(L.cameraRay(S.yaw, S.pitch, S.zoom, n, n, Math.floor((d.x1 - q.x) * n / q.s) + 0.5,
                          Math.floor((d.y1 - q.y) * n / q.s) + 0.5), false);
@@ -1042,7 +1095,7 @@ function bindInputs() {
     e.preventDefault();
     if (S.mode === 'heat') heat(); else render();
   }, { passive: false });
-  window.addEventListener('resize', function () { base.key = ''; render(); });
+  window.addEventListener('resize', function () { render(); });
 }
 
 /* ---- the state a program reads --------------------------------------------------------- */
@@ -1062,7 +1115,7 @@ window.sidxLab = {
       events2: s1 ? s1.trace.map(stripped) : [],
       stats: s0 && s0.stats ? Object.assign({}, s0.stats, s0.trace ? { walk: walkCounts(s0) } : {}) : null,
       stats2: s1 && s1.stats ? Object.assign({}, s1.stats, { walk: walkCounts(s1) }) : null,
-      part: DIFF, heat: HEAT ? { n: HEAT.n, max: HEAT.max, mean: HEAT.mean } : null,
+      part: DIFF, heat: HEATS[0] ? { n: HEATS[0].n, max: HEATS[0].max, mean: HEATS[0].mean } : null,
       error: S.error || (window.sidxErrors.length ? window.sidxErrors.join('\n') : '')
     };
   },
