@@ -107,6 +107,7 @@ function makeLab(M) {
     },
     accels: function () { return json(M._sidx_lab_structures()).structures; },
     build: function (slot, accel, knobs) {
+      var t0 = now();
       var k = {};
       for (var n in knobs) {
         if (n === 'mailbox') { if (!knobs.mailbox) k.mailbox = false; }
@@ -117,14 +118,16 @@ function makeLab(M) {
         return cstr(JSON.stringify(k), function (q) { return M._sidx_lab_build(slot, p, q); });
       });
       if (rc !== 0) return { ok: false, error: err() };
-      var b = json(M._sidx_lab_build_json(slot));
+      var t1 = now(), bj = M._sidx_lab_build_json(slot), t2 = now(), b = json(bj);
+      T.parts = { build: t1 - t0, build_json: t2 - t1, build_parse: now() - t2 };
       return { ok: true, stats: b.stats, args: b.args, build: b.build, labels: b.labels || {},
                cand_total: b.cand_total, cand_kept: b.cand_kept };
     },
     trace: function (slot, ray) {
-      var rc = M._sidx_lab_trace(slot, ray[0], ray[1], ray[2], ray[3], ray[4], ray[5]);
+      var t0 = now(), rc = M._sidx_lab_trace(slot, ray[0], ray[1], ray[2], ray[3], ray[4], ray[5]);
       if (rc !== 0) return { ok: false, error: err(), events: [] };
-      var t = json(M._sidx_lab_trace_json(slot));
+      var t1 = now(), t = json(M._sidx_lab_trace_json(slot));
+      T.tparts = { trace: t1 - t0, trace_json: now() - t1 };
       return { ok: true, events: t.events, counts: t.counts, hit: t.hit, ray_arg: t.ray_arg, truncated: t.truncated };
     },
     diverge: function () { return json(M._sidx_lab_diverge_json()); },
@@ -143,10 +146,11 @@ function makeLab(M) {
 }
 
 /* ---- the state ----------------------------------------------------------------------- */
+var BTYPES = ['build_begin', 'build_node', 'build_candidate', 'build_split', 'build_leaf', 'build_end'];
 var KNOBS = ['bins', 'c_trav', 'c_tri', 'leaf_size', 'max_depth', 'lambda', 'mailbox', 'empty_bonus', 'optimize'];
 var S = {
   scene: '', accel: '', accel2: '', knobs: {}, ray: null, step: 0, mode: '2d', heatMetric: 'steps', heatSize: 256,
-  yaw: 0.6, pitch: 0.35, zoom: 1, level: -1, playing: null, error: ''
+  yaw: 0.6, pitch: 0.35, zoom: 1, level: -1, playing: null, error: '', bstep: Infinity
 };
 var SC = null;               /* the open scene: {name, ntris, pos, idx, bounds, flat} */
 var SLOT = [null, null];     /* per structure: {accel, stats, tree, nodeBox, nodeDepth, leaf, maxDepth, trace, error} */
@@ -230,6 +234,7 @@ function rebuild() {
   var t0 = now(), msgs = [];
   HEATS = [null, null];
   [0, 1].forEach(function (i) { var m = buildSlot(i); if (m) msgs.push(m); });
+  S.bstep = build0().length;  /* a new build shows the whole tree */
   retrace(true);
   T.rebuild = now() - t0;
   setError(msgs.join('\n'));
@@ -254,7 +259,8 @@ function retrace(keepStep) {
 function replay(s, k) {
   var ntris = SC ? SC.ntris : 0;
   var r = { current: null, box: null, tn: NaN, tf: NaN, stack: [], more: 0, best: null, bestT: Infinity,
-            prims: 0, boxes: 0, entered: 0, mailbox: 0, primMark: new Uint8Array(ntris || 1), nodeMark: {} };
+            prims: 0, boxes: 0, entered: 0, mailbox: 0, primMark: new Uint8Array(ntris || 1), nodeMark: {},
+            cells: [], missed: [] };
   if (!s) return r;
   var trav = s.trace;
   for (var i = 0; i < k && i < trav.length; ++i) {
@@ -266,10 +272,12 @@ function replay(s, k) {
       r.tn = num(e.t_near); r.tf = num(e.t_far);
       r.entered++;
       if (inTree) r.nodeMark[e.node] = 1;
+      else if (e.box6) r.cells.push(e.box6);     /* grid cells: not in the tree, the event has the box */
       break;
     case 'box_test':
       r.boxes++;
       if (inTree && r.nodeMark[e.node] !== 1) r.nodeMark[e.node] = e.result === 1 ? 3 : 2;
+      else if (!inTree && e.result !== 1 && e.bounds) r.missed.push(boxOf(e.bounds));
       break;
     case 'stack_push':
       if (r.stack.length < 64) r.stack.push({ node: e.node, tn: num(e.t_near), tf: num(e.t_far) });
@@ -464,6 +472,8 @@ function draw2d(vp, r, s) {
       if (r.nodeMark[id] === 1) rect2d(cx, m, s.nodeBox[id], null, '#e0b000', 2);
       else if (r.nodeMark[id] === 2) rect2d(cx, m, s.nodeBox[id], null, '#d02020', 1, true);
     }
+    r.cells.forEach(function (b) { rect2d(cx, m, b, null, '#e0b000', 2); });
+    r.missed.forEach(function (b) { rect2d(cx, m, b, null, '#d02020', 1, true); });
     triangles2d(cx, m, r.primMark, true);
     if (r.box) rect2d(cx, m, r.box, 'rgba(255,153,0,0.31)', '#ff7f00', 3);
   }
@@ -485,6 +495,97 @@ function draw2d(vp, r, s) {
   cx.fillStyle = '#333'; cx.font = 'bold 18px monospace';
   cx.fillText('2D: ' + (s ? s.accel : '(no structure)'), 10, 24);
   cx.restore();
+}
+
+/* The build mode: the tree as far as its first k build events made it (sidx-view's build
+ * mode); the current node's box, its split or candidate plane, a leaf's triangles. */
+function drawBuild(vp, s, k) {
+  var w = vp.w, h = vp.h, m = makeMap(w, h), b = s ? s.build : [], e = null, box = null, i;
+  cx.save();
+  cx.beginPath(); cx.rect(vp.x, vp.y, w, h); cx.clip();
+  cx.translate(vp.x, vp.y);
+  cx.fillStyle = '#f7f6f0'; cx.fillRect(0, 0, w, h);
+  triangles2d(cx, m, null, false);
+  for (i = 0; i < k && i < b.length; ++i) {
+    var x = b[i];
+    if (x[0] === 3 && x[2] < 0 && x.length > 9) plane2d(cx, m, [x[7], x[8], x[9]], x[3], s.nodeBox[x[1]], 1, '#404040');
+    if (x[0] === 1) { var d = x[3] < 0 ? 0 : x[3]; rect2d(cx, m, boxOf(x.slice(5, 11)), null, depthColor(d, d === 0 ? 0.8 : 0.6), 1); }
+  }
+  if (k > 0 && k <= b.length) {
+    e = b[k - 1];
+    box = e[0] === 0 ? boxOf(e.slice(2, 8)) : e[0] === 1 ? boxOf(e.slice(5, 11)) : s.nodeBox[e[1]];
+    rect2d(cx, m, box, 'rgba(255,153,0,0.25)', '#ff7f00', 3);
+    if ((e[0] === 2 || e[0] === 3) && box) {
+      var col = e[0] === 3 ? '#d00000' : 'rgba(208,128,0,0.75)';
+      if (e[2] === 0) line(cx, X(m, e[3]), Y(m, box.min[1]), X(m, e[3]), Y(m, box.max[1]), 3, col);
+      else if (e[2] === 1) line(cx, X(m, box.min[0]), Y(m, e[3]), X(m, box.max[0]), Y(m, e[3]), 3, col);
+      else if (e[2] < 0 && e.length > 9) plane2d(cx, m, [e[7], e[8], e[9]], e[3], box, 3, col);
+    }
+    if (e[0] === 4 && e[6]) {
+      var mk = new Uint8Array(SC.ntris || 1);
+      e[6].forEach(function (p) { if (p < SC.ntris) mk[p] = 2; });
+      triangles2d(cx, m, mk, true);
+    }
+  }
+  cx.fillStyle = '#333'; cx.font = 'bold 18px monospace';
+  cx.fillText('build: ' + (s ? s.accel : '(no structure)'), 10, 24);
+  cx.restore();
+}
+
+/* The SAH cost over the split position of the current build event's node, from its
+ * candidate events (viz/page.html's curve). */
+function drawSah(s, k) {
+  var sahCv = $('sah'), sx = sahCv.getContext('2d'), w = sahCv.width, h = sahCv.height, pts = [], split = null, i;
+  var b = s.build, node = k > 0 && k <= b.length && b[k - 1][0] !== 0 && b[k - 1][0] !== 5 ? b[k - 1][1] : null;
+  sx.fillStyle = '#2a2f39'; sx.fillRect(0, 0, w, h);
+  $('sah-title').textContent = node === null ? 'SAH cost' : 'SAH cost over split position (node ' + node + ')';
+  var note = $('sah-note');
+  note.textContent = '';
+  if (node === null) return;
+  for (i = 0; i < k && i < b.length; ++i) {
+    var e = b[i];
+    if (e[1] !== node) continue;
+    if (e[0] === 3) split = e;
+    if (e[0] === 2 && isFinite(e[3]) && isFinite(e[4])) pts.push(e);
+  }
+  if (!pts.length) {
+    sx.fillStyle = '#9aa3b0'; sx.font = '12px monospace'; sx.fillText('no candidates for this node', 8, 20);
+    if (s.cand_kept < s.cand_total) note.textContent = 'the page keeps the first ' + s.cand_kept + ' of ' + s.cand_total + ' candidate events';
+    return;
+  }
+  var p0 = Infinity, p1 = -Infinity, c0 = Infinity, c1 = -Infinity;
+  pts.forEach(function (e) { p0 = Math.min(p0, e[3]); p1 = Math.max(p1, e[3]); c0 = Math.min(c0, e[4]); c1 = Math.max(c1, e[4]); });
+  if (!(p1 > p0)) { p0 -= 0.5; p1 += 0.5; }
+  if (!(c1 > c0)) { c0 -= 0.5; c1 += 0.5; }
+  var AX = ['#ff6b6b', '#6bdc6b', '#6ba8ff'], last = [null, null, null];
+  pts.forEach(function (e) {
+    var a = e[2] >= 0 && e[2] < 3 ? e[2] : 0;
+    var px = 4 + (e[3] - p0) / (p1 - p0) * (w - 8), py = h - 4 - (e[4] - c0) / (c1 - c0) * (h - 8);
+    if (last[a]) { sx.beginPath(); sx.strokeStyle = AX[a]; sx.lineWidth = 1; sx.moveTo(last[a][0], last[a][1]); sx.lineTo(px, py); sx.stroke(); }
+    sx.beginPath(); sx.fillStyle = AX[a]; sx.arc(px, py, 1.8, 0, 2 * Math.PI); sx.fill();
+    last[a] = [px, py];
+  });
+  if (split && split[3] >= p0 && split[3] <= p1) {
+    var qx = 4 + (split[3] - p0) / (p1 - p0) * (w - 8);
+    sx.beginPath(); sx.setLineDash([3, 3]); sx.strokeStyle = '#ffc14d'; sx.moveTo(qx, 2); sx.lineTo(qx, h - 2); sx.stroke(); sx.setLineDash([]);
+  }
+  note.textContent = 'pos ' + g(p0) + '..' + g(p1) + '  cost ' + g(c0) + '..' + g(c1) + '  (x red, y green, z blue)';
+}
+/* A build event's line (viz/page.html's wording). */
+var AXN = ['x', 'y', 'z'];
+function buildLine(s, e) {
+  var d = e[0] === 1 || e[0] === 4 ? Math.max(e[0] === 1 ? e[3] : e[2], 0) : (e[1] in s.nodeDepth ? s.nodeDepth[e[1]] + 1 : 0);
+  var pad = new Array(Math.min(d, 8) + 1).join('  '), lab = s.labels && s.labels[e[1]] ? '  [' + s.labels[e[1]] + ']' : '';
+  switch (e[0]) {
+  case 0: return 'build begin (' + s.accel + '): ' + e[1] + ' prims';
+  case 1: return pad + 'build node ' + e[1] + '  depth ' + e[3] + '  prims ' + e[4] + (e[2] < 0 ? '  (root)' : '  (parent ' + e[2] + ')') + lab;
+  case 2: case 3:
+    return pad + (e[0] === 3 ? 'split node ' + e[1] + ' ' : 'candidate ') + 'axis ' + (e[2] < 0 ? 'plane' : AXN[e[2]]) +
+           ' at ' + g(e[3]) + '  cost ' + g(e[4]) + '  (L ' + e[5] + ' | R ' + e[6] + ')';
+  case 4: return pad + 'leaf node ' + e[1] + '  prims ' + e[3] + '  cost ' + g(e[4]) + '  (' + e[5] + ')' + lab;
+  case 5: return 'build end: ' + e[1] + ' nodes, ' + e[2] + ' refs, depth ' + e[3];
+  }
+  return 'event ' + e[0];
 }
 
 /* ---- 3D: a pinhole camera around the scene (view_render.c's make_camera) ------------ */
@@ -652,7 +753,7 @@ function drawHeat(vp, r, s) {
   cx.drawImage(H.canvas, q.x, q.y, q.s, q.s);
   if (S.ray && s) {             /* the ray, drawn with the heat map's camera */
     var cam = camera(q.s, q.s);
-    cx.save(); cx.translate(q.x, q.y);
+    cx.save(); cx.beginPath(); cx.rect(q.x, q.y, q.s, q.s); cx.clip(); cx.translate(q.x, q.y);
     var tEnd = isFinite(r.bestT) ? r.bestT : rayEnd();
     var pa = project(cam, at(1e-3)), pb = project(cam, at(tEnd));
     if (pa && pb) line(cx, pa[0], pa[1], pb[0], pb[1], 2, '#00ffff');
@@ -683,18 +784,25 @@ function heatLegend() {
 
 /* ---- the panel ------------------------------------------------------------------------ */
 function trace0() { return SLOT[0] ? SLOT[0].trace : []; }
+function build0() { return SLOT[0] ? SLOT[0].build : []; }
 function count() { return trace0().length; }
+/* The stepper walks the build in build mode, the ray's trace elsewhere. */
+function bm() { return S.mode === 'build'; }
+function steps() { return bm() ? build0().length : count(); }
+function cur() { return bm() ? S.bstep : S.step; }
+function typeOf(i) { return bm() ? BTYPES[build0()[i][0]] || 'other' : trace0()[i].type; }
 function fillTypes() {
-  var sel = $('evtype'), seen = {}, old = sel.value, tr = trace0();
+  var sel = $('evtype'), seen = {}, old = sel.value, n = steps();
   sel.innerHTML = '';
-  for (var i = 0; i < tr.length; ++i) {
-    var t = tr[i].type;
+  for (var i = 0; i < n; ++i) {
+    var t = typeOf(i);
     if (seen[t]) continue;
     seen[t] = 1;
     var o = document.createElement('option'); o.value = o.textContent = t; sel.appendChild(o);
   }
   if (seen[old]) sel.value = old;
   else if (seen.node_enter) sel.value = 'node_enter';
+  else if (seen.build_split) sel.value = 'build_split';
 }
 function statsRows(s) {
   if (!s) return null;
@@ -723,8 +831,7 @@ function statsHtml() {
   });
   h.push('</table>');
   cols.forEach(function (i) {
-    if (SLOT[i].error) h.push('<div class="bad">' + esc(SLOT[i].accel + ': ' + SLOT[i].error) + '</div>');
-    else h.push('<div class="dim">= sidx-step --accel ' + esc(SLOT[i].accel) + ' ' + esc(S.scene) +
+    if (!SLOT[i].error) h.push('<div class="dim">= sidx-step --accel ' + esc(SLOT[i].accel) + ' ' + esc(S.scene) +
                 (SLOT[i].args ? ' ' + esc(SLOT[i].args) : '') + '</div>');
   });
   return h.join('');
@@ -756,9 +863,9 @@ function compareHtml() {
   return h.join('');
 }
 function panel(r) {
-  var s = SLOT[0], k = S.step, n = count(), info = [];
+  var s = SLOT[0], k = cur(), n = steps(), info = [], inBuild = bm();
   $('title-note').textContent = SC ? SC.name + ' (' + SC.ntris + ' triangles)' : '';
-  ['2d', '3d'].forEach(function (m) { $('m-' + m).className = S.mode === m ? 'on' : ''; });
+  ['2d', 'build', '3d'].forEach(function (m) { $('m-' + m).className = S.mode === m ? 'on' : ''; });
   $('heatmap').className = S.mode === 'heat' ? 'on' : '';
   $('b-play').textContent = S.playing ? 'pause' : 'play';
   $('level-row').style.display = S.mode === '3d' ? '' : 'none';
@@ -766,10 +873,16 @@ function panel(r) {
   $('jump').max = n;
   $('stats').innerHTML = statsHtml();
   var banner = $('banner');
-  if (!S.ray) { banner.style.display = 'block'; banner.textContent = S.mode === '2d' ? 'Drag on the view to shoot a ray.' : 'Click on the view to shoot a ray.'; }
+  if (inBuild) banner.style.display = 'none';
+  else if (!S.ray) { banner.style.display = 'block'; banner.textContent = S.mode === '2d' ? 'Drag on the view to shoot a ray.' : 'Click on the view to shoot a ray.'; }
   else if (s && s.misses) { banner.style.display = 'block'; banner.textContent = 'The ray misses: it hits no triangle.'; }
   else banner.style.display = 'none';
-  if (S.ray) {
+  if (inBuild && s) {
+    info.push('<span class="hi">build step ' + k + ' / ' + n + '</span>');
+    if (k > 0 && k <= s.build.length) info.push(esc(buildLine(s, s.build[k - 1]).trim()));
+    if (s.cand_kept < s.cand_total)
+      info.push('<span class="dim">SAH candidates: the first ' + s.cand_kept + ' of ' + s.cand_total + ' are in the page</span>');
+  } else if (S.ray) {
     info.push('ray o=(' + S.ray.slice(0, 3).map(g).join(', ') + ')');
     info.push('    d=(' + S.ray.slice(3).map(g).join(', ') + ')');
     info.push('<span class="hi">step ' + k + ' / ' + n + '</span>');
@@ -780,7 +893,10 @@ function panel(r) {
                                       '  t=[' + g(r.tn) + ', ' + g(r.tf) + ']');
   }
   $('info').innerHTML = info.join('<br>');
-  $('compare').innerHTML = compareHtml();
+  $('compare').innerHTML = inBuild ? '' : compareHtml();
+  $('stack-box').style.display = inBuild ? 'none' : '';
+  $('sah-box').style.display = inBuild ? '' : 'none';
+  if (inBuild && s) drawSah(s, k);
   var gp = $('goto-part');
   if (gp) gp.onclick = function (e) { e.preventDefault(); go(DIFF); };
   $('stack-title').textContent = 'stack (top first): ' + (r.stack.length + r.more);
@@ -794,7 +910,8 @@ function panel(r) {
   var tr = trace0(), lines = 30, first = Math.max(0, Math.min(k - 1 - (lines >> 1), n - lines)), html = [];
   for (var j = first; j < first + lines && j < n; ++j)
     html.push('<div data-i="' + j + '" class="' + (j === k - 1 ? 'cur' : j < k - 1 ? 'past' : 'future') +
-              (j === DIFF - 1 ? ' part' : '') + '">' + ('    ' + (j + 1)).slice(-5) + ' ' + esc(lineOf(tr[j])) + '</div>');
+              (!inBuild && j === DIFF - 1 ? ' part' : '') + '">' + ('    ' + (j + 1)).slice(-5) + ' ' +
+              esc(inBuild ? buildLine(s, s.build[j]) : lineOf(tr[j])) + '</div>');
   $('events').innerHTML = html.join('');
   heatLegend();
 }
@@ -820,6 +937,7 @@ function render() {
     var s = SLOT[vp.slot], r = replay(s, S.step);
     if (vp.slot === 0) r0 = r;
     if (S.mode === 'heat' && !ORBITING) drawHeat(vp, r, s);
+    else if (S.mode === 'build') drawBuild(vp, s, Math.min(S.bstep, s ? s.build.length : 0));
     else if (S.mode === '2d') draw2d(vp, r, s);
     else draw3d(vp, r, s);
     if (s && s.error) {
@@ -830,6 +948,7 @@ function render() {
   if (viewports().length > 1) { cx.fillStyle = '#1f232b'; cx.fillRect(viewports()[1].x - 2, 0, 2, cv.height); }
   panel(r0);
   $('hint').textContent = S.mode === '2d' ? 'drag: a new ray from the press point towards the release point'
+    : S.mode === 'build' ? 'the build, event by event: step with the arrows'
     : S.mode === '3d' ? 'drag: orbit   wheel: zoom   click: a ray through that pixel' : 'click: a ray through that pixel';
   writeHash();
   T.draw = now() - t0;
@@ -841,6 +960,7 @@ function fmt(x) {
   for (var p = 1; p < 9; ++p) { var t = +x.toPrecision(p); if (Math.fround(t) === x) return String(t); }
   return String(+x.toPrecision(9));
 }
+var LAST_HASH = '';
 function writeHash() {
   var p = ['scene=' + encodeURIComponent(S.scene), 'accel=' + encodeURIComponent(S.accel)];
   if (S.accel2) p.push('accel2=' + encodeURIComponent(S.accel2));
@@ -851,7 +971,9 @@ function writeHash() {
   if (S.mode === 'heat') p.push('heat=' + S.heatMetric + ',' + S.heatSize);
   if (S.ray) p.push('ray=' + S.ray.map(fmt).join(','));
   if (S.ray) p.push('step=' + S.step);
+  if (S.mode === 'build') p.push('bstep=' + S.bstep);
   var h = '#' + p.join('&');
+  LAST_HASH = h;
   if (location.hash !== h) try { history.replaceState(null, '', h); } catch (e) { /* some browsers refuse on file: */ }
 }
 function readHash() {
@@ -871,26 +993,36 @@ function setRay(ray, keepStep) {
   retrace(!!keepStep);
   return true;
 }
-function go(k) { S.step = Math.max(0, Math.min(count(), k | 0)); render(); }
+function go(k) {
+  k = Math.max(0, Math.min(steps(), k | 0));
+  if (bm()) S.bstep = k; else S.step = k;
+  render();
+}
 function stop() { if (S.playing) { clearInterval(S.playing); S.playing = null; } }
 function play() {
   if (S.playing) { stop(); render(); return; }
-  if (S.step >= count()) S.step = 0;
-  S.playing = setInterval(function () { if (S.step >= count()) { stop(); render(); } else go(S.step + 1); }, 120);
+  if (cur() >= steps()) go(0);
+  S.playing = setInterval(function () { if (cur() >= steps()) { stop(); render(); } else go(cur() + 1); }, 120);
   render();
 }
 function nextWhere(dir, pred) {
-  var tr = trace0();
-  for (var i = S.step - 1 + dir; i >= 0 && i < tr.length; i += dir) if (pred(tr[i])) { go(i + 1); return; }
+  var n = steps();
+  for (var i = cur() - 1 + dir; i >= 0 && i < n; i += dir) if (pred(i)) { go(i + 1); return; }
 }
-function nextOfType(dir) { var t = $('evtype').value; nextWhere(dir, function (e) { return e.type === t; }); }
+function nextOfType(dir) { var t = $('evtype').value; nextWhere(dir, function (i) { return typeOf(i) === t; }); }
 function nextLeaf(dir) {
   var s = SLOT[0];
-  nextWhere(dir, function (e) { return e.type === 'node_enter' && s && s.leaf[e.node] === 1; });
+  /* a leaf entered, as sidx-step's "leaf": a grid cell, or a node the build made a leaf */
+  nextWhere(dir, function (i) {
+    if (bm()) return build0()[i][0] === 4;
+    var e = trace0()[i];
+    return e.type === 'node_enter' && ((e.cell && e.cell[0] >= 0) || (s && s.leaf[e.node] === 1));
+  });
 }
 function setMode(m) {
   stop();
   S.mode = m;
+  fillTypes();
   if (m === 'heat' && (!HEATS[0] || HEATS[0].key !== heatKey(0))) { render(); setTimeout(heat, 0); return; }
   render();
 }
@@ -951,7 +1083,7 @@ function loadScene(name, bytes, ray) {
   var msg = openScene(name, bytes);
   if (msg) { setError(msg); return false; }
   S.scene = name;
-  fillSceneSelect(bytes ? name : null);
+  fillSceneSelect(bytes ? name : FILE ? FILE.name : null);
   fillAccelSelects();
   if (S.mode === '2d' && !SC.flat && !ray) S.mode = '3d';
   if (SC.flat && S.mode !== '2d' && !ray) S.mode = '2d';
@@ -972,11 +1104,15 @@ function loadFile(file) {
   }
   var rd = new FileReader();
   rd.onload = function () {
-    var saved = { scene: S.scene };
+    var saved = { scene: S.scene }, link = PENDING && PENDING.scene === file.name ? PENDING : null;
     if (!loadScene(file.name, new Uint8Array(rd.result), null)) {
       S.scene = saved.scene;          /* the scene before stays open */
       $('scene').value = S.scene;
+      return;
     }
+    FILE = { name: file.name, bytes: new Uint8Array(rd.result) };
+    setError('');
+    if (link) { PENDING = null; applyLink(link, true); }
   };
   rd.onerror = function () { setError(file.name + ': the browser could not read the file'); };
   rd.readAsArrayBuffer(file);
@@ -984,7 +1120,9 @@ function loadFile(file) {
 
 /* ---- input ------------------------------------------------------------------------------ */
 function bindInputs() {
-  $('scene').onchange = function () { loadScene(this.value, null, null); };
+  $('scene').onchange = function () {
+    loadScene(this.value, FILE && FILE.name === this.value ? FILE.bytes : null, null);
+  };
   $('accel').onchange = function () { S.accel = this.value; rebuild(); };
   $('accel2').onchange = function () { S.accel2 = this.value; rebuild(); };
   KNOBS.forEach(function (name) {
@@ -1000,14 +1138,15 @@ function bindInputs() {
     if (e.dataTransfer && e.dataTransfer.files.length) loadFile(e.dataTransfer.files[0]);
   });
   $('m-2d').onclick = function () { setMode('2d'); };
+  $('m-build').onclick = function () { setMode('build'); };
   $('m-3d').onclick = function () { setMode('3d'); };
   $('heatmap').onclick = function () { setMode(S.mode === 'heat' ? '3d' : 'heat'); };
   $('heat-metric').onchange = function () { S.heatMetric = this.value; if (S.mode === 'heat') heat(); };
   $('heat-size').onchange = function () { S.heatSize = +this.value; if (S.mode === 'heat') heat(); };
   $('b-first').onclick = function () { go(0); };
-  $('b-prev').onclick = function () { go(S.step - 1); };
-  $('b-next').onclick = function () { go(S.step + 1); };
-  $('b-last').onclick = function () { go(count()); };
+  $('b-prev').onclick = function () { go(cur() - 1); };
+  $('b-next').onclick = function () { go(cur() + 1); };
+  $('b-last').onclick = function () { go(steps()); };
   $('b-play').onclick = play;
   $('b-jump').onclick = function () { go(parseInt($('jump').value, 10) || 0); };
   $('jump').onkeydown = function (e) { if (e.key === 'Enter') { go(parseInt($('jump').value, 10) || 0); $('jump').blur(); } };
@@ -1021,10 +1160,10 @@ function bindInputs() {
   document.addEventListener('keydown', function (e) {
     if (e.target && (e.target.tagName === 'INPUT' || e.target.tagName === 'SELECT')) return;
     var k = e.key;
-    if (k === 'ArrowRight' || k === 'n') go(S.step + 1);
-    else if (k === 'ArrowLeft' || k === 'p') go(S.step - 1);
+    if (k === 'ArrowRight' || k === 'n') go(cur() + 1);
+    else if (k === 'ArrowLeft' || k === 'p') go(cur() - 1);
     else if (k === 'Home') go(0);
-    else if (k === 'End') go(count());
+    else if (k === 'End') go(steps());
     else if (k === ' ') play();
     else if (k === 'g') { $('jump').focus(); $('jump').select(); }
     else if (k === 't') nextOfType(1);
@@ -1032,6 +1171,7 @@ function bindInputs() {
     else if (k === 'l') nextLeaf(1);
     else if (k === 'L') nextLeaf(-1);
     else if (k === '1') setMode('2d');
+    else if (k === '2') setMode('build');
     else if (k === '3') setMode('3d');
     else if (k === '4') setMode('heat');
     else if (k === '+' || k === '=') $('b-lvup').onclick();
@@ -1050,7 +1190,7 @@ function bindInputs() {
     return [a[0], a[1], z, b[0] - a[0], b[1] - a[1], 0];
   }
   cv.addEventListener('mousedown', function (e) {
-    if (!SC || e.button !== 0) return;
+    if (!SC || e.button !== 0 || S.mode === 'build') return;
     var p = local(e);
     drag = { x0: p[0], y0: p[1], x1: p[0], y1: p[1], vp: viewportAt(p[0]), yaw: S.yaw, pitch: S.pitch, moved: false, cx: e.clientX, cy: e.clientY };
     e.preventDefault();
@@ -1119,43 +1259,82 @@ window.sidxLab = {
       error: S.error || (window.sidxErrors.length ? window.sidxErrors.join('\n') : '')
     };
   },
-  timings: function () { return { rebuild: T.rebuild, trace: T.trace, heat: T.heat, draw: T.draw }; },
+  timings: function () { return { rebuild: T.rebuild, trace: T.trace, heat: T.heat, draw: T.draw, parts: T.parts, tparts: T.tparts }; },
   /* for a program: the same as the inputs, without the mouse */
   setRay: function (r) { return setRay(r, false); },
   heat: function () { if (S.mode !== 'heat') S.mode = 'heat'; heat(); return T.heat; }
 };
 
 /* ---- start ------------------------------------------------------------------------------ */
+/* The view an address describes: {scene, accel, accel2, knobs, mode, cam, level, heat, ray, step}. */
+function linkOf(q) {
+  var v = { scene: q.scene || 'kd-slide', accel: q.accel || '', accel2: q.accel2 || '', knobs: {}, mode: null,
+            cam: null, level: -1, heat: null, ray: null, step: null };
+  KNOBS.forEach(function (k) { if (q[k] !== undefined && q[k] !== '' && isFinite(+q[k])) v.knobs[k] = +q[k]; });
+  if (q.mode === '2d' || q.mode === 'build' || q.mode === '3d' || q.mode === 'heat') v.mode = q.mode;
+  if (q.cam) { var c = q.cam.split(',').map(Number); if (c.length === 3 && c.every(isFinite)) v.cam = c; }
+  if (q.level && /^\d+$/.test(q.level)) v.level = +q.level;
+  if (q.heat) {
+    var hp = q.heat.split(',');
+    v.heat = [hp[0] === 'tris' ? 'tris' : 'steps', +hp[1] > 0 ? Math.min(1024, +hp[1] | 0) : 256];
+  }
+  var ray = q.ray ? q.ray.split(',').map(Number) : null;
+  if (ray && ray.length === 6 && ray.every(isFinite)) v.ray = ray;
+  if (q.step && /^\d+$/.test(q.step)) v.step = +q.step;
+  v.bstep = q.bstep && /^\d+$/.test(q.bstep) ? +q.bstep : null;
+  return v;
+}
+/* Opens the view of a link: its scene, structures, knobs, camera, ray and step.  A scene that
+ * was a file cannot come back by itself: the page says so, and applies the rest of the link
+ * when a file of that name is opened. */
+var PENDING = null;
+var FILE = null;             /* the OBJ opened last, {name, bytes}: the scene list offers it again */
+function applyLink(v, sceneLoaded) {
+  S.accel = v.accel; S.accel2 = v.accel2; S.knobs = v.knobs;
+  writeKnobs();
+  if (v.cam) { S.yaw = v.cam[0]; S.pitch = v.cam[1]; S.zoom = v.cam[2]; }
+  S.level = v.level;
+  if (v.heat) { S.heatMetric = v.heat[0]; S.heatSize = v.heat[1]; }
+  $('heat-metric').value = S.heatMetric; $('heat-size').value = String(S.heatSize);
+  if (v.mode) S.mode = v.mode;
+  if (sceneLoaded) {
+    fillAccelSelects();
+    S.ray = v.ray ? v.ray.map(f32) : defaultRay().map(f32);
+    S.step = Infinity;
+    rebuild();
+  } else {
+    var msgErr = S.error;
+    if (!loadScene(v.scene, null, v.ray)) return;
+    if (msgErr && !S.error) setError(msgErr);
+  }
+  if (v.mode) S.mode = v.mode;
+  if (v.step !== null) S.step = Math.min(v.step, count());
+  if (v.bstep !== null) S.bstep = Math.min(v.bstep, build0().length);
+  fillTypes();
+  if (S.mode === 'heat') heat(); else render();
+}
+function onHash() {
+  var h = location.hash;
+  if (h === LAST_HASH) return;          /* the page's own address */
+  var v = linkOf(readHash());
+  if (L.scenes().indexOf(v.scene) < 0) {
+    if (v.scene === S.scene && SC) { applyLink(v, true); return; }
+    PENDING = v;
+    setError('The scene "' + v.scene + '" of this link is a file: open it with "open OBJ..." (or drop it here) and ' +
+             'the link\'s structures, knobs, ray and step follow.');
+    if (!SC) { v = linkOf({}); applyLink(v, false); setError(S.error); }
+    return;
+  }
+  applyLink(v, false);
+}
+
 function start(lab) {
   L = lab;
   bindInputs();
-  var q = readHash();
-  S.accel = q.accel || '';
-  S.accel2 = q.accel2 || '';
-  S.knobs = {};
-  KNOBS.forEach(function (k) { if (q[k] !== undefined && q[k] !== '' && isFinite(+q[k])) S.knobs[k] = +q[k]; });
-  writeKnobs();
-  if (q.mode === '2d' || q.mode === '3d' || q.mode === 'heat') S.mode = q.mode;
-  if (q.cam) { var c = q.cam.split(',').map(Number); if (c.length === 3 && c.every(isFinite)) { S.yaw = c[0]; S.pitch = c[1]; S.zoom = c[2]; } }
-  if (q.level && /^\d+$/.test(q.level)) S.level = +q.level;
-  if (q.heat) { var hp = q.heat.split(','); if (hp[0] === 'tris' || hp[0] === 'steps') S.heatMetric = hp[0]; if (+hp[1] > 0) S.heatSize = Math.min(1024, +hp[1] | 0); }
-  $('heat-metric').value = S.heatMetric; $('heat-size').value = String(S.heatSize);
-  var ray = q.ray ? q.ray.split(',').map(Number) : null;
-  if (ray && (ray.length !== 6 || !ray.every(isFinite))) ray = null;
-  var scenes = L.scenes(), scene = q.scene || 'kd-slide';
-  var mode = S.mode;
-  if (scenes.indexOf(scene) < 0) {
-    setError('The scene "' + scene + '" of this link is a file: open it again with the file picker (the link keeps ' +
-             'the structure, knobs and ray).');
-    scene = 'kd-slide';
-    ray = null;
-  }
-  var prevErr = S.error;
-  loadScene(scene, null, ray);
-  if (q.mode) { S.mode = mode; }
-  if (q.step && /^\d+$/.test(q.step)) S.step = Math.min(+q.step, count());
-  if (prevErr && !S.error) setError(prevErr);
+  onHash();
+  if (!SC) applyLink(linkOf({}), false);
   $('loading').style.display = 'none';
+  window.addEventListener('hashchange', onHash);
   render();
 }
 
