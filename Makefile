@@ -33,10 +33,12 @@
 #                                       skipped without)
 #   chromium + nodejs                   the web pages driven through the DevTools protocol
 #                                       (tests/run_web_page.sh; skipped without)
+#   emscripten                          make web: the lab page with the library in WebAssembly
+#                                       (tests/run_web_module.sh; skipped without)
 # HAVE_GRAPHVIZ=0, HAVE_SDL=0, HAVE_EMBREE=0 (or MINIMAL=1 for all three)
 # build without one even where it is installed.
 
-DEBS := pkg-config libcmocka-dev libgraphviz-dev libsdl2-dev libsdl2-image-dev libembree-dev gnuplot-nox valgrind tmux chromium nodejs
+DEBS := pkg-config libcmocka-dev libgraphviz-dev libsdl2-dev libsdl2-image-dev libembree-dev gnuplot-nox valgrind tmux chromium nodejs emscripten
 # More packages for one call, e.g. `make deps EXTRA_DEBS="clang cppcheck"` (.ci/run).
 EXTRA_DEBS ?=
 
@@ -128,7 +130,7 @@ PROGS := $(VIZ_PROGS) $(if $(wildcard lessons/tour.c),$(BUILD)/bin/sidx-tour) \
 NOHOOKS_OBJ := $(LIB_SRC:%.c=$(BUILD)/nohooks/obj/%.o)
 ALL_LIBS = $(VIZA) $(LIBA) $(PKG_LIBS) $(LDLIBS)
 
-.PHONY: all deps build optional-parts demo test test-run test-tsan valgrind bench install clean docs apidocs fuzz cppcheck
+.PHONY: web web-if-emcc all deps build optional-parts demo test test-run test-tsan valgrind bench install clean docs apidocs fuzz cppcheck
 
 # No object is intermediate: the programs', lessons' and suites' objects are
 # reached only through pattern rules, and make would delete them after the
@@ -227,6 +229,7 @@ demo: deps
 # suites before the build is done.
 test: deps
 	@$(MAKE) --no-print-directory $(BUILD_JOBS) build
+	@$(MAKE) --no-print-directory $(BUILD_JOBS) web-if-emcc
 	@$(MAKE) --no-print-directory test-run
 
 # Every suite and every shell check (tests/run_*.sh, given BUILD), from the
@@ -358,6 +361,61 @@ install: build
 
 clean:
 	rm -rf $(BUILDDIR)
+
+# ---- the web lab ---------------------------------------------------------------
+# make web: $(BUILDDIR)/web/sidx-lab.html, one self-contained page (no
+# network, works from file://) with the library's own sources and the lab's
+# entry layer (viz/lab.c) compiled to WebAssembly by emscripten and inlined
+# (-sSINGLE_FILE: the module as base64 in the JavaScript, the JavaScript
+# in viz/lab_page.html at its @SIDX_LAB_MODULE@ line).  WebAssembly SIMD:
+# -msimd128 -msse4.1 maps the SSE kernels onto it (lib/simd_isa.h);
+# WEB_SIMD=0 builds the scalar fallback in $(BUILDDIR)/web-scalar.
+# Debian's emscripten runs node with acorn from node-acorn
+# (/usr/share/nodejs), which a node not built by Debian does not search:
+# NODE_PATH names it.  The page is refused above WEB_MAX_BYTES.
+EMCC ?= emcc
+WEB_SIMD ?= 1
+WEB_DIR := $(BUILDDIR)/web$(if $(filter 0,$(WEB_SIMD)),-scalar)
+WEB_SRC := $(LIB_SRC) viz/lab.c viz/json_write.c viz/camera.c viz/knobs.c
+WEB_OBJ := $(WEB_SRC:%.c=$(WEB_DIR)/obj/%.o)
+WEB_CFLAGS := -std=c11 -O3 $(WARN) $(FPFLAGS) -D_DEFAULT_SOURCE -Ilib/include -Ilib \
+              $(if $(filter 0,$(WEB_SIMD)),,-msimd128 -msse4.1)
+# every sidx_lab_* function lab.h declares, and malloc/free (the page passes a dropped file's bytes)
+WEB_EXPORTS := ${shell sed -n 's/^[a-z].* \**\(sidx_lab_[a-z_]*\)(.*/_\1/p' viz/lab.h | tr '\n' ','}_malloc,_free
+WEB_LDFLAGS := -O3 -sMODULARIZE=1 -sEXPORT_NAME=SidxLab -sENVIRONMENT=web,node -sSINGLE_FILE=1 \
+               -sALLOW_MEMORY_GROWTH=1 -sEXPORTED_FUNCTIONS=$(WEB_EXPORTS) \
+               -sEXPORTED_RUNTIME_METHODS=ccall,cwrap,UTF8ToString,stringToUTF8,lengthBytesUTF8,HEAPU8,HEAPU32
+WEB_NODE_PATH := NODE_PATH=/usr/share/nodejs$${NODE_PATH:+:$$NODE_PATH}
+WEB_MAX_BYTES := 3145728
+
+web:
+	@command -v $(EMCC) >/dev/null 2>&1 || { echo "web: emcc not found: install Debian's emscripten (apt-get install emscripten)"; exit 1; }
+	@$(MAKE) --no-print-directory $(WEB_DIR)/sidx-lab.html
+
+# make test: the module where emscripten is installed, one line where not.
+web-if-emcc:
+	@if command -v $(EMCC) >/dev/null 2>&1; then $(MAKE) --no-print-directory $(WEB_DIR)/sidx-lab.html; \
+	else echo "web: without emscripten (apt-get install emscripten): no build/web/sidx-lab.html, its tests skipped"; fi
+
+$(WEB_DIR)/obj/%.o: %.c
+	@mkdir -p $(dir $@)
+	$(EMCC) $(WEB_CFLAGS) -MMD -MP -c $< -o $@
+
+$(WEB_DIR)/sidx-lab.js: $(WEB_OBJ) viz/lab.h
+	$(WEB_NODE_PATH) $(EMCC) $(WEB_LDFLAGS) -o $@ $(WEB_OBJ)
+
+$(WEB_DIR)/sidx-lab.html: $(WEB_DIR)/sidx-lab.js viz/lab_page.html
+	@if grep -qi '</script' $(WEB_DIR)/sidx-lab.js; then echo "web: the module's JavaScript holds '</script': it cannot be inlined"; exit 1; fi
+	@if [ "$$(grep -c '^<script>/\*@SIDX_LAB_MODULE@\*/</script>$$' viz/lab_page.html)" != 1 ]; then \
+	  echo "web: viz/lab_page.html wants exactly one line <script>/*@SIDX_LAB_MODULE@*/</script>"; exit 1; fi
+	awk -v js=$(WEB_DIR)/sidx-lab.js '$$0 == "<script>/*@SIDX_LAB_MODULE@*/</script>" { print "<script>"; \
+	  while ((getline l < js) > 0) print l; print "</script>"; next } { print }' viz/lab_page.html > $@.tmp
+	@size=$$(wc -c < $@.tmp); if [ $$size -gt $(WEB_MAX_BYTES) ]; then \
+	  echo "web: $@ would be $$size bytes, over the limit of $(WEB_MAX_BYTES)"; rm -f $@.tmp; exit 1; fi
+	mv $@.tmp $@
+	@echo "web: $@ ($$(wc -c < $@) bytes)"
+
+-include $(shell find $(WEB_DIR)/obj -name '*.d' 2>/dev/null)
 
 # Exercises (docs/exercises.md).  sidx-check links a student's file with
 # the exercise's checker driver and the runner, compiled here, against

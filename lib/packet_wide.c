@@ -69,7 +69,7 @@
 #include "bvh_wide_internal.h"
 #include "packet_internal.h"
 #include "simd_isa.h"
-#ifdef SIDX_SIMD_SSE2
+#if defined(SIDX_SIMD_X86) && defined(SIDX_SIMD_SSE2)
 #define PW_X86 1 /* SSE2 (the set-up, the triangle blocks) always; AVX2 chosen at run time */
 #endif
 

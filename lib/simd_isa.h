@@ -6,7 +6,11 @@
  *
  *   SIDX_SIMD_X86   x86 or x86-64: the CPU may have SSE4.1, AVX2 or
  *                   AVX-512, picked at run time (__builtin_cpu_supports)
- *   SIDX_SIMD_SSE2  SSE2 at compile time (baseline on x86-64)
+ *   SIDX_SIMD_SSE2  SSE2 at compile time (baseline on x86-64), or
+ *                   WebAssembly SIMD through emscripten's SSE headers
+ *                   (emcc -msimd128 -msse4.1: `make web`), where nothing
+ *                   is picked at run time: SIDX_SIMD_X86 stays undefined,
+ *                   so no cpuid test and no AVX kernel is compiled
  *
  * Also the two things plain code needs from SSE2: a 4-float row as a
  * struct member (sidx__f32x4, for kernels' data kept in a structure's
@@ -19,6 +23,8 @@
 #if defined(__SSE2__)
 #define SIDX_SIMD_SSE2 1
 #endif
+#elif defined(__EMSCRIPTEN__) && defined(__wasm_simd128__) && defined(__SSE2__)
+#define SIDX_SIMD_SSE2 1
 #endif
 
 #ifdef SIDX_SIMD_SSE2

@@ -79,7 +79,8 @@ static SIDX_INLINE int wide_lane_hit_uv(const sidx_accel *a, const sidx_ray *r, 
                                u, v);
 }
 
-#if (defined(__x86_64__) || defined(__i386__)) && defined(__SSE2__)
+#include "simd_isa.h"
+#ifdef SIDX_SIMD_SSE2 /* x86 with SSE2, or WebAssembly SIMD (simd_isa.h) */
 #define SIDX_TRI4_SSE 1
 #include "simd_tri4_sse.h" /* 4 triangles at once (watertight), one ray */
 #else

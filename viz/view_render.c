@@ -13,6 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <SDL_image.h>
+#include "camera.h"
 #include "view.h"
 
 #define PANEL_BG 0xff1f232bu
@@ -549,7 +550,7 @@ static void render_2d(view_state *v, viz_canvas *cv, int build_mode)
 
 /* ---- 3D ------------------------------------------------------------------------------ */
 
-typedef struct camera { sidx_vec3 eye, fwd, right, up; float f, cx, cy; } camera;
+typedef viz_camera camera;
 
 static sidx_vec3 v3norm(sidx_vec3 a)
 {
@@ -557,37 +558,16 @@ static sidx_vec3 v3norm(sidx_vec3 a)
     return l > 0.0f ? sidx_v3_scale(a, 1.0f / l) : a;
 }
 
+/* The camera of viz/camera.c, shared with the web page's heat map. */
 static camera make_camera(const view_state *v, int w, int h)
 {
-    camera c;
-    sidx_aabb b = v->bounds;
-    if (sidx_aabb_is_empty(b)) b.min = b.max = sidx_v3(0, 0, 0);
-    sidx_vec3 target = sidx_aabb_centroid(b);
-    float radius = 0.5f * sidx_v3_length(sidx_aabb_extent(b));
-    if (!(radius > 0.0f)) radius = 1.0f;
-    float dist = radius * 2.4f / (v->zoom > 0.05f ? v->zoom : 0.05f);
-    float cp = cosf(v->pitch), sp = sinf(v->pitch);
-    sidx_vec3 off = sidx_v3(cp * sinf(v->yaw), sp, cp * cosf(v->yaw));
-    /* flat2d lies in xy and is seen from +z: orbit around +z there */
-    c.eye = sidx_v3_add(target, sidx_v3_scale(off, dist));
-    c.fwd = v3norm(sidx_v3_sub(target, c.eye));
-    sidx_vec3 world_up = sidx_v3(0, 1, 0);
-    c.right = sidx_v3_cross(c.fwd, world_up);
-    if (sidx_v3_length(c.right) < 1e-4f) c.right = sidx_v3(1, 0, 0);
-    c.right = v3norm(c.right);
-    c.up = sidx_v3_cross(c.right, c.fwd);
-    c.f = (float)h * 0.5f / tanf(0.5f * 45.0f * 3.14159265f / 180.0f);
-    c.cx = (float)w * 0.5f;
-    c.cy = (float)h * 0.5f;
-    return c;
+    return viz_camera_make(v->bounds, v->yaw, v->pitch, v->zoom, w, h);
 }
 
 void view_camera_ray(const view_state *v, float px, float py, int w, int h, sidx_vec3 *org, sidx_vec3 *dir)
 {
     camera c = make_camera(v, w, h);
-    *org = c.eye;
-    *dir = v3norm(sidx_v3_add(c.fwd, sidx_v3_add(sidx_v3_scale(c.right, (px - c.cx) / c.f),
-                                                 sidx_v3_scale(c.up, -(py - c.cy) / c.f))));
+    viz_camera_ray(&c, px, py, org, dir);
 }
 
 static int project(const camera *c, sidx_vec3 p, float *sx, float *sy)
@@ -615,13 +595,6 @@ static void box3d(viz_canvas *cv, const camera *c, sidx_aabb b, int width, uint3
     }
 }
 
-typedef struct step_count { uint32_t n; } step_count;
-static void count_fn(const sidx_event *ev, void *user)
-{
-    (void)ev;
-    ((step_count *)user)->n++;
-}
-
 /* The heat map's colour for n steps when the busiest pixel took max: on a log scale,
  * log(1 + n) / log(1 + max).  Steps per pixel span three or four decades (a few dozen through
  * a tree, thousands in the one grid cell that holds the teapot in the stadium): on a linear
@@ -641,48 +614,13 @@ static int render_image(view_state *v, int w, int h, view_mode mode)
     v->image_h = h;
     v->image_mode = mode;
     camera c = make_camera(v, w, h);
-    const int heat = mode == VIEW_HEAT;
-    uint32_t *counts = NULL;
-    if (heat) {
-        counts = calloc((size_t)w * (size_t)h, sizeof *counts);
+    if (mode == VIEW_HEAT) {
+        uint32_t *counts = calloc((size_t)w * (size_t)h, sizeof *counts);
         if (!counts) return -1;
-    }
-    step_count sc = {0};
-    sidx_hook hook = {count_fn, &sc, SIDX_EVMASK(SIDX_EV_NODE_ENTER) | SIDX_EVMASK(SIDX_EV_PRIM_TEST)};
-    sidx_query q;
-    memset(&q, 0, sizeof q);
-    q.flags = SIDX_QUERY_NORMAL;
-    if (heat) q.hook = &hook;
-    const int ps = v->pixel_step > 0 ? v->pixel_step : 1;
-    uint32_t maxc = 0;
-    const sidx_vec3 light = v3norm(sidx_v3_add(sidx_v3_scale(c.up, 0.6f), sidx_v3_sub(c.right, c.fwd)));
-    for (int y = 0; y < h; y += ps)
-        for (int x = 0; x < w; x += ps) {
-            sidx_vec3 dir = v3norm(sidx_v3_add(
-                c.fwd, sidx_v3_add(sidx_v3_scale(c.right, ((float)x + 0.5f * (float)ps - c.cx) / c.f),
-                                   sidx_v3_scale(c.up, -((float)y + 0.5f * (float)ps - c.cy) / c.f))));
-            sidx_ray r;
-            uint32_t col = 0xff30343cu;
-            if (v->accel && sidx_ray_init(&r, c.eye, dir, 0.0f, INFINITY) == SIDX_OK) {
-                sidx_hit hit;
-                sc.n = 0;
-                sidx_accel_intersect(v->accel, &r, &q, &hit);
-                if (heat) {
-                    if (sc.n > maxc) maxc = sc.n;
-                    counts[(size_t)y * (size_t)w + (size_t)x] = sc.n;
-                } else if (hit.prim != SIDX_NO_HIT) {
-                    sidx_vec3 n = v3norm(hit.ng);
-                    if (sidx_v3_dot(n, dir) > 0.0f) n = sidx_v3_scale(n, -1.0f);
-                    float lam = 0.35f + 0.65f * fmaxf(0.0f, sidx_v3_dot(n, light));
-                    col = viz_rgba((int)((0.5f + 0.5f * n.x) * 255.0f * lam), (int)((0.5f + 0.5f * n.y) * 255.0f * lam),
-                                   (int)((0.5f + 0.5f * n.z) * 255.0f * lam), 255);
-                }
-            }
-            if (!heat)
-                for (int yy = y; yy < y + ps && yy < h; ++yy)
-                    for (int xx = x; xx < x + ps && xx < w; ++xx) img[(size_t)yy * (size_t)w + (size_t)xx] = col;
-        }
-    if (heat) {
+        /* steps per pixel: nodes entered + primitive tests (viz/camera.c) */
+        const uint32_t mask = SIDX_EVMASK(SIDX_EV_NODE_ENTER) | SIDX_EVMASK(SIDX_EV_PRIM_TEST);
+        const int ps = v->pixel_step > 0 ? v->pixel_step : 1;
+        const uint32_t maxc = v->accel ? viz_heat_counts(v->accel, &c, w, h, ps, mask, counts) : 0;
         v->heat_max = maxc;
         for (int y = 0; y < h; y += ps)
             for (int x = 0; x < w; x += ps) {
@@ -692,7 +630,34 @@ static int render_image(view_state *v, int w, int h, view_mode mode)
                     for (int xx = x; xx < x + ps && xx < w; ++xx) img[(size_t)yy * (size_t)w + (size_t)xx] = col;
             }
         free(counts);
+        v->image_valid = 1;
+        return 0;
     }
+    sidx_query q;
+    memset(&q, 0, sizeof q);
+    q.flags = SIDX_QUERY_NORMAL;
+    const int ps = v->pixel_step > 0 ? v->pixel_step : 1;
+    const sidx_vec3 light = v3norm(sidx_v3_add(sidx_v3_scale(c.up, 0.6f), sidx_v3_sub(c.right, c.fwd)));
+    for (int y = 0; y < h; y += ps)
+        for (int x = 0; x < w; x += ps) {
+            sidx_vec3 org, dir;
+            viz_camera_ray(&c, (float)x + 0.5f * (float)ps, (float)y + 0.5f * (float)ps, &org, &dir);
+            sidx_ray r;
+            uint32_t col = 0xff30343cu;
+            if (v->accel && sidx_ray_init(&r, org, dir, 0.0f, INFINITY) == SIDX_OK) {
+                sidx_hit hit;
+                sidx_accel_intersect(v->accel, &r, &q, &hit);
+                if (hit.prim != SIDX_NO_HIT) {
+                    sidx_vec3 n = v3norm(hit.ng);
+                    if (sidx_v3_dot(n, dir) > 0.0f) n = sidx_v3_scale(n, -1.0f);
+                    float lam = 0.35f + 0.65f * fmaxf(0.0f, sidx_v3_dot(n, light));
+                    col = viz_rgba((int)((0.5f + 0.5f * n.x) * 255.0f * lam), (int)((0.5f + 0.5f * n.y) * 255.0f * lam),
+                                   (int)((0.5f + 0.5f * n.z) * 255.0f * lam), 255);
+                }
+            }
+            for (int yy = y; yy < y + ps && yy < h; ++yy)
+                for (int xx = x; xx < x + ps && xx < w; ++xx) img[(size_t)yy * (size_t)w + (size_t)xx] = col;
+        }
     v->image_valid = 1;
     return 0;
 }
