@@ -6,15 +6,22 @@
 #
 # First the protocol client on sidx-view --html's recorded page
 # (tests/web/view_page_test.js), then the lab page BUILD/web/sidx-lab.html
-# (tests/web/lab_test.js): a dragged ray's trace, knobs, structures, a bad
-# OBJ, heat map, side by side and the page offline, each against the
-# native programs of BUILD.  Screenshots go to BUILD/web/screens/.
+# (tests/web/lab_test.js; WEB is BUILD/web, build/web for build/san):
+# rays from the address, dragged in 2D and clicked in 3D, knobs,
+# structures, a bad OBJ, heat map, side by side and the page offline, each
+# against the native programs of BUILD.  Screenshots go to WEB/screens/.
 # Without node or chromium it says so in one line and passes; without the
 # built lab page (make web, which needs emscripten) that part says so in
 # one line.  Each part is stopped after a fixed time if it hangs.
 
 BUILD=${BUILD:-build}
 export BUILD
+# the page lives beside the native tree: build/web (build/san/.. -> build/web)
+case $BUILD in
+*/san | */tsan) WEB=$(dirname "$BUILD")/web ;;
+*) WEB=$BUILD/web ;;
+esac
+WEB=${WEB_DIR:-$WEB}
 
 if ! command -v node >/dev/null 2>&1; then
     echo "web-page: skipped: node is not installed (make deps installs nodejs)"
@@ -27,9 +34,9 @@ fi
 
 fail=0
 timeout -k 5 180 node tests/web/view_page_test.js "$BUILD" || fail=1
-if [ -f "$BUILD/web/sidx-lab.html" ]; then
-    timeout -k 5 300 node tests/web/lab_test.js "$BUILD" || fail=1
+if [ -f "$WEB/sidx-lab.html" ]; then
+    timeout -k 5 300 node tests/web/lab_test.js "$BUILD" "$WEB" || fail=1
 else
-    echo "web-page: lab page skipped: no $BUILD/web/sidx-lab.html (make web builds it, with emscripten)"
+    echo "web-page: lab page skipped: no $WEB/sidx-lab.html (make web builds it, with emscripten)"
 fi
 exit $fail

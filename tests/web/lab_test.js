@@ -1,6 +1,6 @@
 // lab_test.js — the lab page (build/web/sidx-lab.html) in headless Chromium.
 //
-//   node tests/web/lab_test.js [BUILD]          (tests/run_web_page.sh runs it)
+//   node tests/web/lab_test.js [BUILD [WEB]]    (tests/run_web_page.sh runs it)
 //
 // Drives the page through the DevTools protocol (cdp.js) with real mouse
 // and keyboard events and checks what it shows against the native
@@ -10,7 +10,8 @@
 //   - rays dragged on #view in the 2D scene kd-slide: the same, with R the
 //     page's ray, each float written so that strtof gives it back exactly;
 //     the page's address then opens the same walk in a new tab;
-//   - a click on the 3D view of teapot: the ray through that pixel, the same;
+//   - the teapot loaded as OBJ, a click on the 3D view: the ray through
+//     that pixel traces as sidx-step's on the same file;
 //   - a build knob typed into its input: the node count equals the
 //     build_end count of `sidx-step --build` with the same knob;
 //   - another structure picked: the trace follows it (against sidx-step);
@@ -22,7 +23,7 @@
 //   - side by side: the second structure's walk against sidx-step, the
 //     counts shown for both against their traces, and the step where the
 //     walks part against sidx-step --diff.
-// Each mode's screenshot goes to BUILD/web/screens/*.png; the page's
+// Each mode's screenshot goes to WEB/screens/*.png (WEB: BUILD/web); the page's
 // timings() are printed, never compared with a limit.  Every wait gives up
 // after a fixed time.  Exit status: 0 all passed, 1 a check failed.
 'use strict';
@@ -34,9 +35,10 @@ const os = require('os');
 const path = require('path');
 
 const BUILD = process.argv[2] || process.env.BUILD || 'build';
-const PAGE = path.resolve(BUILD, 'web/sidx-lab.html');
+const WEB = process.argv[3] || path.join(BUILD, 'web');
+const PAGE = path.resolve(WEB, 'sidx-lab.html');
 const STEP = path.resolve(BUILD, 'bin/sidx-step');
-const SCREENS = path.resolve(BUILD, 'web/screens');
+const SCREENS = path.resolve(WEB, 'screens');
 const URL0 = 'file://' + PAGE;
 const WAIT_MS = 20000;
 
@@ -185,13 +187,13 @@ async function check(name, fn) {
 }
 
 // The page's trace of its current ray against sidx-step's.
-async function compareTrace(p, s) {
-    const want = traceOnly(nativeTrace(s.accel, s.scene, s.ray, knobArgs(s.knobs)));
+async function compareTrace(p, s, scenePath) {
+    const want = traceOnly(nativeTrace(s.accel, scenePath || s.scene, s.ray, knobArgs(s.knobs)));
     const got = traceOnly(s.events || []);
     const d = traceDiff(got, want);
     if (d) return `ray ${rayArg(s.ray)}: ${d}`;
     console.log(`        ${s.accel} on ${s.scene}, ray ${rayArg(s.ray)}: ${got.length} events agree` +
-        ` (${got.filter((e) => e.type === 'prim_test').length} triangle tests, ${got.some((e) => e.type === 'prim_hit') ? 'a hit' : 'no hit'})`);
+        ` (${got.filter((e) => e.type === 'prim_test').length} triangle tests, ${got.some((e) => e.type === 'hit_update') ? 'a hit' : 'no hit'})`);
     return null;
 }
 
@@ -246,7 +248,7 @@ async function main() {
                 if (s.ray[2] !== 0 || s.ray[5] !== 0) return `a 2D ray leaves the plane z = 0: ${s.ray}`;
                 const why = await compareTrace(p, s);
                 if (why) return why;
-                if (traceOnly(s.events).some((e) => e.type === 'prim_hit')) ++hits;
+                if (traceOnly(s.events).some((e) => e.type === 'hit_update')) ++hits;
             }
             await timings(p, 'a dragged ray');
             await shot(p, '2d-dragged-ray');
@@ -264,19 +266,31 @@ async function main() {
             return hits ? null : 'none of the dragged rays hit a shape: the drags test too little';
         });
 
-        await check('3D: a click on teapot shoots a ray that traces as sidx-step does', async () => {
-            await choose(p, '#scene', 'teapot');
-            await choose(p, '#accel', 'bvh');
-            let s = await until(p, 'teapot in 3D', (x) => x.scene === 'teapot' && x.accel === 'bvh' && x.mode === '3d');
-            const before = JSON.stringify(s.ray);
-            const bx = await p.box('#view');
-            await p.click(bx.x + bx.w * 0.52, bx.y + bx.h * 0.48);
-            s = await until(p, 'a new ray after the click', (x) => JSON.stringify(x.ray) !== before);
-            const why = await compareTrace(p, s);
-            if (why) return why;
-            await timings(p, 'a clicked ray on teapot');
-            await shot(p, '3d-teapot-clicked-ray');
-            return null;
+        // The native teapot as an OBJ with its exact floats (sidx-lab
+        // saveobj): the built-in generator's sinf/cosf are the C library's,
+        // which may differ in the last bit from the module's.
+        await check('3D: a click on the teapot (an OBJ picked in #obj-file) traces as sidx-step does', async () => {
+            const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'sidx-lab-'));
+            const obj = path.join(dir, 'teapot.obj');
+            try {
+                execFileSync(path.resolve(BUILD, 'bin/sidx-lab'), [], { input: `open teapot\nsaveobj ${obj}\n`, timeout: 60000, stdio: ['pipe', 'ignore', 'pipe'] });
+                await p.setFiles('#obj-file', [obj]);
+                await choose(p, '#accel', 'bvh');
+                let s = await until(p, 'teapot.obj in 3D', (x) => x.scene === 'teapot.obj' && x.accel === 'bvh' && x.mode === '3d');
+                if (s.error) return 'error: ' + s.error;
+                const before = JSON.stringify(s.ray);
+                const bx = await p.box('#view');
+                await p.click(bx.x + bx.w * 0.52, bx.y + bx.h * 0.48);
+                s = await until(p, 'a new ray after the click', (x) => JSON.stringify(x.ray) !== before);
+                const why = await compareTrace(p, s, obj);
+                if (why) return why;
+                if (!traceOnly(s.events).some((e) => e.type === 'hit_update')) return 'the click in the middle of the view missed the teapot';
+                await timings(p, 'a clicked ray on teapot.obj');
+                await shot(p, '3d-teapot-clicked-ray');
+                return null;
+            } finally {
+                fs.rmSync(dir, { recursive: true, force: true });
+            }
         });
 
         await check('knob: max_depth typed in rebuilds the kd-tree with the native node count', async () => {
@@ -286,7 +300,7 @@ async function main() {
             for (const depth of ['3', '8']) {
                 await typeInto(p, '#knob-max_depth', depth);
                 const s = await until(p, 'max_depth ' + depth, (x) => String(x.knobs && x.knobs.max_depth) === depth);
-                const want = nativeNodes('kdtree', 'teapot', ['--max-depth', depth]);
+                const want = nativeNodes('kdtree', 'teapot', knobArgs(s.knobs));
                 const got = await until(p, 'a node count', (x) => findKey(x.stats, 'nodes') !== undefined)
                     .then((x) => findKey(x.stats, 'nodes'));
                 if (got !== want) return `max_depth ${depth}: the page shows ${got} nodes, sidx-step --build ${want}`;
@@ -297,16 +311,19 @@ async function main() {
             return null;
         });
 
-        await check('knob: leaf_size typed in rebuilds the BVH with the native node count', async () => {
+        await check('knob: defaults, then leaf_size typed in rebuilds the BVH with the native node count', async () => {
             await choose(p, '#accel', 'bvh');
             await until(p, 'bvh', (s) => s.accel === 'bvh');
+            const r = await p.box('#knob-reset');
+            await p.click(r.x + r.w / 2, r.y + r.h / 2);
+            await until(p, 'the knobs back to their defaults', (x) => Object.keys(x.knobs || {}).length === 0);
             for (const leaf of ['1', '16']) {
                 await typeInto(p, '#knob-leaf_size', leaf);
-                await until(p, 'leaf_size ' + leaf, (x) => String(x.knobs && x.knobs.leaf_size) === leaf);
-                const want = nativeNodes('bvh', 'teapot', ['--leaf-size', leaf]);
-                const got = findKey((await state(p)).stats, 'nodes');
+                const s = await until(p, 'leaf_size ' + leaf, (x) => String(x.knobs && x.knobs.leaf_size) === leaf);
+                const want = nativeNodes('bvh', 'teapot', knobArgs(s.knobs));
+                const got = findKey(s.stats, 'nodes');
                 if (got !== want) return `leaf_size ${leaf}: the page shows ${got} nodes, sidx-step --build ${want}`;
-                console.log(`        bvh on teapot, leaf_size ${leaf}: ${got} nodes on both`);
+                console.log(`        bvh on teapot, knobs ${JSON.stringify(s.knobs)}: ${got} nodes on both`);
             }
             return null;
         });
