@@ -1,6 +1,7 @@
 // lab_test.js — the lab page (build/web/sidx-lab.html) in headless Chromium.
 //
 //   node tests/web/lab_test.js [BUILD [WEB]]    (tests/run_web_page.sh runs it)
+//   LAB_ONLY='knob|heat' node tests/web/lab_test.js    only the checks named so
 //
 // Drives the page through the DevTools protocol (cdp.js) with real mouse
 // and keyboard events and checks what it shows against the native
@@ -175,8 +176,10 @@ async function timings(p, what) {
     console.log(`        timings after ${what}: ${t}`);
 }
 
-// Runs one check; a thrown error fails it with its message.
+// Runs one check (only those whose name matches LAB_ONLY, a regular
+// expression, when it is set); a thrown error fails it with its message.
 async function check(name, fn) {
+    if (process.env.LAB_ONLY && !new RegExp(process.env.LAB_ONLY).test(name)) return;
     try {
         const why = await fn();
         if (why) bad(name, why);
@@ -312,8 +315,9 @@ async function main() {
         });
 
         await check('knob: defaults, then leaf_size typed in rebuilds the BVH with the native node count', async () => {
+            await choose(p, '#scene', 'teapot');
             await choose(p, '#accel', 'bvh');
-            await until(p, 'bvh', (s) => s.accel === 'bvh');
+            await until(p, 'teapot with bvh', (s) => s.scene === 'teapot' && s.accel === 'bvh');
             const r = await p.box('#knob-reset');
             await p.click(r.x + r.w / 2, r.y + r.h / 2);
             await until(p, 'the knobs back to their defaults', (x) => Object.keys(x.knobs || {}).length === 0);
