@@ -6,7 +6,7 @@
 #
 # First the protocol client on sidx-view --html's recorded page
 # (tests/web/view_page_test.js), then the lab page BUILD/web/sidx-lab.html
-# (tests/web/lab_test.js; WEB is BUILD/web, build/web for build/san):
+# (tests/web/lab_test.js; WEB is BUILD/web unless WEB_DIR is set):
 # rays from the address, dragged in 2D and clicked in 3D, knobs,
 # structures, a bad OBJ, heat map, side by side and the page offline, each
 # against the native programs of BUILD.  Screenshots go to WEB/screens/.
@@ -16,12 +16,8 @@
 
 BUILD=${BUILD:-build}
 export BUILD
-# the page lives beside the native tree: build/web (build/san/.. -> build/web)
-case $BUILD in
-*/san | */tsan) WEB=$(dirname "$BUILD")/web ;;
-*) WEB=$BUILD/web ;;
-esac
-WEB=${WEB_DIR:-$WEB}
+# the page make web writes for this tree (WEB_DIR=DIR names another)
+WEB=${WEB_DIR:-$BUILD/web}
 
 if ! command -v node >/dev/null 2>&1; then
     echo "web-page: skipped: node is not installed (make deps installs nodejs)"

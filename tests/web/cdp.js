@@ -249,9 +249,28 @@ class Browser {
             const t = setTimeout(() => { try { this.proc.kill('SIGKILL'); } catch (e) { /* gone */ } resolve(); }, 5000);
             this.proc.on('exit', () => { clearTimeout(t); resolve(); });
         });
+        running.delete(this);
         if (this.profile) fs.rmSync(this.profile, { recursive: true, force: true });
         this.profile = null;
     }
+}
+
+// The browsers still running: killed, and their profiles removed, when
+// this process is stopped by a signal (a test's time limit) or exits.
+const running = new Set();
+function cleanup() {
+    for (const b of running) {
+        try { b.proc.kill('SIGKILL'); } catch (e) { /* gone */ }
+        try { fs.rmSync(b.profile, { recursive: true, force: true }); } catch (e) { /* gone */ }
+    }
+    running.clear();
+}
+process.on('exit', cleanup);
+for (const sig of ['SIGTERM', 'SIGINT', 'SIGHUP']) {
+    process.on(sig, () => {
+        cleanup();
+        process.exit(1);
+    });
 }
 
 // Starts headless chromium (opts.chromium or the first found on PATH) with
@@ -276,6 +295,8 @@ async function launch(opts) {
     const proc = spawn(exe, args, { stdio: ['ignore', 'ignore', 'pipe', 'pipe', 'pipe'] });
     const b = new Browser(proc, o);
     b.profile = profile;
+    running.add(b);
+    proc.on('exit', () => running.delete(b));
     b.killer = setTimeout(() => { try { proc.kill('SIGKILL'); } catch (e) { /* gone */ } }, o.lifeMs || 300000);
     b.killer.unref();
     await b.send('Browser.getVersion');
