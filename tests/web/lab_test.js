@@ -171,9 +171,13 @@ async function shot(p, name) {
     console.log('        screenshot ' + path.relative(process.cwd(), f));
 }
 
-async function timings(p, what) {
-    const t = await p.eval('JSON.stringify(sidxLab.timings())');
-    console.log(`        timings after ${what}: ${t}`);
+// Prints the page's timings() after what; key (rebuild, trace or heat)
+// also goes into the summary printed at the end as label.
+const summary = [];
+async function timings(p, what, key, label) {
+    const t = await p.eval('sidxLab.timings()');
+    console.log(`        timings after ${what}: ${JSON.stringify(t)}`);
+    if (key && t && typeof t[key] === 'number') summary.push(`${label} ${t[key].toFixed(1)} ms`);
 }
 
 // Runs one check (only those whose name matches LAB_ONLY, a regular
@@ -253,7 +257,7 @@ async function main() {
                 if (why) return why;
                 if (traceOnly(s.events).some((e) => e.type === 'hit_update')) ++hits;
             }
-            await timings(p, 'a dragged ray');
+            await timings(p, 'a dragged ray', 'trace', 'trace of a dragged ray (kd-slide, kdtree, drawn)');
             await shot(p, '2d-dragged-ray');
             // the address keeps the state: the same link in a new tab shows the same walk
             const href = await p.eval('location.href');
@@ -288,7 +292,7 @@ async function main() {
                 const why = await compareTrace(p, s, obj);
                 if (why) return why;
                 if (!traceOnly(s.events).some((e) => e.type === 'hit_update')) return 'the click in the middle of the view missed the teapot';
-                await timings(p, 'a clicked ray on teapot.obj');
+                await timings(p, 'a clicked ray on teapot.obj', 'trace', 'trace of a clicked ray (teapot, bvh, drawn)');
                 await shot(p, '3d-teapot-clicked-ray');
                 return null;
             } finally {
@@ -308,7 +312,7 @@ async function main() {
                     .then((x) => findKey(x.stats, 'nodes'));
                 if (got !== want) return `max_depth ${depth}: the page shows ${got} nodes, sidx-step --build ${want}`;
                 console.log(`        kdtree on teapot, max_depth ${depth}: ${got} nodes on both (stats ${JSON.stringify(s.stats).slice(0, 200)})`);
-                await timings(p, 'rebuilding teapot, max_depth ' + depth);
+                await timings(p, 'rebuilding teapot, max_depth ' + depth, 'rebuild', 'rebuild teapot kdtree max_depth ' + depth);
             }
             await shot(p, 'knob-max-depth');
             return null;
@@ -345,7 +349,7 @@ async function main() {
                 const why = await compareTrace(p, s);
                 if (why) return name + ': ' + why;
             }
-            await timings(p, 'rebuilding kd-slide');
+            await timings(p, 'rebuilding kd-slide', 'rebuild', 'rebuild kd-slide ' + want[want.length - 1]);
             await shot(p, 'structures-' + want[want.length - 1]);
             return null;
         });
@@ -405,7 +409,7 @@ async function main() {
             if (!s.heat || s.heat.n !== 256) return `the heat map is ${JSON.stringify(s.heat)}, not 256 x 256`;
             if (!(s.heat.max > 0)) return `the heat map is empty: ${JSON.stringify(s.heat)}`;
             console.log(`        teapot, bvh: 256 x 256 heat map, max ${s.heat.max}, mean ${s.heat.mean}`);
-            await timings(p, 'the 256 x 256 heat map');
+            await timings(p, 'the 256 x 256 heat map', 'heat', 'heat map 256x256 teapot bvh');
             await shot(p, 'heatmap');
             return null;
         });
@@ -487,6 +491,7 @@ if (!fs.existsSync(PAGE)) {
     process.exit(0);
 }
 main().then(() => {
+    if (summary.length) console.log('web-page: the page\'s timings (printed, not checked): ' + summary.join(', '));
     console.log(failures ? `web-page: ${failures} check(s) failed` : 'web-page: all checks passed');
     process.exit(failures ? 1 : 0);
 }, (e) => {
