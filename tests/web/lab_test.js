@@ -20,6 +20,7 @@
 //     message and the page still traces afterwards;
 //   - the page from file:// with networking off (offline, and a dead proxy):
 //     it starts and no request leaves it;
+//   - the build mode: as many build steps as sidx-step --build's events;
 //   - the heat map: 256 x 256, not empty, no error;
 //   - side by side: the second structure's walk against sidx-step, the
 //     counts shown for both against their traces, and the step where the
@@ -384,6 +385,32 @@ async function main() {
             await dragRay(p, 0.05, 0.3, 0.95, 0.6);
             const s = await until(p, 'a ray after the bad file', (x) => x.scene === 'kd-slide' && JSON.stringify(x.ray) !== before);
             return compareTrace(p, s);
+        });
+
+        await check('build mode: a click on #m-build steps through sidx-step --build\'s events', async () => {
+            await choose(p, '#scene', 'kd-slide');
+            await choose(p, '#accel', 'kdtree');
+            await until(p, 'kd-slide with kdtree', (x) => x.scene === 'kd-slide' && x.accel === 'kdtree');
+            const m = await p.box('#m-build');
+            await p.click(m.x + m.w / 2, m.y + m.h / 2);
+            const s = await until(p, 'mode build', (x) => x.mode === 'build');
+            const want = native(['--accel', 'kdtree', 'kd-slide', '--build', '--json', ...knobArgs(s.knobs)])
+                .split('\n').filter((l) => l.includes('"type":"build_')).length;
+            // the address holds the build step: the whole build at first, then one back
+            const bstep = async () => Number((/[#&]bstep=(\d+)/.exec(await p.eval('location.hash')) || [])[1]);
+            let got = await bstep();
+            if (got !== want) return `the build mode shows ${got} build steps, sidx-step --build prints ${want} events`;
+            await p.send('Input.dispatchKeyEvent', { type: 'rawKeyDown', key: 'ArrowLeft', code: 'ArrowLeft', windowsVirtualKeyCode: 37 });
+            await p.send('Input.dispatchKeyEvent', { type: 'keyUp', key: 'ArrowLeft', code: 'ArrowLeft', windowsVirtualKeyCode: 37 });
+            const t0 = Date.now();
+            while ((got = await bstep()) !== want - 1 && Date.now() - t0 < WAIT_MS) await sleep(50);
+            if (got !== want - 1) return `Left in the build mode leaves the build step at ${got}, not ${want - 1}`;
+            console.log(`        kdtree on kd-slide: ${want} build events, Left goes to ${got}`);
+            await shot(p, 'build-mode');
+            const b2 = await p.box('#m-2d');
+            await p.click(b2.x + b2.w / 2, b2.y + b2.h / 2);
+            await until(p, 'mode 2d', (x) => x.mode === '2d');
+            return null;
         });
 
         await check('heat map: drawn for teapot without an error', async () => {
