@@ -31,7 +31,7 @@ fi
 fail=0
 timeout -k 5 180 node tests/web/view_page_test.js "$BUILD" || fail=1
 if [ -f "$WEB/sidx-lab.html" ]; then
-    timeout -k 5 300 node tests/web/lab_test.js "$BUILD" "$WEB" || fail=1
+    timeout -k 5 600 node tests/web/lab_test.js "$BUILD" "$WEB" || fail=1
 else
     echo "web-page: lab page skipped: no $WEB/sidx-lab.html (make web builds it, with emscripten)"
 fi

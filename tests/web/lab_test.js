@@ -221,7 +221,7 @@ function knobArgs(k) {
 // ---- the checks -----------------------------------------------------------------------------
 
 async function main() {
-    const b = await cdp.launch({ timeoutMs: WAIT_MS, lifeMs: 240000 });
+    const b = await cdp.launch({ timeoutMs: WAIT_MS, lifeMs: 540000 });
     try {
         const p = await open(b);
         const s0 = await state(p);
