@@ -25,7 +25,9 @@
  * walk compiled for AVX-512F/VL when the CPU has those (32 vector
  * registers: no spills at leaf entry; docs/performance.md, "Wide
  * BVHs"), else AVX2; SSE4.1 for bvh4; else the
- * scalar copy of the same walk (__builtin_cpu_supports).  SIDX_SIMD in
+ * scalar copy of the same walk (__builtin_cpu_supports).  In WebAssembly
+ * with SIMD (`make web`) bvh4 takes the SSE4.1 walk, which emscripten maps
+ * onto WebAssembly SIMD, and bvh8 the scalar one.  SIDX_SIMD in
  * the environment caps the choice: "scalar", "sse4.1" or "avx2" (the
  * tests compare every copy the CPU can run).  A NOTE event on the build
  * hook says which was picked. */
@@ -55,8 +57,12 @@
 #undef WALK_ISA
 #undef WALK_TARGET
 
+#if defined(SIDX_WIDE_X86) || defined(SIDX_WIDE_WASM)
 #ifdef SIDX_WIDE_X86
 #define WALK_TARGET __attribute__((target("sse4.1")))
+#else
+#define WALK_TARGET
+#endif
 #define WALK_ISA 1
 #define WALK_ISA_NAME sse41
 #define WALK_W 4
@@ -65,6 +71,9 @@
 #undef WALK_ISA_NAME
 #undef WALK_ISA
 #undef WALK_TARGET
+#endif
+
+#ifdef SIDX_WIDE_X86
 
 #define WALK_TARGET __attribute__((target("avx2,fma,popcnt")))
 #define WALK_ISA 2
@@ -103,6 +112,8 @@ wide_isa sidx__wide_pick_isa(uint32_t width)
         return WIDE_ISA_AVX512;
     if (width == 8 && allow >= 2 && avx2) return WIDE_ISA_AVX2;
     if (width == 4 && allow >= 1 && __builtin_cpu_supports("sse4.1")) return WIDE_ISA_SSE41;
+#elif defined(SIDX_WIDE_WASM)
+    if (width == 4 && allow >= 1) return WIDE_ISA_SSE41;
 #else
     (void)width;
     (void)allow;
@@ -117,6 +128,8 @@ static void set_kernels(wide_bvh *w, sidx_tri_method tri)
     if (w->isa == WIDE_ISA_AVX512) k = &sidx__wide_kernels_8_avx512;
     else if (w->isa == WIDE_ISA_AVX2) k = &sidx__wide_kernels_8_avx2;
     else if (w->isa == WIDE_ISA_SSE41) k = &sidx__wide_kernels_4_sse41;
+#elif defined(SIDX_WIDE_WASM)
+    if (w->isa == WIDE_ISA_SSE41) k = &sidx__wide_kernels_4_sse41;
 #endif
     /* The triangle test is fixed at build: decide here, not per ray. */
     const int simd_tri = tri == SIDX_TRI_WATERTIGHT;

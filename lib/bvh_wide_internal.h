@@ -102,6 +102,11 @@ extern const wide_kernels sidx__wide_kernels_4_scalar, sidx__wide_kernels_8_scal
 #if defined(__x86_64__) || defined(__i386__)
 #define SIDX_WIDE_X86 1
 extern const wide_kernels sidx__wide_kernels_4_sse41, sidx__wide_kernels_8_avx2, sidx__wide_kernels_8_avx512;
+#elif defined(SIDX_SIMD_SSE2)
+/* WebAssembly SIMD (simd_isa.h): bvh4's SSE4.1 walk, compiled for it and
+ * taken without a run-time test; bvh8's AVX2 walk has no counterpart */
+#define SIDX_WIDE_WASM 1
+extern const wide_kernels sidx__wide_kernels_4_sse41;
 #endif
 
 /* The instruction set bvh4/bvh8 pick on this machine: the best the CPU

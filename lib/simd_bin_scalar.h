@@ -12,6 +12,13 @@ static inline sidx_aabb pref_box(const pref *r)
     return b;
 }
 
+/* Axis k of a reference's centroid, (lo + hi)·0.5 as sidx_aabb_centroid
+ * computes it. */
+static inline float pref_c(const pref *r, int k)
+{
+    return (r->lo[k] + r->hi[k]) * 0.5f;
+}
+
 static inline sidx_aabb binbox_get(const binbox *b)
 {
     sidx_aabb r = {{b->lo[0], b->lo[1], b->lo[2]}, {b->hi[0], b->hi[1], b->hi[2]}};

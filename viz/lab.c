@@ -21,8 +21,10 @@ typedef struct lab_slot {
     sidx_traversal traversal;
     char args[256];           /* the knobs as sidx-step flags */
     double build_ms;
+    size_t cand_total;        /* SAH candidates the build proposed (the first SIDX_LAB_MAX_CANDIDATES kept) */
     sidx_recorder trace;      /* the last ray's events */
     int has_trace, truncated;
+    double trace_ms;          /* the recorded query's wall time */
     sidx_vec3 org, dir;
     sidx_hit hit;
 } lab_slot;
@@ -127,6 +129,7 @@ static void slot_clear(lab_slot *s)
     s->has_trace = s->truncated = 0;
     s->args[0] = '\0';
     s->build_ms = 0.0;
+    s->cand_total = 0;
 }
 
 static void drop_scene(void)
@@ -411,6 +414,17 @@ static lab_slot *get_slot(int slot)
     return slot >= 0 && slot < SIDX_LAB_SLOTS ? &lab.slot[slot] : NULL;
 }
 
+/* The build's hook: the recorder, less the SAH candidates past the JSON's
+ * budget (a kd-tree build of the teapot proposes hundreds of thousands;
+ * copying them all would cost more than the build). */
+typedef struct build_sink { sidx_hook rec; size_t candidates; } build_sink;
+static void build_sink_fn(const sidx_event *e, void *user)
+{
+    build_sink *b = user;
+    if (e->type == SIDX_EV_BUILD_CANDIDATE && b->candidates++ >= SIDX_LAB_MAX_CANDIDATES) return;
+    b->rec.fn(e, b->rec.user);
+}
+
 int sidx_lab_build(int slot, const char *accel, const char *knobs_json)
 {
     lab_slot *s = get_slot(slot);
@@ -428,8 +442,8 @@ int sidx_lab_build(int slot, const char *accel, const char *knobs_json)
     slot_clear(s);
     if (rc) return rc;
     sidx_recorder_init(&s->build);
-    sidx_hook bh = sidx_recorder_hook(&s->build);
-    bh.mask = SIDX_EVMASK_BUILD | SIDX_EVMASK(SIDX_EV_NOTE);
+    build_sink sink = {sidx_recorder_hook(&s->build), 0};
+    sidx_hook bh = {build_sink_fn, &sink, SIDX_EVMASK_BUILD | SIDX_EVMASK(SIDX_EV_NOTE)};
     bo.hook = &bh;
     sidx_error err;
     const double t0 = now_ms();
@@ -446,6 +460,7 @@ int sidx_lab_build(int slot, const char *accel, const char *knobs_json)
         return fail(SIDX_ERR_NOMEM, "out of memory recording the build");
     }
     s->traversal = trav;
+    s->cand_total = sink.candidates;
     snprintf(s->args, sizeof s->args, "%s", args);
     return ok();
 }
@@ -466,22 +481,18 @@ const char *sidx_lab_build_json(int slot)
                        "\"prim_refs\":%llu,\"build_ms\":%.3f}",
                     st.nodes, st.leaves, st.max_depth, st.sah_cost, st.bytes, (unsigned long long)st.prim_refs,
                     s->build_ms);
-    size_t cand_total = 0, cand_kept = 0;
+    size_t cand_kept = 0;
     viz_json_put(b, ",\"build\":[");
     int first = 1;
     for (size_t i = 0; i < s->build.count; ++i) {
         const sidx_event *e = &s->build.events[i];
         if (e->type == SIDX_EV_NOTE) continue;
-        if (e->type == SIDX_EV_BUILD_CANDIDATE) {
-            ++cand_total;
-            if (cand_kept >= SIDX_LAB_MAX_CANDIDATES) continue;
-            ++cand_kept;
-        }
+        if (e->type == SIDX_EV_BUILD_CANDIDATE) ++cand_kept;
         if (!first) viz_json_put(b, ",");
         first = 0;
         viz_json_build_event(b, e);
     }
-    viz_json_printf(b, "],\"cand_total\":%zu,\"cand_kept\":%zu,\"labels\":{", cand_total, cand_kept);
+    viz_json_printf(b, "],\"cand_total\":%zu,\"cand_kept\":%zu,\"labels\":{", s->cand_total, cand_kept);
     first = 1;
     for (uint32_t i = 0; i < st.nodes; ++i) {
         const char *label = sidx_accel_node_label(s->accel, i);
@@ -515,7 +526,9 @@ int sidx_lab_trace(int slot, double ox, double oy, double oz, double dx, double 
     memset(&q, 0, sizeof q);
     q.traversal = s->traversal;
     q.hook = &th;
+    const double t0 = now_ms();
     sidx_accel_intersect(s->accel, &ray, &q, &s->hit);
+    s->trace_ms = now_ms() - t0;
     s->org = org;
     s->dir = dir;
     s->has_trace = 1;
@@ -544,10 +557,10 @@ const char *sidx_lab_trace_json(int slot)
     for (size_t i = 0; i < s->trace.count; ++i) n[s->trace.events[i].type]++;
     viz_json_printf(b,
                     ",\"counts\":{\"nodes\":%llu,\"boxes\":%llu,\"triangles\":%llu,\"mailbox\":%llu,\"events\":%zu},"
-                    "\"truncated\":%s,\"events\":[",
+                    "\"truncated\":%s,\"ms\":%.3f,\"events\":[",
                     (unsigned long long)n[SIDX_EV_NODE_ENTER], (unsigned long long)n[SIDX_EV_BOX_TEST],
                     (unsigned long long)n[SIDX_EV_PRIM_TEST], (unsigned long long)n[SIDX_EV_MAILBOX_HIT],
-                    s->trace.count, s->truncated ? "true" : "false");
+                    s->trace.count, s->truncated ? "true" : "false", s->trace_ms);
     for (size_t i = 0; i < s->trace.count; ++i) {
         if (i) viz_json_put(b, ",\n");
         if (viz_json_trav_event(b, &s->trace.events[i]) != 0) viz_json_put(b, "null");
@@ -672,6 +685,8 @@ const char *sidx_lab_bench(int slot, double yaw, double pitch, double zoom, int 
             if (sidx_ray_init(&rays[n], org, dir, 0.0f, INFINITY) == SIDX_OK) ++n;
         }
     uint64_t hits = 0, prim_sum = 0;
+    struct timespec c0, c1;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c0);
     const double t0 = now_ms();
     for (int k = 0; k < repeat; ++k)
         for (size_t i = 0; i < n; ++i) {
@@ -683,11 +698,15 @@ const char *sidx_lab_bench(int slot, double yaw, double pitch, double zoom, int 
             }
         }
     const double ms = now_ms() - t0;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c1);
+    const double cpu_ms = (double)(c1.tv_sec - c0.tv_sec) * 1e3 + (double)(c1.tv_nsec - c0.tv_nsec) * 1e-6;
     free(rays);
     viz_json *b = answer(OUT_MISC);
     const double total = (double)n * (double)repeat;
-    viz_json_printf(b, "{\"rays\":%.0f,\"hits\":%llu,\"prim_sum\":%llu,\"ms\":%.3f,\"mrays_per_s\":%.3f}", total,
-                    (unsigned long long)hits, (unsigned long long)prim_sum, ms, ms > 0.0 ? total / ms / 1e3 : 0.0);
+    viz_json_printf(b,
+                    "{\"rays\":%.0f,\"hits\":%llu,\"prim_sum\":%llu,\"ms\":%.3f,\"cpu_ms\":%.3f,\"mrays_per_s\":%.3f}",
+                    total, (unsigned long long)hits, (unsigned long long)prim_sum, ms, cpu_ms,
+                    ms > 0.0 ? total / ms / 1e3 : 0.0);
     ok();
     return done(b);
 }

@@ -103,6 +103,7 @@ int sidx_lab_trace(int slot, double ox, double oy, double oz, double dx, double 
  * "ray_arg":"ox,oy,oz,dx,dy,dz","hit":{"prim","t"} or null,
  * "counts":{"nodes" (NODE_ENTER),"boxes" (BOX_TEST),"triangles"
  * (PRIM_TEST),"mailbox" (MAILBOX_HIT),"events"},"truncated":false,
+ * "ms" (the recorded query's wall time),
  * "events":[one object per event: sidx_event_to_json's (sidx-step --json)
  * plus "box" on NODE_ENTER and "line", the printer's text]}; "null"
  * when the slot has no trace. */
@@ -137,7 +138,9 @@ const char *sidx_lab_camera_ray(double yaw, double pitch, double zoom, int w, in
 
 /* Primary rays without a hook, for speed: the heat map's w×h camera rays
  * traced through the slot's structure (closest hit, default traversal),
- * `repeat` times.  {"rays","hits","prim_sum","ms","mrays_per_s"}: hits
+ * `repeat` times.  {"rays","hits","prim_sum","ms","cpu_ms","mrays_per_s"}
+ * (ms wall time, cpu_ms the process's CPU time where the C library
+ * measures it: in the browser it is wall time too): hits
  * and prim_sum (the sum of the hit triangles' ids) let two builds check
  * they found the same hits; "null" on error (sidx_lab_error says why). */
 const char *sidx_lab_bench(int slot, double yaw, double pitch, double zoom, int w, int h, int repeat);
