@@ -31,12 +31,14 @@
 #                                       (tests/run_step_tmux.sh; skipped without)
 #   chromium                            the headless-browser test of those pages (tests/test_html.c;
 #                                       skipped without)
+#   chromium + nodejs                   the web pages driven through the DevTools protocol
+#                                       (tests/run_web_page.sh; skipped without)
 #   emscripten                          make web: the lab page with the library in WebAssembly
 #                                       (tests/run_web_module.sh; skipped without)
 # HAVE_GRAPHVIZ=0, HAVE_SDL=0, HAVE_EMBREE=0 (or MINIMAL=1 for all three)
 # build without one even where it is installed.
 
-DEBS := pkg-config libcmocka-dev libgraphviz-dev libsdl2-dev libsdl2-image-dev libembree-dev gnuplot-nox valgrind tmux chromium emscripten
+DEBS := pkg-config libcmocka-dev libgraphviz-dev libsdl2-dev libsdl2-image-dev libembree-dev gnuplot-nox valgrind tmux chromium nodejs emscripten
 # More packages for one call, e.g. `make deps EXTRA_DEBS="clang cppcheck"` (.ci/run).
 EXTRA_DEBS ?=
 
