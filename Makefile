@@ -5,7 +5,7 @@
 #   make deps       install the missing Debian packages (as root; else prints the command)
 #   make demo       deps, build, run the guided tour
 #   make test       deps, build, run every cmocka suite and the lessons' checks
-#   make test SAN=1 the same under AddressSanitizer + UndefinedBehaviorSanitizer (build/san),
+#   make test SAN=1 the same under AddressSanitizer + UndefinedBehaviorSanitizer (build/san, -O1),
 #                   the suites at their small sizes (SIDX_FAST_TESTS=1; FAST_TESTS=0 for full)
 #   make test-tsan  the threaded suites under ThreadSanitizer (build/tsan)
 #   make valgrind   the suites under valgrind memcheck (small sizes; VALGRIND_SKIP)
@@ -48,6 +48,11 @@ BUILDDIR ?= build
 ifeq ($(SAN),1)
 BUILD := $(BUILDDIR)/san
 SANFLAGS := -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
+# -O1 unless OPT is given: gcc compiles the instrumented code in about
+# half the CPU time of -O2, and the small-size suites run under 10 % slower.
+ifeq ($(origin OPT),file)
+OPT := -O1
+endif
 else ifeq ($(TSAN),1)
 BUILD := $(BUILDDIR)/tsan
 SANFLAGS := -fsanitize=thread -fno-omit-frame-pointer
