@@ -200,7 +200,7 @@ static void make_table(const sidx_accel *a, const sidx_recorder *rec, int slide,
             snprintf(r->current, sizeof r->current, "%s", node_name(a, e->node, id));
             snprintf(r->result, sizeof r->result, "%s", best);
             stack_text(a, stack, sn, r->stack, sizeof r->stack);
-            snprintf(leaf, sizeof leaf, "%s", r->current);
+            snprintf(leaf, sizeof leaf, "%.*s", (int)sizeof leaf - 1, r->current); /* the leaf's name, cut to fit */
             leaf_far = e->t_far;
             break;
         }

@@ -161,113 +161,158 @@ static int degenerate_hit_ok(const sidx_mesh *m, const sidx_ray *r, const sidx_h
            segment_distance(p, v2, v0) <= tol;
 }
 
-/* Checks every registered structure on (m, rays); returns the number of
- * failed checks (each one printed, up to MAX_REPORTS per structure). */
-static unsigned check_case(const char *label, const sidx_mesh *m, const tk_rayrec *rays, size_t n,
-                           const sidx_build_options *bo, unsigned flags)
+/* A set of rays checked on one mesh, with its label and rule (CHECK_*). */
+typedef struct ray_set {
+    const char *label;
+    const tk_rayrec *rays;
+    size_t n;
+    unsigned flags;
+} ray_set;
+
+/* The expected hits of one set: brute force's, and per ray whether the ray
+ * is valid and whether brute force itself keeps the set's rule. */
+typedef struct ray_set_ref {
+    sidx_hit *ref;
+    sidx_ray *rr;
+    uint8_t *valid, *brute_ok;
+} ray_set_ref;
+
+/* Brute force's hits for one set; returns the number of rays on which the
+ * triangle test itself breaks the set's rule (each printed, up to
+ * MAX_REPORTS), reported here once, not for every structure. */
+static unsigned brute_reference(const sidx_accel *brute, const sidx_mesh *m, const ray_set *set, ray_set_ref *out)
+{
+    const size_t n = set->n;
+    out->ref = calloc(n ? n : 1, sizeof *out->ref);
+    out->rr = calloc(n ? n : 1, sizeof *out->rr);
+    out->valid = calloc(n ? n : 1, 1);
+    out->brute_ok = calloc(n ? n : 1, 1);
+    assert_non_null(out->ref);
+    assert_non_null(out->rr);
+    assert_non_null(out->valid);
+    assert_non_null(out->brute_ok);
+    unsigned brute_bad = 0;
+    for (size_t i = 0; i < n; ++i) {
+        out->valid[i] = tk_ray_from(&set->rays[i], &out->rr[i]) == SIDX_OK;
+        if (!out->valid[i]) continue;
+        assert_int_equal(sidx_accel_intersect(brute, &out->rr[i], NULL, &out->ref[i]), SIDX_OK);
+        const int hit = out->ref[i].prim != SIDX_NO_HIT;
+        out->brute_ok[i] = !(((set->flags & CHECK_ALL_HIT) && !hit) ||
+                             ((set->flags & CHECK_ALL_MISS) && !degenerate_hit_ok(m, &out->rr[i], &out->ref[i])));
+        if (!out->brute_ok[i] && brute_bad++ < MAX_REPORTS) {
+            char d[200];
+            describe_ray(&set->rays[i], d, sizeof d);
+            print_message("%s: brute force (the triangle test itself): ray %zu %s: prim %ld t=%.9g (%s)\n",
+                          set->label, i, hit ? "hits degenerate geometry" : "leaks", hit_prim(&out->ref[i]),
+                          out->ref[i].t, d);
+        }
+    }
+    if (brute_bad > MAX_REPORTS) print_message("%s: brute force: %u rays failed in all\n", set->label, brute_bad);
+    return brute_bad;
+}
+
+/* One structure, built once, on one set; returns the number of failed rays. */
+static unsigned check_structure(const char *name, const sidx_accel *a, const sidx_mesh *m, const ray_set *set,
+                                const ray_set_ref *b)
+{
+    const unsigned flags = set->flags;
+    unsigned bad = 0;
+    for (size_t i = 0; i < set->n; ++i) {
+        if (!b->valid[i]) continue;
+        const sidx_hit *const ref = &b->ref[i];
+        const sidx_ray *const rr = &b->rr[i];
+        const char *what = NULL;
+        sidx_hit h0, h1;
+        sidx_query q0 = {0, SIDX_TRAVERSE_DEFAULT, NULL, (uint32_t)i};
+        sidx_query q1 = {SIDX_QUERY_UV, SIDX_TRAVERSE_DEFAULT, NULL, (uint32_t)i};
+        int occ = -1;
+        sidx_accel_intersect(a, rr, &q0, &h0);
+        sidx_accel_intersect(a, rr, &q1, &h1);
+        sidx_accel_occluded(a, rr, &q0, &occ);
+        const int ref_hit = ref->prim != SIDX_NO_HIT;
+        sidx_hit hv = h0;
+        if (!tk_hits_agree(ref, &h0)) what = "closest hit differs from brute force";
+        else if (b->brute_ok[i] && (flags & CHECK_ALL_HIT) && h0.prim == SIDX_NO_HIT)
+            what = "leak: the ray slipped through";
+        else if (b->brute_ok[i] && (flags & CHECK_ALL_MISS) && !degenerate_hit_ok(m, rr, &h0))
+            what = "hit on degenerate geometry away from its segment";
+        else if (h1.prim != h0.prim || !(h1.t == h0.t || (isinf(h1.t) && isinf(h0.t)))) {
+            what = "asking for u, v changed the hit";
+            hv = h1;
+        } else if (h0.u != 0.0f || h0.v != 0.0f) what = "u, v filled although not asked for";
+        else if (h1.prim != SIDX_NO_HIT && !(h1.u >= -1e-4f && h1.v >= -1e-4f && h1.u + h1.v <= 1.0001f)) {
+            what = "u, v are not barycentric";
+            hv = h1;
+        } else if (occ != ref_hit) what = ref_hit ? "any-hit query missed" : "any-hit query hit nothing real";
+        if (!what && (flags & CHECK_TRAVERSALS)) {
+            for (int t = SIDX_TRAVERSE_STACK; t < SIDX_TRAVERSE_COUNT && !what; ++t) {
+                sidx_query qt = {0, (sidx_traversal)t, NULL, (uint32_t)i};
+                sidx_accel_intersect(a, rr, &qt, &hv);
+                if (!tk_hits_agree(ref, &hv)) what = sidx_traversal_name((sidx_traversal)t);
+            }
+        }
+        if (what && bad++ < MAX_REPORTS) {
+            char d[200];
+            describe_ray(&set->rays[i], d, sizeof d);
+            print_message("%s: %s: ray %zu: %s%s: ref prim %ld t=%.9g, got prim %ld t=%.9g (%s)\n", set->label, name,
+                          i, what, (flags & CHECK_TRAVERSALS) && strlen(what) < 10 ? " traversal differs" : "",
+                          hit_prim(ref), ref->t, hit_prim(&hv), hv.t, d);
+        }
+    }
+    if (bad > MAX_REPORTS) print_message("%s: %s: %u rays failed in all\n", set->label, name, bad);
+    return bad;
+}
+
+/* Checks every registered structure on the sets of rays of one mesh m;
+ * returns the number of failed checks (each one printed, up to
+ * MAX_REPORTS per structure and set).  Each structure is built once for
+ * all the sets (scene names it in the watchdog's message). */
+static unsigned check_sets(const char *scene, const sidx_mesh *m, const ray_set *sets, size_t nsets,
+                           const sidx_build_options *bo)
 {
     unsigned failures = 0;
     sidx_error err = {SIDX_OK, ""};
     sidx_accel *brute = NULL;
     if (sidx_accel_build("brute", m, bo, &brute, &err) != SIDX_OK) {
-        print_message("%s: brute force does not build: %s\n", label, err.message);
+        print_message("%s: brute force does not build: %s\n", scene, err.message);
         return 1;
     }
-    sidx_hit *ref = calloc(n ? n : 1, sizeof *ref);
-    sidx_ray *rr = calloc(n ? n : 1, sizeof *rr);
-    uint8_t *valid = calloc(n ? n : 1, 1);
-    assert_non_null(ref);
-    assert_non_null(rr);
-    assert_non_null(valid);
-    /* brute_ok[i] = 0: brute force itself (i.e. the triangle test) breaks
-     * the case's rule on ray i; reported once here, not for every structure. */
-    uint8_t *brute_ok = calloc(n ? n : 1, 1);
-    assert_non_null(brute_ok);
-    unsigned brute_bad = 0;
-    for (size_t i = 0; i < n; ++i) {
-        valid[i] = tk_ray_from(&rays[i], &rr[i]) == SIDX_OK;
-        if (!valid[i]) continue;
-        assert_int_equal(sidx_accel_intersect(brute, &rr[i], NULL, &ref[i]), SIDX_OK);
-        const int hit = ref[i].prim != SIDX_NO_HIT;
-        brute_ok[i] = !(((flags & CHECK_ALL_HIT) && !hit) ||
-                        ((flags & CHECK_ALL_MISS) && !degenerate_hit_ok(m, &rr[i], &ref[i])));
-        if (!brute_ok[i] && brute_bad++ < MAX_REPORTS) {
-            char d[200];
-            describe_ray(&rays[i], d, sizeof d);
-            print_message("%s: brute force (the triangle test itself): ray %zu %s: prim %ld t=%.9g (%s)\n", label,
-                          i, hit ? "hits degenerate geometry" : "leaks", hit_prim(&ref[i]), ref[i].t, d);
-        }
-    }
-    if (brute_bad > MAX_REPORTS) print_message("%s: brute force: %u rays failed in all\n", label, brute_bad);
-    failures += brute_bad;
+    ray_set_ref *refs = calloc(nsets ? nsets : 1, sizeof *refs);
+    assert_non_null(refs);
+    for (size_t k = 0; k < nsets; ++k) failures += brute_reference(brute, m, &sets[k], &refs[k]);
 
     for (size_t ai = 0; ai < sidx_accel_registered_count(); ++ai) {
         const char *name = sidx_accel_registered_name(ai);
         if (!strcmp(name, "brute")) continue;
         sidx_accel *a = NULL;
-        watchdog_start(label, name);
+        watchdog_start(scene, name);
         if (sidx_accel_build(name, m, bo, &a, &err) != SIDX_OK) {
             watchdog_stop();
-            print_message("%s: %s does not build: %s\n", label, name, err.message);
+            print_message("%s: %s does not build: %s\n", scene, name, err.message);
             ++failures;
             continue;
         }
-        unsigned bad = 0;
-        for (size_t i = 0; i < n; ++i) {
-            if (!valid[i]) continue;
-            const char *what = NULL;
-            sidx_hit h0, h1;
-            sidx_query q0 = {0, SIDX_TRAVERSE_DEFAULT, NULL, (uint32_t)i};
-            sidx_query q1 = {SIDX_QUERY_UV, SIDX_TRAVERSE_DEFAULT, NULL, (uint32_t)i};
-            int occ = -1;
-            sidx_accel_intersect(a, &rr[i], &q0, &h0);
-            sidx_accel_intersect(a, &rr[i], &q1, &h1);
-            sidx_accel_occluded(a, &rr[i], &q0, &occ);
-            const int ref_hit = ref[i].prim != SIDX_NO_HIT;
-            sidx_hit hv = h0;
-            if (!tk_hits_agree(&ref[i], &h0)) what = "closest hit differs from brute force";
-            else if (brute_ok[i] && (flags & CHECK_ALL_HIT) && h0.prim == SIDX_NO_HIT)
-                what = "leak: the ray slipped through";
-            else if (brute_ok[i] && (flags & CHECK_ALL_MISS) && !degenerate_hit_ok(m, &rr[i], &h0))
-                what = "hit on degenerate geometry away from its segment";
-            else if (h1.prim != h0.prim || !(h1.t == h0.t || (isinf(h1.t) && isinf(h0.t)))) {
-                what = "asking for u, v changed the hit";
-                hv = h1;
-            } else if (h0.u != 0.0f || h0.v != 0.0f) what = "u, v filled although not asked for";
-            else if (h1.prim != SIDX_NO_HIT &&
-                     !(h1.u >= -1e-4f && h1.v >= -1e-4f && h1.u + h1.v <= 1.0001f)) {
-                what = "u, v are not barycentric";
-                hv = h1;
-            } else if (occ != ref_hit) what = ref_hit ? "any-hit query missed" : "any-hit query hit nothing real";
-            if (!what && (flags & CHECK_TRAVERSALS)) {
-                for (int t = SIDX_TRAVERSE_STACK; t < SIDX_TRAVERSE_COUNT && !what; ++t) {
-                    sidx_query qt = {0, (sidx_traversal)t, NULL, (uint32_t)i};
-                    sidx_accel_intersect(a, &rr[i], &qt, &hv);
-                    if (!tk_hits_agree(&ref[i], &hv)) what = sidx_traversal_name((sidx_traversal)t);
-                }
-            }
-            if (what) {
-                if (bad++ < MAX_REPORTS) {
-                    char d[200];
-                    describe_ray(&rays[i], d, sizeof d);
-                    print_message("%s: %s: ray %zu: %s%s: ref prim %ld t=%.9g, got prim %ld t=%.9g (%s)\n", label,
-                                  name, i, what,
-                                  (flags & CHECK_TRAVERSALS) && strlen(what) < 10 ? " traversal differs" : "",
-                                  hit_prim(&ref[i]), ref[i].t, hit_prim(&hv), hv.t, d);
-                }
-            }
-        }
-        if (bad > MAX_REPORTS) print_message("%s: %s: %u rays failed in all\n", label, name, bad);
-        failures += bad;
+        for (size_t k = 0; k < nsets; ++k) failures += check_structure(name, a, m, &sets[k], &refs[k]);
         sidx_accel_destroy(a);
         watchdog_stop();
     }
     sidx_accel_destroy(brute);
-    free(ref);
-    free(rr);
-    free(valid);
-    free(brute_ok);
+    for (size_t k = 0; k < nsets; ++k) {
+        free(refs[k].ref);
+        free(refs[k].rr);
+        free(refs[k].valid);
+        free(refs[k].brute_ok);
+    }
+    free(refs);
     return failures;
+}
+
+/* One set of rays on m. */
+static unsigned check_case(const char *label, const sidx_mesh *m, const tk_rayrec *rays, size_t n,
+                           const sidx_build_options *bo, unsigned flags)
+{
+    const ray_set set = {label, rays, n, flags};
+    return check_sets(label, m, &set, 1, bo);
 }
 
 /* ---- scenes ------------------------------------------------------------------- */
@@ -314,60 +359,46 @@ static unsigned check_kinds(const char *label, const sidx_mesh *m, const tk_ray_
 
 /* ---- the tests: every built-in scene ----------------------------------------- */
 
-static void test_builtin_random_rays(void **state)
+/* Each built-in scene, each structure built once for three sets of rays:
+ *   - random primary, diffuse and shadow rays, with the traversal variants;
+ *   - grazing rays (shared edges and vertices) and axis-parallel rays;
+ *   - rays starting exactly on a surface point: tmin = 0 (self hit at
+ *     t ~ 0 allowed, as long as every structure agrees with brute force;
+ *     half of them leave the surface the other way) and tmin = 1e-3 (the
+ *     usual shadow-ray offset). */
+static void test_builtin_scenes(void **state)
 {
     (void)state;
     unsigned failures = 0;
-    static const tk_ray_kind kinds[] = {TK_RAYS_PRIMARY, TK_RAYS_DIFFUSE, TK_RAYS_SHADOW};
+    static const tk_ray_kind random_kinds[] = {TK_RAYS_PRIMARY, TK_RAYS_DIFFUSE, TK_RAYS_SHADOW};
+    static const tk_ray_kind grazing_kinds[] = {TK_RAYS_GRAZING, TK_RAYS_AXIS};
     for (const char *const *s = sidx_scene_names(); *s; ++s) {
         sidx_mesh m;
         make_scene(*s, &m);
-        failures += check_kinds(*s, &m, kinds, 3, nrays(150), CHECK_TRAVERSALS);
-        sidx_mesh_free(&m);
-    }
-    assert_int_equal(failures, 0);
-}
-
-static void test_builtin_grazing_and_axis_rays(void **state)
-{
-    (void)state;
-    unsigned failures = 0;
-    static const tk_ray_kind kinds[] = {TK_RAYS_GRAZING, TK_RAYS_AXIS};
-    for (const char *const *s = sidx_scene_names(); *s; ++s) {
-        sidx_mesh m;
-        make_scene(*s, &m);
-        failures += check_kinds(*s, &m, kinds, 2, nrays(250), 0);
-        sidx_mesh_free(&m);
-    }
-    assert_int_equal(failures, 0);
-}
-
-/* Rays starting exactly on a surface point: tmin = 0 (self hit at t ~ 0
- * allowed, as long as every structure agrees with brute force) and
- * tmin = 1e-3 (the usual shadow-ray offset). */
-static void test_rays_starting_on_surface(void **state)
-{
-    (void)state;
-    unsigned failures = 0;
-    for (const char *const *s = sidx_scene_names(); *s; ++s) {
-        sidx_mesh m;
-        make_scene(*s, &m);
+        size_t n_random, n_grazing;
+        tk_rayrec *random = kinds_rays(&m, random_kinds, 3, nrays(150), 1234, &n_random);
+        tk_rayrec *grazing = kinds_rays(&m, grazing_kinds, 2, nrays(250), 1234, &n_grazing);
         const size_t n = nrays(200);
-        tk_rayrec *r = malloc(2 * n * sizeof *r);
-        assert_non_null(r);
-        tk_make_rays(&m, TK_RAYS_SHADOW, n, 99, r);
+        tk_rayrec *surface = malloc(2 * n * sizeof *surface);
+        assert_non_null(surface);
+        tk_make_rays(&m, TK_RAYS_SHADOW, n, 99, surface);
         for (size_t i = 0; i < n; ++i) {
-            r[n + i] = r[i];
-            r[n + i].tmin = 0.0f;
-            r[n + i].tmax = INFINITY;
-            /* half of them leave the surface the other way */
+            surface[n + i] = surface[i];
+            surface[n + i].tmin = 0.0f;
+            surface[n + i].tmax = INFINITY;
             if (i & 1)
-                for (int k = 0; k < 3; ++k) r[n + i].d[k] = -r[n + i].d[k];
+                for (int k = 0; k < 3; ++k) surface[n + i].d[k] = -surface[n + i].d[k];
         }
-        char label[64];
-        snprintf(label, sizeof label, "%s (on surface)", *s);
-        failures += check_case(label, &m, r, 2 * n, NULL, 0);
-        free(r);
+        char grazing_label[64], surface_label[64];
+        snprintf(grazing_label, sizeof grazing_label, "%s (grazing, axis)", *s);
+        snprintf(surface_label, sizeof surface_label, "%s (on surface)", *s);
+        const ray_set sets[] = {{*s, random, n_random, CHECK_TRAVERSALS},
+                                {grazing_label, grazing, n_grazing, 0},
+                                {surface_label, surface, 2 * n, 0}};
+        failures += check_sets(*s, &m, sets, 3, NULL);
+        free(random);
+        free(grazing);
+        free(surface);
         sidx_mesh_free(&m);
     }
     assert_int_equal(failures, 0);
@@ -375,21 +406,36 @@ static void test_rays_starting_on_surface(void **state)
 
 /* ---- closed meshes: no leaks --------------------------------------------------- */
 
-static unsigned leak_case(const char *label, const sidx_mesh *m, sidx_vec3 inside, size_t max)
+/* Leak rays from each point of `insides` (every structure built once for
+ * all of them), checked on every structure; the double-precision
+ * reference must see no leak either. */
+static unsigned leak_cases(const char *label, const sidx_mesh *m, const sidx_vec3 *insides, size_t count,
+                           size_t max)
 {
-    tk_rayrec *r = malloc(max * sizeof *r);
-    assert_non_null(r);
-    const size_t n = tk_make_leak_rays(m, inside, max, r);
-    unsigned failures = check_case(label, m, r, n, NULL, CHECK_ALL_HIT);
-    /* the double-precision reference must see no leak either */
-    unsigned ref_leaks = 0;
-    for (size_t i = 0; i < n; ++i) {
-        sidx_hit h;
-        tk_ref_intersect(m, &r[i], &h);
-        if (h.prim == SIDX_NO_HIT && ref_leaks++ < 3) print_message("%s: reference leaks ray %zu\n", label, i);
+    ray_set sets[3];
+    tk_rayrec *rays[3];
+    char labels[3][80];
+    unsigned failures = 0;
+    assert_true(count <= 3);
+    for (size_t k = 0; k < count; ++k) {
+        rays[k] = malloc(max * sizeof *rays[k]);
+        assert_non_null(rays[k]);
+        const size_t n = tk_make_leak_rays(m, insides[k], max, rays[k]);
+        if (count > 1) snprintf(labels[k], sizeof labels[k], "%s from inside #%zu", label, k);
+        else snprintf(labels[k], sizeof labels[k], "%s", label);
+        sets[k] = (ray_set){labels[k], rays[k], n, CHECK_ALL_HIT};
+        unsigned ref_leaks = 0;
+        for (size_t i = 0; i < n; ++i) {
+            sidx_hit h;
+            tk_ref_intersect(m, &rays[k][i], &h);
+            if (h.prim == SIDX_NO_HIT && ref_leaks++ < 3)
+                print_message("%s: reference leaks ray %zu\n", labels[k], i);
+        }
+        failures += ref_leaks;
     }
-    free(r);
-    return failures + ref_leaks;
+    failures += check_sets(label, m, sets, count, NULL);
+    for (size_t k = 0; k < count; ++k) free(rays[k]);
+    return failures;
 }
 
 static void test_icosphere_no_leaks(void **state)
@@ -403,11 +449,9 @@ static void test_icosphere_no_leaks(void **state)
         const sidx_vec3 c = sidx_aabb_centroid(sidx_mesh_bounds(&m));
         const sidx_vec3 insides[3] = {c, sidx_v3_add(c, sidx_v3(0.1f, -0.2f, 0.3f)),
                                       sidx_v3_add(c, sidx_v3(-0.5f, 0.25f, 0.125f))};
-        for (int k = 0; k < 3; ++k) {
-            char label[64];
-            snprintf(label, sizeof label, "icosphere:%u from inside #%d", (unsigned)level, k);
-            failures += leak_case(label, &m, insides[k], max);
-        }
+        char label[64];
+        snprintf(label, sizeof label, "icosphere:%u", (unsigned)level);
+        failures += leak_cases(label, &m, insides, 3, max);
         /* far from the origin and tiny: still closed, so still no leak */
         static const struct { double scale; float off; const char *what; } tf[] = {
             {100.0, 1e6f, "x100 at +1e6"}, {100.0, -1e6f, "x100 at -1e6"}, {1e-6, 0.0f, "x1e-6"}};
@@ -416,9 +460,8 @@ static void test_icosphere_no_leaks(void **state)
             assert_int_equal(tk_mesh_transform(&m, tf[t].scale, sidx_v3(tf[t].off, tf[t].off, -tf[t].off), &tm),
                              SIDX_OK);
             const sidx_vec3 tc = sidx_aabb_centroid(sidx_mesh_bounds(&tm));
-            char label[64];
             snprintf(label, sizeof label, "icosphere:%u %s", (unsigned)level, tf[t].what);
-            failures += leak_case(label, &tm, tc, max);
+            failures += leak_cases(label, &tm, &tc, 1, max);
             sidx_mesh_free(&tm);
         }
         sidx_mesh_free(&m);
@@ -1137,9 +1180,7 @@ int main(void)
         cmocka_unit_test(test_empty_mesh),
         cmocka_unit_test(test_single_triangle),
         cmocka_unit_test(test_one_degenerate_triangle),
-        cmocka_unit_test(test_builtin_random_rays),
-        cmocka_unit_test(test_builtin_grazing_and_axis_rays),
-        cmocka_unit_test(test_rays_starting_on_surface),
+        cmocka_unit_test(test_builtin_scenes),
         cmocka_unit_test(test_icosphere_no_leaks),
         cmocka_unit_test(test_axis_rays_signed_zero),
         cmocka_unit_test(test_translated_and_scaled_scenes),
