@@ -58,7 +58,7 @@ typedef struct sidx_build_options {
                                      that improves the binary tree after the build (bvh_optimize.c);
                                      0 = off.  A budget large enough gives the same tree every time;
                                      one that cuts the pass short depends on the machine's speed */
-    uint32_t lazy;                /* bvh (not bvh-obb), kdtree family, bvh8: build the top of the tree now and
+    uint32_t lazy;                /* bvh family but bvh-obb: build the top of the tree now and
                                      leave each subtree of at most this many primitives as an unbuilt node
                                      holding them, built the first time a ray enters it (a BUILD_LAZY_EXPAND
                                      event, then its build events, on that query's hook).  The tree below
