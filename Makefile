@@ -261,7 +261,7 @@ test-run:
 # die_after_fork=0: test_pool_after_fork forks while the pool's threads
 # run, on purpose (the child must not inherit them); its child only
 # queries serially.  Any report fails the run (exitcode).
-TSAN_TESTS := test_parallel test_threads
+TSAN_TESTS := test_parallel test_threads test_lazy
 TSAN_FAST := $(if $(filter command line environment,$(origin FAST_TESTS)),$(FAST_TESTS),1)
 test-tsan:
 	@$(MAKE) --no-print-directory $(BUILD_JOBS) TSAN=1 $(TSAN_TESTS:%=$(BUILDDIR)/tsan/tests/%)

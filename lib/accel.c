@@ -212,12 +212,32 @@ static SIDX_NOINLINE void intersect_traced(const sidx_accel *a, const sidx_ray *
               e_.t = hit->t; e_.result = hit->prim != SIDX_NO_HIT);
 }
 
+/* Set by a failed lazy expansion on this thread during the current query. */
+static _Thread_local unsigned char lazy_failed;
+void sidx__lazy_note_failure(void) { lazy_failed = 1; }
+
+/* A query on a lazy tree: the walk may expand nodes, and an expansion
+ * without memory makes the query fail (sidx_internal.h). */
+static SIDX_NOINLINE sidx_status intersect_lazy(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
+                                                sidx_hit *hit)
+{
+    lazy_failed = 0;
+    if (SIDX_QUERY_TRACED(q)) {
+        intersect_traced(a, r, q, hit);
+    } else {
+        a->vt->intersect(a, r, q, hit);
+        finish_hit(a, r, q, hit);
+    }
+    return lazy_failed ? SIDX_ERR_NOMEM : SIDX_OK;
+}
+
 sidx_status sidx_accel_intersect(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
 {
     if (!a || !r || !hit) return SIDX_ERR_INVALID_ARG;
     if (!q) q = &default_query;
     *hit = sidx_hit_none();
     hit->t = r->tmax;
+    if (SIDX_UNLIKELY(a->lazy)) return intersect_lazy(a, r, q, hit);
     if (SIDX_QUERY_TRACED(q)) {
         intersect_traced(a, r, q, hit);
         return SIDX_OK;
@@ -234,10 +254,11 @@ sidx_status sidx_accel_occluded(const sidx_accel *a, const sidx_ray *r, const si
     const int traced = SIDX_QUERY_TRACED(q);
     SIDX_EMIT(traced, q->hook, SIDX_EV_RAY_BEGIN, e_.structure = a->name; e_.ray_id = q->ray_id;
               e_.t_near = r->tmin; e_.t_far = r->tmax);
+    if (a->lazy) lazy_failed = 0;
     *occluded = a->vt->occluded(a, r, q) ? 1 : 0;
     SIDX_EMIT(traced, q->hook, SIDX_EV_RAY_END, e_.structure = a->name; e_.ray_id = q->ray_id;
               e_.result = *occluded);
-    return SIDX_OK;
+    return a->lazy && lazy_failed ? SIDX_ERR_NOMEM : SIDX_OK;
 }
 
 sidx_status sidx_accel_intersect_n(const sidx_accel *a, const sidx_ray *rays, size_t n, const sidx_query *q,
@@ -246,11 +267,12 @@ sidx_status sidx_accel_intersect_n(const sidx_accel *a, const sidx_ray *rays, si
     if (!a || (n && (!rays || !hits))) return SIDX_ERR_INVALID_ARG;
     sidx_query qq = q ? *q : default_query;
     const uint32_t base = qq.ray_id;
+    sidx_status st = SIDX_OK;
     for (size_t i = 0; i < n; ++i) {
         qq.ray_id = base + (uint32_t)i;
-        sidx_accel_intersect(a, &rays[i], &qq, &hits[i]);
+        if (sidx_accel_intersect(a, &rays[i], &qq, &hits[i]) != SIDX_OK) st = SIDX_ERR_NOMEM;
     }
-    return SIDX_OK;
+    return st;
 }
 
 sidx_status sidx_accel_stats_get(const sidx_accel *a, sidx_accel_stats *s)

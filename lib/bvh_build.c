@@ -42,7 +42,9 @@
  * Nodes are written in depth-first pre-order straight into their final
  * slots, so the id in every BUILD_* event is the node's index in the final
  * array and its left child is always id + 1. */
+#include <sched.h>
 #include "bvh_internal.h"
+#include "simd_isa.h"
 
 /* Events carry the registered name ("bvh-sweep", ...). */
 #define SIDX_STRUCTURE_NAME (B->a->name)
@@ -74,7 +76,21 @@ typedef struct builder {
     float *right_area;       /* sweep: suffix areas, n; binned: per bin */
     sidx_aabb *bin_box;      /* binned: per bin */
     uint32_t *bin_count;
+    /* lazy trees: nodes of at most lazy_max primitives (and more than a
+     * leaf's) are left unbuilt, one record each in lazy->recs (up to
+     * lazy_cap); 0 = build everything.  An expansion builds node
+     * expand_root's subtree, writing that node itself into root_tmp (it is
+     * published last) and skipping its BUILD_NODE event (sent with the
+     * build); UINT32_MAX otherwise */
+    uint32_t lazy_max, lazy_cap, expand_root, nodes_made;
+    bvh_lazy *lazy;
+    bvh_node root_tmp;
 } builder;
+
+static SIDX_INLINE bvh_node *node_at(builder *B, uint32_t ni)
+{
+    return ni == B->expand_root ? &B->root_tmp : &B->nodes[ni];
+}
 
 static inline float sah(const builder *B, float al, uint32_t nl, float ar, uint32_t nr, float inv_area)
 {
@@ -319,6 +335,7 @@ static SIDX_NOINLINE void split_middle(builder *B, uint32_t node, uint32_t first
 static uint32_t build_node(builder *B, uint32_t first, uint32_t count, uint32_t parent, uint32_t depth)
 {
     const uint32_t ni = B->num_nodes++;
+    B->nodes_made++;
     sidx_aabb bb = sidx_aabb_empty(), cb = sidx_aabb_empty();
     for (uint32_t i = 0; i < count; ++i) {
         const uint32_t id = B->idx[first + i];
@@ -326,13 +343,33 @@ static uint32_t build_node(builder *B, uint32_t first, uint32_t count, uint32_t 
         cb = sidx_aabb_grow(cb, B->cent[id]);
     }
     {
-        bvh_node *n = &B->nodes[ni];
+        bvh_node *n = node_at(B, ni);
         n->bmin[0] = bb.min.x; n->bmin[1] = bb.min.y; n->bmin[2] = bb.min.z;
         n->bmax[0] = bb.max.x; n->bmax[1] = bb.max.y; n->bmax[2] = bb.max.z;
     }
     if (depth > B->max_depth_seen) B->max_depth_seen = depth;
-    SIDX_EMIT(1, B->hook, SIDX_EV_BUILD_NODE, e_.node = ni; e_.parent = parent; e_.depth = depth;
-              e_.bounds = bb; e_.count = count);
+    if (ni != B->expand_root)
+        SIDX_EMIT(1, B->hook, SIDX_EV_BUILD_NODE, e_.node = ni; e_.parent = parent; e_.depth = depth;
+                  e_.bounds = bb; e_.count = count);
+    if (B->lazy_max && count <= B->lazy_max && count > B->leaf_size && B->lazy->num_recs < B->lazy_cap) {
+        /* Lazy: the node waits for a ray, holding idx[first, first + count)
+         * in the order this build has them now, and the slots its subtree
+         * may need (bvh_internal.h, bvh_lazy). */
+        const uint32_t r = B->lazy->num_recs++;
+        bvh_lazy_rec *rec = &B->lazy->recs[r];
+        rec->state = BVH_LAZY_UNBUILT;
+        rec->node = ni;
+        rec->parent = parent;
+        rec->depth = depth;
+        rec->first = first;
+        rec->count = count;
+        B->lazy->unbuilt++;
+        B->lazy->unbuilt_prims += count;
+        B->nodes[ni].left_or_first = first;
+        B->nodes[ni].count_axis = BVH_LAZY_MARK | r;
+        B->num_nodes += 2u * count - 2u;
+        return ni;
+    }
 
     const float area = sidx_aabb_area(bb);
     /* A zero-area node (all triangles degenerate and coincident) makes
@@ -374,8 +411,8 @@ static uint32_t build_node(builder *B, uint32_t first, uint32_t count, uint32_t 
     }
 
     if (reason != SIDX_LEAF_NONE) {
-        B->nodes[ni].left_or_first = first;
-        B->nodes[ni].count_axis = count;
+        node_at(B, ni)->left_or_first = first;
+        node_at(B, ni)->count_axis = count;
         B->num_leaves++;
         SIDX_EMIT(1, B->hook, SIDX_EV_BUILD_LEAF, e_.node = ni; e_.depth = depth; e_.count = count;
                   e_.cost = leaf_cost; e_.reason = reason; e_.bounds = bb; e_.prims = B->idx + first);
@@ -385,8 +422,8 @@ static uint32_t build_node(builder *B, uint32_t first, uint32_t count, uint32_t 
               e_.cost = sp.cost; e_.count = sp.nl; e_.aux = count - sp.nl);
     build_node(B, first, sp.nl, ni, depth + 1); /* lands at ni + 1 */
     const uint32_t right = build_node(B, first + sp.nl, count - sp.nl, ni, depth + 1);
-    B->nodes[ni].left_or_first = right;
-    B->nodes[ni].count_axis = (uint32_t)(sp.axis < 0 ? 0 : sp.axis) << BVH_AXIS_SHIFT;
+    node_at(B, ni)->left_or_first = right;
+    node_at(B, ni)->count_axis = (uint32_t)(sp.axis < 0 ? 0 : sp.axis) << BVH_AXIS_SHIFT;
     return ni;
 }
 
@@ -415,6 +452,12 @@ static void fill_tris(const sidx_mesh *m, bvh *b)
 static void bvh_free(const sidx_accel *a, bvh *b)
 {
     if (!b) return;
+    if (b->lazy) {
+        sidx__free(a, b->lazy->recs);
+        sidx__free(a, b->lazy->pbox);
+        sidx__free(a, b->lazy->cent);
+        sidx__free(a, b->lazy);
+    }
     sidx__free(a, b->nodes_mem);
     sidx__free(a, b->prim_id);
     sidx__free(a, b->tris);
@@ -444,7 +487,10 @@ static sidx_status build_tree(sidx_accel *a, sidx_error *err)
     if (n > BVH_COUNT_MASK)
         return sidx__fail(err, SIDX_ERR_LIMIT, "%s: %u triangles exceed the BVH's limit of %u", a->name, n,
                           BVH_COUNT_MASK);
-    if (B->kind == BVH_BINNED && !(B->hook && B->hook->fn) && n > 0) {
+    B->expand_root = UINT32_MAX;
+    const uint32_t lazy_max = a->opt.lazy == 1 ? SIDX_LAZY_DEFAULT : a->opt.lazy;
+    const int lazy = lazy_max > 0 && B->kind != BVH_OBB && !(a->opt.optimize_ms > 0.0f) && n > 0;
+    if (B->kind == BVH_BINNED && !(B->hook && B->hook->fn) && n > 0 && !lazy) {
         /* Untraced "bvh" builds, on one thread or several, go through
          * parallel.c: the same decisions on packed references that stream
          * (Wald 2007), faster on one thread than this recursion over idx[]
@@ -466,7 +512,23 @@ static sidx_status build_tree(sidx_accel *a, sidx_error *err)
     B->pbox = pbox;
     B->cent = cent;
     b->prim_id = B->idx = sidx__alloc(a, n, sizeof *B->idx);
-    B->nodes = sidx__alloc(a, 2u * (size_t)n - 1u, sizeof *B->nodes); /* a binary tree over n leaves or fewer */
+    if (lazy) {
+        /* Every slot a subtree may take, in the final aligned array: the
+         * expansions build in place (bvh_lazy). */
+        b->nodes_mem = sidx__alloc(a, 2u * (size_t)n + 1u, sizeof *b->nodes);
+        b->lazy = sidx__calloc(a, 1, sizeof *b->lazy);
+        B->lazy_cap = n / (B->leaf_size + 1u) + 1u;
+        if (B->lazy_cap > BVH_LAZY_MAX_RECS) B->lazy_cap = BVH_LAZY_MAX_RECS;
+        if (!b->nodes_mem || !b->lazy) goto fail;
+        b->lazy->recs = sidx__alloc(a, B->lazy_cap, sizeof *b->lazy->recs);
+        if (!b->lazy->recs) goto fail;
+        b->nodes = (bvh_node *)(void *)(((uintptr_t)b->nodes_mem + 63u) & ~(uintptr_t)63u);
+        B->nodes = b->nodes;
+        B->lazy = b->lazy;
+        B->lazy_max = lazy_max;
+    } else {
+        B->nodes = sidx__alloc(a, 2u * (size_t)n - 1u, sizeof *B->nodes); /* a binary tree over n leaves or fewer */
+    }
     if (!B->idx || !B->nodes) goto fail;
     for (uint32_t i = 0; i < n; ++i) B->idx[i] = i;
     if (B->kind == BVH_SWEEP || B->kind == BVH_EVERYB || B->kind == BVH_MEDIAN || B->kind == BVH_MIDDLE) {
@@ -487,6 +549,25 @@ static sidx_status build_tree(sidx_accel *a, sidx_error *err)
     }
 
     build_node(B, 0, n, UINT32_MAX, 0);
+
+    if (lazy) {
+        b->tris = sidx__alloc(a, n, sizeof *b->tris);
+        if (!b->tris) goto fail;
+        b->num_nodes = B->num_nodes; /* the slots in use or reserved */
+        b->num_leaves = B->num_leaves;
+        b->max_depth = B->max_depth_seen;
+        b->lazy->built_nodes = B->nodes_made;
+        b->lazy->built_leaves = B->num_leaves;
+        b->lazy->max_depth = B->max_depth_seen;
+        b->lazy->pbox = pbox;
+        b->lazy->cent = cent;
+        pbox = NULL;
+        cent = NULL;
+        fill_tris(m, b);
+        B->nodes = NULL; /* b's own */
+        a->lazy = 1;
+        goto done;
+    }
 
     /* Keep only the nodes used (typically ~n/2 of the 2n − 1 reserved),
      * 64-byte aligned: malloc's 16-byte alignment would let every other
@@ -518,7 +599,7 @@ done:
     return SIDX_OK;
 
 fail:
-    sidx__free(a, B->nodes);
+    if (!lazy) sidx__free(a, B->nodes); /* lazy: b's nodes_mem */
     sidx__free(a, B->keys[0]);
     sidx__free(a, B->keys[1]);
     sidx__free(a, B->right_area);
@@ -530,6 +611,101 @@ fail:
     a->impl = NULL;
     if (s == SIDX_ERR_NOMEM) return sidx__fail(err, s, "%s: out of memory", a->name);
     return s;
+}
+
+/* ---- lazy expansion (bvh_internal.h, bvh_lazy) ------------------------------ */
+
+static void atomic_max_u32(uint32_t *p, uint32_t v)
+{
+    uint32_t cur = __atomic_load_n(p, __ATOMIC_RELAXED);
+    while (cur < v && !__atomic_compare_exchange_n(p, &cur, v, 1, __ATOMIC_RELAXED, __ATOMIC_RELAXED)) {
+    }
+}
+
+/* Builds record rec's subtree in its reserved slots with the build's own
+ * recursion and parameters, then publishes it.  Returns the node's new
+ * count_axis, or BVH_LAZY_FAILED when the scratch memory could not be
+ * had: every allocation comes first, so nothing is written then. */
+static uint32_t expand_build(const sidx_accel *a, bvh *b, const bvh_lazy_rec *rec, const sidx_hook *hook)
+{
+    builder Bs;
+    builder *B = &Bs;
+    memset(B, 0, sizeof *B);
+    B->a = a;
+    B->hook = hook;
+    B->kind = (a->variant >= 0 && a->variant < BVH_BUILDER_COUNT) ? (bvh_builder)a->variant : BVH_BINNED;
+    const bvh_par_params pp = bvh_params(a);
+    B->leaf_size = pp.leaf_size;
+    B->max_leaf = pp.max_leaf;
+    B->max_depth = pp.max_depth;
+    B->bins = pp.bins;
+    B->every_b = a->opt.every_b ? a->opt.every_b : 32u;
+    B->c_trav = pp.c_trav;
+    B->c_tri = pp.c_tri;
+    B->pbox = b->lazy->pbox;
+    B->cent = b->lazy->cent;
+    B->idx = b->prim_id;
+    B->nodes = b->nodes;
+    B->expand_root = rec->node;
+    B->num_nodes = rec->node;
+    const uint32_t c = rec->count;
+    int ok;
+    if (B->kind == BVH_BINNED) {
+        B->keys[0] = sidx__alloc(a, c, sizeof(sweep_key));
+        B->bin_box = sidx__alloc(a, B->bins, sizeof *B->bin_box);
+        B->bin_count = sidx__alloc(a, B->bins, sizeof *B->bin_count);
+        B->right_area = sidx__alloc(a, B->bins, sizeof(float));
+        ok = B->keys[0] && B->bin_box && B->bin_count && B->right_area;
+    } else {
+        B->keys[0] = sidx__alloc(a, c, sizeof(sweep_key));
+        B->keys[1] = sidx__alloc(a, c, sizeof(sweep_key));
+        B->right_area = sidx__alloc(a, c, sizeof(float));
+        ok = B->keys[0] && B->keys[1] && B->right_area;
+    }
+    if (ok) {
+        SIDX_EMIT(1, hook, SIDX_EV_BUILD_LAZY_EXPAND, e_.node = rec->node; e_.parent = rec->parent;
+                  e_.depth = rec->depth; e_.count = c; e_.bounds = bvh_node_box(&b->nodes[rec->node]));
+        build_node(B, rec->first, c, rec->parent, rec->depth);
+    }
+    sidx__free(a, B->keys[0]);
+    sidx__free(a, B->keys[1]);
+    sidx__free(a, B->right_area);
+    sidx__free(a, B->bin_box);
+    sidx__free(a, B->bin_count);
+    if (!ok) return BVH_LAZY_FAILED;
+    for (uint32_t i = rec->first; i < rec->first + c; ++i)
+        for (int k = 0; k < 3; ++k) b->tris[i].v[k] = sidx_mesh_vertex(a->mesh, b->prim_id[i], k);
+    bvh_lazy *L = b->lazy;
+    __atomic_fetch_add(&L->built_nodes, B->nodes_made - 1u, __ATOMIC_RELAXED); /* the node itself was counted */
+    __atomic_fetch_add(&L->built_leaves, B->num_leaves, __ATOMIC_RELAXED);
+    __atomic_fetch_sub(&L->unbuilt, 1u, __ATOMIC_RELAXED);
+    __atomic_fetch_sub(&L->unbuilt_prims, (uint64_t)c, __ATOMIC_RELAXED);
+    atomic_max_u32(&L->max_depth, B->max_depth_seen);
+    bvh_node *n = &b->nodes[rec->node];
+    __atomic_store_n(&n->left_or_first, B->root_tmp.left_or_first, __ATOMIC_RELAXED);
+    __atomic_store_n(&n->count_axis, B->root_tmp.count_axis, __ATOMIC_RELEASE);
+    return B->root_tmp.count_axis;
+}
+
+uint32_t sidx__bvh_lazy_expand(const sidx_accel *a, uint32_t r, const sidx_hook *hook)
+{
+    bvh *b = a->impl;
+    bvh_lazy_rec *rec = &b->lazy->recs[r];
+    for (unsigned spins = 0;; ++spins) {
+        uint32_t st = __atomic_load_n(&rec->state, __ATOMIC_ACQUIRE);
+        if (st == BVH_LAZY_BUILT) return __atomic_load_n(&b->nodes[rec->node].count_axis, __ATOMIC_ACQUIRE);
+        if (st == BVH_LAZY_UNBUILT) {
+            if (!__atomic_compare_exchange_n(&rec->state, &st, BVH_LAZY_BUSY, 0, __ATOMIC_ACQ_REL, __ATOMIC_ACQUIRE))
+                continue;
+            const uint32_t ca = expand_build(a, b, rec, hook);
+            __atomic_store_n(&rec->state, ca == BVH_LAZY_FAILED ? BVH_LAZY_UNBUILT : BVH_LAZY_BUILT, __ATOMIC_RELEASE);
+            if (ca == BVH_LAZY_FAILED) sidx__lazy_note_failure();
+            return ca;
+        }
+        /* BUSY: another thread is building it; wait (bvh_lazy) */
+        if (spins < 64) SIDX_SPIN_PAUSE();
+        else sched_yield();
+    }
 }
 
 static void bvh_destroy(sidx_accel *a)
@@ -545,12 +721,23 @@ static void bvh_stats(const sidx_accel *a, sidx_accel_stats *s)
     s->nodes = b->num_nodes;
     s->leaves = b->num_leaves;
     s->max_depth = b->max_depth;
+    if (b->lazy) {
+        bvh_lazy *L = b->lazy;
+        s->nodes = __atomic_load_n(&L->built_nodes, __ATOMIC_RELAXED);
+        s->leaves = __atomic_load_n(&L->built_leaves, __ATOMIC_RELAXED);
+        s->max_depth = __atomic_load_n(&L->max_depth, __ATOMIC_RELAXED);
+        s->unbuilt = __atomic_load_n(&L->unbuilt, __ATOMIC_RELAXED);
+        s->unbuilt_prims = __atomic_load_n(&L->unbuilt_prims, __ATOMIC_RELAXED);
+    }
     s->prim_refs = b->num_prims;
     s->bytes = sizeof *b + ((size_t)b->num_nodes + 2u) * sizeof *b->nodes +
                (size_t)b->num_prims * (sizeof *b->prim_id + sizeof *b->tris) +
                (b->obbs ? (size_t)b->num_nodes * sizeof *b->obbs : 0);
-    s->sah_cost = b->sah_cost;
-    s->mean_leaf_prims = b->num_leaves ? (double)b->num_prims / b->num_leaves : 0.0;
+    if (b->lazy) /* every slot reserved, the records, the boxes and centroids kept for the expansions */
+        s->bytes += sizeof *b->lazy + (size_t)b->lazy->num_recs * sizeof *b->lazy->recs +
+                    (size_t)b->num_prims * (sizeof *b->lazy->pbox + sizeof *b->lazy->cent);
+    s->sah_cost = b->sah_cost; /* lazy: 0 (not applicable until every node is built) */
+    s->mean_leaf_prims = s->leaves ? (double)(b->num_prims - s->unbuilt_prims) / s->leaves : 0.0;
     s->empty_leaves = 0; /* object partitioning: every leaf holds at least one triangle */
 }
 
@@ -559,8 +746,8 @@ static void bvh_stats(const sidx_accel *a, sidx_accel_stats *s)
  * node before the node itself: O(nodes), no recursion, no allocation. */
 static sidx_status bvh_refit(sidx_accel *a, sidx_error *err)
 {
-    (void)err;
     bvh *b = a->impl;
+    if (b && b->lazy) return sidx__fail(err, SIDX_ERR_UNSUPPORTED, "%s: a lazy tree cannot be refitted; rebuild it", a->name);
     if (!b || b->num_nodes == 0) return SIDX_OK;
     fill_tris(a->mesh, b);
     for (uint32_t i = b->num_nodes; i-- > 0;) {
@@ -587,7 +774,7 @@ static sidx_status bvh_refit(sidx_accel *a, sidx_error *err)
 static sidx_status bvh_build(sidx_accel *a, sidx_error *err)
 {
     const sidx_status s = build_tree(a, err);
-    if (s == SIDX_OK) sidx__bvh_optimize(a, a->impl);
+    if (s == SIDX_OK && !a->lazy) sidx__bvh_optimize(a, a->impl);
     if (s == SIDX_OK) sidx__bvh_pick_walks(a->impl);
     return s;
 }

@@ -86,6 +86,53 @@ typedef enum bvh_walk_kind {
     BVH_WALK_COUNT
 } bvh_walk_kind;
 
+/* Lazy trees (opt.lazy).  An unbuilt node keeps its box and holds
+ * count_axis = BVH_LAZY_MARK | r, r the index of its record below (axis 3
+ * never occurs on an inner node, and a leaf's count stays below 2^30, so
+ * the mark is unambiguous).  The node reserves the 2·count − 2 slots after
+ * it in nodes[] (a binary tree over count primitives has at most 2·count − 1
+ * nodes) and owns prim_id[first, first + count): its expansion builds the
+ * subtree there with the same builder on the same, identically ordered,
+ * primitives the eager build would have at that node, so the tree is the
+ * eager one, node for node, at other indices.
+ *
+ * Publication: the expanding thread writes the subtree's slots, the
+ * leaves' prim_id and tris, then the node's left_or_first (relaxed) and
+ * count_axis (release), then its record's state (release).  A walk reads
+ * count_axis with acquire, so what it reads below a built node was written
+ * before.  No lock on built paths: the only cost is that acquire load
+ * (a plain load on x86) in the walk copies for lazy trees.
+ *
+ * One thread expands a node (compare-and-swap of its state from UNBUILT
+ * to BUSY); another that arrives meanwhile waits for it (spinning, then
+ * yielding) rather than building a private copy: a subtree below the
+ * threshold takes well under a millisecond to build, and a private copy
+ * would need memory of its own for every waiting thread.  If the memory
+ * for the expansion's scratch cannot be had, nothing has been written
+ * (every allocation comes before the first write), the state returns to
+ * UNBUILT and the walk skips the node and reports SIDX_ERR_NOMEM through
+ * the query; a later ray tries again. */
+#define BVH_LAZY_MARK 0xC0000000u
+#define BVH_LAZY_FAILED 0xFFFFFFFFu  /* what sidx__bvh_lazy_expand returns when it could not build */
+#define BVH_LAZY_MAX_RECS 0x3FFFFFFEu
+enum { BVH_LAZY_UNBUILT = 0, BVH_LAZY_BUSY = 1, BVH_LAZY_BUILT = 2 };
+
+typedef struct bvh_lazy_rec {
+    uint32_t state;                 /* BVH_LAZY_*, atomic */
+    uint32_t node, parent, depth;   /* the unbuilt node, its parent and depth (for the events) */
+    uint32_t first, count;          /* its primitives: prim_id[first, first + count) */
+} bvh_lazy_rec;
+
+typedef struct bvh_lazy {
+    bvh_lazy_rec *recs;
+    uint32_t num_recs;
+    sidx_aabb *pbox;                /* the build's per-triangle boxes and centroids, kept for the expansions */
+    sidx_vec3 *cent;
+    /* what is built so far; atomic (expansions add, stats read) */
+    uint32_t built_nodes, built_leaves, max_depth, unbuilt;
+    uint64_t unbuilt_prims;
+} bvh_lazy;
+
 typedef struct bvh {
     bvh_node *nodes;        /* 64-byte aligned inside nodes_mem */
     void *nodes_mem;
@@ -99,7 +146,24 @@ typedef struct bvh {
     double sah_cost;
     float obb_pad;          /* absolute padding of the oriented slabs (bvh-obb) */
     const sidx__walk_table *walks; /* [BVH_WALK_COUNT]: the copies for its box kind (sidx__bvh_pick_walks) */
+    bvh_lazy *lazy;         /* lazy trees only; NULL when every node is built at once */
 } bvh;
+
+/* bvh_build.c: builds the subtree of lazy record r (see bvh_lazy) or waits
+ * for the thread building it; returns the node's count_axis once built,
+ * BVH_LAZY_FAILED when the memory for it could not be had.  Build events
+ * go to hook (the query's; NULL = none). */
+uint32_t sidx__bvh_lazy_expand(const sidx_accel *a, uint32_t r, const sidx_hook *hook);
+
+/* The count_axis of node n as a walk over a lazy tree must read it: with
+ * acquire, expanding the node first when it is unbuilt (BVH_LAZY_FAILED
+ * when that fails; the query then reports it, sidx__lazy_note_failure). */
+static SIDX_INLINE uint32_t bvh_lazy_count_axis(const sidx_accel *a, const bvh_node *n, const sidx_hook *hook)
+{
+    const uint32_t ca = __atomic_load_n(&n->count_axis, __ATOMIC_ACQUIRE);
+    if (SIDX_LIKELY(ca < BVH_LAZY_MARK)) return ca;
+    return sidx__bvh_lazy_expand(a, ca & BVH_COUNT_MASK, hook);
+}
 
 /* bvh_traverse.c: the vtable's entries, and the choice of walks the
  * build makes once its tree (and whether it has oriented boxes) is final. */

@@ -102,8 +102,17 @@ typedef struct walk {
     bvh_ray br;
     float scale, best;
     uint32_t tri, visited; /* the best hit so far: its leaf copy's index */
-    int anyhit, obb;
+    int anyhit, obb, lazy;
 } walk;
+
+/* A node's count_axis as a walk reads it: on a lazy tree with acquire,
+ * built first if a ray has not entered it yet (bvh_internal.h, bvh_lazy);
+ * BVH_LAZY_FAILED when that build could not get its memory. */
+static SIDX_INLINE uint32_t walk_count_axis(const sidx_accel *a, const bvh_node *n, const sidx_query *q,
+                                            const int lazy, const int traced)
+{
+    return lazy ? bvh_lazy_count_axis(a, n, traced ? q->hook : NULL) : n->count_axis;
+}
 
 static SIDX_INLINE int walk_box(walk *w, uint32_t i, float *t_near, float *t_far)
 {
@@ -141,7 +150,9 @@ static SIDX_INLINE int naive_body(walk *w, uint32_t node, uint32_t depth, const 
     SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id; e_.node = node; e_.depth = depth;
               e_.t_near = t_near; e_.t_far = t_far);
     const bvh_node *n = &b->nodes[node];
-    if (bvh_is_leaf(n)) return walk_leaf(w, n, traced);
+    const uint32_t ca = walk_count_axis(a, n, q, w->lazy, traced);
+    if (ca == BVH_LAZY_FAILED) return 0; /* unbuilt for want of memory: skipped, the query says so */
+    if (ca & BVH_COUNT_MASK) return walk_leaf(w, n, traced);
     const uint32_t right = n->left_or_first;
     if (traced ? naive_rec1(w, node + 1, depth + 1) : naive_rec0(w, node + 1, depth + 1)) return 1;
     return traced ? naive_rec1(w, right, depth + 1) : naive_rec0(w, right, depth + 1);
@@ -161,7 +172,9 @@ static SIDX_INLINE int ordered_body(walk *w, uint32_t node, uint32_t depth, floa
     SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id; e_.node = node; e_.depth = depth;
               e_.t_near = t_near; e_.t_far = t_far);
     const bvh_node *n = &b->nodes[node];
-    if (bvh_is_leaf(n)) return walk_leaf(w, n, traced);
+    const uint32_t ca = walk_count_axis(a, n, q, w->lazy, traced);
+    if (ca == BVH_LAZY_FAILED) return 0; /* unbuilt for want of memory: skipped, the query says so */
+    if (ca & BVH_COUNT_MASK) return walk_leaf(w, n, traced);
     /* left and right child until sorted: then the nearer and the farther */
     uint32_t near_child = node + 1, far_child = n->left_or_first;
     float near_t_near, near_t_far, far_t_near, far_t_far;
@@ -209,6 +222,7 @@ static SIDX_INLINE int recursive_walk(const sidx_accel *a, const sidx_ray *r, co
     w.visited = 0;
     w.anyhit = anyhit;
     w.obb = b->obbs != NULL;
+    w.lazy = b->lazy != NULL;
     int found = 0, missed_root = b->num_nodes == 0;
     if (!missed_root) {
         if (ordered) {
@@ -244,7 +258,7 @@ static SIDX_INLINE int recursive_walk(const sidx_accel *a, const sidx_ray *r, co
  * copy of its own, so the walk for plain queries carries no u, v and no
  * triangle index ("no u/v or normals unless asked"). */
 static SIDX_INLINE int stack_walk(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit,
-                                  const int traced, const int anyhit, const int obb, const int attrs)
+                                  const int traced, const int anyhit, const int obb, const int attrs, const int lazy)
 {
     const bvh *b = a->impl;
     const bvh_node *nodes = b->nodes;
@@ -278,7 +292,10 @@ static SIDX_INLINE int stack_walk(const sidx_accel *a, const sidx_ray *r, const 
         SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id; e_.node = node; e_.depth = depth;
                   e_.t_near = t_near; e_.t_far = t_far);
         const bvh_node *n = &nodes[node];
-        if (bvh_is_leaf(n)) {
+        const uint32_t ca = walk_count_axis(a, n, q, lazy, traced);
+        if (lazy && SIDX_UNLIKELY(ca == BVH_LAZY_FAILED)) {
+            /* unbuilt for want of memory: skipped, the query says so */
+        } else if (ca & BVH_COUNT_MASK) {
             if (leaf_test(a, b, n, r, q, &best, &prim, attrs, anyhit, traced)) {
                 SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id;
                           e_.reason = SIDX_TERM_ANY_HIT; e_.count = visited);
@@ -377,15 +394,15 @@ static SIDX_INLINE int stack_walk(const sidx_accel *a, const sidx_ray *r, const 
     {                                                                                                           \
         return recursive_walk(a, r, q, NULL, 1, ordered_, traced_);                                             \
     }
-#define STACK_INTERSECT(name_, traced_, obb_, attrs_)                                                          \
+#define STACK_INTERSECT(name_, traced_, obb_, attrs_, lazy_)                                                   \
     static void name_(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)             \
     {                                                                                                           \
-        (void)stack_walk(a, r, q, hit, traced_, 0, obb_, attrs_);                                               \
+        (void)stack_walk(a, r, q, hit, traced_, 0, obb_, attrs_, lazy_);                                        \
     }
-#define STACK_OCCLUDED(name_, traced_, obb_)                                                                   \
+#define STACK_OCCLUDED(name_, traced_, obb_, lazy_)                                                            \
     static int name_(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)                              \
     {                                                                                                           \
-        return stack_walk(a, r, q, NULL, traced_, 1, obb_, 0);                                                  \
+        return stack_walk(a, r, q, NULL, traced_, 1, obb_, 0, lazy_);                                           \
     }
 
 /* The recursive walks test the box kind per node (w.obb): teaching paths,
@@ -399,19 +416,27 @@ RECURSIVE_INTERSECT(ordered_intersect_traced, 1, 1)
 RECURSIVE_OCCLUDED(ordered_occluded, 1, 0)
 RECURSIVE_OCCLUDED(ordered_occluded_traced, 1, 1)
 
-STACK_INTERSECT(stack_intersect, 0, 0, 0) /* the hot path: plain closest hit on AABBs */
-STACK_INTERSECT(stack_intersect_traced, 1, 0, 0)
-STACK_INTERSECT(stack_intersect_attrs, 0, 0, 1)
-STACK_INTERSECT(stack_intersect_attrs_traced, 1, 0, 1)
-STACK_OCCLUDED(stack_occluded, 0, 0)
-STACK_OCCLUDED(stack_occluded_traced, 1, 0)
+STACK_INTERSECT(stack_intersect, 0, 0, 0, 0) /* the hot path: plain closest hit on AABBs */
+STACK_INTERSECT(stack_intersect_traced, 1, 0, 0, 0)
+STACK_INTERSECT(stack_intersect_attrs, 0, 0, 1, 0)
+STACK_INTERSECT(stack_intersect_attrs_traced, 1, 0, 1, 0)
+STACK_OCCLUDED(stack_occluded, 0, 0, 0)
+STACK_OCCLUDED(stack_occluded_traced, 1, 0, 0)
 
-STACK_INTERSECT(obb_stack_intersect, 0, 1, 0)
-STACK_INTERSECT(obb_stack_intersect_traced, 1, 1, 0)
-STACK_INTERSECT(obb_stack_intersect_attrs, 0, 1, 1)
-STACK_INTERSECT(obb_stack_intersect_attrs_traced, 1, 1, 1)
-STACK_OCCLUDED(obb_stack_occluded, 0, 1)
-STACK_OCCLUDED(obb_stack_occluded_traced, 1, 1)
+STACK_INTERSECT(obb_stack_intersect, 0, 1, 0, 0)
+STACK_INTERSECT(obb_stack_intersect_traced, 1, 1, 0, 0)
+STACK_INTERSECT(obb_stack_intersect_attrs, 0, 1, 1, 0)
+STACK_INTERSECT(obb_stack_intersect_attrs_traced, 1, 1, 1, 0)
+STACK_OCCLUDED(obb_stack_occluded, 0, 1, 0)
+STACK_OCCLUDED(obb_stack_occluded_traced, 1, 1, 0)
+
+/* lazy trees (AABBs only): every node's count_axis read with acquire */
+STACK_INTERSECT(lazy_stack_intersect, 0, 0, 0, 1)
+STACK_INTERSECT(lazy_stack_intersect_traced, 1, 0, 0, 1)
+STACK_INTERSECT(lazy_stack_intersect_attrs, 0, 0, 1, 1)
+STACK_INTERSECT(lazy_stack_intersect_attrs_traced, 1, 0, 1, 1)
+STACK_OCCLUDED(lazy_stack_occluded, 0, 0, 1)
+STACK_OCCLUDED(lazy_stack_occluded_traced, 1, 0, 1)
 
 #undef RECURSIVE_INTERSECT
 #undef RECURSIVE_OCCLUDED
@@ -435,7 +460,16 @@ static const sidx__walk_table obb_walks[BVH_WALK_COUNT] = {
                               obb_stack_occluded_traced},
 };
 
-void sidx__bvh_pick_walks(bvh *b) { b->walks = b->obbs ? obb_walks : aabb_walks; }
+static const sidx__walk_table lazy_walks[BVH_WALK_COUNT] = {
+    [BVH_WALK_NAIVE] = {naive_intersect, naive_intersect_traced, naive_occluded, naive_occluded_traced},
+    [BVH_WALK_ORDERED] = {ordered_intersect, ordered_intersect_traced, ordered_occluded, ordered_occluded_traced},
+    [BVH_WALK_STACK] = {lazy_stack_intersect, lazy_stack_intersect_traced, lazy_stack_occluded,
+                        lazy_stack_occluded_traced},
+    [BVH_WALK_STACK_ATTRS] = {lazy_stack_intersect_attrs, lazy_stack_intersect_attrs_traced, lazy_stack_occluded,
+                              lazy_stack_occluded_traced},
+};
+
+void sidx__bvh_pick_walks(bvh *b) { b->walks = b->obbs ? obb_walks : b->lazy ? lazy_walks : aabb_walks; }
 
 /* The table for this query's traversal (anything but naive and ordered
  * is the stack walk) and, for the stack walk, for whether it asks for u,

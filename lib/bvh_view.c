@@ -18,6 +18,8 @@ static sidx_status bvh_view(const sidx_accel *a, const void *p, const void *q, s
     if (!a || !p || !q) return sidx__fail(err, SIDX_ERR_INVALID_ARG, "%s: NULL argument", fn);
     if (a->vt != &sidx__bvh_vtable || !a->impl)
         return sidx__fail(err, SIDX_ERR_INVALID_ARG, "%s: '%s' is not a binary BVH", fn, a->name ? a->name : "?");
+    if (((const bvh *)a->impl)->lazy)
+        return sidx__fail(err, SIDX_ERR_UNSUPPORTED, "%s: a lazy tree's nodes change as rays enter them", fn);
     *out = a->impl;
     return SIDX_OK;
 }

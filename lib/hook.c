@@ -32,7 +32,7 @@ static const char *const event_names[SIDX_EV_COUNT] = {
     "build_begin", "build_node", "build_candidate", "build_split", "build_leaf", "build_end",
     "ray_begin", "node_enter", "box_test", "stack_push", "stack_pop", "prim_test",
     "hit_update", "mailbox_hit", "terminate", "ray_end", "note", "build_merge", "build_expand",
-    "build_reinsert",
+    "build_reinsert", "build_lazy_expand",
 };
 
 const char *sidx_event_type_name(sidx_event_type t)

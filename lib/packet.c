@@ -383,7 +383,8 @@ static int packet_capable(const sidx_accel *a)
 {
     if (a->vt != &sidx__bvh_vtable) return 0;
     const bvh *b = a->impl;
-    return b && b->obbs == NULL;
+    /* a lazy tree is traced ray by ray: its walk builds what the rays enter */
+    return b && b->obbs == NULL && b->lazy == NULL;
 }
 
 /* Checked per call (a getenv and a cached cpuid bit), so SIDX_SIMD=scalar
@@ -425,16 +426,17 @@ static sidx_status run_packet(const sidx_accel *a, const sidx_ray *rays, uint32_
     if (o.mode == SIDX_PACKET_SINGLE || !packet_capable(a) || n == 0 || !pkt_setup(&pkt, rays, n, scale, anyhit)) {
         stats->single_packets++;
         const sidx_query q = {o.flags, SIDX_TRAVERSE_DEFAULT, NULL, 0};
+        sidx_status st = SIDX_OK; /* SIDX_ERR_NOMEM from a lazy tree's expansion */
         for (uint32_t i = 0; i < n; ++i) {
             if (anyhit) {
                 int occluded = 0;
-                sidx_accel_occluded(a, &rays[i], &q, &occluded);
+                if (sidx_accel_occluded(a, &rays[i], &q, &occluded) != SIDX_OK) st = SIDX_ERR_NOMEM;
                 occ[i] = (uint8_t)occluded;
             } else {
-                sidx_accel_intersect(a, &rays[i], &q, &hits[i]);
+                if (sidx_accel_intersect(a, &rays[i], &q, &hits[i]) != SIDX_OK) st = SIDX_ERR_NOMEM;
             }
         }
-        return SIDX_OK;
+        return st;
     }
     walkopt walk;
     walk.a = a;

@@ -86,6 +86,7 @@ typedef struct trace_job {
     sidx_hit *hits;
     uint8_t *occ;
     unsigned nt;
+    atomic_int nomem; /* a lazy tree's expansion failed for some ray */
     trace_share share[MAX_THREADS];
 } trace_job;
 
@@ -98,13 +99,15 @@ static void trace_share_drain(trace_job *j, trace_share *s, sidx_query *q, uint3
         const size_t e = s->end - b > SIDX_PARALLEL_BATCH ? b + SIDX_PARALLEL_BATCH : s->end;
         for (size_t i = b; i < e; ++i) {
             q->ray_id = base + (uint32_t)i;
+            sidx_status st;
             if (j->hits) {
-                sidx_accel_intersect(j->a, &j->rays[i], q, &j->hits[i]);
+                st = sidx_accel_intersect(j->a, &j->rays[i], q, &j->hits[i]);
             } else {
                 int o = 0;
-                sidx_accel_occluded(j->a, &j->rays[i], q, &o);
+                st = sidx_accel_occluded(j->a, &j->rays[i], q, &o);
                 j->occ[i] = (uint8_t)o;
             }
+            if (SIDX_UNLIKELY(st != SIDX_OK)) atomic_store_explicit(&j->nomem, 1, memory_order_relaxed);
         }
     }
 }
@@ -129,6 +132,7 @@ static sidx_status trace_common(const sidx_accel *a, const sidx_ray *rays, size_
     else memset(&j.q, 0, sizeof j.q);
     j.hits = hits;
     j.occ = occ;
+    atomic_init(&j.nomem, 0);
     if (threads == 0) threads = sidx_hardware_threads();
     /* A traced query stays on this thread: ordered events, no concurrent hook calls. */
     if (j.q.hook && j.q.hook->fn) threads = 1;
@@ -144,7 +148,7 @@ static sidx_status trace_common(const sidx_accel *a, const sidx_ray *rays, size_
         j.share[t].end = hi < n ? hi : n;
     }
     par_run(threads, trace_worker, &j);
-    return SIDX_OK;
+    return atomic_load_explicit(&j.nomem, memory_order_relaxed) ? SIDX_ERR_NOMEM : SIDX_OK;
 }
 
 sidx_status sidx_trace_parallel(const sidx_accel *a, const sidx_ray *rays, size_t n, const sidx_query *q,

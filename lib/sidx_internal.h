@@ -83,6 +83,9 @@ struct sidx_accel {
      * Bytes beside `variant`, in what would be padding, so that the labels
      * below do not make the structure bigger. */
     unsigned char fills_uv, fills_ng;
+    /* 1 for a lazy tree (opt.lazy in effect): the queries then say whether
+     * an expansion failed (sidx__lazy_note_failure). */
+    unsigned char lazy;
     const sidx_mesh *mesh;
     sidx_build_options opt;    /* copy; opt.hook is only valid during build */
     sidx_allocator alloc;      /* resolved allocator (never NULL fns) */
@@ -100,6 +103,12 @@ typedef sidx_status (*sidx__build_fn)(sidx_accel *a, void *arg, sidx_error *err)
 sidx_status sidx__accel_build_with(const char *name, const sidx_accel_vtable *vt, int variant, const sidx_mesh *mesh,
                                    const sidx_build_options *opt, sidx__build_fn build, void *arg, sidx_accel **out,
                                    sidx_error *err);
+/* Lazy trees: an expansion on this thread could not get its memory.  The
+ * query running on it (sidx_accel_intersect, _occluded) clears the mark
+ * before the walk and returns SIDX_ERR_NOMEM when it is set after (a
+ * per-thread mark, because the walks return no status). */
+void sidx__lazy_note_failure(void);
+
 /* Frees the labels (sidx_accel_destroy). */
 void sidx__labels_free(sidx_accel *a);
 

@@ -248,6 +248,7 @@ static unsigned indent_level(const sidx_event *ev)
     case SIDX_EV_BUILD_MERGE:
     case SIDX_EV_BUILD_EXPAND:
     case SIDX_EV_BUILD_REINSERT:
+    case SIDX_EV_BUILD_LAZY_EXPAND:
     case SIDX_EV_NODE_ENTER:
     case SIDX_EV_BOX_TEST:
     case SIDX_EV_NOTE:
@@ -427,6 +428,12 @@ static void format_event(sink_out *o, const sidx_event *ev, int show_bounds)
         out_puts(o, ") beside node ");
         out_id(o, ev->aux);
         out_printf(o, " at depth %" PRIu32 ": SAH -%g (pass %" PRIu32 ")", ev->depth, (double)ev->cost, ev->count);
+        if (show_bounds) { out_puts(o, "  "); out_box(o, &ev->bounds); }
+        break;
+    case SIDX_EV_BUILD_LAZY_EXPAND:
+        out_puts(o, "lazy expand node ");
+        out_id(o, ev->node);
+        out_printf(o, " at depth %" PRIu32 ": building its subtree of %" PRIu32 " prims", ev->depth, ev->count);
         if (show_bounds) { out_puts(o, "  "); out_box(o, &ev->bounds); }
         break;
     default:
@@ -649,6 +656,7 @@ static void json_event(sink_out *o, const sidx_event *ev, int unused)
         break;
     case SIDX_EV_BUILD_NODE:
     case SIDX_EV_BUILD_REINSERT:
+    case SIDX_EV_BUILD_LAZY_EXPAND:
         json_id(o, "node", ev->node);
         json_id(o, "parent", ev->parent);
         json_id(o, "depth", ev->depth);

@@ -1,7 +1,7 @@
 /* knobs.c — the build knobs on a command line.
  *
  * sidx-step, sidx-dot, sidx-view and the lessons (lessons/lesson.h) take
- * the same nine options, each filling one sidx_build_options field, so
+ * the same eleven options, each filling one sidx_build_options field, so
  * one table says what each flag fills and what values it takes.  The
  * ranges are those sidx_accel_build accepts, minus the 0 that means "the
  * structure's default" (leave the flag out for that). */
@@ -30,6 +30,8 @@ static const knob knobs[] = {
     {"--no-mailbox", KNOB_FLAG, offsetof(sidx_build_options, no_mailbox), 0},
     {"--empty-bonus", KNOB_FRACTION, offsetof(sidx_build_options, empty_bonus), 0},
     {"--optimize", KNOB_POSITIVE, offsetof(sidx_build_options, optimize_ms), 0},
+    {"--lazy", KNOB_FLAG, offsetof(sidx_build_options, lazy), 0},
+    {"--lazy-size", KNOB_COUNT, offsetof(sidx_build_options, lazy), 2},
 };
 #define NKNOBS (sizeof knobs / sizeof knobs[0])
 
@@ -55,7 +57,7 @@ int sidx_viz_build_knob(const char *flag, const char *value, sidx_build_options 
     char *field = (char *)bo + k->offset;
     if (k->kind == KNOB_FLAG) {
         const int on = 1;
-        memcpy(field, &on, sizeof on); /* the field's type is the knob's kind: int */
+        memcpy(field, &on, sizeof on); /* the field's type is the knob's kind: int (lazy: uint32_t, 1 the same) */
         return 1;
     }
     char *end = NULL;
@@ -90,5 +92,8 @@ const char *sidx_viz_build_knobs_help(void)
            "  --lambda X         grids: cells per triangle (the density of the resolution formula), X > 0\n"
            "  --no-mailbox       grids, kd-tree: no mailbox (a triangle in k cells is tested k times)\n"
            "  --empty-bonus X    kd-tree SAH bonus for cutting off empty space, 0 <= X < 1\n"
-           "  --optimize MS      BVHs: improve the binary tree by reinsertion for at most MS ms, MS > 0\n";
+           "  --optimize MS      BVHs: improve the binary tree by reinsertion for at most MS ms, MS > 0\n"
+           "  --lazy             bvh family: build subtrees of at most 1024 primitives when a ray first\n"
+           "                     enters them (build_lazy_expand events on the query's hook)\n"
+           "  --lazy-size N      the same, subtrees of at most N primitives (N >= 2)\n";
 }

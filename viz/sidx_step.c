@@ -926,7 +926,9 @@ int main(int argc, char **argv)
             goto done;
         }
         sidx_hook th = sidx_recorder_hook(&trec);
-        th.mask = SIDX_EVMASK_TRAVERSAL;
+        /* a lazy tree builds the subtrees the ray enters: build_lazy_expand
+         * and the subtree's build events arrive among the ray's */
+        th.mask = SIDX_EVMASK_TRAVERSAL | (bo.lazy ? SIDX_EVMASK_BUILD : 0u);
         sidx_query q;
         memset(&q, 0, sizeof q);
         q.traversal = trav;
@@ -937,7 +939,7 @@ int main(int argc, char **argv)
     s.nbuild = build ? brec.count : 0;
     s.n = s.nbuild + trec.count;
     s.ev = malloc((s.n ? s.n : 1) * sizeof *s.ev);
-    s.leaves = malloc((brec.count ? brec.count : 1) * sizeof *s.leaves);
+    s.leaves = malloc((brec.count + trec.count ? brec.count + trec.count : 1) * sizeof *s.leaves);
     if (brec.overflow || trec.overflow || !s.ev || !s.leaves) {
         fprintf(stderr, "sidx-step: out of memory recording the events\n");
         rc = 1;
@@ -947,6 +949,8 @@ int main(int argc, char **argv)
         if (i < s.nbuild) s.ev[i] = &brec.events[i];
         if (brec.events[i].type == SIDX_EV_BUILD_LEAF) s.leaves[s.nleaves++] = brec.events[i].node;
     }
+    for (size_t i = 0; i < trec.count; ++i) /* leaves a lazy tree built for the ray */
+        if (trec.events[i].type == SIDX_EV_BUILD_LEAF) s.leaves[s.nleaves++] = trec.events[i].node;
     qsort(s.leaves, s.nleaves, sizeof *s.leaves, cmp_u32);
     for (size_t i = 0; i < trec.count; ++i) s.ev[s.nbuild + i] = &trec.events[i];
     s.json = json;

@@ -30,6 +30,8 @@ static void usage(FILE *out)
             "        build time and steps per ray against triangle count, fitted growth exponents\n"
             "  extras [--scenes DIR] [--only instancing,lightbuffer,rayclass] [--instances N] ...\n"
             "        instanced scenes, the light buffer (shadow rays), ray classification's trade-off\n"
+            "  lazy [--accel NAME] [--lazy-size N] [--size PX] [--frames N] [--rounds N] [SCENE ...]\n"
+            "        time to the first image and over N frames, lazy build against eager\n"
             "  list  registered structures and built-in scenes\n"
             "\n"
             "SCENE is a mesh file (.obj, .ply) or a built-in scene name[:detail].\n"
@@ -104,6 +106,7 @@ int main(int argc, char **argv)
     if (!strcmp(cmd, "run")) return bench_cmd_run(argc - 1, argv + 1);
     if (!strcmp(cmd, "scale")) return bench_cmd_scale(argc - 1, argv + 1);
     if (!strcmp(cmd, "extras")) return bench_cmd_extras(argc - 1, argv + 1);
+    if (!strcmp(cmd, "lazy")) return bench_cmd_lazy(argc - 1, argv + 1);
     if (!strcmp(cmd, "list")) return cmd_list();
     fprintf(stderr, "sidx-bench: unknown command '%s'\n", cmd);
     usage(stderr);

@@ -172,7 +172,7 @@ static sidx_status make_stadium_sweep(uint32_t detail, sidx_mesh *out, sidx_erro
 /* The height field: d x d quads over x, z in [-1, 1], y a sum of two
  * sine waves (0.1 high), two triangles per quad: a terrain-like mesh of
  * any size with no file (2 d^2 triangles, (d+1)^2 vertices). */
-static sidx_status make_heightfield(uint32_t d, sidx_mesh *out, sidx_error *err)
+sidx_status bench_make_heightfield(uint32_t d, sidx_mesh *out, sidx_error *err)
 {
     const size_t nv = ((size_t)d + 1) * ((size_t)d + 1), nt = 2 * (size_t)d * d;
     float *xyz = malloc(nv * 3 * sizeof *xyz);
@@ -444,7 +444,7 @@ int bench_cmd_scale(int argc, char **argv)
         sidx_error err = {SIDX_OK, ""};
         bench_progress("scale: making %s", spec);
         const sidx_status made = stadium  ? make_stadium_sweep(details[si], &m, &err)
-                                 : hfield ? make_heightfield(details[si], &m, &err)
+                                 : hfield ? bench_make_heightfield(details[si], &m, &err)
                                           : sidx_scene_open(spec, &m, &err);
         if (made != SIDX_OK) {
             bench_progress_done();

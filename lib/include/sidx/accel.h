@@ -58,7 +58,20 @@ typedef struct sidx_build_options {
                                      that improves the binary tree after the build (bvh_optimize.c);
                                      0 = off.  A budget large enough gives the same tree every time;
                                      one that cuts the pass short depends on the machine's speed */
+    uint32_t lazy;                /* bvh family but bvh-obb: build the top of the tree now and
+                                     leave each subtree of at most this many primitives as an unbuilt node
+                                     holding them, built the first time a ray enters it (a BUILD_LAZY_EXPAND
+                                     event, then its build events, on that query's hook).  The tree below
+                                     each node is the eager build's, so hits are bit-identical.  0 = eager;
+                                     1 = the default size (SIDX_LAZY_DEFAULT).  Ignored by the other
+                                     structures and with optimize_ms > 0 (the pass needs the whole tree).
+                                     A query that cannot get the memory for an expansion returns
+                                     SIDX_ERR_NOMEM, its hit not to be used; the subtree stays unbuilt and
+                                     a later query tries again */
 } sidx_build_options;
+
+/* opt.lazy = 1: subtrees of at most this many primitives wait for a ray. */
+#define SIDX_LAZY_DEFAULT 1024u
 
 typedef enum sidx_traversal {
     SIDX_TRAVERSE_DEFAULT = 0,    /* the structure's fast path */
@@ -93,6 +106,10 @@ typedef struct sidx_accel_stats {
     double mean_leaf_prims;       /* over non-empty leaves / cells */
     uint32_t empty_leaves;
     uint32_t res[3];              /* grids: resolution; 0 otherwise */
+    /* lazy builds (opt.lazy): the subtrees no ray has entered yet and the primitive references they
+     * hold; nodes, leaves and max_depth count what is built so far.  0 for eager builds */
+    uint32_t unbuilt;
+    uint64_t unbuilt_prims;
 } sidx_accel_stats;
 
 /* Builds structure `name` over mesh.  opt may be NULL.  On failure *out is
@@ -107,11 +124,16 @@ sidx_status sidx_accel_build(const char *name, const sidx_mesh *mesh, const sidx
 sidx_status sidx_accel_auto(const sidx_mesh *mesh, const sidx_build_options *opt, sidx_accel **out, sidx_error *err);
 
 /* Closest hit in [ray.tmin, ray.tmax).  q may be NULL.  *hit is always
- * written (sidx_hit_none() on a miss).  Fails only on NULL arguments. */
+ * written (sidx_hit_none() on a miss).  Fails on NULL arguments, and on a
+ * lazy build (opt.lazy) with SIDX_ERR_NOMEM when the subtree the ray
+ * enters cannot be built for want of memory: the hit is then not to be
+ * used (the ray skipped that subtree). */
 sidx_status sidx_accel_intersect(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit);
-/* Any hit in [tmin, tmax): *occluded = 1 if there is one; stops at the first. */
+/* Any hit in [tmin, tmax): *occluded = 1 if there is one; stops at the first.
+ * Errors as sidx_accel_intersect. */
 sidx_status sidx_accel_occluded(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, int *occluded);
-/* n rays at once (same query for all); ray ids are q->ray_id + i. */
+/* n rays at once (same query for all); ray ids are q->ray_id + i.
+ * SIDX_ERR_NOMEM when any ray's query returned it (the others are traced). */
 sidx_status sidx_accel_intersect_n(const sidx_accel *a, const sidx_ray *rays, size_t n, const sidx_query *q,
                                    sidx_hit *hits);
 

@@ -58,6 +58,11 @@ typedef enum sidx_event_type {
                                 now sits beside, depth = its new depth, count = the pass (from 1),
                                 cost = the SAH gain, bounds = its box.  Ids are those of the tree as
                                 built (its BUILD_NODE ids), before the pass renumbers the nodes */
+    /* build, lazy trees (opt.lazy): emitted during a query, on its hook */
+    SIDX_EV_BUILD_LAZY_EXPAND, /* a ray entered an unbuilt node and its subtree is built now: node,
+                                  parent, depth, count = the subtree's primitives, bounds; the subtree's
+                                  BUILD_SPLIT / BUILD_NODE / BUILD_LEAF events follow (the node's own
+                                  BUILD_NODE came with the build) */
     SIDX_EV_COUNT
 } sidx_event_type;
 
@@ -67,7 +72,7 @@ typedef enum sidx_event_type {
      SIDX_EVMASK(SIDX_EV_BUILD_CANDIDATE) | SIDX_EVMASK(SIDX_EV_BUILD_SPLIT) |                     \
      SIDX_EVMASK(SIDX_EV_BUILD_LEAF) | SIDX_EVMASK(SIDX_EV_BUILD_END) |                           \
      SIDX_EVMASK(SIDX_EV_BUILD_MERGE) | SIDX_EVMASK(SIDX_EV_BUILD_EXPAND) |                     \
-     SIDX_EVMASK(SIDX_EV_BUILD_REINSERT))
+     SIDX_EVMASK(SIDX_EV_BUILD_REINSERT) | SIDX_EVMASK(SIDX_EV_BUILD_LAZY_EXPAND))
 #define SIDX_EVMASK_ALL ((1u << SIDX_EV_COUNT) - 1u)
 #define SIDX_EVMASK_TRAVERSAL (SIDX_EVMASK_ALL & ~SIDX_EVMASK_BUILD)
 

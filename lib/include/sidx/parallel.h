@@ -48,7 +48,8 @@ unsigned sidx_hardware_threads(void);
 /* Closest hits of rays[0, n) into hits[0, n) on `threads` threads (0 = all
  * hardware threads; the calling thread is one of them).  Same results as
  * sidx_accel_intersect_n: ray ids are q->ray_id + i.  q may be NULL.
- * Fails only on NULL arguments (SIDX_ERR_INVALID_ARG); if threads cannot
+ * Fails on NULL arguments (SIDX_ERR_INVALID_ARG), and with SIDX_ERR_NOMEM
+ * when a ray's query on a lazy tree did (sidx_accel_intersect); if threads cannot
  * be started the remaining work runs on the calling thread. */
 sidx_status sidx_trace_parallel(const sidx_accel *a, const sidx_ray *rays, size_t n, const sidx_query *q,
                                 sidx_hit *hits, unsigned threads);

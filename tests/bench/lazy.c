@@ -1,0 +1,315 @@
+/* lazy.c — sidx-bench lazy: what a lazy build (sidx_build_options.lazy)
+ * saves when the camera sees part of a scene.
+ *
+ * Per scene, eager and lazy in interleaved rounds, on one thread, in the
+ * thread's CPU time (so other load on the machine does not count):
+ *   first image  the build, one PX x PX primary frame from the scene's
+ *                camera (closest hits with the hit point), and one diffuse
+ *                bounce from every hit (sidx_ray_spawn, a direction drawn
+ *                on the hemisphere facing the camera);
+ *   N frames     the same build, then N such frames from viewpoints spread
+ *                around the scene (the first one the camera's), the total.
+ * Printed per scene: the medians over the rounds, their ratios lazy / eager,
+ * the fraction of the primitives whose subtrees are built after the first
+ * image and after N frames, and whether every hit of the lazy runs equals
+ * the eager run's bit for bit (an FNV hash over t, prim, u, v, normal).
+ *
+ * Scenes: "stadium" (built-in stadium, detail 16384: the teapot among
+ * ~100k triangles of stands, seen from beside the teapot) and
+ * "heightfield:D" (2 D^2 triangles of terrain, seen from a low camera at
+ * one edge); any other SCENE (file or built-in) is seen from outside its
+ * box, as the test kit's primary rays. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include "bench.h"
+
+typedef struct cam {
+    sidx_vec3 eye, at;
+    float fov; /* vertical, radians */
+} cam;
+
+typedef struct frame_out {
+    uint64_t hash;
+    size_t hits, bounces;
+    int nomem;
+} frame_out;
+
+static sidx_vec3 unit(sidx_vec3 v) { return sidx_v3_scale(v, 1.0f / sidx_v3_length(v)); }
+
+static uint64_t fnv(uint64_t h, const void *p, size_t n)
+{
+    const unsigned char *c = p;
+    for (size_t i = 0; i < n; ++i) h = (h ^ c[i]) * 0x100000001b3ull;
+    return h;
+}
+
+static uint64_t hash_hit(uint64_t h, const sidx_hit *x)
+{
+    h = fnv(h, &x->t, sizeof x->t);
+    h = fnv(h, &x->prim, sizeof x->prim);
+    h = fnv(h, &x->u, sizeof x->u);
+    h = fnv(h, &x->v, sizeof x->v);
+    return fnv(h, &x->ng, sizeof x->ng);
+}
+
+/* One frame: px x px primary rays through the camera, closest hits with
+ * their points, then one diffuse bounce per hit. */
+static void frame(const sidx_accel *a, const cam *c, uint32_t px, uint64_t seed, frame_out *out)
+{
+    const sidx_vec3 fwd = unit(sidx_v3_sub(c->at, c->eye));
+    sidx_vec3 right = sidx_v3_cross(fwd, sidx_v3(0, 1, 0));
+    if (sidx_v3_length(right) < 1e-6f) right = sidx_v3(1, 0, 0);
+    right = unit(right);
+    const sidx_vec3 up = sidx_v3_cross(right, fwd);
+    const float half = tanf(0.5f * c->fov);
+    const sidx_query qp = {SIDX_QUERY_POINT | SIDX_QUERY_NORMAL, SIDX_TRAVERSE_DEFAULT, NULL, 0};
+    const sidx_query qb = {SIDX_QUERY_UV | SIDX_QUERY_NORMAL, SIDX_TRAVERSE_DEFAULT, NULL, 0};
+    tk_rng g;
+    tk_rng_seed(&g, seed);
+    for (uint32_t y = 0; y < px; ++y)
+        for (uint32_t x = 0; x < px; ++x) {
+            const float sx = (2.0f * ((float)x + 0.5f) / (float)px - 1.0f) * half;
+            const float sy = (1.0f - 2.0f * ((float)y + 0.5f) / (float)px) * half;
+            const sidx_vec3 d = sidx_v3_add(fwd, sidx_v3_add(sidx_v3_scale(right, sx), sidx_v3_scale(up, sy)));
+            sidx_ray r;
+            sidx_hit h;
+            if (sidx_ray_init(&r, c->eye, d, 0.0f, INFINITY) != SIDX_OK) continue;
+            if (sidx_accel_intersect(a, &r, &qp, &h) != SIDX_OK) out->nomem = 1;
+            out->hash = hash_hit(out->hash, &h);
+            if (h.prim == SIDX_NO_HIT) continue;
+            out->hits++;
+            /* a direction on the hemisphere facing the camera */
+            sidx_vec3 n = unit(h.ng);
+            if (sidx_v3_dot(n, d) > 0.0f) n = sidx_v3_scale(n, -1.0f);
+            sidx_vec3 b = tk_rng_sphere(&g);
+            if (sidx_v3_dot(b, n) < 0.0f) b = sidx_v3_scale(b, -1.0f);
+            sidx_ray br;
+            sidx_hit bh;
+            if (sidx_ray_spawn(&h, b, &br) != SIDX_OK) continue;
+            if (sidx_accel_intersect(a, &br, &qb, &bh) != SIDX_OK) out->nomem = 1;
+            out->hash = hash_hit(out->hash, &bh);
+            out->bounces++;
+        }
+}
+
+/* Viewpoint k of n: the camera's eye turned about the vertical axis
+ * through its target by 2 pi k / n. */
+static cam turned(const cam *c, uint32_t k, uint32_t n)
+{
+    const float phi = 6.28318531f * (float)k / (float)n, cs = cosf(phi), sn = sinf(phi);
+    const sidx_vec3 rel = sidx_v3_sub(c->eye, c->at);
+    cam o = *c;
+    o.eye = sidx_v3_add(c->at, sidx_v3(cs * rel.x + sn * rel.z, rel.y, -sn * rel.x + cs * rel.z));
+    return o;
+}
+
+typedef struct run_out {
+    double first_ms, total_ms, built_first, built_total;
+    uint64_t hash;
+    size_t hits, bounces;
+    int nomem;
+} run_out;
+
+static double built_fraction(const sidx_accel *a)
+{
+    sidx_accel_stats s;
+    sidx_accel_stats_get(a, &s);
+    return s.prim_refs ? 1.0 - (double)s.unbuilt_prims / (double)s.prim_refs : 1.0;
+}
+
+static int run_once(const char *accel, const sidx_mesh *m, uint32_t lazy, const cam *c, uint32_t px, uint32_t frames,
+                    run_out *o)
+{
+    sidx_build_options bo;
+    memset(&bo, 0, sizeof bo);
+    bo.lazy = lazy;
+    sidx_accel *a = NULL;
+    sidx_error err;
+    memset(o, 0, sizeof *o);
+    const double t0 = tk_thread_cpu_ms();
+    if (sidx_accel_build(accel, m, &bo, &a, &err) != SIDX_OK) {
+        fprintf(stderr, "sidx-bench lazy: building %s: %s\n", accel, err.message);
+        return 0;
+    }
+    frame_out f = {0xcbf29ce484222325ull, 0, 0, 0};
+    frame(a, c, px, 1, &f);
+    o->first_ms = tk_thread_cpu_ms() - t0;
+    o->built_first = built_fraction(a);
+    for (uint32_t k = 1; k < frames; ++k) {
+        const cam ck = turned(c, k, frames);
+        frame(a, &ck, px, 1 + k, &f);
+    }
+    o->total_ms = tk_thread_cpu_ms() - t0;
+    o->built_total = built_fraction(a);
+    o->hash = f.hash;
+    o->hits = f.hits;
+    o->bounces = f.bounces;
+    o->nomem = f.nomem;
+    sidx_accel_destroy(a);
+    return 1;
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    const double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+static double median(double *v, int n)
+{
+    qsort(v, (size_t)n, sizeof *v, cmp_double);
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+/* The scene and its camera. */
+static int open_scene(const char *spec, sidx_mesh *m, cam *c)
+{
+    sidx_error err;
+    memset(m, 0, sizeof *m);
+    c->fov = 0.7f;
+    if (!strcmp(spec, "stadium")) {
+        if (sidx_scene_make("stadium", 16384, m, &err) != SIDX_OK) goto fail;
+        /* beside the teapot, looking at it: the teapot, the floor, a slice of the stands */
+        c->eye = sidx_v3(0.9f, 0.35f, 0.9f);
+        c->at = sidx_v3(0.0f, 0.2f, 0.0f);
+        return 1;
+    }
+    if (!strncmp(spec, "heightfield:", 12)) {
+        const long d = strtol(spec + 12, NULL, 10);
+        if (d < 1 || d > 4096 || bench_make_heightfield((uint32_t)d, m, &err) != SIDX_OK) goto fail;
+        /* low over one edge, looking along the terrain */
+        c->eye = sidx_v3(0.0f, 0.12f, 1.05f);
+        c->at = sidx_v3(0.0f, 0.0f, 0.6f);
+        return 1;
+    }
+    if (sidx_scene_open(spec, m, &err) != SIDX_OK) goto fail;
+    const sidx_aabb b = sidx_mesh_bounds(m);
+    const sidx_vec3 ctr = sidx_aabb_centroid(b), e = sidx_aabb_extent(b);
+    const float r = sidx_v3_length(e);
+    c->at = ctr;
+    c->eye = sidx_v3_add(ctr, sidx_v3(0.3f * r, 0.4f * r, 1.2f * r));
+    return 1;
+fail:
+    fprintf(stderr, "sidx-bench lazy: scene %s: %s\n", spec, err.message);
+    return 0;
+}
+
+static void lazy_usage(FILE *f)
+{
+    fprintf(f, "usage: sidx-bench lazy [--accel NAME] [--lazy-size N] [--size PX] [--frames N] [--rounds N]\n"
+               "                       [SCENE ...]\n"
+               "Time to the first image (build, one PX x PX primary frame, one diffuse bounce per hit) and\n"
+               "the total over N frames from viewpoints around the scene, lazy build (opt.lazy) against\n"
+               "eager, on one thread in thread CPU time, medians over interleaved rounds; the fraction\n"
+               "of primitives built after the first image and after N frames; whether the hits agree\n"
+               "bit for bit.  SCENE: stadium, heightfield:D, or a mesh file / built-in scene (seen from\n"
+               "outside its box).  Default: stadium heightfield:1024.\n"
+               "  --accel NAME     a structure with lazy builds (default bvh)\n"
+               "  --lazy-size N    opt.lazy (default 1: the library's default size)\n"
+               "  --size PX        image side (default 512)\n"
+               "  --frames N       frames of the second measure (default 16)\n"
+               "  --rounds N       rounds (default 3)\n"
+               "Prints one JSON line per scene.  Exit status: 0 ok, 1 failure, 2 usage.\n");
+}
+
+int bench_cmd_lazy(int argc, char **argv)
+{
+    const char *accel = "bvh";
+    uint32_t lazy = 1, px = 512, frames = 16;
+    int rounds = 3;
+    const char *scenes[16];
+    int ns = 0;
+    for (int i = 1; i < argc; ++i) {
+        const char *a = argv[i];
+        if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
+            lazy_usage(stdout);
+            return BENCH_OK;
+        }
+        if (!strcmp(a, "--accel") || !strcmp(a, "--lazy-size") || !strcmp(a, "--size") || !strcmp(a, "--frames") ||
+            !strcmp(a, "--rounds")) {
+            if (i + 1 >= argc) {
+                fprintf(stderr, "sidx-bench lazy: %s needs a value\n", a);
+                return BENCH_USAGE;
+            }
+            const char *v = argv[++i];
+            if (!strcmp(a, "--accel")) {
+                accel = v;
+                continue;
+            }
+            char *end;
+            const long x = strtol(v, &end, 10);
+            if (*end || end == v || x < 1 || x > 1000000) {
+                fprintf(stderr, "sidx-bench lazy: %s wants a whole number from 1 to 1000000, not '%s'\n", a, v);
+                return BENCH_USAGE;
+            }
+            if (!strcmp(a, "--lazy-size")) lazy = (uint32_t)x;
+            else if (!strcmp(a, "--size")) px = (uint32_t)x;
+            else if (!strcmp(a, "--frames")) frames = (uint32_t)x;
+            else rounds = x > 99 ? 99 : (int)x;
+            continue;
+        }
+        if (a[0] == '-') {
+            fprintf(stderr, "sidx-bench lazy: unknown option '%s'\n", a);
+            lazy_usage(stderr);
+            return BENCH_USAGE;
+        }
+        if (ns == 16) {
+            fprintf(stderr, "sidx-bench lazy: at most 16 scenes\n");
+            return BENCH_USAGE;
+        }
+        scenes[ns++] = a;
+    }
+    if (!sidx_accel_is_registered(accel)) {
+        fprintf(stderr, "sidx-bench lazy: no structure named '%s'\n", accel);
+        return BENCH_USAGE;
+    }
+    if (ns == 0) {
+        scenes[ns++] = "stadium";
+        scenes[ns++] = "heightfield:1024";
+    }
+    for (int s = 0; s < ns; ++s) {
+        sidx_mesh m;
+        cam c;
+        if (!open_scene(scenes[s], &m, &c)) return BENCH_FAIL;
+        double ef[99], et[99], lf[99], lt[99];
+        run_out e = {0}, l = {0};
+        int same = 1, nomem = 0;
+        for (int r = 0; r < rounds; ++r) {
+            /* interleaved, the order swapped each round */
+            for (int k = 0; k < 2; ++k) {
+                const int is_lazy = (k + r) % 2;
+                run_out o;
+                if (!run_once(accel, &m, is_lazy ? lazy : 0, &c, px, frames, &o)) {
+                    sidx_mesh_free(&m);
+                    return BENCH_FAIL;
+                }
+                nomem |= o.nomem;
+                if (is_lazy) {
+                    lf[r] = o.first_ms;
+                    lt[r] = o.total_ms;
+                    l = o;
+                } else {
+                    ef[r] = o.first_ms;
+                    et[r] = o.total_ms;
+                    e = o;
+                }
+            }
+            same &= e.hash == l.hash;
+        }
+        const double mef = median(ef, rounds), met = median(et, rounds), mlf = median(lf, rounds),
+                     mlt = median(lt, rounds);
+        printf("{\"scene\":\"%s\",\"accel\":\"%s\",\"tris\":%u,\"size\":%u,\"frames\":%u,\"rounds\":%d,"
+               "\"hits\":%zu,\"bounces\":%zu,"
+               "\"eager_first_ms\":%.1f,\"lazy_first_ms\":%.1f,\"first_ratio\":%.3f,"
+               "\"eager_total_ms\":%.1f,\"lazy_total_ms\":%.1f,\"total_ratio\":%.3f,"
+               "\"built_first\":%.4f,\"built_total\":%.4f,\"hits_identical\":%s}\n",
+               scenes[s], accel, m.num_triangles, px, frames, rounds, l.hits, l.bounces, mef, mlf, mlf / mef, met, mlt,
+               mlt / met, l.built_first, l.built_total, same && !nomem ? "true" : "false");
+        fflush(stdout);
+        sidx_mesh_free(&m);
+        if (!same || nomem) return BENCH_FAIL;
+    }
+    return BENCH_OK;
+}
