@@ -35,22 +35,47 @@ void viz_json_put(viz_json *b, const char *s)
     b->n += n;
 }
 
+/* One vsnprintf where the text fits in the room left (the common case), a
+ * second after growing where it does not. */
 void viz_json_printf(viz_json *b, const char *fmt, ...)
 {
+    if (b->failed) return;
     va_list ap;
+    if (b->cap < b->n + 64) viz_json_grow(b, 64);
+    if (b->failed) return;
+    const size_t room = b->cap - b->n;
     va_start(ap, fmt);
-    int n = vsnprintf(NULL, 0, fmt, ap);
+    int n = vsnprintf(b->s + b->n, room, fmt, ap);
     va_end(ap);
     if (n < 0) {
         b->failed = 1;
         return;
     }
-    viz_json_grow(b, (size_t)n);
-    if (b->failed) return;
-    va_start(ap, fmt);
-    vsnprintf(b->s + b->n, (size_t)n + 1, fmt, ap);
-    va_end(ap);
+    if ((size_t)n >= room) {
+        viz_json_grow(b, (size_t)n);
+        if (b->failed) return;
+        va_start(ap, fmt);
+        vsnprintf(b->s + b->n, (size_t)n + 1, fmt, ap);
+        va_end(ap);
+    }
     b->n += (size_t)n;
+}
+
+/* A whole number in decimal, as printf's "%u" writes it (without printf:
+ * a build's answer holds tens of thousands of them). */
+static void put_u32(viz_json *b, uint32_t v)
+{
+    char d[11];
+    int k = (int)sizeof d;
+    do {
+        d[--k] = (char)('0' + v % 10u);
+        v /= 10u;
+    } while (v);
+    viz_json_grow(b, sizeof d - (size_t)k);
+    if (b->failed) return;
+    memcpy(b->s + b->n, d + k, sizeof d - (size_t)k);
+    b->n += sizeof d - (size_t)k;
+    b->s[b->n] = '\0';
 }
 
 /* A JSON string; '<' as \u003c so no text can close the page's <script>. */
@@ -91,7 +116,7 @@ void viz_json_id(viz_json *b, uint32_t id)
     if (id == UINT32_MAX)
         viz_json_put(b, "-1");
     else
-        viz_json_printf(b, "%u", id);
+        put_u32(b, id);
 }
 
 void viz_json_box(viz_json *b, sidx_aabb box)
@@ -146,7 +171,10 @@ void viz_json_build_event(viz_json *b, const sidx_event *e)
         viz_json_string(b, sidx_leaf_reason_name(e->reason));
         if (e->prims && e->count != UINT32_MAX) {
             viz_json_put(b, ",[");
-            for (uint32_t i = 0; i < e->count; ++i) viz_json_printf(b, i ? ",%u" : "%u", e->prims[i]);
+            for (uint32_t i = 0; i < e->count; ++i) {
+                if (i) viz_json_put(b, ",");
+                put_u32(b, e->prims[i]);
+            }
             viz_json_put(b, "]");
         } else {
             viz_json_put(b, ",null");

@@ -88,10 +88,20 @@ int sidx_lab_build(int slot, const char *accel, const char *knobs_json);
 /* The slot's structure: {"slot","accel","args" (the knobs as sidx-step
  * flags),"stats":{"nodes","leaves","max_depth","sah_cost","bytes",
  * "prim_refs","build_ms"},"build":[the build events in the compact array
- * form of viz/json_write.h],"cand_total","cand_kept","labels":{"id":"A",
- * ...}}; "null" for an empty slot.  build_ms is the recorded build's wall
- * time (the only value that differs between runs). */
+ * form of viz/json_write.h, less the SAH candidates],"cand_total",
+ * "cand_kept","labels":{"id":"A",...}}; "null" for an empty slot.
+ * build_ms is the recorded build's wall time (the only value that differs
+ * between runs).  The candidates (a BVH of the teapot proposes over a
+ * hundred thousand) are left out: the tree, its counts and labels are all
+ * a rebuild after a knob change needs, and they are a fraction of the
+ * text to write and parse. */
 const char *sidx_lab_build_json(int slot);
+
+/* Every build event of the slot in build order, the SAH candidates in
+ * their places (the first cand_kept of cand_total): {"slot","build":[..],
+ * "cand_total","cand_kept"}, the events of sidx-view --html's build view
+ * and of the page's build mode and SAH curve; "null" for an empty slot. */
+const char *sidx_lab_build_events_json(int slot);
 
 /* Traces origin (ox, oy, oz), direction (dx, dy, dz) through the slot's
  * structure (closest hit, the knobs' traversal) and keeps the trace for
