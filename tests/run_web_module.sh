@@ -13,9 +13,10 @@
 # memory sizes (32-bit pointers in WebAssembly).  The built-in scenes,
 # the teapot among them, are the same floats on both sides.  Also checks
 # that a build's light answer is its full event list (the build mode's)
-# less the SAH candidates, that the camera rays agree, that a trace's events are
-# sidx-step --json's for the same ray, that the page is one file under
-# 3 MB holding the module, and that the ray set exercised what it names.
+# less the SAH candidates, that the camera rays agree, that a trace's
+# events are sidx-step --json's for the same ray and their lines
+# sidx-step's (node labels too), that the page is one file under 3 MB
+# holding the module, and that the ray set exercised what it names.
 # Without node or without the module (make test builds it where emscripten
 # is installed) it says so in one line and passes.  Run from the repository root.
 
@@ -172,11 +173,23 @@ for (const e of body.split(",\n"))
     else
         bad "sidx-step --json != module: $name ($n events)"
     fi
+    # each event's "line" (the page's event list) is sidx-step's line, node labels and all
+    node -e '
+const t = JSON.parse(require("fs").readFileSync(process.argv[1], "utf8"));
+for (const e of t.events) console.log(e.line);' "$TMP/one.json" >"$TMP/one.lines"
+    "$STEP" --accel "$accel" "$scene" --ray "$ray" --all "$@" >"$TMP/one.text"
+    labels=$(grep -c '  \[[A-Z][A-Z0-9]*\]$' "$TMP/one.text")
+    if [ "$n" -gt 3 ] && cmp -s "$TMP/one.lines" "$TMP/one.text"; then
+        ok "sidx-step's lines = module's: $name ($labels with a node label)"
+    else
+        bad "sidx-step's lines != module's: $name, first at $(cmp "$TMP/one.lines" "$TMP/one.text" 2>&1 | sed -n 's/.* line //p')"
+    fi
+    [ -z "$WANT_LABELS" ] || [ "$labels" -ge "$WANT_LABELS" ] || bad "$name: only $labels labelled lines"
 }
-KNOBS="" step_check "kd-slide, the slide's kd-tree" kd-slide kdtree 0,4.2,0,1,0.15,0
-KNOBS='{"bins":8,"mailbox":false}' step_check "kd-slide, grid with knobs" kd-slide grid 0,4.2,0,1,0.15,0 --bins 8 --no-mailbox
-KNOBS="" step_check "teapot, bvh8" teapot bvh8 6.3,1.5,2,-6,-0.2,-2
-KNOBS='{"traversal":"naive"}' step_check "teapot, kdtree naive" teapot kdtree 6.3,1.5,2,-6,-0.2,-2 --traversal naive
+KNOBS="" WANT_LABELS=10 step_check "kd-slide, the slide's kd-tree" kd-slide kdtree 0,4.2,0,1,0.15,0
+WANT_LABELS= KNOBS='{"bins":8,"mailbox":false}' step_check "kd-slide, grid with knobs" kd-slide grid 0,4.2,0,1,0.15,0 --bins 8 --no-mailbox
+WANT_LABELS= KNOBS="" step_check "teapot, bvh8" teapot bvh8 6.3,1.5,2,-6,-0.2,-2
+WANT_LABELS= KNOBS='{"traversal":"naive"}' step_check "teapot, kdtree naive" teapot kdtree 6.3,1.5,2,-6,-0.2,-2 --traversal naive
 
 if [ $fail -ne 0 ]; then
     echo "web-module: FAILED"

@@ -193,8 +193,11 @@ void viz_json_build_event(viz_json *b, const sidx_event *e)
 
 /* One traversal event: sidx-step --json's object (sidx_event_to_json), plus
  * the node's box where NODE_ENTER carries one (the replay's current box)
- * and "line", the printer's text of the event (the viewer's event list). */
-int viz_json_trav_event(viz_json *b, const sidx_event *e)
+ * and "line", the printer's text of the event (the viewer's event list),
+ * with "  [label]" after it where label is not NULL. */
+int viz_json_trav_event(viz_json *b, const sidx_event *e) { return viz_json_trav_event_label(b, e, NULL); }
+
+int viz_json_trav_event_label(viz_json *b, const sidx_event *e, const char *label)
 {
     char json[1024], line[512];
     int n = sidx_event_to_json(e, json, sizeof json);
@@ -206,7 +209,9 @@ int viz_json_trav_event(viz_json *b, const sidx_event *e)
         viz_json_box(b, e->bounds);
         viz_json_put(b, "]");
     }
-    if (sidx_event_format(e, line, sizeof line) < 0) snprintf(line, sizeof line, "?");
+    const int k = sidx_event_format(e, line, sizeof line);
+    if (k < 0) snprintf(line, sizeof line, "?");
+    else if (label && (size_t)k < sizeof line) snprintf(line + k, sizeof line - (size_t)k, "  [%s]", label);
     viz_json_put(b, ",\"line\":");
     viz_json_string(b, line);
     viz_json_put(b, "}");

@@ -560,6 +560,19 @@ int sidx_lab_trace(int slot, double ox, double oy, double oz, double dx, double 
     return ok();
 }
 
+/* The label of the node an event names ("A", "L4": the slide's names of
+ * kd-slide's kd-tree), for the events whose line sidx-step labels; else NULL. */
+static const char *event_label(const lab_slot *s, const sidx_event *e)
+{
+    switch (e->type) {
+    case SIDX_EV_NODE_ENTER: case SIDX_EV_BOX_TEST: case SIDX_EV_STACK_PUSH: case SIDX_EV_STACK_POP:
+    case SIDX_EV_TERMINATE:
+        return e->node != UINT32_MAX ? sidx_accel_node_label(s->accel, e->node) : NULL;
+    default:
+        return NULL;
+    }
+}
+
 const char *sidx_lab_trace_json(int slot)
 {
     const lab_slot *s = get_slot(slot);
@@ -587,7 +600,8 @@ const char *sidx_lab_trace_json(int slot)
                     s->trace.count, s->truncated ? "true" : "false", s->trace_ms);
     for (size_t i = 0; i < s->trace.count; ++i) {
         if (i) viz_json_put(b, ",\n");
-        if (viz_json_trav_event(b, &s->trace.events[i]) != 0) viz_json_put(b, "null");
+        const sidx_event *e = &s->trace.events[i];
+        if (viz_json_trav_event_label(b, e, event_label(s, e)) != 0) viz_json_put(b, "null");
     }
     viz_json_put(b, "]}");
     return done(b);
@@ -621,10 +635,10 @@ const char *sidx_lab_diverge_json(void)
         return done(b);
     }
     viz_json_printf(b, "{\"step\":%zu,\"same\":%zu,\"a\":", i + 1, i);
-    if (i < na) viz_json_trav_event(b, &a->trace.events[i]);
+    if (i < na) viz_json_trav_event_label(b, &a->trace.events[i], event_label(a, &a->trace.events[i]));
     else viz_json_put(b, "null");
     viz_json_put(b, ",\"b\":");
-    if (i < nc) viz_json_trav_event(b, &c->trace.events[i]);
+    if (i < nc) viz_json_trav_event_label(b, &c->trace.events[i], event_label(c, &c->trace.events[i]));
     else viz_json_put(b, "null");
     viz_json_put(b, "}");
     return done(b);

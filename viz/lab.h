@@ -115,8 +115,9 @@ int sidx_lab_trace(int slot, double ox, double oy, double oz, double dx, double 
  * (PRIM_TEST),"mailbox" (MAILBOX_HIT),"events"},"truncated":false,
  * "ms" (the recorded query's wall time),
  * "events":[one object per event: sidx_event_to_json's (sidx-step --json)
- * plus "box" on NODE_ENTER and "line", the printer's text]}; "null"
- * when the slot has no trace. */
+ * plus "box" on NODE_ENTER and "line", the printer's text with the
+ * node's label after it where the structure names its nodes ("  [L4]",
+ * as sidx-step prints it)]}; "null" when the slot has no trace. */
 const char *sidx_lab_trace_json(int slot);
 
 /* Where the last traces of slot 0 and slot 1 part: {"step":K,"same":K-1,
