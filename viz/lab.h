@@ -35,7 +35,8 @@ extern "C" {
 #define SIDX_LAB_MAX_TRIANGLES 50000u
 /* A trace keeps at most this many events ("truncated": true beyond). */
 #define SIDX_LAB_MAX_EVENTS 200000u
-/* SAH candidate events kept in a build's JSON (sidx-view --html's budget). */
+/* SAH candidate events a build keeps (sidx_lab_build_events_json; sidx-view
+ * --html's budget). */
 #define SIDX_LAB_MAX_CANDIDATES 20000u
 /* The largest heat map, in pixels. */
 #define SIDX_LAB_MAX_PIXELS (2048u * 2048u)
