@@ -18,8 +18,6 @@ trap 'rm -rf "$TMP"' EXIT
 
 cat >"$TMP/bench.txt" <<'EOF'
 open teapot
-saveobj @TMP@/teapot.obj
-obj @TMP@/teapot.obj
 build 0 bvh8
 bench 0 0.6 0.4 1 256 256 5
 build 1 kdtree

@@ -10,12 +10,13 @@
 # entry layer twice: natively (sidx-lab) and in the module the page
 # embeds (build/web/sidx-lab.js, in Node: tests/web_module.js).  Every
 # answer must agree byte for byte, except build and heat-map times and
-# memory sizes (32-bit pointers in WebAssembly).  The teapot is the
-# native build's, written as OBJ with exact floats: the built-in
-# generator's sinf/cosf are the C library's, which differ in the last bit
-# between glibc and the module's.  Also checks that a trace's events are
-# sidx-step --json's for the same ray, that the page is one file under
-# 3 MB holding the module, and that the ray set exercised what it names.
+# memory sizes (32-bit pointers in WebAssembly).  The built-in scenes,
+# the teapot among them, are the same floats on both sides.  Also checks
+# that a build's light answer is its full event list (the build mode's)
+# less the SAH candidates, that the camera rays agree, that a trace's
+# events are sidx-step --json's for the same ray and their lines
+# sidx-step's (node labels too), that the page is one file under 3 MB
+# holding the module, and that the ray set exercised what it names.
 # Without node or without the module (make test builds it where emscripten
 # is installed) it says so in one line and passes.  Run from the repository root.
 
@@ -77,7 +78,6 @@ else
 fi
 
 # 2. the ray set, natively and in the module
-printf 'open teapot\nsaveobj %s/teapot.obj\n' "$TMP" | "$LAB" >/dev/null || bad "sidx-lab could not write the teapot"
 sed "s|@TMP@|$TMP|g" "$RAYS" >"$TMP/rays.txt"
 "$LAB" "$TMP/rays.txt" >"$TMP/native.txt" 2>"$TMP/native.err" || bad "sidx-lab failed: $(head -3 "$TMP/native.err")"
 timeout "$LIMIT" node tests/web_module.js "$WEB/sidx-lab.js" "$TMP/rays.txt" >"$TMP/web.txt" 2>"$TMP/web.err" ||
@@ -114,6 +114,39 @@ if grep -q "^rc 7 scene 'grid:512' has 524288 triangles; the page holds at most 
 else
     bad "errors: the module's messages for the scene limit, a bad OBJ or a bad knob are missing"
 fi
+# a build's answer (the page's rebuild) = its full event list (the build mode's) less the candidates
+light=$(node -e '
+const L = require("fs").readFileSync(process.argv[1], "utf8").split("\n");
+const last = {};
+let n = 0, cands = 0, bad = "";
+for (let i = 0; i < L.length; ++i) {
+  let m = /^> build (\d) /.exec(L[i]);
+  if (m) { last[m[1]] = L[i + 2] === "null" ? null : JSON.parse(L[i + 2]); continue; }
+  m = /^> events (\d)$/.exec(L[i]);
+  if (!m) continue;
+  const full = L[i + 1] === "null" ? null : JSON.parse(L[i + 1]), b = last[m[1]];
+  if (!full !== !b) { bad = "line " + (i + 1) + ": an events answer without its build or the reverse"; break; }
+  if (!full) continue;
+  const c = full.build.filter((e) => e[0] === 2).length;
+  cands += c;
+  if (JSON.stringify(full.build.filter((e) => e[0] !== 2)) !== JSON.stringify(b.build) || b.build.some((e) => e[0] === 2) ||
+      c !== b.cand_kept || full.cand_kept !== b.cand_kept || full.cand_total !== b.cand_total) {
+    bad = "line " + (i + 1) + ": the build answer is not the full list less its " + c + " candidates"; break;
+  }
+  ++n;
+}
+console.log(bad ? "BAD " + bad : n + " " + cands);' "$TMP/web.txt")
+case $light in
+BAD*) bad "build answers: ${light#BAD }" ;;
+*) set -- $light
+    if [ "${1:-0}" -ge 4 ] && [ "${2:-0}" -ge 20000 ]; then
+        ok "build answers: $1 are their full event lists less the candidates ($2 candidates in the full lists)"
+    else
+        bad "build answers: only ${1:-0} full lists with ${2:-0} candidates compared"
+    fi ;;
+esac
+cams=$(grep -c '^{"o":\[' "$TMP/web.txt")
+[ "$cams" -ge 6 ] && ok "camera rays: $cams compared bit for bit (9 significant digits)" || bad "camera rays: only $cams"
 heats=$(count '^hash ')
 [ "$heats" -ge 5 ] && ok "heat maps: $heats compared by hash" || bad "heat maps: only $heats"
 
@@ -140,11 +173,23 @@ for (const e of body.split(",\n"))
     else
         bad "sidx-step --json != module: $name ($n events)"
     fi
+    # each event's "line" (the page's event list) is sidx-step's line, node labels and all
+    node -e '
+const t = JSON.parse(require("fs").readFileSync(process.argv[1], "utf8"));
+for (const e of t.events) console.log(e.line);' "$TMP/one.json" >"$TMP/one.lines"
+    "$STEP" --accel "$accel" "$scene" --ray "$ray" --all "$@" >"$TMP/one.text"
+    labels=$(grep -c '  \[[A-Z][A-Z0-9]*\]$' "$TMP/one.text")
+    if [ "$n" -gt 3 ] && cmp -s "$TMP/one.lines" "$TMP/one.text"; then
+        ok "sidx-step's lines = module's: $name ($labels with a node label)"
+    else
+        bad "sidx-step's lines != module's: $name, first at $(cmp "$TMP/one.lines" "$TMP/one.text" 2>&1 | sed -n 's/.* line //p')"
+    fi
+    [ -z "$WANT_LABELS" ] || [ "$labels" -ge "$WANT_LABELS" ] || bad "$name: only $labels labelled lines"
 }
-KNOBS="" step_check "kd-slide, the slide's kd-tree" kd-slide kdtree 0,4.2,0,1,0.15,0
-KNOBS='{"bins":8,"mailbox":false}' step_check "kd-slide, grid with knobs" kd-slide grid 0,4.2,0,1,0.15,0 --bins 8 --no-mailbox
-KNOBS="" step_check "teapot, bvh8" "$TMP/teapot.obj" bvh8 6.3,1.5,2,-6,-0.2,-2
-KNOBS='{"traversal":"naive"}' step_check "teapot, kdtree naive" "$TMP/teapot.obj" kdtree 6.3,1.5,2,-6,-0.2,-2 --traversal naive
+KNOBS="" WANT_LABELS=10 step_check "kd-slide, the slide's kd-tree" kd-slide kdtree 0,4.2,0,1,0.15,0
+WANT_LABELS= KNOBS='{"bins":8,"mailbox":false}' step_check "kd-slide, grid with knobs" kd-slide grid 0,4.2,0,1,0.15,0 --bins 8 --no-mailbox
+WANT_LABELS= KNOBS="" step_check "teapot, bvh8" teapot bvh8 6.3,1.5,2,-6,-0.2,-2
+WANT_LABELS= KNOBS='{"traversal":"naive"}' step_check "teapot, kdtree naive" teapot kdtree 6.3,1.5,2,-6,-0.2,-2 --traversal naive
 
 if [ $fail -ne 0 ]; then
     echo "web-module: FAILED"

@@ -81,6 +81,8 @@ SidxLab().then((M) => {
       const slot = Number(v[1]);
       status(I("sidx_lab_build", ["number", "string", "string"], [slot, v[2], v[3]]));
       out.push(S("sidx_lab_build_json", ["number"], [slot]));
+    } else if (cmd === "events" && (v = numbers(rest, 1))) {
+      out.push(S("sidx_lab_build_events_json", ["number"], [v[0]]));
     } else if (cmd === "trace" && (v = numbers(rest, 7))) {
       status(I("sidx_lab_trace", N7, v));
       out.push(S("sidx_lab_trace_json", ["number"], [v[0]]));

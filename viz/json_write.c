@@ -35,22 +35,47 @@ void viz_json_put(viz_json *b, const char *s)
     b->n += n;
 }
 
+/* One vsnprintf where the text fits in the room left (the common case), a
+ * second after growing where it does not. */
 void viz_json_printf(viz_json *b, const char *fmt, ...)
 {
+    if (b->failed) return;
     va_list ap;
+    if (b->cap < b->n + 64) viz_json_grow(b, 64);
+    if (b->failed) return;
+    const size_t room = b->cap - b->n;
     va_start(ap, fmt);
-    int n = vsnprintf(NULL, 0, fmt, ap);
+    int n = vsnprintf(b->s + b->n, room, fmt, ap);
     va_end(ap);
     if (n < 0) {
         b->failed = 1;
         return;
     }
-    viz_json_grow(b, (size_t)n);
-    if (b->failed) return;
-    va_start(ap, fmt);
-    vsnprintf(b->s + b->n, (size_t)n + 1, fmt, ap);
-    va_end(ap);
+    if ((size_t)n >= room) {
+        viz_json_grow(b, (size_t)n);
+        if (b->failed) return;
+        va_start(ap, fmt);
+        vsnprintf(b->s + b->n, (size_t)n + 1, fmt, ap);
+        va_end(ap);
+    }
     b->n += (size_t)n;
+}
+
+/* A whole number in decimal, as printf's "%u" writes it (without printf:
+ * a build's answer holds tens of thousands of them). */
+static void put_u32(viz_json *b, uint32_t v)
+{
+    char d[11];
+    int k = (int)sizeof d;
+    do {
+        d[--k] = (char)('0' + v % 10u);
+        v /= 10u;
+    } while (v);
+    viz_json_grow(b, sizeof d - (size_t)k);
+    if (b->failed) return;
+    memcpy(b->s + b->n, d + k, sizeof d - (size_t)k);
+    b->n += sizeof d - (size_t)k;
+    b->s[b->n] = '\0';
 }
 
 /* A JSON string; '<' as \u003c so no text can close the page's <script>. */
@@ -91,7 +116,7 @@ void viz_json_id(viz_json *b, uint32_t id)
     if (id == UINT32_MAX)
         viz_json_put(b, "-1");
     else
-        viz_json_printf(b, "%u", id);
+        put_u32(b, id);
 }
 
 void viz_json_box(viz_json *b, sidx_aabb box)
@@ -146,7 +171,10 @@ void viz_json_build_event(viz_json *b, const sidx_event *e)
         viz_json_string(b, sidx_leaf_reason_name(e->reason));
         if (e->prims && e->count != UINT32_MAX) {
             viz_json_put(b, ",[");
-            for (uint32_t i = 0; i < e->count; ++i) viz_json_printf(b, i ? ",%u" : "%u", e->prims[i]);
+            for (uint32_t i = 0; i < e->count; ++i) {
+                if (i) viz_json_put(b, ",");
+                put_u32(b, e->prims[i]);
+            }
             viz_json_put(b, "]");
         } else {
             viz_json_put(b, ",null");
@@ -165,8 +193,11 @@ void viz_json_build_event(viz_json *b, const sidx_event *e)
 
 /* One traversal event: sidx-step --json's object (sidx_event_to_json), plus
  * the node's box where NODE_ENTER carries one (the replay's current box)
- * and "line", the printer's text of the event (the viewer's event list). */
-int viz_json_trav_event(viz_json *b, const sidx_event *e)
+ * and "line", the printer's text of the event (the viewer's event list),
+ * with "  [label]" after it where label is not NULL. */
+int viz_json_trav_event(viz_json *b, const sidx_event *e) { return viz_json_trav_event_label(b, e, NULL); }
+
+int viz_json_trav_event_label(viz_json *b, const sidx_event *e, const char *label)
 {
     char json[1024], line[512];
     int n = sidx_event_to_json(e, json, sizeof json);
@@ -178,7 +209,9 @@ int viz_json_trav_event(viz_json *b, const sidx_event *e)
         viz_json_box(b, e->bounds);
         viz_json_put(b, "]");
     }
-    if (sidx_event_format(e, line, sizeof line) < 0) snprintf(line, sizeof line, "?");
+    const int k = sidx_event_format(e, line, sizeof line);
+    if (k < 0) snprintf(line, sizeof line, "?");
+    else if (label && (size_t)k < sizeof line) snprintf(line + k, sizeof line - (size_t)k, "  [%s]", label);
     viz_json_put(b, ",\"line\":");
     viz_json_string(b, line);
     viz_json_put(b, "}");

@@ -42,6 +42,9 @@ void viz_json_build_event(viz_json *b, const sidx_event *e);
  * printer's text of the event (sidx_event_format).  -1 (and nothing
  * written) if the event's JSON does not fit 1 KiB. */
 int viz_json_trav_event(viz_json *b, const sidx_event *e);
+/* The same with "  [label]" after the line where label is not NULL: the
+ * node's name on the slide, as sidx-step prints it. */
+int viz_json_trav_event_label(viz_json *b, const sidx_event *e, const char *label);
 
 /* 1 for a scene flat in z (the 2D lecture scenes: z extent at most 5% of
  * the larger of x and y), which the pages open in their 2D view. */

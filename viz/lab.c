@@ -36,12 +36,12 @@ static struct lab {
     int builtin;              /* 1: name is a built-in scene spec (sidx_scene_accel_build uses it) */
     lab_slot slot[SIDX_LAB_SLOTS];
     char error[320];
-    viz_json out[9];          /* one answer per kind, valid until that kind is asked again */
+    viz_json out[10];          /* one answer per kind, valid until that kind is asked again */
     uint32_t *heat;
     size_t heat_cap;
 } lab;
 
-enum { OUT_SCENES, OUT_STRUCTS, OUT_SCENE, OUT_OBJ, OUT_BUILD, OUT_TRACE, OUT_DIVERGE, OUT_HEAT, OUT_MISC };
+enum { OUT_SCENES, OUT_STRUCTS, OUT_SCENE, OUT_OBJ, OUT_BUILD, OUT_TRACE, OUT_DIVERGE, OUT_HEAT, OUT_MISC, OUT_EVENTS };
 
 static double now_ms(void)
 {
@@ -465,6 +465,28 @@ int sidx_lab_build(int slot, const char *accel, const char *knobs_json)
     return ok();
 }
 
+/* The slot's build events in the compact array form, the SAH candidates
+ * (the first SIDX_LAB_MAX_CANDIDATES) with them or not; the kept ones counted. */
+static size_t put_build_events(viz_json *b, const lab_slot *s, int with_candidates)
+{
+    size_t cand_kept = 0;
+    int first = 1;
+    viz_json_put(b, "[");
+    for (size_t i = 0; i < s->build.count; ++i) {
+        const sidx_event *e = &s->build.events[i];
+        if (e->type == SIDX_EV_NOTE) continue;
+        if (e->type == SIDX_EV_BUILD_CANDIDATE) {
+            ++cand_kept;
+            if (!with_candidates) continue;
+        }
+        if (!first) viz_json_put(b, ",");
+        first = 0;
+        viz_json_build_event(b, e);
+    }
+    viz_json_put(b, "]");
+    return cand_kept;
+}
+
 const char *sidx_lab_build_json(int slot)
 {
     const lab_slot *s = get_slot(slot);
@@ -481,19 +503,10 @@ const char *sidx_lab_build_json(int slot)
                        "\"prim_refs\":%llu,\"build_ms\":%.3f}",
                     st.nodes, st.leaves, st.max_depth, st.sah_cost, st.bytes, (unsigned long long)st.prim_refs,
                     s->build_ms);
-    size_t cand_kept = 0;
-    viz_json_put(b, ",\"build\":[");
+    viz_json_put(b, ",\"build\":");
+    const size_t cand_kept = put_build_events(b, s, 0);
+    viz_json_printf(b, ",\"cand_total\":%zu,\"cand_kept\":%zu,\"labels\":{", s->cand_total, cand_kept);
     int first = 1;
-    for (size_t i = 0; i < s->build.count; ++i) {
-        const sidx_event *e = &s->build.events[i];
-        if (e->type == SIDX_EV_NOTE) continue;
-        if (e->type == SIDX_EV_BUILD_CANDIDATE) ++cand_kept;
-        if (!first) viz_json_put(b, ",");
-        first = 0;
-        viz_json_build_event(b, e);
-    }
-    viz_json_printf(b, "],\"cand_total\":%zu,\"cand_kept\":%zu,\"labels\":{", s->cand_total, cand_kept);
-    first = 1;
     for (uint32_t i = 0; i < st.nodes; ++i) {
         const char *label = sidx_accel_node_label(s->accel, i);
         if (!label) continue;
@@ -502,6 +515,17 @@ const char *sidx_lab_build_json(int slot)
         first = 0;
     }
     viz_json_put(b, "}}");
+    return done(b);
+}
+
+const char *sidx_lab_build_events_json(int slot)
+{
+    const lab_slot *s = get_slot(slot);
+    if (!s || !s->accel) return null_answer(OUT_EVENTS);
+    viz_json *b = answer(OUT_EVENTS);
+    viz_json_printf(b, "{\"slot\":%d,\"build\":", slot);
+    const size_t cand_kept = put_build_events(b, s, 1);
+    viz_json_printf(b, ",\"cand_total\":%zu,\"cand_kept\":%zu}", s->cand_total, cand_kept);
     return done(b);
 }
 
@@ -536,6 +560,19 @@ int sidx_lab_trace(int slot, double ox, double oy, double oz, double dx, double 
     return ok();
 }
 
+/* The label of the node an event names ("A", "L4": the slide's names of
+ * kd-slide's kd-tree), for the events whose line sidx-step labels; else NULL. */
+static const char *event_label(const lab_slot *s, const sidx_event *e)
+{
+    switch (e->type) {
+    case SIDX_EV_NODE_ENTER: case SIDX_EV_BOX_TEST: case SIDX_EV_STACK_PUSH: case SIDX_EV_STACK_POP:
+    case SIDX_EV_TERMINATE:
+        return e->node != UINT32_MAX ? sidx_accel_node_label(s->accel, e->node) : NULL;
+    default:
+        return NULL;
+    }
+}
+
 const char *sidx_lab_trace_json(int slot)
 {
     const lab_slot *s = get_slot(slot);
@@ -563,7 +600,8 @@ const char *sidx_lab_trace_json(int slot)
                     s->trace.count, s->truncated ? "true" : "false", s->trace_ms);
     for (size_t i = 0; i < s->trace.count; ++i) {
         if (i) viz_json_put(b, ",\n");
-        if (viz_json_trav_event(b, &s->trace.events[i]) != 0) viz_json_put(b, "null");
+        const sidx_event *e = &s->trace.events[i];
+        if (viz_json_trav_event_label(b, e, event_label(s, e)) != 0) viz_json_put(b, "null");
     }
     viz_json_put(b, "]}");
     return done(b);
@@ -597,10 +635,10 @@ const char *sidx_lab_diverge_json(void)
         return done(b);
     }
     viz_json_printf(b, "{\"step\":%zu,\"same\":%zu,\"a\":", i + 1, i);
-    if (i < na) viz_json_trav_event(b, &a->trace.events[i]);
+    if (i < na) viz_json_trav_event_label(b, &a->trace.events[i], event_label(a, &a->trace.events[i]));
     else viz_json_put(b, "null");
     viz_json_put(b, ",\"b\":");
-    if (i < nc) viz_json_trav_event(b, &c->trace.events[i]);
+    if (i < nc) viz_json_trav_event_label(b, &c->trace.events[i], event_label(c, &c->trace.events[i]));
     else viz_json_put(b, "null");
     viz_json_put(b, "}");
     return done(b);

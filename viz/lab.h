@@ -35,7 +35,8 @@ extern "C" {
 #define SIDX_LAB_MAX_TRIANGLES 50000u
 /* A trace keeps at most this many events ("truncated": true beyond). */
 #define SIDX_LAB_MAX_EVENTS 200000u
-/* SAH candidate events kept in a build's JSON (sidx-view --html's budget). */
+/* SAH candidate events a build keeps (sidx_lab_build_events_json; sidx-view
+ * --html's budget). */
 #define SIDX_LAB_MAX_CANDIDATES 20000u
 /* The largest heat map, in pixels. */
 #define SIDX_LAB_MAX_PIXELS (2048u * 2048u)
@@ -88,10 +89,20 @@ int sidx_lab_build(int slot, const char *accel, const char *knobs_json);
 /* The slot's structure: {"slot","accel","args" (the knobs as sidx-step
  * flags),"stats":{"nodes","leaves","max_depth","sah_cost","bytes",
  * "prim_refs","build_ms"},"build":[the build events in the compact array
- * form of viz/json_write.h],"cand_total","cand_kept","labels":{"id":"A",
- * ...}}; "null" for an empty slot.  build_ms is the recorded build's wall
- * time (the only value that differs between runs). */
+ * form of viz/json_write.h, less the SAH candidates],"cand_total",
+ * "cand_kept","labels":{"id":"A",...}}; "null" for an empty slot.
+ * build_ms is the recorded build's wall time (the only value that differs
+ * between runs).  The candidates (a BVH of the teapot proposes over a
+ * hundred thousand) are left out: the tree, its counts and labels are all
+ * a rebuild after a knob change needs, and they are a fraction of the
+ * text to write and parse. */
 const char *sidx_lab_build_json(int slot);
+
+/* Every build event of the slot in build order, the SAH candidates in
+ * their places (the first cand_kept of cand_total): {"slot","build":[..],
+ * "cand_total","cand_kept"}, the events of sidx-view --html's build view
+ * and of the page's build mode and SAH curve; "null" for an empty slot. */
+const char *sidx_lab_build_events_json(int slot);
 
 /* Traces origin (ox, oy, oz), direction (dx, dy, dz) through the slot's
  * structure (closest hit, the knobs' traversal) and keeps the trace for
@@ -105,8 +116,9 @@ int sidx_lab_trace(int slot, double ox, double oy, double oz, double dx, double 
  * (PRIM_TEST),"mailbox" (MAILBOX_HIT),"events"},"truncated":false,
  * "ms" (the recorded query's wall time),
  * "events":[one object per event: sidx_event_to_json's (sidx-step --json)
- * plus "box" on NODE_ENTER and "line", the printer's text]}; "null"
- * when the slot has no trace. */
+ * plus "box" on NODE_ENTER and "line", the printer's text with the
+ * node's label after it where the structure names its nodes ("  [L4]",
+ * as sidx-step prints it)]}; "null" when the slot has no trace. */
 const char *sidx_lab_trace_json(int slot);
 
 /* Where the last traces of slot 0 and slot 1 part: {"step":K,"same":K-1,

@@ -30,6 +30,7 @@ static void usage(FILE *f)
             "  saveobj FILE                        write the open scene as OBJ (exactly its floats)\n"
             "  build SLOT ACCEL [KNOBS]            build in slot 0 or 1; KNOBS a JSON object, e.g.\n"
             "                                      {\"bins\":16,\"mailbox\":false}\n"
+            "  events SLOT                         the slot's build events with the SAH candidates\n"
             "  trace SLOT OX OY OZ DX DY DZ        trace a ray; prints the trace\n"
             "  diverge                             where the traces of slots 0 and 1 part\n"
             "  heat SLOT YAW PITCH ZOOM W H WHAT   heat map (WHAT 0 steps, 1 triangle tests): its\n"
@@ -149,6 +150,8 @@ static int run_line(char *line)
         const int rc = sidx_lab_build(slot, accel, knobs);
         status_line(rc);
         printf("%s\n", sidx_lab_build_json(slot));
+    } else if (!strcmp(cmd, "events") && (rest = numbers(rest, v, 1)) && !*rest) {
+        printf("%s\n", sidx_lab_build_events_json((int)v[0]));
     } else if (!strcmp(cmd, "trace") && (rest = numbers(rest, v, 7)) && !*rest) {
         const int rc = sidx_lab_trace((int)v[0], v[1], v[2], v[3], v[4], v[5], v[6]);
         status_line(rc);

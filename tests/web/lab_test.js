@@ -11,8 +11,8 @@
 //   - rays dragged on #view in the 2D scene kd-slide: the same, with R the
 //     page's ray, each float written so that strtof gives it back exactly;
 //     the page's address then opens the same walk in a new tab;
-//   - the teapot loaded as OBJ, a click on the 3D view: the ray through
-//     that pixel traces as sidx-step's on the same file;
+//   - the built-in teapot, a click on the 3D view: the ray through that
+//     pixel traces as `sidx-step --accel bvh teapot --ray R --json`;
 //   - a build knob typed into its input: the node count equals the
 //     build_end count of `sidx-step --build` with the same knob;
 //   - another structure picked: the trace follows it (against sidx-step);
@@ -20,7 +20,9 @@
 //     message and the page still traces afterwards;
 //   - the page from file:// with networking off (offline, and a dead proxy):
 //     it starts and no request leaves it;
-//   - the build mode: as many build steps as sidx-step --build's events;
+//   - the build mode: as many build steps as sidx-step --build's events
+//     (kdtree and bvh on kd-slide), and at bvh's first split the SAH curve
+//     drawn from the node's candidates, which the page asks for on entering;
 //   - the heat map: 256 x 256, not empty, no error;
 //   - side by side: the second structure's walk against sidx-step, the
 //     counts shown for both against their traces, and the step where the
@@ -274,31 +276,28 @@ async function main() {
             return hits ? null : 'none of the dragged rays hit a shape: the drags test too little';
         });
 
-        // The native teapot as an OBJ with its exact floats (sidx-lab
-        // saveobj): the built-in generator's sinf/cosf are the C library's,
-        // which may differ in the last bit from the module's.
-        await check('3D: a click on the teapot (an OBJ picked in #obj-file) traces as sidx-step does', async () => {
-            const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'sidx-lab-'));
-            const obj = path.join(dir, 'teapot.obj');
-            try {
-                execFileSync(path.resolve(BUILD, 'bin/sidx-lab'), [], { input: `open teapot\nsaveobj ${obj}\n`, timeout: 60000, stdio: ['pipe', 'ignore', 'pipe'] });
-                await p.setFiles('#obj-file', [obj]);
-                await choose(p, '#accel', 'bvh');
-                let s = await until(p, 'teapot.obj in 3D', (x) => x.scene === 'teapot.obj' && x.accel === 'bvh' && x.mode === '3d');
-                if (s.error) return 'error: ' + s.error;
-                const before = JSON.stringify(s.ray);
-                const bx = await p.box('#view');
-                await p.click(bx.x + bx.w * 0.52, bx.y + bx.h * 0.48);
-                s = await until(p, 'a new ray after the click', (x) => JSON.stringify(x.ray) !== before);
-                const why = await compareTrace(p, s, obj);
-                if (why) return why;
-                if (!traceOnly(s.events).some((e) => e.type === 'hit_update')) return 'the click in the middle of the view missed the teapot';
-                await timings(p, 'a clicked ray on teapot.obj', 'trace', 'trace of a clicked ray (teapot, bvh, drawn)');
-                await shot(p, '3d-teapot-clicked-ray');
-                return null;
-            } finally {
-                fs.rmSync(dir, { recursive: true, force: true });
+        // The built-in teapot: its floats are the same in the module and in
+        // sidx-step (lib/scenes.c computes its own sines).
+        await check('3D: a click on the built-in teapot traces as sidx-step --accel bvh teapot does', async () => {
+            await choose(p, '#scene', 'teapot');
+            await choose(p, '#accel', 'bvh');
+            let s = await until(p, 'teapot with bvh', (x) => x.scene === 'teapot' && x.accel === 'bvh');
+            if (s.mode !== '3d') {
+                const b3 = await p.box('#m-3d');
+                await p.click(b3.x + b3.w / 2, b3.y + b3.h / 2);
+                s = await until(p, 'teapot in 3D', (x) => x.mode === '3d');
             }
+            if (s.error) return 'error: ' + s.error;
+            const before = JSON.stringify(s.ray);
+            const bx = await p.box('#view');
+            await p.click(bx.x + bx.w * 0.52, bx.y + bx.h * 0.48);
+            s = await until(p, 'a new ray after the click', (x) => JSON.stringify(x.ray) !== before);
+            const why = await compareTrace(p, s);
+            if (why) return why;
+            if (!traceOnly(s.events).some((e) => e.type === 'hit_update')) return 'the click in the middle of the view missed the teapot';
+            await timings(p, 'a clicked ray on teapot', 'trace', 'trace of a clicked ray (teapot, bvh, drawn)');
+            await shot(p, '3d-teapot-clicked-ray');
+            return null;
         });
 
         await check('knob: max_depth typed in rebuilds the kd-tree with the native node count', async () => {
@@ -333,6 +332,7 @@ async function main() {
                 const got = findKey(s.stats, 'nodes');
                 if (got !== want) return `leaf_size ${leaf}: the page shows ${got} nodes, sidx-step --build ${want}`;
                 console.log(`        bvh on teapot, knobs ${JSON.stringify(s.knobs)}: ${got} nodes on both`);
+                await timings(p, 'rebuilding teapot, bvh leaf_size ' + leaf, 'rebuild', 'rebuild teapot bvh leaf_size ' + leaf);
             }
             return null;
         });
@@ -407,6 +407,32 @@ async function main() {
             if (got !== want - 1) return `Left in the build mode leaves the build step at ${got}, not ${want - 1}`;
             console.log(`        kdtree on kd-slide: ${want} build events, Left goes to ${got}`);
             await shot(p, 'build-mode');
+            // a binned BVH proposes SAH candidates: the page asks the module for
+            // them on entering the build mode; the curve of the first split's node
+            // is drawn from them and the steps count them
+            await choose(p, '#accel', 'bvh');
+            const kr = await p.box('#knob-reset');
+            await p.click(kr.x + kr.w / 2, kr.y + kr.h / 2);
+            await until(p, 'kd-slide with bvh, default knobs', (x) => x.scene === 'kd-slide' && x.accel === 'bvh' &&
+                        x.mode === 'build' && Object.keys(x.knobs || {}).length === 0);
+            const lines = native(['--accel', 'bvh', 'kd-slide', '--build', '--json'])
+                .split('\n').filter((l) => l.includes('"type":"build_')).map((l) => JSON.parse(l));
+            let t1 = Date.now();
+            while ((got = await bstep()) !== lines.length && Date.now() - t1 < WAIT_MS) await sleep(50);
+            if (got !== lines.length) return `bvh: the build mode shows ${got} build steps, sidx-step --build prints ${lines.length} events`;
+            const split = lines.findIndex((e) => e.type === 'build_split');
+            const cands = split < 0 ? 0 : lines.filter((e) => e.type === 'build_candidate' && e.node === lines[split].node).length;
+            if (cands < 2) return `bvh on kd-slide: sidx-step --build gives the first split's node ${cands} candidates`;
+            const h = await p.eval('location.hash');
+            await p.eval(`location.hash = ${JSON.stringify(h.replace(/bstep=\d+/, 'bstep=' + (split + 1)))}`);
+            t1 = Date.now();
+            let note = '';
+            while (((got = await bstep()) !== split + 1 || !/^pos /.test(note = await p.eval("document.getElementById('sah-note').textContent"))) &&
+                   Date.now() - t1 < WAIT_MS) await sleep(50);
+            if (got !== split + 1 || !/^pos /.test(note)) return `bvh: at build step ${split + 1} (a split) the SAH curve says '${note}', not its candidates`;
+            console.log(`        bvh on kd-slide: ${lines.length} build events; step ${split + 1} splits node ${lines[split].node}, its curve from ${cands} candidates: ${note}`);
+            await shot(p, 'build-mode-sah');
+            await timings(p, 'the build mode of bvh on kd-slide', 'rebuild', 'rebuild kd-slide bvh in build mode');
             const b2 = await p.box('#m-2d');
             await p.click(b2.x + b2.w / 2, b2.y + b2.h / 2);
             await until(p, 'mode 2d', (x) => x.mode === '2d');
