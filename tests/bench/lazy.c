@@ -273,7 +273,7 @@ int bench_cmd_lazy(int argc, char **argv)
         sidx_mesh m;
         cam c;
         if (!open_scene(scenes[s], &m, &c)) return BENCH_FAIL;
-        double ef[99], et[99], lf[99], lt[99];
+        double ef[99] = {0}, et[99] = {0}, lf[99] = {0}, lt[99] = {0};
         run_out e = {0}, l = {0};
         int same = 1, nomem = 0;
         for (int r = 0; r < rounds; ++r) {

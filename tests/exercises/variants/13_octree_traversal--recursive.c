@@ -38,7 +38,7 @@ static int visit(const walk *w, uint32_t node, uint32_t depth, sidx_aabb box, fl
     }
     const float *o = sidx_v3_array(&r->org), *d = sidx_v3_array(&r->dir), *id = sidx_v3_array(&r->inv_dir);
     const float *blo = sidx_v3_array(&box.min), *bhi = sidx_v3_array(&box.max);
-    float centre[3], tc[3];
+    float centre[3], tc[3] = {0.0f, 0.0f, 0.0f};
     int pending[3] = {0, 0, 0};
     uint32_t c = 0;
     for (int k = 0; k < w->axes; ++k) {
