@@ -34,7 +34,7 @@ function findChromium() {
     return null;
 }
 
-class Session {
+class PageLink {
     constructor(browser, sessionId, targetId) {
         this.browser = browser;
         this.id = sessionId;
@@ -42,7 +42,7 @@ class Session {
     }
     send(method, params) { return this.browser.send(method, params, this.id); }
     on(method, fn) { this.browser.listen(this.id, method, fn); }
-    // Waits for one event of this session (its params), or throws after ms.
+    // Waits for one event of this link (its params), or throws after ms.
     waitFor(method, ms) { return this.browser.waitFor(this.id, method, ms); }
 
     // The value of a JavaScript expression in the page (promises awaited);
@@ -162,13 +162,13 @@ class Browser {
                 else p.resolve(msg.result);
             } else if (msg.method) {
                 for (const l of this.listeners.slice()) {
-                    if (l.method === msg.method && (l.session === undefined || l.session === msg.sessionId)) l.fn(msg.params);
+                    if (l.method === msg.method && (l.link === undefined || l.link === msg.sessionId)) l.fn(msg.params);
                 }
             }
         }
     }
 
-    // Sends one command (to the browser, or to a page's session) and
+    // Sends one command (to the browser, or to a page's link) and
     // resolves with its result; rejects on a protocol error or a timeout.
     send(method, params, sessionId, timeoutMs) {
         if (this.closed) return Promise.reject(this.exitError || new Error('browser closed'));
@@ -190,11 +190,11 @@ class Browser {
         });
     }
 
-    listen(session, method, fn) { this.listeners.push({ session, method, fn }); }
+    listen(link, method, fn) { this.listeners.push({ link, method, fn }); }
 
-    waitFor(session, method, ms) {
+    waitFor(link, method, ms) {
         return new Promise((resolve, reject) => {
-            const l = { session, method, fn: null };
+            const l = { link, method, fn: null };
             const timer = setTimeout(() => {
                 this.listeners = this.listeners.filter((x) => x !== l);
                 reject(new Error(`${method}: not seen in ${ms} ms`));
@@ -214,7 +214,7 @@ class Browser {
         const o = opts || {};
         const { targetId } = await this.send('Target.createTarget', { url: 'about:blank' });
         const { sessionId } = await this.send('Target.attachToTarget', { targetId, flatten: true });
-        const s = new Session(this, sessionId, targetId);
+        const s = new PageLink(this, sessionId, targetId);
         s.console = [];
         s.exceptions = [];
         s.requests = [];
