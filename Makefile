@@ -8,7 +8,7 @@
 #   make test SAN=1 the same under AddressSanitizer + UndefinedBehaviorSanitizer (build/san, -O1),
 #                   the suites at their small sizes (SIDX_FAST_TESTS=1; FAST_TESTS=0 for full)
 #   make test-tsan  the threaded suites under ThreadSanitizer (build/tsan)
-#   make valgrind   the suites under valgrind memcheck (small sizes; VALGRIND_SKIP)
+#   make valgrind   the suites under valgrind memcheck (smallest sizes; VALGRIND_SKIP)
 #   TEST_JOBS=N     how many suites run at once (default: the number of cores)
 #   make cppcheck   static analysis of every C file (cppcheck, warning + portability)
 #   make bench      the benchmark table (build/bench/); refreshes the figures in
@@ -244,15 +244,17 @@ test: deps
 # N failed".  Under the sanitizers the suites run at their small sizes
 # (SIDX_FAST_TESTS=1, as under valgrind): they look for memory errors and
 # undefined behaviour on every path, which more rays do not add to.
-# TEST_SKIP="tests/run_x.sh ..." leaves those shell checks out (.ci/run
-# runs the checks that read only the sources and docs in one build).
+# TEST_SKIP="tests/run_x.sh test_y ..." leaves those shell checks and
+# suites out (.ci/run runs the checks that read only the sources and docs,
+# and the browser's, in one build).
 TEST_JOBS ?= $(NPROC)
 TEST_SKIP ?=
 TEST_SCRIPTS := $(filter-out $(TEST_SKIP),$(wildcard tests/run_*.sh))
+TEST_SUITES = $(filter-out $(TEST_SKIP:%=$(BUILD)/tests/%),$(TESTS))
 FAST_TESTS ?= $(if $(SANFLAGS),1,0)
 FAST_ENV := $(if $(filter 1,$(FAST_TESTS)),SIDX_FAST_TESTS=1)
 test-run:
-	@$(FAST_ENV) JOBS=$(TEST_JOBS) BUILD=$(BUILD) LABEL=test-run sh tests/runner.sh $(TEST_SCRIPTS) $(TESTS)
+	@$(FAST_ENV) JOBS=$(TEST_JOBS) BUILD=$(BUILD) LABEL=test-run sh tests/runner.sh $(TEST_SCRIPTS) $(TEST_SUITES)
 
 # ThreadSanitizer over the suites that run threads: the parallel build, the
 # parallel trace and the worker pool (test_parallel), concurrent queries on
@@ -270,8 +272,10 @@ test-tsan:
 	  sh tests/runner.sh $(TSAN_TESTS:%=$(BUILDDIR)/tsan/tests/%) \
 	  && echo "test-tsan: the threaded suites ran with no ThreadSanitizer report"
 
-# Each suite at its small size under memcheck; a suite's output is printed
-# only when it fails (errors, leaks: exit 99).  What memcheck finds that
+# Each suite at its smallest size (SIDX_FAST_TESTS=2: a sixteenth of the
+# full ray counts, the largest builds left to the sanitizer run) under
+# memcheck; a suite's output is printed only when it fails (errors, leaks:
+# exit 99).  What memcheck finds that
 # ASan + UBSan (make test SAN=1, the same suites) do not is a read of
 # uninitialised memory, in the optimised build itself; VALGRIND_SKIP are
 # the suites whose work happens where memcheck does not look: in other
@@ -284,7 +288,7 @@ VALGRIND := valgrind -q --error-exitcode=99 --suppressions=tests/valgrind.supp -
             --show-leak-kinds=definite,indirect,possible --errors-for-leak-kinds=definite,indirect,possible
 valgrind: deps
 	@$(MAKE) --no-print-directory $(BUILD_JOBS) build
-	@SIDX_FAST_TESTS=1 PREFIX="$(VALGRIND)" QUIET=1 JOBS=$(TEST_JOBS) BUILD=$(BUILD) LABEL=valgrind \
+	@SIDX_FAST_TESTS=2 PREFIX="$(VALGRIND)" QUIET=1 JOBS=$(TEST_JOBS) BUILD=$(BUILD) LABEL=valgrind \
 	  sh tests/runner.sh $(VALGRIND_TESTS) && echo "valgrind: every suite but $(VALGRIND_SKIP) ran with zero errors and zero leaks"
 
 bench: deps

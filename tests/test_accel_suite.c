@@ -122,7 +122,7 @@ static void install_limits(void)
 #define CHECK_TRAVERSALS 4u /* also the stack / ordered / naive traversals */
 #define MAX_REPORTS 4       /* mismatches printed per structure and case */
 
-static size_t nrays(size_t normal) { return tk_fast_tests() ? (normal + 3) / 4 : normal; }
+static size_t nrays(size_t normal) { return tk_test_size(normal); }
 
 static void describe_ray(const tk_rayrec *r, char *buf, size_t size)
 {
@@ -442,7 +442,7 @@ static void test_icosphere_no_leaks(void **state)
 {
     (void)state;
     unsigned failures = 0;
-    const size_t max = tk_fast_tests() ? 1200 : 6000;
+    const size_t max = tk_tiny_tests() ? 400 : tk_fast_tests() ? 1200 : 6000;
     for (uint32_t level = 1; level <= (tk_fast_tests() ? 2u : 3u); ++level) {
         sidx_mesh m = {0};
         assert_int_equal(sidx_scene_make("icosphere", level, &m, NULL), SIDX_OK);
@@ -775,7 +775,7 @@ static void test_uv_normal_match_the_mesh(void **state)
     static const char *const accels[] = {"bvh", "bvh-obb", "bvh4", "bvh8", "kdtree", "kdtree-binned"};
     static const uint32_t flag_sets[] = {SIDX_QUERY_UV | SIDX_QUERY_NORMAL, SIDX_QUERY_UV, SIDX_QUERY_NORMAL};
     static const tk_ray_kind kinds[] = {TK_RAYS_PRIMARY, TK_RAYS_DIFFUSE, TK_RAYS_GRAZING};
-    const size_t n = tk_fast_tests() ? 60 : 250;
+    const size_t n = tk_tiny_tests() ? 20 : tk_fast_tests() ? 60 : 250;
     unsigned failures = 0;
     size_t checked_hits = 0, brute_same = 0;
     for (size_t si = 0; si < sizeof scenes / sizeof scenes[0]; ++si) {

@@ -153,7 +153,7 @@ static void ten_thousand_instances(void **state)
     const double flat_ms = tk_now_ms() - t0;
     assert_int_equal(sidx_accel_build("brute", &flat_mesh, NULL, &flat_brute, NULL), SIDX_OK);
 
-    const size_t nrays = tk_fast_tests() ? 300 : 2000;
+    const size_t nrays = tk_tiny_tests() ? 80 : tk_fast_tests() ? 300 : 2000;
     sidx_ray *rays = malloc(nrays * sizeof *rays);
     assert_non_null(rays);
     make_rays(&g, sidx_mesh_bounds(&flat_mesh), agg, nrays, rays);
@@ -387,7 +387,7 @@ static void ten_thousand_bunnies(void **state)
     /* rays: a quarter from outside the cloud, the rest from inside it; half
      * aimed at a random bunny's centre (they hit often), half random */
     const sidx_aabb world = {sidx_v3(-13.5f * diag, -13.5f * diag, -13.5f * diag), sidx_v3(13.5f * diag, 13.5f * diag, 13.5f * diag)};
-    const size_t nrays = tk_fast_tests() ? 200 : 2000;
+    const size_t nrays = tk_tiny_tests() ? 60 : tk_fast_tests() ? 200 : 2000;
     sidx_ray *rays = malloc(nrays * sizeof *rays);
     assert_non_null(rays);
     for (size_t i = 0; i < nrays; ++i) {

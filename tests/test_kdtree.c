@@ -238,7 +238,7 @@ static void check_rays(const sidx_accel *ref, const sidx_accel *a, const tk_rayr
 static void test_against_brute(void **state)
 {
     (void)state;
-    const size_t per_kind = tk_fast_tests() ? 40 : 100;
+    const size_t per_kind = tk_tiny_tests() ? 12 : tk_fast_tests() ? 40 : 100;
     const size_t nk = TK_RAYS_KIND_COUNT + 1; /* + one diffuse set for the naive traversal */
     tk_rayrec *rays = malloc(per_kind * nk * sizeof *rays);
     sidx_hit *ref_hits = malloc(per_kind * nk * sizeof *ref_hits);
@@ -1232,8 +1232,9 @@ static void test_slide_walk_equals_fast_walk(void **state)
     (void)state;
     const char *const sc[] = {"flat2d", "cornell", "menger", "teapot", "stadium", "icosphere"};
     const uint32_t detail[] = {0, 0, 1, 0, 0, 0};
-    const size_t per_kind = tk_fast_tests() ? 60 : 200, max_split = 800;
-    tk_rayrec *rays = malloc((per_kind * TK_RAYS_KIND_COUNT + max_split + 6000) * sizeof *rays);
+    const size_t per_kind = tk_tiny_tests() ? 16 : tk_fast_tests() ? 60 : 200;
+    const size_t max_split = tk_tiny_tests() ? 200 : 800, leak_rays = tk_tiny_tests() ? 1500 : 6000;
+    tk_rayrec *rays = malloc((per_kind * TK_RAYS_KIND_COUNT + max_split + leak_rays) * sizeof *rays);
     assert_non_null(rays);
     uint64_t empty_enters = 0, checked = 0;
     for (size_t s = 0; s < sizeof sc / sizeof sc[0]; ++s) {
@@ -1254,7 +1255,7 @@ static void test_slide_walk_equals_fast_walk(void **state)
             tk_rng rng;
             tk_rng_seed(&rng, 77 + s + 13 * k);
             n += split_plane_rays(&m, kd, &rng, max_split, rays + n);
-            if (!strcmp(sc[s], "icosphere")) n += tk_make_leak_rays(&m, sidx_v3(0.1f, -0.2f, 0.3f), 6000, rays + n);
+            if (!strcmp(sc[s], "icosphere")) n += tk_make_leak_rays(&m, sidx_v3(0.1f, -0.2f, 0.3f), leak_rays, rays + n);
             slide_count cnt = {kd, 0, 0};
             const sidx_hook hook = {slide_fn, &cnt, 0};
             for (size_t i = 0; i < n; ++i) {
@@ -1269,7 +1270,7 @@ static void test_slide_walk_equals_fast_walk(void **state)
         }
         sidx_mesh_free(&m);
     }
-    assert_true(checked > 10000);
+    assert_true(checked > (tk_tiny_tests() ? 2000u : 10000u));
     assert_true(empty_enters > 0); /* the slide walk's own path was taken */
     free(rays);
 }

@@ -197,7 +197,7 @@ static void measure(void **state)
     const int fast = tk_fast_tests() || !getenv("SIDX_RAYCLASS_TABLE");
     sidx_mesh m;
     make_scene("teapot", 0, &m);
-    const size_t n = fast ? 2000 : 5000;
+    const size_t n = tk_tiny_tests() ? 250 : fast ? 2000 : 5000;
     tk_rayrec *recs = malloc(n * sizeof *recs);
     sidx_ray *rays = malloc(n * sizeof *rays);
     sidx_hit *h0 = malloc(n * sizeof *h0), *h1 = malloc(n * sizeof *h1);

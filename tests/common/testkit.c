@@ -701,6 +701,18 @@ int tk_fast_tests(void)
     return e && *e && strcmp(e, "0") != 0;
 }
 
+int tk_tiny_tests(void)
+{
+    const char *e = getenv("SIDX_FAST_TESTS");
+    return e && strcmp(e, "2") == 0;
+}
+
+size_t tk_test_size(size_t full)
+{
+    const size_t part = tk_tiny_tests() ? 16 : tk_fast_tests() ? 4 : 1;
+    return (full + part - 1) / part; /* rounded up: 1 or more when full is */
+}
+
 double tk_thread_cpu_ms(void)
 {
     struct timespec ts;

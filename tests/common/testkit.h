@@ -132,8 +132,16 @@ sidx_status tk_mesh_flatten(const sidx_mesh *m, float z0, sidx_mesh *out);
  * gives BUILD/bin in out; out is kept when argv0 names no directory. */
 void tk_bin_dir(const char *argv0, char *out, size_t size);
 
-/* 1 when the environment asks for fast tests (SIDX_FAST_TESTS=1, valgrind). */
+/* 1 when the environment asks for fast tests (SIDX_FAST_TESTS=1: the
+ * sanitizers, the clang and minimal builds; 2: valgrind). */
 int tk_fast_tests(void);
+/* 1 when it asks for the smallest sizes (SIDX_FAST_TESTS=2, make valgrind:
+ * memcheck runs every instruction some 40 times slower, and looks for
+ * memory faults, which a few rays through each path find as well as many). */
+int tk_tiny_tests(void);
+/* A count of rays (or cases) at the sizes asked for: full, a quarter of it
+ * (fast), a sixteenth (tiny), rounded up. */
+size_t tk_test_size(size_t full);
 /* Monotonic wall-clock time in milliseconds. */
 double tk_now_ms(void);
 /* CPU time of the calling thread / of the whole process, in milliseconds:
