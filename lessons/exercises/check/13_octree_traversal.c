@@ -316,15 +316,9 @@ static const char *const hint_extra =
 static const char *hint(size_t i, const sidx_event *ref, const sidx_event *stu)
 {
     const int r = (int)(i % RAYS);
-    const int ref_stop = ref && ref->type == SIDX_EV_TERMINATE && ref->reason == SIDX_TERM_HIT_IN_CELL;
-    const int stu_stop = stu && stu->type == SIDX_EV_TERMINATE && stu->reason == SIDX_TERM_HIT_IN_CELL;
-    if (stu_stop && !ref_stop) return stu->prim == SIDX_NO_HIT ? hint_stop_nohit : hint_cannot;
-    if (ref_stop && !stu_stop) return hint_stop;
-    if (ref && ref->type == SIDX_EV_NODE_ENTER && ref->node == 0 && (!stu || stu->type != SIDX_EV_NODE_ENTER))
-        return hint_start;
-    if ((ref && (ref->type == SIDX_EV_PRIM_TEST || ref->type == SIDX_EV_HIT_UPDATE)) ||
-        (stu && (stu->type == SIDX_EV_PRIM_TEST || stu->type == SIDX_EV_HIT_UPDATE)))
-        return hint_leaf;
+    const ex_walk_hints walk = {hint_stop, hint_cannot, hint_stop_nohit, hint_start, hint_leaf};
+    const char *w = ex_walk_hint(ref, stu, &walk);
+    if (w) return w;
     if (ref && ref->type == SIDX_EV_NODE_ENTER && stu && stu->type == SIDX_EV_TERMINATE) return hint_missing;
     if (ref && ref->type == SIDX_EV_TERMINATE && stu && stu->type == SIDX_EV_NODE_ENTER)
         return (r >= K_TMAX_MID && r < K_ZERO) || r == K_EXIT_TIE ? hint_end_tie : hint_extra;

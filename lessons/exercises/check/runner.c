@@ -93,6 +93,20 @@ void ex_walk_end(const sidx_hook *h, const char *structure, const sidx_hit *best
     sidx_hook_emit(h, &e);
 }
 
+const char *ex_walk_hint(const sidx_event *ref, const sidx_event *stu, const ex_walk_hints *h)
+{
+    const int ref_stop = ref && ref->type == SIDX_EV_TERMINATE && ref->reason == SIDX_TERM_HIT_IN_CELL;
+    const int stu_stop = stu && stu->type == SIDX_EV_TERMINATE && stu->reason == SIDX_TERM_HIT_IN_CELL;
+    if (stu_stop && !ref_stop) return stu->prim == SIDX_NO_HIT ? h->stop_nohit : h->cannot;
+    if (ref_stop && !stu_stop) return h->stop;
+    if (ref && ref->type == SIDX_EV_NODE_ENTER && ref->node == 0 && (!stu || stu->type != SIDX_EV_NODE_ENTER))
+        return h->start;
+    if ((ref && (ref->type == SIDX_EV_PRIM_TEST || ref->type == SIDX_EV_HIT_UPDATE)) ||
+        (stu && (stu->type == SIDX_EV_PRIM_TEST || stu->type == SIDX_EV_HIT_UPDATE)))
+        return h->leaf;
+    return NULL;
+}
+
 /* ---- traces ------------------------------------------------------------------ */
 
 void ex_trace_hook_fn(const sidx_event *ev, void *user)
