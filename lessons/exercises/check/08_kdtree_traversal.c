@@ -209,13 +209,7 @@ static void describe(size_t i, ex_case_info *out)
 {
     const int s = (int)(i / RAYS), r = (int)(i % RAYS);
     snprintf(out->name, sizeof out->name, "scene %s, ray %d (%s)", scene_names[s], r + 1, ray_kind[s][r]);
-    ex_format_ray(out->what, sizeof out->what, &rays[s][r]);
-    out->view_accel = "kdtree";
-    out->view_knobs = "--no-mailbox";
-    out->view_scene = scene_names[s];
-    out->view_mesh = &meshes[s];
-    out->view_ray = &rays[s][r];
-    out->hint = NULL;
+    ex_describe_walk(out, &rays[s][r], "kdtree", "--no-mailbox", scene_names[s], &meshes[s]);
 }
 
 static void reference(size_t i, const sidx_hook *h)

@@ -240,13 +240,7 @@ static void describe(size_t i, ex_case_info *out)
     const int s = (int)(i / RAYS), r = (int)(i % RAYS);
     snprintf(out->name, sizeof out->name, "%s over %s, ray %d (%s)", accel_names[s], scene_names[s], r + 1,
              ray_kind[s][r]);
-    ex_format_ray(out->what, sizeof out->what, &rays[s][r]);
-    out->view_accel = accel_names[s];
-    out->view_knobs = view_knobs[s];
-    out->view_scene = s == 4 ? NULL : scene_names[s];
-    out->view_mesh = &meshes[s];
-    out->view_ray = &rays[s][r];
-    out->hint = NULL;
+    ex_describe_walk(out, &rays[s][r], accel_names[s], view_knobs[s], s == 4 ? NULL : scene_names[s], &meshes[s]);
 }
 
 /* The reference's events without its stack steps. */

@@ -51,6 +51,12 @@ extern const ex_driver ex_driver_this;
 
 /* "o=(x, y, z) d=(x, y, z) t in [tmin, tmax)" */
 void ex_format_ray(char *buf, size_t size, const sidx_ray *r);
+/* A walk case's input for the report, the ray r, and its sidx-view
+ * command: structure accel with knobs (or NULL) over scene (a built-in
+ * name, or NULL: mesh m is written out); no case hint.  The driver
+ * writes out->name. */
+void ex_describe_walk(ex_case_info *out, const sidx_ray *r, const char *accel, const char *knobs, const char *scene,
+                      const sidx_mesh *m);
 /* A ray from components, checked (aborts the driver on an invalid ray). */
 sidx_ray ex_ray(float ox, float oy, float oz, float dx, float dy, float dz, float tmin, float tmax);
 /* A growing array of events; ex_trace_hook_fn (a hook's fn, user = the

@@ -48,6 +48,18 @@ void ex_format_ray(char *buf, size_t size, const sidx_ray *r)
              (double)r->tmax);
 }
 
+void ex_describe_walk(ex_case_info *out, const sidx_ray *r, const char *accel, const char *knobs, const char *scene,
+                      const sidx_mesh *m)
+{
+    ex_format_ray(out->what, sizeof out->what, r);
+    out->view_accel = accel;
+    out->view_knobs = knobs;
+    out->view_scene = scene;
+    out->view_mesh = m;
+    out->view_ray = r;
+    out->hint = NULL;
+}
+
 sidx_ray ex_ray(float ox, float oy, float oz, float dx, float dy, float dz, float tmin, float tmax)
 {
     sidx_ray r;
