@@ -112,8 +112,16 @@ VIZ_PROG_SRC := $(filter-out $(if $(filter 1,$(HAVE_SDL)),,viz/sidx_view.c) \
 VIZ_LIB_SRC := $(filter-out $(wildcard viz/sidx_*.c) $(if $(filter 1,$(HAVE_SDL)),,$(VIZ_SDL_SRC)),$(wildcard viz/*.c))
 # sidx-view --html's page template, viz/page.html, becomes a C array
 # (sidx_page_html) so the installed program needs no file beside it; od
-# and sed (coreutils) write the bytes.
+# and sed (coreutils) write the bytes.  The script both web pages share,
+# viz/page_common.js, takes the place of each page's line
+# /*@SIDX_PAGE_COMMON@*/ (PAGE_COMMON_SPLICE; PAGE_COMMON_CHECK wants one
+# such line and no '</script' in the shared text).
 PAGE_OBJ := $(if $(filter 1,$(HAVE_SDL)),$(BUILD)/obj/gen/page_html.o)
+PAGE_COMMON_SPLICE = awk -v js=viz/page_common.js '$$0 == "/*@SIDX_PAGE_COMMON@*/" { \
+  while ((getline l < js) > 0) print l; close(js); next } { print }'
+PAGE_COMMON_CHECK = if [ "$$(grep -c '^/\*@SIDX_PAGE_COMMON@\*/$$' $(1))" != 1 ]; then \
+  echo "$(1) wants exactly one line /*@SIDX_PAGE_COMMON@*/"; exit 1; fi; \
+  if grep -qi '</script' viz/page_common.js; then echo "viz/page_common.js holds '</script': it cannot be inlined"; exit 1; fi
 VIZ_OBJ := $(VIZ_LIB_SRC:%.c=$(BUILD)/obj/%.o) $(PAGE_OBJ)
 TEST_SRC := $(if $(filter 1,$(HAVE_CMOCKA)),$(wildcard tests/test_*.c))
 TEST_COMMON_SRC := $(wildcard tests/common/*.c)
@@ -170,11 +178,12 @@ $(BUILD)/obj/%.o: %.c
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS) $(PKG_CFLAGS) $(CMOCKA_CFLAGS) -MMD -MP -c $< -o $@
 
-$(BUILD)/gen/page_html.c: viz/page.html
+$(BUILD)/gen/page_html.c: viz/page.html viz/page_common.js
 	@mkdir -p $(dir $@)
-	{ echo '/* generated from viz/page.html by the Makefile: do not edit */'; echo '#include <stddef.h>'; \
+	@$(call PAGE_COMMON_CHECK,$<)
+	{ echo '/* generated from viz/page.html and viz/page_common.js by the Makefile: do not edit */'; echo '#include <stddef.h>'; \
 	  echo 'const unsigned char sidx_page_html[] = {'; \
-	  od -An -v -tx1 < $< | sed -e 's/\([0-9a-f][0-9a-f]\)/0x\1,/g'; echo '0x00};'; \
+	  $(PAGE_COMMON_SPLICE) $< | od -An -v -tx1 | sed -e 's/\([0-9a-f][0-9a-f]\)/0x\1,/g'; echo '0x00};'; \
 	  echo 'const size_t sidx_page_html_len = sizeof sidx_page_html - 1;'; } > $@.tmp && mv $@.tmp $@
 
 $(BUILD)/obj/gen/page_html.o: $(BUILD)/gen/page_html.c
@@ -387,7 +396,8 @@ clean:
 # network, works from file://) with the library's own sources and the lab's
 # entry layer (viz/lab.c) compiled to WebAssembly by emscripten and inlined
 # (-sSINGLE_FILE: the module as base64 in the JavaScript, the JavaScript
-# in viz/lab_page.html at its @SIDX_LAB_MODULE@ line).  WebAssembly SIMD:
+# in viz/lab_page.html at its @SIDX_LAB_MODULE@ line; viz/page_common.js at
+# its @SIDX_PAGE_COMMON@ line).  WebAssembly SIMD:
 # -msimd128 -msse4.1 maps the SSE kernels onto it (lib/simd_isa.h);
 # WEB_SIMD=0 builds the scalar fallback in $(BUILDDIR)/web-scalar.
 # Debian's emscripten runs node with acorn from node-acorn
@@ -424,12 +434,13 @@ $(WEB_DIR)/obj/%.o: %.c
 $(WEB_DIR)/sidx-lab.js: $(WEB_OBJ) viz/lab.h
 	$(WEB_NODE_PATH) $(EMCC) $(WEB_LDFLAGS) -o $@ $(WEB_OBJ)
 
-$(WEB_DIR)/sidx-lab.html: $(WEB_DIR)/sidx-lab.js viz/lab_page.html
+$(WEB_DIR)/sidx-lab.html: $(WEB_DIR)/sidx-lab.js viz/lab_page.html viz/page_common.js
 	@if grep -qi '</script' $(WEB_DIR)/sidx-lab.js; then echo "web: the module's JavaScript holds '</script': it cannot be inlined"; exit 1; fi
 	@if [ "$$(grep -c '^<script>/\*@SIDX_LAB_MODULE@\*/</script>$$' viz/lab_page.html)" != 1 ]; then \
 	  echo "web: viz/lab_page.html wants exactly one line <script>/*@SIDX_LAB_MODULE@*/</script>"; exit 1; fi
+	@$(call PAGE_COMMON_CHECK,viz/lab_page.html)
 	awk -v js=$(WEB_DIR)/sidx-lab.js '$$0 == "<script>/*@SIDX_LAB_MODULE@*/</script>" { print "<script>"; \
-	  while ((getline l < js) > 0) print l; print "</script>"; next } { print }' viz/lab_page.html > $@.tmp
+	  while ((getline l < js) > 0) print l; print "</script>"; next } { print }' viz/lab_page.html | $(PAGE_COMMON_SPLICE) > $@.tmp
 	@size=$$(wc -c < $@.tmp); if [ $$size -gt $(WEB_MAX_BYTES) ]; then \
 	  echo "web: $@ would be $$size bytes, over the limit of $(WEB_MAX_BYTES)"; rm -f $@.tmp; exit 1; fi
 	mv $@.tmp $@

@@ -89,12 +89,7 @@ static void describe(size_t i, ex_case_info *out)
     split(i, &ordered, &s, &r);
     snprintf(out->name, sizeof out->name, "%s walk, scene %s, ray %d (%s)", ordered ? "ordered" : "naive",
              scene_names[s], r + 1, ray_kind[s][r]);
-    ex_format_ray(out->what, sizeof out->what, &rays[s][r]);
-    out->hint = NULL;
-    out->view_accel = "bvh";
-    out->view_scene = scene_names[s];
-    out->view_mesh = &meshes[s];
-    out->view_ray = &rays[s][r];
+    ex_describe_walk(out, &rays[s][r], "bvh", NULL, scene_names[s], &meshes[s]);
 }
 
 static void reference(size_t i, const sidx_hook *h)

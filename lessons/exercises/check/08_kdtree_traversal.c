@@ -209,13 +209,7 @@ static void describe(size_t i, ex_case_info *out)
 {
     const int s = (int)(i / RAYS), r = (int)(i % RAYS);
     snprintf(out->name, sizeof out->name, "scene %s, ray %d (%s)", scene_names[s], r + 1, ray_kind[s][r]);
-    ex_format_ray(out->what, sizeof out->what, &rays[s][r]);
-    out->view_accel = "kdtree";
-    out->view_knobs = "--no-mailbox";
-    out->view_scene = scene_names[s];
-    out->view_mesh = &meshes[s];
-    out->view_ray = &rays[s][r];
-    out->hint = NULL;
+    ex_describe_walk(out, &rays[s][r], "kdtree", "--no-mailbox", scene_names[s], &meshes[s]);
 }
 
 static void reference(size_t i, const sidx_hook *h)
@@ -279,18 +273,11 @@ static const char *const hint_far_interval =
 static const char *hint(size_t i, const sidx_event *ref, const sidx_event *stu)
 {
     const int r = (int)(i % RAYS);
-    const int ref_stop = ref && ref->type == SIDX_EV_TERMINATE && ref->reason == SIDX_TERM_HIT_IN_CELL;
-    const int stu_stop = stu && stu->type == SIDX_EV_TERMINATE && stu->reason == SIDX_TERM_HIT_IN_CELL;
-    if (stu_stop && !ref_stop) {
-        if (stu->prim == SIDX_NO_HIT) return hint_stop_nohit;
-        return r >= K_IN_PLANE && r < K_TMAX ? hint_nan : hint_cannot;
-    }
-    if (ref_stop && !stu_stop) return hint_stop;
-    if (ref && ref->type == SIDX_EV_NODE_ENTER && ref->node == 0 && (!stu || stu->type != SIDX_EV_NODE_ENTER))
-        return hint_start;
-    if ((ref && (ref->type == SIDX_EV_PRIM_TEST || ref->type == SIDX_EV_HIT_UPDATE)) ||
-        (stu && (stu->type == SIDX_EV_PRIM_TEST || stu->type == SIDX_EV_HIT_UPDATE)))
-        return hint_leaf;
+    /* a stop with a hit beyond the cell, on a ray inside a split plane, is the NaN rule */
+    const ex_walk_hints walk = {hint_stop, r >= K_IN_PLANE && r < K_TMAX ? hint_nan : hint_cannot, hint_stop_nohit,
+                                hint_start, hint_leaf};
+    const char *w = ex_walk_hint(ref, stu, &walk);
+    if (w) return w;
     if ((ref && ref->type == SIDX_EV_STACK_POP) || (stu && stu->type == SIDX_EV_STACK_POP)) return hint_pop;
     if (ref && ref->type == SIDX_EV_TERMINATE && stu && stu->type == SIDX_EV_NODE_ENTER) return hint_pop;
     if (ref && stu && (ref->type == SIDX_EV_STACK_PUSH) != (stu->type == SIDX_EV_STACK_PUSH))

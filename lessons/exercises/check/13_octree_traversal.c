@@ -240,13 +240,7 @@ static void describe(size_t i, ex_case_info *out)
     const int s = (int)(i / RAYS), r = (int)(i % RAYS);
     snprintf(out->name, sizeof out->name, "%s over %s, ray %d (%s)", accel_names[s], scene_names[s], r + 1,
              ray_kind[s][r]);
-    ex_format_ray(out->what, sizeof out->what, &rays[s][r]);
-    out->view_accel = accel_names[s];
-    out->view_knobs = view_knobs[s];
-    out->view_scene = s == 4 ? NULL : scene_names[s];
-    out->view_mesh = &meshes[s];
-    out->view_ray = &rays[s][r];
-    out->hint = NULL;
+    ex_describe_walk(out, &rays[s][r], accel_names[s], view_knobs[s], s == 4 ? NULL : scene_names[s], &meshes[s]);
 }
 
 /* The reference's events without its stack steps. */
@@ -316,15 +310,9 @@ static const char *const hint_extra =
 static const char *hint(size_t i, const sidx_event *ref, const sidx_event *stu)
 {
     const int r = (int)(i % RAYS);
-    const int ref_stop = ref && ref->type == SIDX_EV_TERMINATE && ref->reason == SIDX_TERM_HIT_IN_CELL;
-    const int stu_stop = stu && stu->type == SIDX_EV_TERMINATE && stu->reason == SIDX_TERM_HIT_IN_CELL;
-    if (stu_stop && !ref_stop) return stu->prim == SIDX_NO_HIT ? hint_stop_nohit : hint_cannot;
-    if (ref_stop && !stu_stop) return hint_stop;
-    if (ref && ref->type == SIDX_EV_NODE_ENTER && ref->node == 0 && (!stu || stu->type != SIDX_EV_NODE_ENTER))
-        return hint_start;
-    if ((ref && (ref->type == SIDX_EV_PRIM_TEST || ref->type == SIDX_EV_HIT_UPDATE)) ||
-        (stu && (stu->type == SIDX_EV_PRIM_TEST || stu->type == SIDX_EV_HIT_UPDATE)))
-        return hint_leaf;
+    const ex_walk_hints walk = {hint_stop, hint_cannot, hint_stop_nohit, hint_start, hint_leaf};
+    const char *w = ex_walk_hint(ref, stu, &walk);
+    if (w) return w;
     if (ref && ref->type == SIDX_EV_NODE_ENTER && stu && stu->type == SIDX_EV_TERMINATE) return hint_missing;
     if (ref && ref->type == SIDX_EV_TERMINATE && stu && stu->type == SIDX_EV_NODE_ENTER)
         return (r >= K_TMAX_MID && r < K_ZERO) || r == K_EXIT_TIE ? hint_end_tie : hint_extra;

@@ -51,6 +51,12 @@ extern const ex_driver ex_driver_this;
 
 /* "o=(x, y, z) d=(x, y, z) t in [tmin, tmax)" */
 void ex_format_ray(char *buf, size_t size, const sidx_ray *r);
+/* A walk case's input for the report, the ray r, and its sidx-view
+ * command: structure accel with knobs (or NULL) over scene (a built-in
+ * name, or NULL: mesh m is written out); no case hint.  The driver
+ * writes out->name. */
+void ex_describe_walk(ex_case_info *out, const sidx_ray *r, const char *accel, const char *knobs, const char *scene,
+                      const sidx_mesh *m);
 /* A ray from components, checked (aborts the driver on an invalid ray). */
 sidx_ray ex_ray(float ox, float oy, float oz, float dx, float dy, float dz, float tmin, float tmax);
 /* A growing array of events; ex_trace_hook_fn (a hook's fn, user = the
@@ -74,5 +80,19 @@ float ex_rand(uint32_t *state);
 void ex_walk_begin(sidx_ex *ex, const sidx_hook *student_hook, const sidx_hook *h, const char *structure,
                    const sidx_ray *r, const sidx_mesh *m, sidx_tri_method tri, sidx_box_method box, sidx_hit *best);
 void ex_walk_end(const sidx_hook *h, const char *structure, const sidx_hit *best);
+
+/* The hints of a front-to-back walk that stops once the best hit lies in
+ * the current cell (the kd-tree's, the octree's), in the slide's words. */
+typedef struct ex_walk_hints {
+    const char *stop;       /* the reference stops there (hit_in_cell), the student goes on */
+    const char *cannot;     /* the student stops with a hit beyond the cell */
+    const char *stop_nohit; /* the student stops with no hit at all */
+    const char *start;      /* the student does not enter the root first */
+    const char *leaf;       /* a triangle test or a closer hit differs */
+} ex_walk_hints;
+/* The hint for a first divergence (ref or stu NULL where that trace
+ * ended) about the stop rule, the start or a leaf, from h; NULL when it
+ * is about none of them (the driver's own rules decide then). */
+const char *ex_walk_hint(const sidx_event *ref, const sidx_event *stu, const ex_walk_hints *h);
 
 #endif

@@ -48,6 +48,18 @@ void ex_format_ray(char *buf, size_t size, const sidx_ray *r)
              (double)r->tmax);
 }
 
+void ex_describe_walk(ex_case_info *out, const sidx_ray *r, const char *accel, const char *knobs, const char *scene,
+                      const sidx_mesh *m)
+{
+    ex_format_ray(out->what, sizeof out->what, r);
+    out->view_accel = accel;
+    out->view_knobs = knobs;
+    out->view_scene = scene;
+    out->view_mesh = m;
+    out->view_ray = r;
+    out->hint = NULL;
+}
+
 sidx_ray ex_ray(float ox, float oy, float oz, float dx, float dy, float dz, float tmin, float tmax)
 {
     sidx_ray r;
@@ -91,6 +103,20 @@ void ex_walk_end(const sidx_hook *h, const char *structure, const sidx_hit *best
     e.t = best->prim == SIDX_NO_HIT ? INFINITY : best->t;
     e.result = best->prim != SIDX_NO_HIT;
     sidx_hook_emit(h, &e);
+}
+
+const char *ex_walk_hint(const sidx_event *ref, const sidx_event *stu, const ex_walk_hints *h)
+{
+    const int ref_stop = ref && ref->type == SIDX_EV_TERMINATE && ref->reason == SIDX_TERM_HIT_IN_CELL;
+    const int stu_stop = stu && stu->type == SIDX_EV_TERMINATE && stu->reason == SIDX_TERM_HIT_IN_CELL;
+    if (stu_stop && !ref_stop) return stu->prim == SIDX_NO_HIT ? h->stop_nohit : h->cannot;
+    if (ref_stop && !stu_stop) return h->stop;
+    if (ref && ref->type == SIDX_EV_NODE_ENTER && ref->node == 0 && (!stu || stu->type != SIDX_EV_NODE_ENTER))
+        return h->start;
+    if ((ref && (ref->type == SIDX_EV_PRIM_TEST || ref->type == SIDX_EV_HIT_UPDATE)) ||
+        (stu && (stu->type == SIDX_EV_PRIM_TEST || stu->type == SIDX_EV_HIT_UPDATE)))
+        return h->leaf;
+    return NULL;
 }
 
 /* ---- traces ------------------------------------------------------------------ */
