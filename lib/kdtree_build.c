@@ -24,6 +24,7 @@
  * a triangle that straddles a plane is clipped to each child cell
  * (Sutherland–Hodgman on the triangle polygon) and its candidate planes in
  * the child come from the clipped box, not from the triangle's full box. */
+#include <sched.h>
 #include <stdio.h>
 #include "kdtree_internal.h"
 
@@ -47,7 +48,7 @@ typedef struct kd_given {
 } kd_given;
 
 typedef struct kd_builder {
-    sidx_accel *a;
+    const sidx_accel *a;
     const sidx_hook *hook;
     const char *name;
     const kd_tri *tris;
@@ -65,7 +66,19 @@ typedef struct kd_builder {
     float inv_root_area;
     uint32_t leaves, empty_leaves, depth;
     double sah;
+    /* lazy trees (kd_lazy): the top build records nodes of at most
+     * lazy_max references (0 = build everything) in lazy->recs (recs_cap
+     * allocated); an expansion builds one such node's subtree, its node 0
+     * being the unbuilt node, whose BUILD_NODE came with the build */
+    kd_lazy *lazy;
+    uint32_t lazy_max;
+    size_t recs_cap;
+    int expanding;
+    uint32_t root_id, id_base; /* event ids of the nodes, as kd_id */
 } kd_builder;
+
+/* The event id of node idx (kd_id). */
+static uint32_t bid(const kd_builder *b, uint32_t idx) { return idx ? b->id_base + idx - 1u : b->root_id; }
 
 static float axis_of(sidx_vec3 v, uint32_t k) { return k == 0 ? v.x : k == 1 ? v.y : v.z; }
 static void set_axis(sidx_vec3 *v, uint32_t k, float x)
@@ -79,7 +92,7 @@ static void set_axis(sidx_vec3 *v, uint32_t k, float x)
  * the root ("proportional to surface area ... not the volume"). */
 static double rel_area(const kd_builder *b, uint32_t idx, sidx_aabb cell)
 {
-    return idx == 0 ? 1.0 : (double)sidx_aabb_area(cell) * b->inv_root_area;
+    return idx == 0 && !b->expanding ? 1.0 : (double)sidx_aabb_area(cell) * b->inv_root_area;
 }
 
 static sidx_status alloc_pair(kd_builder *b, uint32_t *child)
@@ -115,7 +128,7 @@ static void leaf_finish(kd_builder *b, uint32_t idx, uint32_t depth, sidx_aabb c
     if (depth > b->depth) b->depth = depth;
     const float cost = b->c_tri * (float)n;
     b->sah += rel_area(b, idx, cell) * cost;
-    SIDX_EMIT(1, b->hook, SIDX_EV_BUILD_LEAF, e_.structure = b->name; e_.node = idx; e_.depth = depth; e_.count = n;
+    SIDX_EMIT(1, b->hook, SIDX_EV_BUILD_LEAF, e_.structure = b->name; e_.node = bid(b, idx); e_.depth = depth; e_.count = n;
               e_.cost = cost; e_.reason = reason; e_.bounds = cell; e_.prims = n ? b->prims + offset : NULL);
 }
 
@@ -125,14 +138,15 @@ static void inner_finish(kd_builder *b, uint32_t idx, uint32_t depth, sidx_aabb 
     b->nodes[idx] = kd_make_inner(axis, pos, child);
     if (depth > b->depth) b->depth = depth;
     b->sah += rel_area(b, idx, cell) * b->c_trav;
-    SIDX_EMIT(1, b->hook, SIDX_EV_BUILD_SPLIT, e_.structure = b->name; e_.node = idx; e_.depth = depth;
+    SIDX_EMIT(1, b->hook, SIDX_EV_BUILD_SPLIT, e_.structure = b->name; e_.node = bid(b, idx); e_.depth = depth;
               e_.axis = (int32_t)axis; e_.pos = pos; e_.cost = cost; e_.count = nl; e_.aux = nr; e_.bounds = cell);
 }
 
 static void emit_node(kd_builder *b, uint32_t idx, uint32_t parent, uint32_t depth, sidx_aabb cell, uint32_t n)
 {
-    SIDX_EMIT(1, b->hook, SIDX_EV_BUILD_NODE, e_.structure = b->name; e_.node = idx; e_.parent = parent;
-              e_.depth = depth; e_.bounds = cell; e_.count = n);
+    if (b->expanding && idx == 0) return; /* the unbuilt node: its BUILD_NODE came with the build */
+    SIDX_EMIT(1, b->hook, SIDX_EV_BUILD_NODE, e_.structure = b->name; e_.node = bid(b, idx);
+              e_.parent = parent == UINT32_MAX ? parent : bid(b, parent); e_.depth = depth; e_.bounds = cell; e_.count = n);
 }
 
 static void split_cell(sidx_aabb cell, uint32_t axis, float pos, sidx_aabb *l, sidx_aabb *r)
@@ -141,6 +155,42 @@ static void split_cell(sidx_aabb cell, uint32_t axis, float pos, sidx_aabb *l, s
     *r = cell;
     set_axis(&l->max, axis, pos);
     set_axis(&r->min, axis, pos);
+}
+
+/* Lazy trees: whether node idx waits for a ray instead of being built now
+ * (kd_lazy): it holds at most lazy_max references and would not be made a
+ * leaf before any split is priced. */
+static int lazy_wait(const kd_builder *b, uint32_t n, uint32_t depth)
+{
+    return b->lazy_max && n <= b->lazy_max && n > b->leaf_size && depth < b->max_depth;
+}
+
+/* Writes node idx as unbuilt, its record holding what the build would
+ * recurse with; `input` then belongs to the record (on failure, still to
+ * the caller). */
+static sidx_status lazy_defer(kd_builder *b, uint32_t idx, uint32_t parent, uint32_t depth, sidx_aabb cell,
+                              uint32_t n, uint32_t bad, void *input, const size_t cnt[3])
+{
+    kd_lazy *L = b->lazy;
+    if (L->num_recs >= KD_INDEX_LIMIT - 1u) return SIDX_ERR_LIMIT;
+    void *p = L->recs;
+    if (!sidx__grow(b->a, &p, &b->recs_cap, (size_t)L->num_recs + 1u, sizeof *L->recs)) return SIDX_ERR_NOMEM;
+    L->recs = p;
+    const uint32_t r = L->num_recs++;
+    kd_lazy_rec *rec = &L->recs[r];
+    memset(rec, 0, sizeof *rec);
+    rec->node = idx;
+    rec->parent = parent;
+    rec->depth = depth;
+    rec->count = n;
+    rec->bad = bad;
+    rec->cell = cell;
+    rec->input = input;
+    if (cnt) memcpy(rec->cnt, cnt, sizeof rec->cnt);
+    b->nodes[idx] = kd_make_unbuilt(r);
+    L->unbuilt++;
+    L->unbuilt_refs += n;
+    return SIDX_OK;
 }
 
 /* The SAH of one candidate (the deck's formula), with the empty-space
@@ -354,7 +404,7 @@ static void sweep_axis(kd_builder *b, uint32_t idx, sidx_aabb cell, float inv_ar
             const int left = cl <= cr;
             const float c = left ? cl : cr;
             const uint32_t cnl = left ? nl + pp : nl, cnr = left ? nr : nr + pp;
-            SIDX_EMIT(1, b->hook, SIDX_EV_BUILD_CANDIDATE, e_.structure = b->name; e_.node = idx;
+            SIDX_EMIT(1, b->hook, SIDX_EV_BUILD_CANDIDATE, e_.structure = b->name; e_.node = bid(b, idx);
                       e_.axis = (int32_t)k; e_.pos = p; e_.cost = c; e_.count = cnl; e_.aux = cnr);
             if (c < best->cost) {
                 best->cost = c;
@@ -377,6 +427,11 @@ static sidx_status sah_node(kd_builder *b, uint32_t idx, uint32_t parent, uint32
     sidx_status s = SIDX_OK;
     const kd_event *E[3] = {ev, ev + cnt[0], ev + cnt[0] + cnt[1]};
     emit_node(b, idx, parent, depth, cell, n);
+    if (lazy_wait(b, n, depth)) {
+        s = lazy_defer(b, idx, parent, depth, cell, n, bad, ev, cnt);
+        if (s != SIDX_OK) sidx__free(b->a, ev);
+        return s;
+    }
 
     int reason = SIDX_LEAF_NONE;
     sah_best best = {INFINITY, 0.0f, 0, 1, 0, 0};
@@ -626,7 +681,7 @@ static sidx_status binned_choice(kd_builder *b, uint32_t idx, sidx_aabb cell, co
             const float p = lo + (hi - lo) * (float)i / (float)B;
             if (!(p > lo && p < hi)) continue;
             const float c = sah_cost(b, cell, inv_area, k, p, nl, nr);
-            SIDX_EMIT(1, b->hook, SIDX_EV_BUILD_CANDIDATE, e_.structure = b->name; e_.node = idx;
+            SIDX_EMIT(1, b->hook, SIDX_EV_BUILD_CANDIDATE, e_.structure = b->name; e_.node = bid(b, idx);
                       e_.axis = (int32_t)k; e_.pos = p; e_.cost = c; e_.count = nl; e_.aux = nr);
             if (c < best->cost) {
                 best->cost = c;
@@ -683,6 +738,11 @@ static sidx_status refs_node(kd_builder *b, uint32_t idx, uint32_t parent, uint3
 {
     sidx_status s = SIDX_OK;
     emit_node(b, idx, parent, depth, cell, n);
+    if (!b->given && lazy_wait(b, n, depth)) {
+        s = lazy_defer(b, idx, parent, depth, cell, n, bad, refs, NULL);
+        if (s != SIDX_OK) sidx__free(b->a, refs);
+        return s;
+    }
     int reason = SIDX_LEAF_NONE;
     sah_best best = {INFINITY, 0.0f, 0, 1, 0, 0};
     const float leaf_cost = b->c_tri * (float)n;
@@ -736,7 +796,7 @@ static sidx_status refs_node(kd_builder *b, uint32_t idx, uint32_t parent, uint3
         if (b->variant >= KD_VARIANT_MEDIAN) { /* intuitive or given: no sweep priced it */
             const float area = sidx_aabb_area(cell);
             best.cost = area > 0.0f ? sah_cost(b, cell, 1.0f / area, k, p, nl, nr) : 0.0f;
-            SIDX_EMIT(1, b->hook, SIDX_EV_BUILD_CANDIDATE, e_.structure = b->name; e_.node = idx;
+            SIDX_EMIT(1, b->hook, SIDX_EV_BUILD_CANDIDATE, e_.structure = b->name; e_.node = bid(b, idx);
                       e_.axis = (int32_t)k; e_.pos = p; e_.cost = best.cost; e_.count = nl; e_.aux = nr);
             /* a plane that separates nothing only duplicates: stop (a given tree is kept as given) */
             if (nl == n && nr == n && !b->given) reason = SIDX_LEAF_NO_SPLIT;
@@ -837,6 +897,16 @@ static void align_nodes(const sidx_accel *a, kd_tree *kd)
 static void kd_free(const sidx_accel *a, kd_tree *kd)
 {
     if (!kd) return;
+    kd_lazy *L = kd->lazy;
+    if (L) {
+        for (uint32_t r = 0; r < L->num_recs; ++r) {
+            sidx__free(a, L->recs[r].input);
+            kd_free(a, L->recs[r].sub);
+        }
+        sidx__free(a, L->recs);
+        sidx__free(a, L->tris);
+        sidx__free(a, L);
+    }
     sidx__free(a, kd->nodes_mem);
     sidx__free(a, kd->prims);
     sidx__free(a, kd->blocks_mem);
@@ -897,9 +967,24 @@ static sidx_status kd_build(sidx_accel *a, kd_given *given, sidx_error *err)
         tris[i].prim = i;
     }
     kd->bounds = root;
+    kd->root_id = 0;
+    kd->id_base = 1;
+    const uint32_t lazy_max = a->opt.lazy == 1 ? SIDX_LAZY_DEFAULT : a->opt.lazy;
+    if (lazy_max && !given && n > 0) {
+        kd->lazy = sidx__calloc(a, 1, sizeof *kd->lazy);
+        if (!kd->lazy) {
+            sidx__free(a, tris);
+            kd_free(a, kd);
+            return sidx__fail(err, SIDX_ERR_NOMEM, "%s: out of memory", a->name);
+        }
+    }
 
     kd_builder b;
     memset(&b, 0, sizeof b);
+    b.lazy = kd->lazy;
+    b.lazy_max = kd->lazy ? lazy_max : 0u;
+    b.root_id = 0;
+    b.id_base = 1;
     b.a = a;
     b.hook = a->opt.hook;
     b.name = a->name;
@@ -939,7 +1024,8 @@ static sidx_status kd_build(sidx_accel *a, kd_given *given, sidx_error *err)
         }
     }
     sidx__free(a, b.cls);
-    sidx__free(a, tris);
+    if (kd->lazy) kd->lazy->tris = tris; /* the expansions clip with them */
+    else sidx__free(a, tris);
     kd->nodes = kd->nodes_mem = b.nodes;
     kd->prims = b.prims;
     if (s == SIDX_OK && given && given->next != given->count) {
@@ -971,6 +1057,20 @@ static sidx_status kd_build(sidx_accel *a, kd_given *given, sidx_error *err)
     kd->c_trav = b.c_trav;
     kd->c_tri = b.c_tri;
     kd->empty_bonus = bonus;
+    if (kd->lazy) {
+        kd_lazy *L = kd->lazy;
+        L->leaf_size = b.leaf_size;
+        L->max_depth = b.max_depth;
+        L->bins = b.bins;
+        L->next_id = kd->num_nodes;
+        L->built_nodes = kd->num_nodes;
+        L->built_leaves = b.leaves;
+        L->empty_leaves = b.empty_leaves;
+        L->max_depth_seen = b.depth;
+        L->built_refs = kd->num_refs;
+        kd->sah_cost = 0.0; /* the SAH of a tree not yet whole: not given (sidx_accel_stats) */
+        a->lazy = 1;
+    }
     a->impl = kd;
     a->fills_uv = a->fills_ng = 1; /* from the leaves' triangle copies (kdtree_traverse.c) */
     SIDX_EMIT(1, a->opt.hook, SIDX_EV_BUILD_END, e_.structure = a->name; e_.node = kd->num_nodes;
@@ -1033,6 +1133,156 @@ void sidx__kd_stats(const sidx_accel *a, sidx_accel_stats *s)
     s->bytes = sizeof *kd + (size_t)kd->num_nodes * sizeof(kd_node) + (size_t)kd->num_refs * sizeof(uint32_t) +
                (size_t)kd->num_blocks * sizeof(wide_tri4);
     s->sah_cost = kd->sah_cost;
+    const kd_lazy *L = kd->lazy;
+    if (L) {
+        s->nodes = __atomic_load_n(&L->built_nodes, __ATOMIC_RELAXED);
+        s->leaves = __atomic_load_n(&L->built_leaves, __ATOMIC_RELAXED);
+        s->empty_leaves = __atomic_load_n(&L->empty_leaves, __ATOMIC_RELAXED);
+        s->max_depth = __atomic_load_n(&L->max_depth_seen, __ATOMIC_RELAXED);
+        s->prim_refs = __atomic_load_n(&L->built_refs, __ATOMIC_RELAXED);
+        s->unbuilt = __atomic_load_n(&L->unbuilt, __ATOMIC_RELAXED);
+        s->unbuilt_prims = __atomic_load_n(&L->unbuilt_refs, __ATOMIC_RELAXED);
+        const uint32_t built_full = s->leaves - s->empty_leaves;
+        s->mean_leaf_prims = built_full ? (double)s->prim_refs / (double)built_full : 0.0;
+        /* the subtrees built, the records, the triangle copies and the unbuilt nodes' inputs */
+        s->bytes += __atomic_load_n(&L->built_bytes, __ATOMIC_RELAXED) + sizeof *L +
+                    (size_t)L->num_recs * sizeof *L->recs + (size_t)a->mesh->num_triangles * sizeof *L->tris +
+                    (size_t)s->unbuilt_prims * (a->variant == KD_VARIANT_SAH ? 6u * sizeof(kd_event) : sizeof(kd_ref));
+    }
+}
+
+/* ==== lazy expansion (kdtree_internal.h, kd_lazy) ========================== */
+
+/* Builds record rec's subtree into arrays of its own with the build's
+ * recursion and parameters, node ids as kd_id with (rec->node, id_base).
+ * The record's input is copied, so that a failure leaves it as it was.
+ * NULL when memory runs out (nothing of the subtree is kept). */
+static kd_tree *expand_once(const sidx_accel *a, const kd_tree *kd, const kd_lazy_rec *rec, const sidx_hook *hook,
+                            uint32_t id_base)
+{
+    const kd_lazy *L = kd->lazy;
+    kd_builder b;
+    memset(&b, 0, sizeof b);
+    b.a = a;
+    b.hook = hook;
+    b.name = a->name;
+    b.tris = L->tris;
+    b.variant = a->variant;
+    b.c_trav = kd->c_trav;
+    b.c_tri = kd->c_tri;
+    b.lambda = 1.0f - kd->empty_bonus;
+    b.leaf_size = L->leaf_size;
+    b.max_depth = L->max_depth;
+    b.bins = L->bins;
+    const float ra = sidx_aabb_area(kd->bounds);
+    b.inv_root_area = ra > 0.0f ? 1.0f / ra : 0.0f;
+    b.expanding = 1;
+    b.root_id = rec->node;
+    b.id_base = id_base;
+    const int sah = a->variant == KD_VARIANT_SAH;
+    const size_t in_size = sah ? (rec->cnt[0] + rec->cnt[1] + rec->cnt[2]) * sizeof(kd_event)
+                               : (size_t)rec->count * sizeof(kd_ref);
+    kd_tree *sub = sidx__calloc(a, 1, sizeof *sub);
+    void *input = sidx__alloc(a, in_size ? in_size : 1u, 1);
+    if (sah) b.cls = sidx__alloc(a, a->mesh->num_triangles, 1);
+    uint32_t child;
+    sidx_status s = !sub || !input || (sah && !b.cls) ? SIDX_ERR_NOMEM : alloc_pair(&b, &child);
+    if (s == SIDX_OK) {
+        memcpy(input, rec->input, in_size);
+        b.num_nodes = 1;
+        if (sah) s = sah_node(&b, 0, rec->parent, rec->depth, rec->cell, input, rec->cnt, rec->count, rec->bad);
+        else s = refs_node(&b, 0, rec->parent, rec->depth, rec->cell, input, rec->count, rec->bad);
+        input = NULL; /* the recursion owns it */
+    }
+    sidx__free(a, input);
+    sidx__free(a, b.cls);
+    if (!sub) {
+        sidx__free(a, b.nodes);
+        sidx__free(a, b.prims);
+        return NULL;
+    }
+    sub->nodes = sub->nodes_mem = b.nodes;
+    sub->prims = b.prims;
+    if (s == SIDX_OK) {
+        sub->num_nodes = b.num_nodes;
+        sub->num_refs = b.num_refs;
+        align_nodes(a, sub);
+        sub->prims = shrink(a, sub->prims, sub->num_refs, sizeof *sub->prims, b.prims_cap);
+        s = sidx__kd_make_blocks(a, sub, a->mesh);
+    }
+    if (s != SIDX_OK) {
+        kd_free(a, sub);
+        return NULL;
+    }
+    sub->bounds = rec->cell;
+    sub->leaves = b.leaves;
+    sub->empty_leaves = b.empty_leaves;
+    sub->max_depth = b.depth;
+    sub->c_trav = kd->c_trav;
+    sub->c_tri = kd->c_tri;
+    sub->empty_bonus = kd->empty_bonus;
+    sub->root_id = rec->node;
+    sub->id_base = id_base;
+    return sub;
+}
+
+static void atomic_max_u32(uint32_t *p, uint32_t v)
+{
+    uint32_t cur = __atomic_load_n(p, __ATOMIC_RELAXED);
+    while (cur < v && !__atomic_compare_exchange_n(p, &cur, v, 1, __ATOMIC_RELAXED, __ATOMIC_RELAXED)) {
+    }
+}
+
+/* The subtree of rec, its event ids taken once its size is known; for a
+ * query with a build hook the same build once more with those ids, for
+ * the events (kd_lazy). */
+static kd_tree *expand_build(const sidx_accel *a, kd_tree *kd, kd_lazy_rec *rec, const sidx_hook *hook)
+{
+    kd_lazy *L = kd->lazy;
+    kd_tree *sub = expand_once(a, kd, rec, NULL, 0);
+    if (!sub) return NULL;
+    const uint32_t id_base = __atomic_fetch_add(&L->next_id, sub->num_nodes - 1u, __ATOMIC_RELAXED);
+    sub->id_base = id_base;
+    SIDX_EMIT(1, hook, SIDX_EV_BUILD_LAZY_EXPAND, e_.structure = a->name; e_.node = rec->node;
+              e_.parent = rec->parent; e_.depth = rec->depth; e_.count = rec->count; e_.bounds = rec->cell);
+    if (hook && hook->fn && (hook->mask == 0 || (hook->mask & (SIDX_EVMASK_BUILD & ~SIDX_EVMASK(SIDX_EV_BUILD_LAZY_EXPAND)))))
+        kd_free(a, expand_once(a, kd, rec, hook, id_base)); /* events only; without memory they stop short */
+    sidx__free(a, rec->input);
+    rec->input = NULL;
+    __atomic_fetch_add(&L->built_nodes, sub->num_nodes - 1u, __ATOMIC_RELAXED); /* the node itself was counted */
+    __atomic_fetch_add(&L->built_leaves, sub->leaves, __ATOMIC_RELAXED);
+    __atomic_fetch_add(&L->empty_leaves, sub->empty_leaves, __ATOMIC_RELAXED);
+    __atomic_fetch_add(&L->built_refs, (uint64_t)sub->num_refs, __ATOMIC_RELAXED);
+    __atomic_fetch_add(&L->built_bytes,
+                       (uint64_t)(sizeof *sub + (size_t)sub->num_nodes * sizeof(kd_node) +
+                                  (size_t)sub->num_refs * sizeof(uint32_t) + (size_t)sub->num_blocks * sizeof(wide_tri4)),
+                       __ATOMIC_RELAXED);
+    __atomic_fetch_sub(&L->unbuilt, 1u, __ATOMIC_RELAXED);
+    __atomic_fetch_sub(&L->unbuilt_refs, (uint64_t)rec->count, __ATOMIC_RELAXED);
+    atomic_max_u32(&L->max_depth_seen, sub->max_depth);
+    return sub;
+}
+
+const kd_tree *sidx__kd_lazy_expand(const sidx_accel *a, uint32_t r, const sidx_hook *hook)
+{
+    kd_tree *kd = a->impl;
+    kd_lazy_rec *rec = &kd->lazy->recs[r];
+    for (unsigned spins = 0;; ++spins) {
+        uint32_t st = __atomic_load_n(&rec->state, __ATOMIC_ACQUIRE);
+        if (st == KD_LAZY_BUILT) return __atomic_load_n(&rec->sub, __ATOMIC_ACQUIRE);
+        if (st == KD_LAZY_UNBUILT) {
+            if (!__atomic_compare_exchange_n(&rec->state, &st, KD_LAZY_BUSY, 0, __ATOMIC_ACQ_REL, __ATOMIC_ACQUIRE))
+                continue;
+            kd_tree *sub = expand_build(a, kd, rec, hook);
+            if (sub) __atomic_store_n(&rec->sub, sub, __ATOMIC_RELEASE);
+            __atomic_store_n(&rec->state, sub ? KD_LAZY_BUILT : KD_LAZY_UNBUILT, __ATOMIC_RELEASE);
+            if (!sub) sidx__lazy_note_failure();
+            return sub;
+        }
+        /* BUSY: another thread is building it; wait (kd_lazy) */
+        if (spins < 64) SIDX_SPIN_PAUSE();
+        else sched_yield();
+    }
 }
 
 /* ==== the read-only view (sidx/kdtree.h) =================================== */
@@ -1047,6 +1297,9 @@ static sidx_status kd_view(const sidx_accel *a, const void *p, const void *q, si
     if (!a || !p || !q) return sidx__fail(err, SIDX_ERR_INVALID_ARG, "%s: NULL argument", fn);
     if (a->vt != &sidx__kdtree_vtable || !a->impl)
         return sidx__fail(err, SIDX_ERR_INVALID_ARG, "%s: '%s' is not a kd-tree", fn, a->name ? a->name : "?");
+    if (((const kd_tree *)a->impl)->lazy)
+        return sidx__fail(err, SIDX_ERR_UNSUPPORTED, "%s: a lazy tree is built as rays arrive; build it with lazy = 0",
+                          fn);
     *out = a->impl;
     return SIDX_OK;
 }

@@ -75,12 +75,12 @@ typedef struct kd_leaves {
 } kd_leaves;
 
 static SIDX_INLINE int kd_enter_root(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, float best_t,
-                                     float *t_near, float *t_far, const int traced);
+                                     float *t_near, float *t_far, const int traced, const int lazy);
 static SIDX_INLINE void kd_leaves_init(kd_leaves *L, const sidx_accel *a, const sidx_ray *r, uint32_t *mbox,
                                        float best_t, const int traced);
 static SIDX_INLINE int kd_test_leaf(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, kd_leaves *L,
-                                    uint32_t *mbox, const kd_node *leaf, uint32_t node, uint32_t visited,
-                                    const int traced, const int any);
+                                    uint32_t *mbox, const wide_tri4 *sub_blocks, const kd_node *leaf, uint32_t node,
+                                    uint32_t visited, const int traced, const int any);
 static SIDX_INLINE void kd_finish(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, const kd_leaves *L,
                                   sidx_hit *hit);
 
@@ -117,16 +117,24 @@ static SIDX_INLINE void kd_finish(const sidx_accel *a, const sidx_ray *r, const 
  * hit; for closest-hit queries `hit` then carries the best hit.
  * naive: SIDX_TRAVERSE_NAIVE, the deck's naive variant — the left child
  * first whatever the ray's direction, every overlapped cell visited, no
- * early termination. */
+ * early termination.
+ * lazy: a lazy tree (kd_lazy, kdtree_internal.h): an unbuilt node is
+ * built (or waited for) and the walk goes on in its subtree, `cur`; an
+ * unbuilt node that cannot be built for want of memory is passed over as
+ * an empty leaf (the query reports it).  Event node ids are kd_id's. */
 static SIDX_INLINE int kd_walk_slide(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit,
-                                     const int traced, const int any, const int naive)
+                                     const int traced, const int any, const int naive, const int lazy)
 {
     const kd_tree *kd = a->impl;
+    const kd_tree *cur = kd;                  /* lazy: the subtree the walk is in */
+    const kd_node *nodes = kd->nodes;
+    const kd_tree *subs[KD_MAX_DEPTH + 2];    /* lazy: the subtree of each stack entry */
+    static const kd_node unbuildable = {{.count = 0u}, KD_LEAF_FLAG}; /* an empty leaf in its stead */
     const float origin[3] = {r->org.x, r->org.y, r->org.z};
     const float inv_dir[3] = {r->inv_dir.x, r->inv_dir.y, r->inv_dir.z};
     const float best_t = any ? r->tmax : hit->t; /* the closest hit so far bounds every test */
     float t_near, t_far;
-    if (!kd_enter_root(a, r, q, best_t, &t_near, &t_far, traced)) return 0;
+    if (!kd_enter_root(a, r, q, best_t, &t_near, &t_far, traced, lazy)) return 0;
     kd_leaves leaves;
     uint32_t mbox[KD_MAILBOX];
     kd_leaves_init(&leaves, a, r, mbox, best_t, traced);
@@ -137,9 +145,21 @@ static SIDX_INLINE int kd_walk_slide(const sidx_accel *a, const sidx_ray *r, con
     int may_stop = !naive; /* early termination allowed (off once the ray runs inside a plane) */
 
     for (;;) {
-        const kd_node *n = &kd->nodes[node];
+        const kd_node *n = lazy ? &nodes[node] : &kd->nodes[node];
+        if (lazy && SIDX_UNLIKELY(kd_is_unbuilt(n))) {
+            const kd_tree *sub = kd_lazy_sub(a, n, traced ? q->hook : NULL);
+            if (sub) {
+                cur = sub;
+                nodes = sub->nodes;
+                node = 0;
+                n = nodes;
+            } else {
+                n = &unbuildable;
+            }
+        }
         ++visited;
-        SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id; e_.node = node; e_.depth = depth;
+        SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id; e_.node = lazy ? kd_id(cur, node) : node;
+                  e_.depth = depth;
                   e_.t_near = t_near; e_.t_far = t_far);
 
         if (!kd_is_leaf(n)) {
@@ -170,9 +190,11 @@ static SIDX_INLINE int kd_walk_slide(const sidx_accel *a, const sidx_ray *r, con
                     far_entry = near_entry;
                     near_entry = left_entry;
                 }
+                if (lazy) subs[stack_size] = cur;
                 stack[stack_size++] = far_entry;
                 /* result SIDX_STACK_IN_PLANE: the ray lies in the split plane (docs/events.md) */
-                SIDX_EMIT(traced, q->hook, SIDX_EV_STACK_PUSH, e_.ray_id = q->ray_id; e_.node = far_entry.node;
+                SIDX_EMIT(traced, q->hook, SIDX_EV_STACK_PUSH, e_.ray_id = q->ray_id;
+                          e_.node = lazy ? kd_id(cur, far_entry.node) : far_entry.node;
                           e_.depth = stack_size; e_.t_near = far_entry.t_near; e_.t_far = far_entry.t_far;
                           e_.result = in_plane ? SIDX_STACK_IN_PLANE : -1);
                 node = near_entry.node;
@@ -188,11 +210,13 @@ static SIDX_INLINE int kd_walk_slide(const sidx_accel *a, const sidx_ray *r, con
          * walk goes on ("CANNOT terminate !!!", Traversal (10)).  An empty
          * leaf: nothing to test, on to the next cell (edge cases above). */
         if (kd_count(n) != 0) {
-            if (kd_test_leaf(a, r, q, &leaves, mbox, n, node, visited, traced, any)) return 1;
+            if (kd_test_leaf(a, r, q, &leaves, mbox, lazy ? cur->blocks : NULL, n, lazy ? kd_id(cur, node) : node,
+                             visited, traced, any))
+                return 1;
             if (leaves.found && may_stop && leaves.best_t <= t_far + fabsf(t_far) * KD_TS_EPS) {
                 SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id;
                           e_.reason = SIDX_TERM_HIT_IN_CELL; e_.t = leaves.best_t; e_.count = visited;
-                          e_.node = node; e_.t_near = t_near; e_.t_far = t_far);
+                          e_.node = lazy ? kd_id(cur, node) : node; e_.t_near = t_near; e_.t_far = t_far);
                 kd_finish(a, r, q, &leaves, hit);
                 return 1;
             }
@@ -210,7 +234,8 @@ static SIDX_INLINE int kd_walk_slide(const sidx_accel *a, const sidx_ray *r, con
             const kd_slide_entry next = stack[--stack_size];
             const int enter = naive || next.t_near <= leaves.best_t;
             /* result: dropped, entered, or entered with the ray in its parent's split plane */
-            SIDX_EMIT(traced, q->hook, SIDX_EV_STACK_POP, e_.ray_id = q->ray_id; e_.node = next.node;
+            SIDX_EMIT(traced, q->hook, SIDX_EV_STACK_POP, e_.ray_id = q->ray_id;
+                      e_.node = lazy ? kd_id(subs[stack_size], next.node) : next.node;
                       e_.depth = stack_size + 1u; e_.t_near = next.t_near; e_.t_far = next.t_far;
                       e_.result = !enter        ? SIDX_STACK_DROPPED
                                   : next.in_plane ? SIDX_STACK_IN_PLANE
@@ -220,6 +245,10 @@ static SIDX_INLINE int kd_walk_slide(const sidx_accel *a, const sidx_ray *r, con
                 depth = next.depth;
                 t_near = next.t_near;
                 t_far = next.t_far;
+                if (lazy) {
+                    cur = subs[stack_size];
+                    nodes = cur->nodes;
+                }
                 break;
             }
         }
@@ -236,18 +265,21 @@ static SIDX_INLINE int kd_walk_slide(const sidx_accel *a, const sidx_ray *r, con
  * children of a node share 16 bytes, usually one cache line, and one of
  * them is the next load anyway: peeking at both lets the walk skip empty
  * leaves (the SAH's "big empty cells") instead of entering each and
- * popping right back.  Untraced: no events. */
+ * popping right back.  Untraced: no events.  lazy: as in kd_walk_slide
+ * (an unbuilt node is never empty, so the walk enters it). */
 static SIDX_INLINE int kd_walk_fast(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit,
-                                    const int any)
+                                    const int any, const int lazy)
 {
     const kd_tree *kd = a->impl;
     const kd_node *nodes = kd->nodes;
+    const kd_tree *cur = kd;               /* lazy: the subtree the walk is in */
+    const kd_tree *subs[KD_MAX_DEPTH + 2]; /* lazy: the subtree of each stack entry */
     const float origin[3] = {r->org.x, r->org.y, r->org.z};
     const float inv_dir[3] = {r->inv_dir.x, r->inv_dir.y, r->inv_dir.z};
     const uint32_t negative[3] = {r->sign[0], r->sign[1], r->sign[2]};
     const float best_t = any ? r->tmax : hit->t; /* the closest hit so far bounds every test */
     float t_near, t_far;
-    if (!kd_enter_root(a, r, q, best_t, &t_near, &t_far, 0)) return 0;
+    if (!kd_enter_root(a, r, q, best_t, &t_near, &t_far, 0, lazy)) return 0;
     kd_leaves leaves;
     uint32_t mbox[KD_MAILBOX];
     kd_leaves_init(&leaves, a, r, mbox, best_t, 0);
@@ -276,6 +308,7 @@ static SIDX_INLINE int kd_walk_fast(const sidx_accel *a, const sidx_ray *r, cons
             stack[stack_size].node = far_child;
             stack[stack_size].t_near = far_t_near;
             stack[stack_size].t_far = t_far;
+            if (lazy) subs[stack_size] = cur;
             stack_size += (unsigned)(enter_near & enter_far);
             if (SIDX_UNLIKELY(t_split != t_split)) may_stop = 0; /* ray inside the plane: intervals overlap */
             if (SIDX_UNLIKELY(!(enter_near | enter_far))) goto pop;
@@ -285,7 +318,15 @@ static SIDX_INLINE int kd_walk_fast(const sidx_accel *a, const sidx_ray *r, cons
             n = &nodes[node];
         }
 
-        if (kd_test_leaf(a, r, q, &leaves, mbox, n, node, 0, 0, any)) return 1;
+        if (lazy && SIDX_UNLIKELY(kd_is_unbuilt(n))) {
+            const kd_tree *sub = kd_lazy_sub(a, n, NULL);
+            if (!sub) goto pop; /* passed over; the query reports it */
+            cur = sub;
+            nodes = sub->nodes;
+            node = 0;
+            continue;
+        }
+        if (kd_test_leaf(a, r, q, &leaves, mbox, lazy ? cur->blocks : NULL, n, node, 0, 0, any)) return 1;
         if (leaves.found && may_stop && leaves.best_t <= t_far + fabsf(t_far) * KD_TS_EPS) {
             kd_finish(a, r, q, &leaves, hit);
             return 1;
@@ -300,7 +341,13 @@ static SIDX_INLINE int kd_walk_fast(const sidx_accel *a, const sidx_ray *r, cons
             node = stack[stack_size].node;
             t_near = stack[stack_size].t_near;
             t_far = stack[stack_size].t_far;
-            if (t_near <= leaves.best_t) break;
+            if (t_near <= leaves.best_t) {
+                if (lazy) {
+                    cur = subs[stack_size];
+                    nodes = cur->nodes;
+                }
+                break;
+            }
         }
     }
 }
@@ -407,15 +454,16 @@ static SIDX_NOINLINE int kd_block_scalar(const sidx_accel *a, const sidx_ray *r,
  * always refers to a test the trace reported.  With another triangle test
  * all walks test the leaf's own references only. */
 static SIDX_INLINE int kd_test_leaf(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, kd_leaves *L,
-                                    uint32_t *mbox, const kd_node *leaf, uint32_t node, uint32_t visited,
-                                    const int traced, const int any)
+                                    uint32_t *mbox, const wide_tri4 *sub_blocks, const kd_node *leaf, uint32_t node,
+                                    uint32_t visited, const int traced, const int any)
 {
-    const kd_tree *kd = a->impl;
+    const kd_tree *kd = a->impl; /* its blocks unless the leaf is in a lazy tree's subtree (sub_blocks) */
     const uint32_t count = kd_count(leaf), offset = kd_offset(leaf);
     (void)visited;
 #if KD_SIMD
     if (L->simd) {
-        const wide_tri4 *block = kd->blocks + (offset >> 2), *const end = kd->blocks + ((offset + count + 3u) >> 2);
+        const wide_tri4 *block = (sub_blocks ? sub_blocks : kd->blocks) + (offset >> 2),
+                        *const end = (sub_blocks ? sub_blocks : kd->blocks) + ((offset + count + 3u) >> 2);
         for (; block < end; ++block) {
             float t;
             unsigned lane;
@@ -438,7 +486,7 @@ static SIDX_INLINE int kd_test_leaf(const sidx_accel *a, const sidx_ray *r, cons
         end = (end + 3u) & ~3u;
     }
     for (; ref < end; ++ref) {
-        const wide_tri4 *block = &kd->blocks[ref >> 2];
+        const wide_tri4 *block = &(sub_blocks ? sub_blocks : kd->blocks)[ref >> 2];
         const unsigned lane = ref & 3u;
         const uint32_t prim = block->prim[lane];
         const int own = ref - offset < count; /* one of this leaf's references */
@@ -479,10 +527,10 @@ static SIDX_INLINE int kd_test_leaf(const sidx_accel *a, const sidx_ray *r, cons
 
 /* The ray's interval in the root cell (the scene box), or 0 if it misses. */
 static SIDX_INLINE int kd_enter_root(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, float best_t,
-                                     float *t_near, float *t_far, const int traced)
+                                     float *t_near, float *t_far, const int traced, const int lazy)
 {
     const kd_tree *kd = a->impl;
-    if (kd->num_refs == 0 ||
+    if ((!lazy && kd->num_refs == 0) || /* a lazy tree holds triangles (kdtree_build.c) */
         !sidx__box_test(a->opt.box == SIDX_BOX_ROBUST, r, &kd->bounds, r->tmin, best_t, t_near, t_far)) {
         SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = SIDX_TERM_MISS_ROOT;
                   e_.count = 0);
@@ -495,49 +543,58 @@ static SIDX_INLINE int kd_enter_root(const sidx_accel *a, const sidx_ray *r, con
 
 /* The walks by traversal and hook.  The untraced default is the fast
  * walk; a traced query, or one asking for the naive walk (which re-enters
- * from the root, as the deck's first version does), takes the slide's. */
-static void kd_isect_fast(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
-{
-    (void)kd_walk_fast(a, r, q, hit, 0);
-}
-static void kd_isect_slide_traced(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
-{
-    (void)kd_walk_slide(a, r, q, hit, 1, 0, 0);
-}
-static void kd_isect_naive(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
-{
-    (void)kd_walk_slide(a, r, q, hit, 0, 0, 1);
-}
-static void kd_isect_naive_traced(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
-{
-    (void)kd_walk_slide(a, r, q, hit, 1, 0, 1);
-}
-static int kd_occl_fast(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
-{
-    sidx_hit dummy = sidx_hit_none();
-    return kd_walk_fast(a, r, q, &dummy, 1);
-}
-static int kd_occl_slide_traced(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
-{
-    sidx_hit dummy = sidx_hit_none();
-    return kd_walk_slide(a, r, q, &dummy, 1, 1, 0);
-}
+ * from the root, as the deck's first version does), takes the slide's.
+ * Each comes as an eager copy and as a copy for lazy trees (kd_lazy). */
+#define KD_ENTRY_POINTS(sfx, lazy)                                                                              \
+    static void kd_isect_fast##sfx(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit) \
+    {                                                                                                          \
+        (void)kd_walk_fast(a, r, q, hit, 0, lazy);                                                             \
+    }                                                                                                          \
+    static void kd_isect_slide_traced##sfx(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,        \
+                                           sidx_hit *hit)                                                      \
+    {                                                                                                          \
+        (void)kd_walk_slide(a, r, q, hit, 1, 0, 0, lazy);                                                      \
+    }                                                                                                          \
+    static void kd_isect_naive##sfx(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)\
+    {                                                                                                          \
+        (void)kd_walk_slide(a, r, q, hit, 0, 0, 1, lazy);                                                      \
+    }                                                                                                          \
+    static void kd_isect_naive_traced##sfx(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,        \
+                                           sidx_hit *hit)                                                      \
+    {                                                                                                          \
+        (void)kd_walk_slide(a, r, q, hit, 1, 0, 1, lazy);                                                      \
+    }                                                                                                          \
+    static int kd_occl_fast##sfx(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)                  \
+    {                                                                                                          \
+        sidx_hit dummy = sidx_hit_none();                                                                      \
+        return kd_walk_fast(a, r, q, &dummy, 1, lazy);                                                         \
+    }                                                                                                          \
+    static int kd_occl_slide_traced##sfx(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)          \
+    {                                                                                                          \
+        sidx_hit dummy = sidx_hit_none();                                                                      \
+        return kd_walk_slide(a, r, q, &dummy, 1, 1, 0, lazy);                                                  \
+    }
+KD_ENTRY_POINTS(, 0)
+KD_ENTRY_POINTS(_lazy, 1)
 
 /* The walk tables (sidx_internal.h): [0] every traversal but the naive
- * one, [1] the naive one; any-hit queries always take [0]. */
-static const sidx__walk_table kd_walks[2] = {
+ * one, [1] the naive one, [2] and [3] the same for lazy trees; any-hit
+ * queries always take [0] or [2]. */
+static const sidx__walk_table kd_walks[4] = {
     {kd_isect_fast, kd_isect_slide_traced, kd_occl_fast, kd_occl_slide_traced},
     {kd_isect_naive, kd_isect_naive_traced, kd_occl_fast, kd_occl_slide_traced},
+    {kd_isect_fast_lazy, kd_isect_slide_traced_lazy, kd_occl_fast_lazy, kd_occl_slide_traced_lazy},
+    {kd_isect_naive_lazy, kd_isect_naive_traced_lazy, kd_occl_fast_lazy, kd_occl_slide_traced_lazy},
 };
 
 static void kd_intersect(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
 {
-    sidx__walk_intersect(&kd_walks[q->traversal == SIDX_TRAVERSE_NAIVE], a, r, q, hit);
+    sidx__walk_intersect(&kd_walks[2u * a->lazy + (q->traversal == SIDX_TRAVERSE_NAIVE)], a, r, q, hit);
 }
 
 static int kd_occluded(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
 {
-    return sidx__walk_occluded(&kd_walks[0], a, r, q);
+    return sidx__walk_occluded(&kd_walks[2u * a->lazy], a, r, q);
 }
 
 /* One vtable serves all four builders (a->variant); the tree they produce

@@ -39,6 +39,7 @@ needs() {
     20_*) echo "bvh kdtree grid" ;;
     23_*) echo "grid grid-irregular" ;;
     24_*|26_*) echo "bvh" ;;
+    27_*) echo "kdtree" ;;
     *) echo "" ;;
     esac
 }
@@ -90,6 +91,9 @@ expect() {
     25_kd_slide_example) echo "slide_tree=1 rows_match_slide=1 cannot_terminate_rows=2 ends_in_L3=1 same_hit=1
                                cheap_step_deeper=1" ;;
     26_bvh_optimise) echo "sah_lower=1 events_sum_to_gain=1 same_hits=1" ;;
+    27_building_kdtrees_quickly) echo "top_sifts_everything=1 root_exceeds_cache=1 most_nodes_fit_cache=1
+                                       image_builds_part=1 hits_agree=1 expand_event_then_subtree=1
+                                       whole_tree_is_eager=1" ;;
     *) echo "" ;;
     esac
 }
@@ -118,6 +122,7 @@ knob_args() {
     22_*) echo "--leaf-size 8" ;;
     23_*) echo "--lambda 0.5" ;;
     25_*) echo "--max-depth 1" ;;
+    27_*) echo "--leaf-size 8" ;;
     *) echo "" ;;
     esac
 }
@@ -142,6 +147,7 @@ knob_lines() {
     22_*) grep 'round-robin, middle ' ;;
     23_*) grep '^  grid-irregular ' | awk '{print $2, $3, $4}' ;;
     25_*) grep "SAH, a cheap step" ;;
+    27_*) grep '^  eager ' | awk '{print $4, $5}' ;;            # the eager kd-tree's nodes and references
     esac
 }
 

@@ -93,7 +93,7 @@ const char *sidx_viz_build_knobs_help(void)
            "  --no-mailbox       grids, kd-tree: no mailbox (a triangle in k cells is tested k times)\n"
            "  --empty-bonus X    kd-tree SAH bonus for cutting off empty space, 0 <= X < 1\n"
            "  --optimize MS      BVHs: improve the binary tree by reinsertion for at most MS ms, MS > 0\n"
-           "  --lazy             bvh family: build subtrees of at most 1024 primitives when a ray first\n"
-           "                     enters them (build_lazy_expand events on the query's hook)\n"
+           "  --lazy             bvh, kd-tree families: build subtrees of at most 1024 primitives\n"
+           "                     when a ray first enters them (build_lazy_expand events on the query's hook)\n"
            "  --lazy-size N      the same, subtrees of at most N primitives (N >= 2)\n";
 }
