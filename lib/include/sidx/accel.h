@@ -62,7 +62,12 @@ typedef struct sidx_build_options {
                                      leave each subtree of at most this many primitives as an unbuilt node
                                      holding them, built the first time a ray enters it (a BUILD_LAZY_EXPAND
                                      event, then its build events, on that query's hook).  The tree below
-                                     each node is the eager build's, so hits are bit-identical.  0 = eager;
+                                     each node is the eager build's, so hits are bit-identical.  bvh4 and
+                                     bvh8 too (subtrees of more than 8 primitives; not with
+                                     no_spatial_splits): the binary tree below each unbuilt node is the eager
+                                     one, but the wide nodes above it group it otherwise, so where a ray
+                                     hits two triangles at exactly the same t the other one may be reported
+                                     (same t); packets over them go ray by ray.  0 = eager;
                                      1 = the default size (SIDX_LAZY_DEFAULT).  Ignored by the other
                                      structures and with optimize_ms > 0 (the pass needs the whole tree).
                                      A query that cannot get the memory for an expansion returns
