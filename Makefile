@@ -267,8 +267,11 @@ test-run:
 
 # ThreadSanitizer over the suites that run threads: the parallel build, the
 # parallel trace and the worker pool (test_parallel), concurrent queries on
-# every structure (test_threads).  Only these are built, in build/tsan
-# (TSAN=1), and run at their small sizes (FAST_TESTS=0: the full ones).
+# every structure (test_threads), threads racing into unbuilt nodes of
+# lazy trees (test_lazy).  Only these are built, in build/tsan (TSAN=1),
+# and run at their smallest sizes, SIDX_FAST_TESTS=2: what ThreadSanitizer
+# checks is how the threads meet, which more rays do not add to
+# (FAST_TESTS=0: the full sizes).
 # die_after_fork=0: test_pool_after_fork forks while the pool's threads
 # run, on purpose (the child must not inherit them); its child only
 # queries serially.  Any report fails the run (exitcode).
@@ -277,7 +280,7 @@ TSAN_FAST := $(if $(filter command line environment,$(origin FAST_TESTS)),$(FAST
 test-tsan:
 	@$(MAKE) --no-print-directory $(BUILD_JOBS) TSAN=1 $(TSAN_TESTS:%=$(BUILDDIR)/tsan/tests/%)
 	@TSAN_OPTIONS="halt_on_error=1 exitcode=66 die_after_fork=0 second_deadlock_stack=1" \
-	  $(if $(filter 0,$(TSAN_FAST)),,SIDX_FAST_TESTS=1) JOBS=$(TEST_JOBS) LABEL=test-tsan \
+	  $(if $(filter 0,$(TSAN_FAST)),,SIDX_FAST_TESTS=2) JOBS=$(TEST_JOBS) LABEL=test-tsan \
 	  sh tests/runner.sh $(TSAN_TESTS:%=$(BUILDDIR)/tsan/tests/%) \
 	  && echo "test-tsan: the threaded suites ran with no ThreadSanitizer report"
 

@@ -203,7 +203,22 @@ static inline bvh_par_params bvh_params(const sidx_accel *a)
  * bvh8 collapse; prim_id[] holds references (a triangle may be in several
  * leaves), tris[] is NULL and the nodes are not aligned (only the collapse
  * reads the tree).  Reads a->opt like bvh_build.c; sets a->impl. */
-sidx_status sidx__bvh_build_spatial(sidx_accel *a, sidx_error *err);
+typedef struct sidx__sbvh_lazy sidx__sbvh_lazy;
+sidx_status sidx__bvh_build_spatial(sidx_accel *a, uint32_t lazy_max, uint32_t lazy_min, sidx__sbvh_lazy **lazy,
+                                    sidx_error *err);
+
+/* Lazy builds of that tree (lazy_max > 0 and lazy != NULL): every subtree
+ * of more than lazy_min and at most lazy_max references is left as a
+ * placeholder node, count_axis = BVH_LAZY_MARK | r and left_or_first = its
+ * reference count, record r of *lazy keeping what its build needs.
+ * sidx__sbvh_lazy_build builds record r's subtree as a tree of its own
+ * (the eager build's subtree at that node, node for node), callable from
+ * any thread, once per record at a time; sidx__sbvh_lazy_release frees
+ * the record's copy of its references once its subtree is built for good. */
+uint32_t sidx__sbvh_lazy_count(const sidx__sbvh_lazy *L);
+sidx_status sidx__sbvh_lazy_build(const sidx_accel *a, sidx__sbvh_lazy *L, uint32_t r, bvh **out);
+void sidx__sbvh_lazy_release(const sidx_accel *a, sidx__sbvh_lazy *L, uint32_t r);
+void sidx__sbvh_lazy_free(const sidx_accel *a, sidx__sbvh_lazy *L);
 
 /* bvh_build.c: the tree's expected cost under the SAH (stats sah_cost). */
 double sidx__bvh_tree_sah(const bvh *b, float c_trav, float c_tri);

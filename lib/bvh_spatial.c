@@ -80,6 +80,8 @@ typedef struct sbuild {
     uint32_t num_leaves, max_depth_seen;
     struct stasks *par;     /* parallel build: where subtrees of at most `frontier` references */
     uint32_t frontier;      /* go as tasks (0: build everything here) */
+    struct sidx__sbvh_lazy *lazy; /* lazy build: where subtrees of more than lazy_min and at most */
+    uint32_t lazy_max, lazy_min;  /* lazy_max references wait for a ray (NULL: build everything) */
 } sbuild;
 
 typedef struct sbin {
@@ -458,6 +460,7 @@ static int pool_reserve(sbuild *S, size_t need)
 
 static sidx_status build(sbuild *S, size_t off, uint32_t n, sidx_aabb box, uint32_t depth, uint64_t budget);
 static sidx_status defer(sbuild *S, size_t off, uint32_t n, sidx_aabb box, uint32_t depth, uint64_t budget);
+static sidx_status defer_lazy(sbuild *S, size_t off, uint32_t n, sidx_aabb box, uint32_t depth, uint64_t budget);
 
 /* The pool is a stack whose top segment is the node being built: its n
  * references at [off, off + n), top = off + n.  A split leaves its
@@ -503,6 +506,8 @@ static sidx_status children(sbuild *S, uint32_t idx, int axis, size_t off, uint3
 static sidx_status build(sbuild *S, size_t off, uint32_t n, sidx_aabb box, uint32_t depth, uint64_t budget)
 {
     const int leaf = n <= S->leaf_size || depth >= S->max_depth;
+    if (!leaf && S->lazy && n <= S->lazy_max && n > S->lazy_min)
+        return defer_lazy(S, off, n, box, depth, budget);
     if (!leaf && n <= S->frontier) return defer(S, off, n, box, depth, budget);
     uint32_t idx;
     if (!push_node(S, &idx)) return SIDX_ERR_NOMEM;
@@ -849,13 +854,118 @@ static sidx_status finish_tasks(sbuild *S, stasks *P, unsigned threads)
     return SIDX_OK;
 }
 
+/* ---- lazy builds -------------------------------------------------------------------- */
+
+/* With a->opt.lazy (bvh_wide.c) the build stops at every subtree of more
+ * than lazy_min and at most lazy_max references: the node becomes a
+ * placeholder (count_axis = BVH_LAZY_MARK | r, left_or_first = its
+ * reference count) and record r keeps what building it needs — a copy of
+ * its references in the build's order, its box, depth and share of the
+ * spatial-split budget.  A node's subtree depends on nothing else (see
+ * "several threads" above), so sidx__sbvh_lazy_build, run when a ray first
+ * reaches the node, builds the very subtree the eager build has there. */
+typedef struct slazy_rec {
+    sref *refs;             /* NULL once built */
+    uint32_t n, depth;
+    sidx_aabb box;
+    uint64_t budget;
+} slazy_rec;
+
+struct sidx__sbvh_lazy {
+    slazy_rec *rec;
+    size_t count, cap;
+    sbuild params;          /* the top build's parameters (arrays empty) */
+};
+
+static sidx_status defer_lazy(sbuild *S, size_t off, uint32_t n, sidx_aabb box, uint32_t depth, uint64_t budget)
+{
+    sidx__sbvh_lazy *L = S->lazy;
+    uint32_t idx;
+    if (L->count >= BVH_LAZY_MAX_RECS) { /* no record left: built now */
+        sidx__sbvh_lazy *keep = L;
+        S->lazy = NULL;
+        const sidx_status s = build(S, off, n, box, depth, budget);
+        S->lazy = keep;
+        return s;
+    }
+    if (!push_node(S, &idx) || !sidx__grow(S->a, (void **)&L->rec, &L->cap, L->count + 1u, sizeof *L->rec))
+        return SIDX_ERR_NOMEM;
+    slazy_rec *r = &L->rec[L->count];
+    r->refs = sidx__alloc(S->a, n, sizeof *r->refs);
+    if (!r->refs) return SIDX_ERR_NOMEM;
+    memcpy(r->refs, S->pool + off, (size_t)n * sizeof *r->refs);
+    r->n = n;
+    r->depth = depth;
+    r->box = box;
+    r->budget = budget;
+    set_box(&S->nodes[idx], box);
+    S->nodes[idx].left_or_first = n;
+    S->nodes[idx].count_axis = BVH_LAZY_MARK | (uint32_t)L->count;
+    L->count++;
+    if (depth > S->max_depth_seen) S->max_depth_seen = depth;
+    return SIDX_OK;
+}
+
+void sidx__sbvh_lazy_free(const sidx_accel *a, sidx__sbvh_lazy *L)
+{
+    if (!L) return;
+    for (size_t i = 0; i < L->count; ++i) sidx__free(a, L->rec[i].refs);
+    sidx__free(a, L->rec);
+    sidx__free(a, L);
+}
+
+uint32_t sidx__sbvh_lazy_count(const sidx__sbvh_lazy *L) { return L ? (uint32_t)L->count : 0u; }
+
+sidx_status sidx__sbvh_lazy_build(const sidx_accel *a, sidx__sbvh_lazy *L, uint32_t r, bvh **out)
+{
+    slazy_rec *rec = &L->rec[r];
+    const uint32_t n = rec->n;
+    *out = NULL;
+    sbuild S = L->params;
+    S.a = a;
+    S.mesh = a->mesh;
+    sidx_status s = SIDX_ERR_NOMEM;
+    bvh *b = sidx__calloc(a, 1, sizeof *b);
+    if (!b || !pool_reserve(&S, SB_POOL_RESERVE * (size_t)n) ||
+        !sidx__grow(a, (void **)&S.nodes, &S.cap_nodes, n, sizeof *S.nodes) ||
+        !sidx__grow(a, (void **)&S.out, &S.cap_out, n + n / 2u, sizeof *S.out))
+        goto fail;
+    memcpy(S.pool, rec->refs, (size_t)n * sizeof *S.pool);
+    S.top = n;
+    if ((s = build(&S, 0, n, rec->box, rec->depth, rec->budget)) != SIDX_OK) goto fail;
+    sidx__free(a, S.pool);
+    b->nodes_mem = b->nodes = S.nodes;
+    b->prim_id = S.out;
+    b->num_nodes = (uint32_t)S.num_nodes;
+    b->num_leaves = S.num_leaves;
+    b->max_depth = S.max_depth_seen;
+    b->num_prims = (uint32_t)S.num_out;
+    *out = b;
+    return SIDX_OK;
+
+fail:
+    sidx__free(a, S.pool);
+    sidx__free(a, S.nodes);
+    sidx__free(a, S.out);
+    sidx__free(a, b);
+    return s;
+}
+
+void sidx__sbvh_lazy_release(const sidx_accel *a, sidx__sbvh_lazy *L, uint32_t r)
+{
+    sidx__free(a, L->rec[r].refs);
+    L->rec[r].refs = NULL;
+}
+
 /* ---- entry -------------------------------------------------------------------------- */
 
 /* Builds the reference tree into a->impl (a bvh, freed by the bvh
  * vtable's destroy).  Reads a->opt: c_trav, c_tri, leaf_size, max_depth
  * as bvh_build.c does, and threads (see "several threads" above). */
-sidx_status sidx__bvh_build_spatial(sidx_accel *a, sidx_error *err)
+sidx_status sidx__bvh_build_spatial(sidx_accel *a, uint32_t lazy_max, uint32_t lazy_min, sidx__sbvh_lazy **lazy,
+                                    sidx_error *err)
 {
+    if (lazy) *lazy = NULL;
     const sidx_mesh *m = a->mesh;
     const uint32_t n = m->num_triangles;
     a->impl = NULL;
@@ -874,7 +984,8 @@ sidx_status sidx__bvh_build_spatial(sidx_accel *a, sidx_error *err)
     const unsigned threads = a->opt.threads > SIDX_POOL_MAX_THREADS ? SIDX_POOL_MAX_THREADS : a->opt.threads;
     stasks P;
     memset(&P, 0, sizeof P);
-    const int parallel = threads > 1 && n >= SB_PAR_MIN;
+    /* a lazy top is built on the calling thread (it is small) */
+    const int parallel = threads > 1 && n >= SB_PAR_MIN && !(lazy && lazy_max);
     if (parallel) {
         if (pthread_mutex_init(&P.lock.mu, NULL) != 0)
             return sidx__fail(err, SIDX_ERR_NOMEM, "%s: cannot create a mutex", a->name);
@@ -892,6 +1003,12 @@ sidx_status sidx__bvh_build_spatial(sidx_accel *a, sidx_error *err)
     sidx_status s = SIDX_ERR_NOMEM;
     bvh *b = sidx__calloc(a, 1, sizeof *b);
     if (!b || (parallel && (!P.tobj || !P.tspat))) goto fail;
+    if (lazy && lazy_max && n > 0) {
+        S.lazy = sidx__calloc(a, 1, sizeof *S.lazy);
+        if (!S.lazy) goto fail;
+        S.lazy_max = lazy_max;
+        S.lazy_min = lazy_min;
+    }
     if (n > 0) {
         /* Sized for a typical build, so the arrays rarely grow (growing
          * copies them whole); pages never written cost no memory. */
@@ -910,6 +1027,16 @@ sidx_status sidx__bvh_build_spatial(sidx_accel *a, sidx_error *err)
         }
         S.top = n;
         S.min_overlap = SB_ALPHA * sidx_aabb_area(root);
+        if (S.lazy) {
+            S.lazy->params = S; /* the parameters; the arrays are the expansion's own */
+            S.lazy->params.pool = NULL;
+            S.lazy->params.nodes = NULL;
+            S.lazy->params.out = NULL;
+            S.lazy->params.lazy = NULL;
+            S.lazy->params.top = S.lazy->params.cap_pool = S.lazy->params.num_nodes = S.lazy->params.cap_nodes = 0;
+            S.lazy->params.num_out = S.lazy->params.cap_out = 0;
+            S.lazy->params.num_leaves = S.lazy->params.max_depth_seen = 0;
+        }
         if ((s = build(&S, 0, n, root, 0, (uint64_t)((double)n * SB_BUDGET))) != SIDX_OK ||
             (s = finish_tasks(&S, &P, threads)) != SIDX_OK)
             goto fail;
@@ -934,6 +1061,7 @@ sidx_status sidx__bvh_build_spatial(sidx_accel *a, sidx_error *err)
         free_tasks(a, &P);
         pthread_mutex_destroy(&P.lock.mu);
     }
+    if (lazy) *lazy = S.lazy;
     a->impl = b;
     return SIDX_OK;
 
@@ -945,6 +1073,7 @@ fail:
         free_tasks(a, &P);
         pthread_mutex_destroy(&P.lock.mu);
     }
+    sidx__sbvh_lazy_free(a, S.lazy);
     if (b) {
         sidx__free(a, b->nodes_mem);
         sidx__free(a, b->prim_id);

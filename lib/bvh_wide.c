@@ -31,9 +31,12 @@
  * the environment caps the choice: "scalar", "sse4.1" or "avx2" (the
  * tests compare every copy the CPU can run).  A NOTE event on the build
  * hook says which was picked. */
+#include <math.h>
+#include <sched.h>
 #include <stdlib.h>
 #include <string.h>
 #include "bvh_wide_internal.h"
+#include "simd_isa.h"
 #ifdef __linux__
 #include <sys/mman.h>
 #endif
@@ -126,6 +129,8 @@ wide_isa sidx__wide_pick_isa(uint32_t width)
 
 static void set_kernels(wide_bvh *w, sidx_tri_method tri)
 {
+    /* a lazy tree's walks are copies of their own (lazy = 1 in bvh_wide_walk.h);
+     * the eager ones compile without any of their code */
     const wide_kernels *k = w->width == 8 ? &sidx__wide_kernels_8_scalar : &sidx__wide_kernels_4_scalar;
 #ifdef SIDX_WIDE_X86
     if (w->isa == WIDE_ISA_AVX512) k = &sidx__wide_kernels_8_avx512;
@@ -136,6 +141,14 @@ static void set_kernels(wide_bvh *w, sidx_tri_method tri)
 #endif
     /* The triangle test is fixed at build: decide here, not per ray. */
     const int simd_tri = tri == SIDX_TRI_WATERTIGHT;
+    if (w->lazy) {
+        const wide_occl_fn occl = simd_tri ? k->lazy_occl_simd : k->lazy_occl_other;
+        w->walks[0] = (sidx__walk_table){simd_tri ? k->lazy_isect_simd : k->lazy_isect_other, k->lazy_isect_traced,
+                                         occl, k->lazy_occl_traced};
+        w->walks[1] = (sidx__walk_table){simd_tri ? k->lazy_isect_simd_uv : k->lazy_isect_other,
+                                         k->lazy_isect_traced, occl, k->lazy_occl_traced};
+        return;
+    }
     const wide_occl_fn occl = simd_tri ? k->occl_simd : k->occl_other;
     w->walks[0] = (sidx__walk_table){simd_tri ? k->isect_simd : k->isect_other, k->isect_traced, occl, k->occl_traced};
     w->walks[1] = (sidx__walk_table){simd_tri ? k->isect_simd_uv : k->isect_other, k->isect_traced, occl,
@@ -174,15 +187,19 @@ typedef struct collapse {
     uint32_t W;
     const uint32_t *sub_count, *sub_first; /* per binary node: triangles below it and the first one */
     float *cost;                           /* [node][j − 1], W per node */
-    uint8_t *how;                          /* [node][j − 1]: 0 leaf, 1 wide node, 2 + k split (k slots left) */
+    uint8_t *how;                          /* [node][j − 1]: HOW_LEAF, HOW_NODE, HOW_LAZY, HOW_SPLIT + k (k slots left) */
     uint8_t *node_k;                       /* [node]: slots given to the left child when n is a wide node */
     float *nodes;
     uint32_t num_inner;
     wide_tri4 *blocks;
     uint32_t num_blocks, num_leaves, max_depth;
+    wide_lazy_rec *lazy_recs;              /* lazy top: the records its unbuilt children fill in */
 } collapse;
 
-enum { HOW_LEAF = 0, HOW_NODE = 1, HOW_SPLIT = 2 };
+/* HOW_LAZY: a placeholder of a lazy build (bvh_spatial.c), one slot. */
+enum { HOW_LEAF = 0, HOW_NODE = 1, HOW_LAZY = 2, HOW_SPLIT = 3 };
+
+static SIDX_INLINE int is_placeholder(const bvh_node *n) { return (n->count_axis & BVH_LAZY_MARK) == BVH_LAZY_MARK; }
 
 static void collapse_costs(collapse *C)
 {
@@ -193,6 +210,16 @@ static void collapse_costs(collapse *C)
         uint8_t *h = C->how + (size_t)i * W;
         const float area = sidx_aabb_area(bvh_node_box(&bn[i]));
         const uint32_t N = C->sub_count[i];
+        if (is_placeholder(&bn[i])) {
+            /* Its subtree is not built, so its cost is not known: one
+             * slot, at an estimate of a wide subtree over N triangles
+             * (a node per level of log_W N, and a block).  The choices
+             * above it are made on that estimate. */
+            const float est = area * (WIDE_C_NODE * (1.0f + logf((float)N) / logf((float)W)) + WIDE_C_BLOCK);
+            for (uint32_t j = 0; j < W; ++j) { c[j] = est; h[j] = HOW_LAZY; }
+            C->node_k[i] = 0;
+            continue;
+        }
         const int is_leaf = bvh_is_leaf(&bn[i]);
         const float leaf = (is_leaf || N <= WIDE_MAX_LEAF) ? area * WIDE_C_BLOCK * (float)((N + 3u) / 4u) : INFINITY;
         if (is_leaf) {
@@ -224,14 +251,16 @@ static void collapse_costs(collapse *C)
     }
 }
 
-/* The slots binary node n stands for with budget j: (node, is_leaf) pairs
- * in the binary tree's left-to-right order. */
+/* The slots binary node n stands for with budget j: (node, kind) pairs
+ * in the binary tree's left-to-right order, kind KID_NODE, KID_LEAF or
+ * KID_LAZY. */
+enum { KID_NODE = 0, KID_LEAF = 1, KID_LAZY = 2 };
 static void gather(const collapse *C, uint32_t n, uint32_t j, uint32_t *kids, uint8_t *leaf, uint32_t *k)
 {
     const uint8_t h = C->how[(size_t)n * C->W + j - 1];
     if (h < HOW_SPLIT) {
         kids[*k] = n;
-        leaf[*k] = h == HOW_LEAF;
+        leaf[*k] = h == HOW_LEAF ? KID_LEAF : h == HOW_LAZY ? KID_LAZY : KID_NODE;
         ++*k;
         return;
     }
@@ -280,17 +309,20 @@ static void count_node(const collapse *C, uint32_t n2, uint32_t *inner, uint32_t
     ++*inner;
     uint32_t kids[8], k = 0;
     uint8_t is_leaf[8];
-    if (!bvh_is_leaf(&bn[n2])) {
+    if (is_placeholder(&bn[n2])) { /* a lazy root: one unbuilt child */
+        kids[k] = n2;
+        is_leaf[k++] = KID_LAZY;
+    } else if (!bvh_is_leaf(&bn[n2])) {
         const uint32_t kl = C->node_k[n2];
         gather(C, n2 + 1, kl, kids, is_leaf, &k);
         gather(C, bn[n2].left_or_first, C->W - kl, kids, is_leaf, &k);
     } else {
         kids[k] = n2;
-        is_leaf[k++] = 1;
+        is_leaf[k++] = KID_LEAF;
     }
     for (uint32_t s = 0; s < k; ++s) {
-        if (is_leaf[s]) *blocks += (C->sub_count[kids[s]] + 3u) / 4u;
-        else count_node(C, kids[s], inner, blocks);
+        if (is_leaf[s] == KID_LEAF) *blocks += (C->sub_count[kids[s]] + 3u) / 4u;
+        else if (is_leaf[s] == KID_NODE) count_node(C, kids[s], inner, blocks);
     }
 }
 
@@ -305,13 +337,16 @@ static uint32_t make_node(collapse *C, uint32_t n2, uint32_t depth)
     if (depth > C->max_depth) C->max_depth = depth;
     uint32_t kids[8], k = 0;
     uint8_t is_leaf[8];
-    if (!bvh_is_leaf(&bn[n2])) {
+    if (is_placeholder(&bn[n2])) { /* a lazy root: one unbuilt child */
+        kids[k] = n2;
+        is_leaf[k++] = KID_LAZY;
+    } else if (!bvh_is_leaf(&bn[n2])) {
         const uint32_t kl = C->node_k[n2];
         gather(C, n2 + 1, kl, kids, is_leaf, &k);
         gather(C, bn[n2].left_or_first, W - kl, kids, is_leaf, &k);
     } else {
         kids[k] = n2;
-        is_leaf[k++] = 1;
+        is_leaf[k++] = KID_LEAF;
     }
     float *n = C->nodes + (size_t)idx * 8u * W;
     uint32_t *ch = (uint32_t *)(void *)(n + 6u * W), *id = (uint32_t *)(void *)(n + 7u * W);
@@ -322,7 +357,17 @@ static uint32_t make_node(collapse *C, uint32_t n2, uint32_t depth)
     }
     for (uint32_t s = 0; s < k; ++s) {
         set_slot(n, W, s, bvh_node_box(&bn[kids[s]]));
-        if (!is_leaf[s]) {
+        if (is_leaf[s] == KID_LAZY) {
+            const uint32_t r = bn[kids[s]].count_axis & BVH_COUNT_MASK;
+            wide_lazy_rec *rec = &C->lazy_recs[r];
+            rec->count = C->sub_count[kids[s]];
+            rec->parent = idx;
+            rec->depth = depth + 1;
+            rec->box = bvh_node_box(&bn[kids[s]]);
+            ch[s] = WIDE_LAZY_BIT | r;
+            id[s] = r; /* + num_inner + num_leaves once those are known */
+            if (depth + 1 > C->max_depth) C->max_depth = depth + 1;
+        } else if (is_leaf[s] == KID_NODE) {
             const uint32_t c = make_node(C, kids[s], depth + 1);
             ch[s] = c;
             id[s] = c;
@@ -358,6 +403,11 @@ static sidx_aabb leaf_box(const wide_bvh *w, uint32_t first_block)
     }
 }
 
+/* The event id of wide node i: root_id for the root, base + i otherwise
+ * (a lazy tree's subtrees number their nodes after everything before them,
+ * their root being the unbuilt child it replaces). */
+static SIDX_INLINE uint32_t node_id(uint32_t i, uint32_t root_id, uint32_t base) { return i ? base + i : root_id; }
+
 static sidx_aabb node_box(const wide_bvh *w, uint32_t i)
 {
     const float *n = wide_node(w, i);
@@ -367,24 +417,29 @@ static sidx_aabb node_box(const wide_bvh *w, uint32_t i)
     return bb;
 }
 
-static void emit_build(const sidx_accel *a, const wide_bvh *w, const uint32_t *count, uint32_t i, uint32_t parent,
-                       uint32_t depth)
+static void emit_build(const sidx_accel *a, const sidx_hook *h, const wide_bvh *w, const uint32_t *count, uint32_t i,
+                       uint32_t parent, uint32_t depth, uint32_t root_id, uint32_t base)
 {
-    const sidx_hook *h = a->opt.hook;
     const uint32_t W = w->width;
     const float *n = wide_node(w, i);
-    SIDX_EMIT(1, h, SIDX_EV_BUILD_NODE, e_.node = i; e_.parent = parent; e_.depth = depth;
+    const uint32_t me = node_id(i, root_id, base);
+    SIDX_EMIT(1, h, SIDX_EV_BUILD_NODE, e_.node = me; e_.parent = parent; e_.depth = depth;
               e_.bounds = node_box(w, i); e_.count = count[i]);
     for (uint32_t s = 0; s < W; ++s) {
         const uint32_t c = wide_child(n, W)[s], id = wide_id(n, W)[s];
         if (c == WIDE_EMPTY) continue;
+        if (!(c & WIDE_LEAF_BIT) && (c & WIDE_LAZY_BIT)) { /* unbuilt: a node without a decision yet */
+            SIDX_EMIT(1, h, SIDX_EV_BUILD_NODE, e_.node = id; e_.parent = me; e_.depth = depth + 1;
+                      e_.bounds = wide_slot_box(n, W, s); e_.count = w->lazy->recs[c & ~WIDE_LAZY_BIT].count);
+            continue;
+        }
         if (!(c & WIDE_LEAF_BIT)) {
-            emit_build(a, w, count, c, i, depth + 1);
+            emit_build(a, h, w, count, c, me, depth + 1, root_id, base);
             continue;
         }
         const uint32_t np = leaf_prims(w, c & ~WIDE_LEAF_BIT);
         const float cost = (float)np * (a->opt.c_tri > 0.0f ? a->opt.c_tri : 1.0f);
-        SIDX_EMIT(1, h, SIDX_EV_BUILD_NODE, e_.node = id; e_.parent = i; e_.depth = depth + 1;
+        SIDX_EMIT(1, h, SIDX_EV_BUILD_NODE, e_.node = id; e_.parent = me; e_.depth = depth + 1;
                   e_.bounds = wide_slot_box(n, W, s); e_.count = np);
         /* The event lists the leaf's ids in one run; the blocks interleave them with the
          * vertices, so they are gathered (this runs only with a hook; no memory: no list). */
@@ -410,7 +465,9 @@ static void inner_counts(const wide_bvh *w, uint32_t *count)
         for (uint32_t s = 0; s < w->width; ++s) {
             const uint32_t ch = wide_child(n, w->width)[s];
             if (ch == WIDE_EMPTY) continue;
-            c += (ch & WIDE_LEAF_BIT) ? leaf_prims(w, ch & ~WIDE_LEAF_BIT) : count[ch];
+            c += (ch & WIDE_LEAF_BIT)  ? leaf_prims(w, ch & ~WIDE_LEAF_BIT)
+                 : (ch & WIDE_LAZY_BIT) ? w->lazy->recs[ch & ~WIDE_LAZY_BIT].count
+                                        : count[ch];
         }
         count[i] = c;
     }
@@ -440,8 +497,8 @@ static float opt_or(float v, float def) { return v > 0.0f ? v : def; }
 
 static sidx_status wide_refit(sidx_accel *a, sidx_error *err)
 {
-    (void)err;
     wide_bvh *w = a->impl;
+    if (w && w->lazy) return sidx__fail(err, SIDX_ERR_UNSUPPORTED, "%s: a lazy tree cannot be refitted; rebuild it", a->name);
     if (!w || w->num_inner == 0) return SIDX_OK;
     const sidx_mesh *m = a->mesh;
     for (uint32_t k = 0; k < w->num_blocks; ++k) {
@@ -475,6 +532,17 @@ static sidx_status wide_refit(sidx_accel *a, sidx_error *err)
 static void wide_free(const sidx_accel *a, wide_bvh *w)
 {
     if (!w) return;
+    if (w->lazy) {
+        for (uint32_t r = 0; r < w->lazy->num_recs; ++r) {
+            const sidx_accel *shell = w->lazy->recs[r].shell;
+            if (!shell) continue;
+            wide_free(a, shell->impl);
+            sidx__free(a, (void *)(uintptr_t)shell);
+        }
+        sidx__free(a, w->lazy->recs);
+        sidx__sbvh_lazy_free(a, w->lazy->sb);
+        sidx__free(a, w->lazy);
+    }
     sidx__free(a, w->nodes_mem);
     sidx__free(a, w->blocks_mem);
     sidx__free(a, w);
@@ -511,6 +579,83 @@ static void *alloc_array(const sidx_accel *a, size_t bytes, void **mem)
     return p;
 }
 
+/* Collapses binary tree b into w (width, isa and kernels already set):
+ * its nodes, blocks, counts and bounds.  lazy_recs: a lazy top's records,
+ * which its placeholders fill in (NULL for a tree without any).  Leaf
+ * event ids follow the inner nodes', unbuilt children's the leaves'.  On
+ * failure (SIDX_ERR_NOMEM) w's arrays are left for wide_free. */
+static sidx_status collapse_into(const sidx_accel *a, const bvh *b, wide_bvh *w, wide_lazy_rec *lazy_recs)
+{
+    const uint32_t W = w->width, nn = b->num_nodes;
+    if (nn == 0) return SIDX_OK;
+    sidx_status s = SIDX_ERR_NOMEM;
+    uint32_t *sub = sidx__alloc(a, 2u * (size_t)nn, sizeof *sub);
+    float *dp_cost = sidx__alloc(a, (size_t)nn * W, sizeof *dp_cost);
+    uint8_t *dp_how = sidx__alloc(a, (size_t)nn * (W + 1u), 1);
+    if (!sub || !dp_cost || !dp_how) goto done;
+    uint32_t *sub_count = sub, *sub_first = sub + nn;
+    for (uint32_t i = nn; i-- > 0;) {
+        const bvh_node *n = &b->nodes[i];
+        if (is_placeholder(n)) {
+            sub_count[i] = n->left_or_first;
+            sub_first[i] = 0;
+        } else if (bvh_is_leaf(n)) {
+            sub_count[i] = bvh_count(n);
+            sub_first[i] = n->left_or_first;
+        } else {
+            sub_count[i] = sub_count[i + 1] + sub_count[n->left_or_first];
+            sub_first[i] = sub_first[i + 1];
+        }
+    }
+    collapse C = {b,    a->mesh, W, sub_count, sub_first, dp_cost, dp_how, dp_how + (size_t)nn * W, NULL, 0, NULL, 0,
+                  0,    0,       lazy_recs};
+    collapse_costs(&C);
+    sidx__free(a, dp_cost); /* the choices (how, node_k) are all the rest reads */
+    dp_cost = NULL;
+    uint32_t num_inner = 0, num_blocks = 0;
+    count_node(&C, 0, &num_inner, &num_blocks);
+    /* Exact-size, aligned arrays: a node is whole cache lines. */
+    w->nodes = alloc_array(a, (size_t)num_inner * 8u * W * sizeof(float), &w->nodes_mem);
+    w->blocks = alloc_array(a, (size_t)num_blocks * sizeof(wide_tri4), &w->blocks_mem);
+    if (!w->nodes || (num_blocks && !w->blocks)) goto done;
+    C.nodes = w->nodes;
+    C.blocks = w->blocks;
+    make_node(&C, 0, 0);
+    w->num_inner = C.num_inner;
+    w->num_blocks = C.num_blocks;
+    w->num_leaves = C.num_leaves;
+    w->max_depth = C.max_depth;
+    /* Leaf event ids come after the inner nodes, unbuilt children's after the leaves. */
+    for (uint32_t i = 0; i < w->num_inner; ++i) {
+        float *n = w->nodes + (size_t)i * 8u * W;
+        uint32_t *ch = (uint32_t *)(void *)(n + 6u * W), *id = (uint32_t *)(void *)(n + 7u * W);
+        for (uint32_t k = 0; k < W; ++k) {
+            if (ch[k] == WIDE_EMPTY) continue;
+            if (ch[k] & WIDE_LEAF_BIT) id[k] += w->num_inner;
+            else if (ch[k] & WIDE_LAZY_BIT) {
+                id[k] += w->num_inner + w->num_leaves;
+                lazy_recs[ch[k] & ~WIDE_LAZY_BIT].id = id[k];
+            }
+        }
+    }
+    w->bounds = node_box(w, 0);
+    s = SIDX_OK;
+done:
+    sidx__free(a, sub);
+    sidx__free(a, dp_cost);
+    sidx__free(a, dp_how);
+    return s;
+}
+
+static void bin_free(const sidx_accel *a, bvh *b)
+{
+    if (!b) return;
+    sidx__free(a, b->nodes_mem);
+    sidx__free(a, b->prim_id);
+    sidx__free(a, b->tris);
+    sidx__free(a, b);
+}
+
 static sidx_status wide_build(sidx_accel *a, sidx_error *err)
 {
     const sidx_mesh *m = a->mesh;
@@ -518,16 +663,29 @@ static sidx_status wide_build(sidx_accel *a, sidx_error *err)
     const sidx_hook *hook = a->opt.hook;
     SIDX_EMIT(1, hook, SIDX_EV_BUILD_BEGIN, e_.count = m->num_triangles; e_.bounds = sidx_mesh_bounds(m));
 
+    /* Lazy (opt.lazy): the spatial-split tree stops at its subtrees of at
+     * most opt.lazy references (see "lazy builds" below); the plain
+     * binned tree (opt.no_spatial_splits) and an optimised one are built
+     * whole. */
+    const uint32_t lazy_max = a->opt.lazy == 1 ? SIDX_LAZY_DEFAULT : a->opt.lazy;
+    const int want_lazy = lazy_max > WIDE_MAX_LEAF && !a->opt.no_spatial_splits && !(a->opt.optimize_ms > 0.0f) &&
+                          m->num_triangles > 0;
+    sidx__sbvh_lazy *sb = NULL;
+
     /* The binary tree, silently (its node ids are not ours), on
      * opt.threads threads either way (bvh_spatial.c, parallel.c). */
     sidx_accel bin = *a;
     bin.variant = BVH_BINNED;
     bin.opt.hook = NULL;
+    bin.opt.lazy = 0;
     bin.impl = NULL;
-    sidx_status s = a->opt.no_spatial_splits ? sidx__bvh_vtable.build(&bin, err) : sidx__bvh_build_spatial(&bin, err);
+    sidx_status s = a->opt.no_spatial_splits
+                        ? sidx__bvh_vtable.build(&bin, err)
+                        : sidx__bvh_build_spatial(&bin, want_lazy ? lazy_max : 0, WIDE_MAX_LEAF, &sb, err);
     if (s != SIDX_OK) return s;
+    const int lazy = sidx__sbvh_lazy_count(sb) > 0;
     /* the plain build optimised its tree already (bvh_build.c) */
-    if (!a->opt.no_spatial_splits) sidx__bvh_optimize(&bin, bin.impl);
+    if (!a->opt.no_spatial_splits && !lazy) sidx__bvh_optimize(&bin, bin.impl);
     bvh *b = bin.impl;
     /* The leaves take their corners from the mesh: a binary tree's copy of
      * them (bvh_build.c's tris[]) is not needed here. */
@@ -535,67 +693,42 @@ static sidx_status wide_build(sidx_accel *a, sidx_error *err)
     b->tris = NULL;
 
     s = SIDX_ERR_NOMEM;
-    uint32_t *sub = NULL, *counts = NULL;
-    float *dp_cost = NULL;
-    uint8_t *dp_how = NULL;
+    uint32_t *counts = NULL;
     wide_bvh *w = sidx__calloc(a, 1, sizeof *w);
     if (!w) goto fail;
     w->width = W;
     w->num_prims = b->num_prims;
     w->isa = sidx__wide_pick_isa(W);
-    set_kernels(w, a->opt.tri);
     w->bounds = sidx_aabb_empty();
-    if (b->num_nodes > 0) {
-        const uint32_t nn = b->num_nodes;
-        sub = sidx__alloc(a, 2u * (size_t)nn, sizeof *sub);
-        dp_cost = sidx__alloc(a, (size_t)nn * W, sizeof *dp_cost);
-        dp_how = sidx__alloc(a, (size_t)nn * (W + 1u), 1);
-        if (!sub || !dp_cost || !dp_how) goto fail;
-        uint32_t *sub_count = sub, *sub_first = sub + nn;
-        for (uint32_t i = nn; i-- > 0;) {
-            const bvh_node *n = &b->nodes[i];
-            if (bvh_is_leaf(n)) {
-                sub_count[i] = bvh_count(n);
-                sub_first[i] = n->left_or_first;
-            } else {
-                sub_count[i] = sub_count[i + 1] + sub_count[n->left_or_first];
-                sub_first[i] = sub_first[i + 1];
-            }
-        }
-        collapse C = {b, m, W, sub_count, sub_first, dp_cost, dp_how, dp_how + (size_t)nn * W, NULL, 0, NULL, 0, 0, 0};
-        collapse_costs(&C);
-        sidx__free(a, dp_cost); /* the choices (how, node_k) are all the rest reads */
-        dp_cost = NULL;
-        uint32_t num_inner = 0, num_blocks = 0;
-        count_node(&C, 0, &num_inner, &num_blocks);
-        /* Exact-size, aligned arrays: a node is whole cache lines. */
-        w->nodes = alloc_array(a, (size_t)num_inner * 8u * W * sizeof(float), &w->nodes_mem);
-        w->blocks = alloc_array(a, (size_t)num_blocks * sizeof(wide_tri4), &w->blocks_mem);
-        if (!w->nodes || !w->blocks) goto fail;
-        C.nodes = w->nodes;
-        C.blocks = w->blocks;
-        make_node(&C, 0, 0);
-        sidx__free(a, dp_how);
-        dp_how = NULL;
-        w->num_inner = C.num_inner;
-        w->num_blocks = C.num_blocks;
-        w->num_leaves = C.num_leaves;
-        w->max_depth = C.max_depth;
-        /* Leaf event ids come after the inner nodes. */
-        for (uint32_t i = 0; i < w->num_inner; ++i) {
-            float *n = w->nodes + (size_t)i * 8u * W;
-            uint32_t *ch = (uint32_t *)(void *)(n + 6u * W), *id = (uint32_t *)(void *)(n + 7u * W);
-            for (uint32_t k = 0; k < W; ++k)
-                if (ch[k] != WIDE_EMPTY && (ch[k] & WIDE_LEAF_BIT)) id[k] += w->num_inner;
-        }
-        w->bounds = node_box(w, 0);
+    if (lazy) {
+        w->lazy = sidx__calloc(a, 1, sizeof *w->lazy);
+        if (!w->lazy) goto fail;
+        w->lazy->sb = sb;
+        sb = NULL;
+        w->lazy->recs = sidx__calloc(a, sidx__sbvh_lazy_count(w->lazy->sb), sizeof *w->lazy->recs);
+        if (!w->lazy->recs) goto fail;
+        w->lazy->num_recs = sidx__sbvh_lazy_count(w->lazy->sb);
     }
-    w->sah_cost = wide_sah(w, opt_or(a->opt.c_trav, 1.0f), opt_or(a->opt.c_tri, 1.0f));
+    set_kernels(w, a->opt.tri);
+    if ((s = collapse_into(a, b, w, lazy ? w->lazy->recs : NULL)) != SIDX_OK) goto fail;
+    s = SIDX_ERR_NOMEM;
+    if (lazy) {
+        wide_lazy *L = w->lazy;
+        L->next_id = w->num_inner + w->num_leaves + L->num_recs;
+        L->built_nodes = L->next_id; /* an unbuilt child counts as one node until built */
+        L->built_leaves = w->num_leaves;
+        L->max_depth = w->max_depth;
+        L->unbuilt = L->num_recs;
+        for (uint32_t r = 0; r < L->num_recs; ++r) L->unbuilt_prims += L->recs[r].count;
+        w->sah_cost = 0.0; /* not applicable until every subtree is built */
+    } else {
+        w->sah_cost = wide_sah(w, opt_or(a->opt.c_trav, 1.0f), opt_or(a->opt.c_tri, 1.0f));
+    }
     if (hook && hook->fn && w->num_inner) {
         counts = sidx__alloc(a, w->num_inner, sizeof *counts);
         if (!counts) goto fail;
         inner_counts(w, counts);
-        emit_build(a, w, counts, 0, UINT32_MAX, 0);
+        emit_build(a, hook, w, counts, 0, UINT32_MAX, 0, 0, 0);
     }
     SIDX_EMIT(1, hook, SIDX_EV_NOTE,
               e_.text = w->isa == WIDE_ISA_AVX512 ? "wide BVH: AVX-512 kernels (8 boxes per pass, 4 triangles per pass)"
@@ -604,22 +737,107 @@ static sidx_status wide_build(sidx_accel *a, sidx_error *err)
                                                    : "wide BVH: portable scalar kernels");
     SIDX_EMIT(1, hook, SIDX_EV_BUILD_END, e_.node = w->num_inner + w->num_leaves; e_.count = w->num_prims;
               e_.depth = w->max_depth);
-    sidx__free(a, sub);
     sidx__free(a, counts);
     sidx__bvh_vtable.destroy(&bin);
     a->impl = w;
+    a->lazy = (unsigned char)(lazy != 0);
     a->fills_uv = a->fills_ng = 1; /* the walk sets u, v, ng from its leaf blocks (bvh_wide_walk.h) */
     return SIDX_OK;
 
 fail:
-    sidx__free(a, sub);
     sidx__free(a, counts);
-    sidx__free(a, dp_cost);
-    sidx__free(a, dp_how);
+    sidx__sbvh_lazy_free(a, sb);
     wide_free(a, w);
     sidx__bvh_vtable.destroy(&bin);
     a->impl = NULL;
     return sidx__fail(err, s, "%s: out of memory", a->name);
+}
+
+/* ---- lazy builds ------------------------------------------------------------------ */
+
+/* Builds record r's subtree as a wide tree of its own and its shell;
+ * NULL when memory runs out (everything it took is given back). */
+static const sidx_accel *expand_build(const sidx_accel *a, const wide_bvh *w, uint32_t r, const sidx_hook *hook)
+{
+    wide_lazy *L = w->lazy;
+    wide_lazy_rec *rec = &L->recs[r];
+    bvh *b = NULL;
+    uint32_t *counts = NULL;
+    sidx_accel *shell = sidx__alloc(a, 1, sizeof *shell);
+    wide_bvh *sub = sidx__calloc(a, 1, sizeof *sub);
+    if (!shell || !sub || sidx__sbvh_lazy_build(a, L->sb, r, &b) != SIDX_OK) goto fail;
+    sub->width = w->width;
+    sub->isa = w->isa;
+    sub->num_prims = b->num_prims;
+    sub->bounds = sidx_aabb_empty();
+    set_kernels(sub, a->opt.tri);
+    if (collapse_into(a, b, sub, NULL) != SIDX_OK) goto fail;
+    if (hook && hook->fn && (hook->mask == 0 || (hook->mask & SIDX_EVMASK_BUILD))) {
+        counts = sidx__alloc(a, sub->num_inner, sizeof *counts);
+        if (!counts) goto fail;
+    }
+    bin_free(a, b);
+    b = NULL;
+    /* Event ids: the root is the unbuilt child it replaces, the rest are new. */
+    const uint32_t base = __atomic_fetch_add(&L->next_id, sub->num_inner + sub->num_leaves, __ATOMIC_RELAXED);
+    for (uint32_t i = 0; i < sub->num_inner; ++i) {
+        float *n = sub->nodes + (size_t)i * 8u * sub->width;
+        uint32_t *ch = (uint32_t *)(void *)(n + 6u * sub->width), *id = (uint32_t *)(void *)(n + 7u * sub->width);
+        for (uint32_t k = 0; k < sub->width; ++k)
+            if (ch[k] != WIDE_EMPTY) id[k] += base;
+    }
+    sub->sah_cost = wide_sah(sub, opt_or(a->opt.c_trav, 1.0f), opt_or(a->opt.c_tri, 1.0f));
+    SIDX_EMIT(1, hook, SIDX_EV_BUILD_LAZY_EXPAND, e_.node = rec->id; e_.parent = rec->parent; e_.depth = rec->depth;
+              e_.count = rec->count; e_.bounds = rec->box);
+    if (counts) {
+        inner_counts(sub, counts);
+        emit_build(a, hook, sub, counts, 0, rec->parent, rec->depth, rec->id, base);
+        sidx__free(a, counts);
+    }
+    *shell = *a;
+    shell->impl = sub;
+    shell->lazy = 0;
+    shell->labels = NULL;
+    shell->opt.hook = NULL;
+    sidx__sbvh_lazy_release(a, L->sb, r); /* its references are in the blocks now */
+    __atomic_fetch_add(&L->built_nodes, sub->num_inner + sub->num_leaves - 1u, __ATOMIC_RELAXED);
+    __atomic_fetch_add(&L->built_leaves, sub->num_leaves, __ATOMIC_RELAXED);
+    __atomic_fetch_sub(&L->unbuilt, 1u, __ATOMIC_RELAXED);
+    __atomic_fetch_sub(&L->unbuilt_prims, (uint64_t)rec->count, __ATOMIC_RELAXED);
+    const uint32_t depth = rec->depth + sub->max_depth;
+    uint32_t cur = __atomic_load_n(&L->max_depth, __ATOMIC_RELAXED);
+    while (cur < depth && !__atomic_compare_exchange_n(&L->max_depth, &cur, depth, 1, __ATOMIC_RELAXED, __ATOMIC_RELAXED)) {
+    }
+    return shell;
+
+fail:
+    sidx__free(a, counts);
+    bin_free(a, b);
+    wide_free(a, sub);
+    sidx__free(a, shell);
+    return NULL;
+}
+
+const sidx_accel *sidx__wide_lazy_expand(const sidx_accel *a, uint32_t r, const sidx_hook *hook)
+{
+    const wide_bvh *w = a->impl;
+    wide_lazy_rec *rec = &w->lazy->recs[r];
+    for (unsigned spins = 0;; ++spins) {
+        uint32_t st = __atomic_load_n(&rec->state, __ATOMIC_ACQUIRE);
+        if (st == BVH_LAZY_BUILT) return rec->shell;
+        if (st == BVH_LAZY_UNBUILT) {
+            if (!__atomic_compare_exchange_n(&rec->state, &st, BVH_LAZY_BUSY, 0, __ATOMIC_ACQ_REL, __ATOMIC_ACQUIRE))
+                continue;
+            const sidx_accel *shell = expand_build(a, w, r, hook);
+            rec->shell = shell;
+            __atomic_store_n(&rec->state, shell ? BVH_LAZY_BUILT : BVH_LAZY_UNBUILT, __ATOMIC_RELEASE);
+            if (!shell) sidx__lazy_note_failure();
+            return shell;
+        }
+        /* BUSY: another thread is building it; wait (bvh_wide_internal.h, wide_lazy) */
+        if (spins < 64) SIDX_SPIN_PAUSE();
+        else sched_yield();
+    }
 }
 
 static void wide_destroy(sidx_accel *a)
@@ -635,11 +853,29 @@ static void wide_stats(const sidx_accel *a, sidx_accel_stats *s)
     s->nodes = w->num_inner + w->num_leaves;
     s->leaves = w->num_leaves;
     s->max_depth = w->max_depth;
+    if (w->lazy) {
+        wide_lazy *L = w->lazy;
+        s->nodes = __atomic_load_n(&L->built_nodes, __ATOMIC_RELAXED);
+        s->leaves = __atomic_load_n(&L->built_leaves, __ATOMIC_RELAXED);
+        s->max_depth = __atomic_load_n(&L->max_depth, __ATOMIC_RELAXED);
+        s->unbuilt = __atomic_load_n(&L->unbuilt, __ATOMIC_RELAXED);
+        s->unbuilt_prims = __atomic_load_n(&L->unbuilt_prims, __ATOMIC_RELAXED);
+    }
     s->prim_refs = w->num_prims;
     s->bytes = sizeof *w + (size_t)w->num_inner * 8u * w->width * sizeof(float) +
                (size_t)w->num_blocks * sizeof(wide_tri4);
     s->sah_cost = w->sah_cost;
-    s->mean_leaf_prims = w->num_leaves ? (double)w->num_prims / w->num_leaves : 0.0;
+    if (w->lazy) { /* the records, and the subtrees built so far */
+        s->bytes += sizeof *w->lazy + (size_t)w->lazy->num_recs * sizeof *w->lazy->recs;
+        for (uint32_t r = 0; r < w->lazy->num_recs; ++r) {
+            if (__atomic_load_n(&w->lazy->recs[r].state, __ATOMIC_ACQUIRE) != BVH_LAZY_BUILT) continue;
+            const wide_bvh *sub = w->lazy->recs[r].shell->impl;
+            s->prim_refs += sub->num_prims;
+            s->bytes += sizeof(sidx_accel) + sizeof *sub + (size_t)sub->num_inner * 8u * sub->width * sizeof(float) +
+                        (size_t)sub->num_blocks * sizeof(wide_tri4);
+        }
+    }
+    s->mean_leaf_prims = s->leaves ? (double)s->prim_refs / s->leaves : 0.0;
     s->empty_leaves = 0;
 }
 

@@ -42,6 +42,10 @@
 
 #define WIDE_LEAF_BIT 0x80000000u
 #define WIDE_EMPTY 0xFFFFFFFFu
+/* Lazy trees (opt.lazy; bvh_wide.c, "lazy builds"): a child WIDE_LAZY_BIT | r
+ * is a subtree not built until a ray reaches it, lazy record r (inner
+ * node indices stay below 2^30, the build checks it). */
+#define WIDE_LAZY_BIT 0x40000000u
 
 /* Closest-hit traversal pushes at most W − 1 deferred children per level
  * and the tree is at most BVH_DEPTH_LIMIT deep: 64 · 7 + 1 < 512. */
@@ -63,7 +67,42 @@ typedef int (*wide_occl_fn)(const sidx_accel *a, const sidx_ray *r, const sidx_q
 typedef struct wide_kernels {
     wide_isect_fn isect_traced, isect_simd, isect_simd_uv, isect_other;
     wide_occl_fn occl_traced, occl_simd, occl_other;
+    /* the same for lazy trees */
+    wide_isect_fn lazy_isect_traced, lazy_isect_simd, lazy_isect_simd_uv, lazy_isect_other;
+    wide_occl_fn lazy_occl_traced, lazy_occl_simd, lazy_occl_other;
 } wide_kernels;
+
+/* Lazy trees.  The build stops at every subtree of the binary tree of
+ * more than WIDE_MAX_LEAF and at most opt.lazy references
+ * (sidx__bvh_build_spatial's placeholders), the collapse makes each one
+ * child of its own, WIDE_LAZY_BIT | r, and record r says what building it
+ * takes.  The first ray to reach it builds the binary subtree (the eager
+ * build's, node for node) and collapses it into a wide tree of its own,
+ * held by `shell`, an accel whose impl is that tree; the lazy walks walk
+ * it with the eager walk of the same kind.
+ *
+ * Publication, as bvh_lazy (bvh_internal.h) does it: the expanding thread
+ * claims the record with a compare-and-swap of state from UNBUILT to BUSY,
+ * builds, stores shell, then state = BUILT with release; a walk reads
+ * state with acquire (one load on the built path, no lock), and a thread
+ * that finds it BUSY waits (spinning, then yielding).  Without memory for
+ * the expansion nothing is published, state returns to UNBUILT, the walk
+ * skips the child and the query reports SIDX_ERR_NOMEM. */
+typedef struct wide_lazy_rec {
+    uint32_t state;                 /* BVH_LAZY_*, atomic */
+    uint32_t count, parent, depth, id; /* references, parent wide node, depth, event id of the child */
+    sidx_aabb box;
+    const sidx_accel *shell;        /* once BUILT */
+} wide_lazy_rec;
+
+typedef struct wide_lazy {
+    wide_lazy_rec *recs;
+    uint32_t num_recs;
+    sidx__sbvh_lazy *sb;            /* the binary build's records (bvh_spatial.c) */
+    /* atomic: event ids handed out, and what is built so far */
+    uint32_t next_id, built_nodes, built_leaves, max_depth, unbuilt;
+    uint64_t unbuilt_prims;
+} wide_lazy;
 
 typedef struct wide_bvh {
     uint32_t width;        /* W: 4 or 8 */
@@ -80,7 +119,23 @@ typedef struct wide_bvh {
      * [1] for SIDX_QUERY_UV; the untraced walks use the structure's
      * triangle test, fixed at build. */
     sidx__walk_table walks[2];
+    wide_lazy *lazy;       /* lazy trees only; NULL when every node is built at once */
 } wide_bvh;
+
+/* bvh_wide.c: builds lazy record r's subtree, or waits for the thread
+ * building it; returns its shell, NULL when its memory could not be had
+ * (noted for the query: sidx__lazy_note_failure).  Build events go to
+ * hook (the query's; NULL = none). */
+const sidx_accel *sidx__wide_lazy_expand(const sidx_accel *a, uint32_t r, const sidx_hook *hook);
+
+/* The shell of lazy record r as a walk reads it: one acquire load once built. */
+static SIDX_INLINE const sidx_accel *wide_lazy_enter(const sidx_accel *a, const wide_bvh *w, uint32_t r,
+                                                     const sidx_hook *hook)
+{
+    const wide_lazy_rec *rec = &w->lazy->recs[r];
+    if (SIDX_LIKELY(__atomic_load_n(&rec->state, __ATOMIC_ACQUIRE) == BVH_LAZY_BUILT)) return rec->shell;
+    return sidx__wide_lazy_expand(a, r, hook);
+}
 
 static SIDX_INLINE const float *wide_node(const wide_bvh *w, uint32_t i) { return w->nodes + (size_t)i * 8u * w->width; }
 static SIDX_INLINE const uint32_t *wide_child(const float *n, uint32_t W)

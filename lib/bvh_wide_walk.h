@@ -211,8 +211,26 @@ WINL void WFN(uv_)(const sidx_accel *a, const sidx_ray *r, uint32_t flags, const
 
 /* ---- the walk ----------------------------------------------------------------- */
 
+/* The untraced and traced walks, declared here for the lazy copies, which
+ * walk a subtree built for a ray as a tree of its own (below). */
+#define WNOINL static __attribute__((noinline)) WALK_TARGET
+WNOINL void WFN(isect_traced_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit);
+WNOINL void WFN(isect_simd_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit);
+#if WALK_TRI4
+WNOINL void WFN(isect_simd_uv_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit);
+#else
+#define isect_simd_uv_ isect_simd_ /* no SIMD kernel, nothing to keep: the plain walk does */
+#endif
+WNOINL void WFN(isect_other_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit);
+WNOINL int WFN(occl_traced_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q);
+WNOINL int WFN(occl_simd_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q);
+WNOINL int WFN(occl_other_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q);
+
+/* lazy = 1: the copy for lazy trees (bvh_wide.c, "lazy builds"), where a
+ * child may be an unbuilt subtree (WIDE_LAZY_BIT); every other copy has
+ * lazy = 0 and no trace of that code. */
 WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit, const int anyhit,
-                    const int traced, const int simd_tri, const int keep_uv)
+                    const int traced, const int simd_tri, const int keep_uv, const int lazy)
 {
     const wide_bvh *w = a->impl;
     const float *nodes = w->nodes;
@@ -251,6 +269,8 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
     uint32_t stack_len = 0, cur = 0, cur_id = 0, depth = 0;
     float cur_t_near = r->tmin, cur_t_far = best;
     int root_hit = 0;
+    sidx_hit sub_hit; /* lazy: the best hit when a subtree's walk found it (hit_block is NULL then) */
+    (void)sub_hit;
     (void)cur_t_near;
     (void)cur_t_far;
     (void)cur_id;
@@ -258,7 +278,37 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
         ++visited;
         SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id; e_.node = cur_id; e_.depth = depth;
                   e_.t_near = cur_t_near; e_.t_far = cur_t_far);
-        if (!(cur & WIDE_LEAF_BIT)) {
+        if (lazy && SIDX_UNLIKELY((cur & (WIDE_LEAF_BIT | WIDE_LAZY_BIT)) == WIDE_LAZY_BIT)) {
+            /* A subtree built the first time a ray reaches it, a wide
+             * tree of its own: walked with the walk of the same kind, as
+             * the eager walk would walk it (its nodes go on top of the
+             * stack and are done before anything below them is popped). */
+            const sidx_accel *sa = wide_lazy_enter(a, w, cur & ~WIDE_LAZY_BIT, traced ? q->hook : NULL);
+            if (sa && anyhit) {
+                const int o = traced     ? WFN(occl_traced_)(sa, r, q)
+                              : simd_tri ? WFN(occl_simd_)(sa, r, q)
+                                         : WFN(occl_other_)(sa, r, q);
+                if (o) {
+                    SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id;
+                              e_.reason = SIDX_TERM_ANY_HIT; e_.count = visited);
+                    return 1;
+                }
+            } else if (sa) {
+                sidx_hit sh = *hit;
+                sh.t = best;
+                if (traced) WFN(isect_traced_)(sa, r, q, &sh);
+                else if (simd_tri && keep_uv) WFN(isect_simd_uv_)(sa, r, q, &sh);
+                else if (simd_tri) WFN(isect_simd_)(sa, r, q, &sh);
+                else WFN(isect_other_)(sa, r, q, &sh);
+                if (sh.t < best) {
+                    best = sh.t;
+                    prim = sh.prim;
+                    hit_block = NULL;
+                    sub_hit = sh;
+                    best_s = best * scale;
+                }
+            }
+        } else if (!(cur & WIDE_LEAF_BIT)) {
             const float *node = nodes + (size_t)cur * (8u * WALK_W);
             const uint32_t *child = wide_child(node, WALK_W);
             unsigned hits = WFN(boxes_)(node, &consts, best_s, t_near, t_far, traced);
@@ -414,7 +464,9 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
                 SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id;
                           e_.reason = root_hit ? SIDX_TERM_STACK_EMPTY : SIDX_TERM_MISS_ROOT; e_.t = best;
                           e_.count = visited);
-                if (!anyhit && prim != SIDX_NO_HIT) {
+                if (lazy && !anyhit && prim != SIDX_NO_HIT && !hit_block) {
+                    *hit = sub_hit; /* t, prim, u, v, ng from the subtree's walk */
+                } else if (!anyhit && prim != SIDX_NO_HIT) {
                     hit->t = best;
                     hit->prim = prim;
                     if (q && (q->flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL)))
@@ -443,47 +495,81 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
  * walks get the same code, registers and stack frame whether or not the
  * library is built with hooks: the hooks then cost one test per ray here
  * (the traced copy is much larger and would otherwise share a frame). */
-#define WNOINL static __attribute__((noinline)) WALK_TARGET
 WNOINL void WFN(isect_traced_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
 {
-    WFN(walk_)(a, r, q, hit, 0, 1, 0, 0);
+    WFN(walk_)(a, r, q, hit, 0, 1, 0, 0, 0);
 }
 WNOINL void WFN(isect_simd_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
 {
-    WFN(walk_)(a, r, q, hit, 0, 0, 1, 0);
+    WFN(walk_)(a, r, q, hit, 0, 0, 1, 0, 0);
 }
 #if WALK_TRI4
 WNOINL void WFN(isect_simd_uv_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
 {
-    WFN(walk_)(a, r, q, hit, 0, 0, 1, 1);
+    WFN(walk_)(a, r, q, hit, 0, 0, 1, 1, 0);
 }
-#else
-#define isect_simd_uv_ isect_simd_ /* no SIMD kernel, nothing to keep: the plain walk does */
 #endif
 WNOINL void WFN(isect_other_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
 {
-    WFN(walk_)(a, r, q, hit, 0, 0, 0, 0);
+    WFN(walk_)(a, r, q, hit, 0, 0, 0, 0, 0);
 }
 WNOINL int WFN(occl_traced_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
 {
-    return WFN(walk_)(a, r, q, NULL, 1, 1, 0, 0);
+    return WFN(walk_)(a, r, q, NULL, 1, 1, 0, 0, 0);
 }
 WNOINL int WFN(occl_simd_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
 {
-    return WFN(walk_)(a, r, q, NULL, 1, 0, 1, 0);
+    return WFN(walk_)(a, r, q, NULL, 1, 0, 1, 0, 0);
 }
 WNOINL int WFN(occl_other_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
 {
-    return WFN(walk_)(a, r, q, NULL, 1, 0, 0, 0);
+    return WFN(walk_)(a, r, q, NULL, 1, 0, 0, 0, 0);
+}
+
+/* The copies for lazy trees: the same walks with lazy = 1. */
+WNOINL void WFN(lazy_isect_traced_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
+{
+    WFN(walk_)(a, r, q, hit, 0, 1, 0, 0, 1);
+}
+WNOINL void WFN(lazy_isect_simd_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
+{
+    WFN(walk_)(a, r, q, hit, 0, 0, 1, 0, 1);
+}
+#if WALK_TRI4
+WNOINL void WFN(lazy_isect_simd_uv_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
+{
+    WFN(walk_)(a, r, q, hit, 0, 0, 1, 1, 1);
+}
+#else
+#define lazy_isect_simd_uv_ lazy_isect_simd_
+#endif
+WNOINL void WFN(lazy_isect_other_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
+{
+    WFN(walk_)(a, r, q, hit, 0, 0, 0, 0, 1);
+}
+WNOINL int WFN(lazy_occl_traced_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
+{
+    return WFN(walk_)(a, r, q, NULL, 1, 1, 0, 0, 1);
+}
+WNOINL int WFN(lazy_occl_simd_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
+{
+    return WFN(walk_)(a, r, q, NULL, 1, 0, 1, 0, 1);
+}
+WNOINL int WFN(lazy_occl_other_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
+{
+    return WFN(walk_)(a, r, q, NULL, 1, 0, 0, 0, 1);
 }
 #undef WNOINL
 
 /* bvh_wide.c picks the untraced pair for the structure's triangle test
  * once, at build, and calls the traced one when a query has a hook. */
-const wide_kernels WFN(sidx__wide_kernels_) = {WFN(isect_traced_), WFN(isect_simd_), WFN(isect_simd_uv_),
-                                               WFN(isect_other_),  WFN(occl_traced_), WFN(occl_simd_),
-                                               WFN(occl_other_)};
+const wide_kernels WFN(sidx__wide_kernels_) = {
+    WFN(isect_traced_),      WFN(isect_simd_),      WFN(isect_simd_uv_),      WFN(isect_other_),
+    WFN(occl_traced_),       WFN(occl_simd_),       WFN(occl_other_),         WFN(lazy_isect_traced_),
+    WFN(lazy_isect_simd_),   WFN(lazy_isect_simd_uv_), WFN(lazy_isect_other_), WFN(lazy_occl_traced_),
+    WFN(lazy_occl_simd_),    WFN(lazy_occl_other_)};
 #undef isect_simd_uv_
+#undef lazy_isect_simd_uv_
 
 #undef WJOIN_
 #undef WJOIN

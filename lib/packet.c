@@ -417,8 +417,9 @@ static sidx_status run_packet(const sidx_accel *a, const sidx_ray *rays, uint32_
     const int anyhit = hits == NULL;
     const float scale = a->opt.box == SIDX_BOX_ROBUST ? SIDX_ROBUST_TFAR_SCALE : 1.0f;
     if (avx < 0) avx = sidx__packet_have_avx2();
-    /* The wide BVHs have their own packet walk (packet_wide.c). */
-    if (o.mode != SIDX_PACKET_SINGLE && n && sidx__is_wide(a)) {
+    /* The wide BVHs have their own packet walk (packet_wide.c); a lazy
+     * one is traced ray by ray, its walk building what the rays reach. */
+    if (o.mode != SIDX_PACKET_SINGLE && n && sidx__is_wide(a) && !a->lazy) {
         sidx__packet_wide(a, rays, n, n, n, &o, hits, occ, stats, avx);
         return SIDX_OK;
     }
@@ -489,7 +490,7 @@ sidx_status sidx_trace_tiles(const sidx_accel *a, const sidx_ray *rays, uint32_t
     sidx_hit ph[SIDX_PACKET_MAX];
     const int avx =
         sidx__packet_have_avx2(); /* once per image: getenv scans the environment (a third of an empty tile) */
-    const int wide = sidx__is_wide(a) && !(opt && opt->mode == SIDX_PACKET_SINGLE);
+    const int wide = sidx__is_wide(a) && !a->lazy && !(opt && opt->mode == SIDX_PACKET_SINGLE);
     sidx_packet_stats dummy;
     memset(&dummy, 0, sizeof dummy);
     if (!stats) stats = &dummy;

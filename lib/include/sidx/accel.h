@@ -58,18 +58,24 @@ typedef struct sidx_build_options {
                                      that improves the binary tree after the build (bvh_optimize.c);
                                      0 = off.  A budget large enough gives the same tree every time;
                                      one that cuts the pass short depends on the machine's speed */
-    uint32_t lazy;                /* bvh family but bvh-obb, and the kd-tree family but a tree of given
-                                     splits: build the top of the tree now and leave each subtree of at most
-                                     this many primitives (kd-tree: references) as an unbuilt node holding
-                                     them, built the first time a ray enters it (a BUILD_LAZY_EXPAND event,
-                                     then its build events, on that query's hook).  The tree below each node
-                                     is the eager build's, node for node.  BVH: hits are bit-identical to
-                                     the eager tree's.  kd-tree: its leaves test blocks of four references
-                                     that reach into neighbouring leaves, and a subtree built apart has other
-                                     neighbours, so hits are the eager tree's up to rounding: the same
-                                     misses, and each hit within 1e-6·t of the eager one, on a triangle the
-                                     ray hits at exactly that t; they do not depend on the order in which
-                                     subtrees were built.  0 = eager;
+    uint32_t lazy;                /* bvh family but bvh-obb, bvh4 and bvh8 (not with no_spatial_splits),
+                                     and the kd-tree family but a tree of given splits: build the top of
+                                     the tree now and leave each subtree of at most this many primitives
+                                     (kd-tree: references; wide BVHs: more than 8) as an unbuilt node
+                                     holding them, built the first time a ray enters it (a
+                                     BUILD_LAZY_EXPAND event, then its build events, on that query's hook).
+                                     bvh family: the tree below each node is the eager build's, node for
+                                     node, and hits are bit-identical to the eager tree's.  bvh4, bvh8: the
+                                     binary tree below each unbuilt node is the eager one, but the wide
+                                     nodes above it group it otherwise, so where a ray hits two triangles
+                                     at exactly the same t the other one may be reported (same t; a t of 0
+                                     may come out as -0 where the eager tree gives +0); packets over them
+                                     go ray by ray.  kd-tree: node for node the eager tree, but its leaves
+                                     test blocks of four references that reach into neighbouring leaves,
+                                     and a subtree built apart has other neighbours, so hits are the eager
+                                     tree's up to rounding: the same misses, and each hit within 1e-6·t of
+                                     the eager one, on a triangle the ray hits at exactly that t.  Neither
+                                     depends on the order in which subtrees were built.  0 = eager;
                                      1 = the default size (SIDX_LAZY_DEFAULT).  Ignored by the other
                                      structures and with optimize_ms > 0 (the pass needs the whole tree).
                                      A query that cannot get the memory for an expansion returns
