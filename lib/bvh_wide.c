@@ -738,6 +738,7 @@ static sidx_status wide_build(sidx_accel *a, sidx_error *err)
     SIDX_EMIT(1, hook, SIDX_EV_BUILD_END, e_.node = w->num_inner + w->num_leaves; e_.count = w->num_prims;
               e_.depth = w->max_depth);
     sidx__free(a, counts);
+    sidx__sbvh_lazy_free(a, sb); /* a lazy build that left nothing unbuilt: its empty record list */
     sidx__bvh_vtable.destroy(&bin);
     a->impl = w;
     a->lazy = (unsigned char)(lazy != 0);
