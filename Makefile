@@ -6,7 +6,8 @@
 #   make demo       deps, build, run the guided tour
 #   make test       deps, build, run every cmocka suite and the lessons' checks
 #   make test SAN=1 the same under AddressSanitizer + UndefinedBehaviorSanitizer (build/san, -O1),
-#                   the suites at their small sizes (SIDX_FAST_TESTS=1; FAST_TESTS=0 for full)
+#                   the suites at their small sizes (SIDX_FAST_TESTS=1; FAST_TESTS=0 for full,
+#                   FAST_TESTS=2 for the smallest)
 #   make test-tsan  the threaded suites under ThreadSanitizer (build/tsan)
 #   make valgrind   the suites under valgrind memcheck (smallest sizes; VALGRIND_SKIP)
 #   TEST_JOBS=N     how many suites run at once (default: the number of cores)
@@ -136,10 +137,14 @@ VIZ_PROGS := $(VIZ_PROG_SRC:viz/sidx_%.c=$(BUILD)/bin/sidx-%)
 LIBA := $(BUILD)/lib/libsidx.a
 LIBSO := $(BUILD)/lib/libsidx.so
 VIZA := $(BUILD)/lib/libsidxviz.a
-PROGS := $(VIZ_PROGS) $(if $(wildcard lessons/tour.c),$(BUILD)/bin/sidx-tour) \
-         $(if $(BENCH_SRC),$(BUILD)/bin/sidx-bench $(BUILD)/bin/sidx-bench-nohooks)
 # The library again with every hook compiled out (-DSIDX_NO_HOOKS), linked
 # into sidx-bench-nohooks: `sidx-bench run` compares it with sidx-bench.
+# NOHOOKS=0 leaves that second library out of the build (.ci/run's clang
+# build: the gcc build of make test compiles it, and nothing but make bench
+# runs it).
+NOHOOKS ?= 1
+PROGS := $(VIZ_PROGS) $(if $(wildcard lessons/tour.c),$(BUILD)/bin/sidx-tour) \
+         $(if $(BENCH_SRC),$(BUILD)/bin/sidx-bench $(if $(filter 1,$(NOHOOKS)),$(BUILD)/bin/sidx-bench-nohooks))
 NOHOOKS_OBJ := $(LIB_SRC:%.c=$(BUILD)/nohooks/obj/%.o)
 ALL_LIBS = $(VIZA) $(LIBA) $(PKG_LIBS) $(LDLIBS)
 
@@ -261,7 +266,7 @@ TEST_SKIP ?=
 TEST_SCRIPTS := $(filter-out $(TEST_SKIP),$(wildcard tests/run_*.sh))
 TEST_SUITES = $(filter-out $(TEST_SKIP:%=$(BUILD)/tests/%),$(TESTS))
 FAST_TESTS ?= $(if $(SANFLAGS),1,0)
-FAST_ENV := $(if $(filter 1,$(FAST_TESTS)),SIDX_FAST_TESTS=1)
+FAST_ENV := $(if $(filter 1 2,$(FAST_TESTS)),SIDX_FAST_TESTS=$(FAST_TESTS))
 test-run:
 	@$(FAST_ENV) JOBS=$(TEST_JOBS) BUILD=$(BUILD) LABEL=test-run sh tests/runner.sh $(TEST_SCRIPTS) $(TEST_SUITES)
 
