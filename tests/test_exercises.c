@@ -19,14 +19,13 @@
  *    equivalent in tests/exercises/equivalent.txt (the full run is make
  *    exercise-mutants).
  *  - CC may be a command of several words ("ccache gcc").
- * At the small sizes (SIDX_FAST_TESTS=1: the sanitizer run) the planted
- * mistakes are a deterministic share of them (every mistake that must exit
- * 2, each exercise's first, every FAST_MISTAKE_STEP-th) and the mutant
- * sample is sparser; at the smallest (SIDX_FAST_TESTS=2: the clang and
- * minimal builds) only those that must exit 2 and each exercise's first,
- * and no mutant: those runs look for the checker's own faults under another
- * compiler, a sanitizer or another configuration, and make test's full run
- * checks every record and the sample of mutants.
+ * At the small and smallest sizes (SIDX_FAST_TESTS=1: the sanitizer run;
+ * 2: the clang and minimal builds) the planted mistakes are a deterministic
+ * share of them (every mistake that must exit 2, each exercise's first,
+ * every FAST_MISTAKE_STEP-th); the mutant sample is sparser at the small
+ * sizes and left out at the smallest: those runs look for the checker's
+ * own faults under another compiler, a sanitizer or another configuration,
+ * and make test's full run checks every record and the sample of mutants.
  * sidx-check compiles each file, so this suite runs the compiler: it is
  * found through the build directory's bin/sidx-check (the sibling of this
  * binary's tests/), and it compiles with that build's sanitizer flags.
@@ -253,7 +252,7 @@ static int read_mistakes(mistake *ms, int max)
 }
 
 /* At the small sizes: the records kept, in file order (see the header). */
-#define FAST_MISTAKE_STEP 5
+#define FAST_MISTAKE_STEP 12
 static int keep_fast(mistake *ms, int n)
 {
     int kept = 0;
@@ -261,7 +260,7 @@ static int keep_fast(mistake *ms, int n)
     for (int i = 0; i < n; ++i) {
         const int first_of_exercise = strcmp(ms[i].name, previous) != 0;
         memcpy(previous, ms[i].name, sizeof previous);
-        const int every_step = !tk_tiny_tests() && i % FAST_MISTAKE_STEP == 0;
+        const int every_step = i % FAST_MISTAKE_STEP == 0;
         if (ms[i].exit_ == 2 || first_of_exercise || every_step) ms[kept++] = ms[i];
     }
     return kept;
