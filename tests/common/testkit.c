@@ -707,6 +707,12 @@ int tk_tiny_tests(void)
     return e && strcmp(e, "2") == 0;
 }
 
+int tk_under_valgrind(void)
+{
+    const char *e = getenv("LD_PRELOAD");
+    return e && strstr(e, "vgpreload") != NULL;
+}
+
 size_t tk_test_size(size_t full)
 {
     const size_t part = tk_tiny_tests() ? 16 : tk_fast_tests() ? 4 : 1;

@@ -132,16 +132,21 @@ sidx_status tk_mesh_flatten(const sidx_mesh *m, float z0, sidx_mesh *out);
  * gives BUILD/bin in out; out is kept when argv0 names no directory. */
 void tk_bin_dir(const char *argv0, char *out, size_t size);
 
-/* 1 when the environment asks for fast tests (SIDX_FAST_TESTS=1: ASan +
- * UBSan; 2: valgrind, ThreadSanitizer, the clang and minimal builds). */
+/* 1 when the environment asks for fast tests (SIDX_FAST_TESTS=1: make test
+ * SAN=1; 2: valgrind, ThreadSanitizer and every build but make test's in
+ * .ci/run). */
 int tk_fast_tests(void);
 /* 1 when it asks for the smallest sizes (SIDX_FAST_TESTS=2, make valgrind:
  * memcheck runs every instruction some 40 times slower, and looks for
  * memory faults, which a few rays through each path find as well as many;
- * the clang and minimal builds of .ci/run, which the full gcc run and the
- * ASan run at the small sizes leave only another compiler and another
- * configuration to find). */
+ * the same holds for the sanitizers; the clang and minimal builds of
+ * .ci/run, which the full gcc run leaves only another compiler and
+ * another configuration to find). */
 int tk_tiny_tests(void);
+/* 1 under valgrind (its preloaded libraries are in LD_PRELOAD): the few
+ * builds that take minutes under memcheck are left out there, and kept at
+ * every size elsewhere (the ASan run builds them). */
+int tk_under_valgrind(void);
 /* A count of rays (or cases) at the sizes asked for: full, a quarter of it
  * (fast), a sixteenth (tiny), rounded up. */
 size_t tk_test_size(size_t full);
