@@ -436,6 +436,17 @@ static void decisions_free(decisions *d)
     free(d->seen);
 }
 
+/* One traced ray from the centre of box, in direction d, through the lazy
+ * tree: it starts inside that box and every box above it. */
+static void shoot_from_box(const sidx_accel *lazy, sidx_aabb box, sidx_vec3 d, sidx_traversal walk, const sidx_hook *hook)
+{
+    sidx_ray r;
+    assert_int_equal(sidx_ray_init(&r, sidx_aabb_centroid(box), d, 0.0f, INFINITY), SIDX_OK);
+    const sidx_query q = {0, walk, hook, 0};
+    sidx_hit h;
+    assert_int_equal(sidx_accel_intersect(lazy, &r, &q, &h), SIDX_OK);
+}
+
 static unsigned same_tree_case(const char *label, const char *name, const sidx_mesh *m, uint32_t lazy_size)
 {
     /* node ids stay below 2·triangles + 2 (the BVH's slots) and below the
@@ -461,15 +472,8 @@ static unsigned same_tree_case(const char *label, const char *name, const sidx_m
      * it and inside every box above it, and the naive walk enters every
      * box it starts in, even after a hit at t = 0 (the centre of a flat
      * box may lie on a triangle).  An expansion builds its whole subtree. */
-    for (uint32_t i = 0; i < cap; ++i) {
-        if (!dl.seen[i] || dl.decided[i]) continue;
-        sidx_ray r;
-        assert_int_equal(sidx_ray_init(&r, sidx_aabb_centroid(dl.box[i]), sidx_v3(0.3f, 0.5f, 0.7f), 0.0f, INFINITY),
-                         SIDX_OK);
-        sidx_query q = {0, SIDX_TRAVERSE_NAIVE, &hl, 0};
-        sidx_hit h;
-        assert_int_equal(sidx_accel_intersect(lazy, &r, &q, &h), SIDX_OK);
-    }
+    for (uint32_t i = 0; i < cap; ++i)
+        if (dl.seen[i] && !dl.decided[i]) shoot_from_box(lazy, dl.box[i], sidx_v3(0.3f, 0.5f, 0.7f), SIDX_TRAVERSE_NAIVE, &hl);
     sidx_accel_stats_get(eager, &se);
     sidx_accel_stats_get(lazy, &sl);
     qsort(de.items, de.n, sizeof *de.items, cmp_str);
@@ -560,16 +564,9 @@ static unsigned same_refs_case(const char *label, const char *name, const sidx_m
     for (int d = 0; d < 4; ++d) {
         sidx_accel_stats_get(lazy, &sl);
         if (sl.unbuilt == 0) break;
-        for (uint32_t i = 0; i < cap; ++i) {
-            if (!ll.seen[i] || ll.leaf[i]) continue;
-            sidx_ray r;
-            assert_int_equal(sidx_ray_init(&r, sidx_aabb_centroid(ll.box[i]), sidx_v3(dirs[d][0], dirs[d][1], dirs[d][2]),
-                                           0.0f, INFINITY),
-                             SIDX_OK);
-            sidx_query q = {0, SIDX_TRAVERSE_DEFAULT, &hl, 0};
-            sidx_hit h;
-            assert_int_equal(sidx_accel_intersect(lazy, &r, &q, &h), SIDX_OK);
-        }
+        for (uint32_t i = 0; i < cap; ++i)
+            if (ll.seen[i] && !ll.leaf[i])
+                shoot_from_box(lazy, ll.box[i], sidx_v3(dirs[d][0], dirs[d][1], dirs[d][2]), SIDX_TRAVERSE_DEFAULT, &hl);
     }
     sidx_accel_stats_get(eager, &se);
     sidx_accel_stats_get(lazy, &sl);
