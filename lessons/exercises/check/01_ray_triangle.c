@@ -130,5 +130,5 @@ const ex_driver ex_driver_this = {
     "01_ray_triangle",
     "ray-plane intersection, then the two-step ray-triangle test",
     "deck 001, \"Ray-Plane Intersection\" and \"Ray-Triangle Intersection\"",
-    setup, num_cases, describe, reference, student, hint, NULL, NULL,
+    setup, num_cases, describe, reference, student, hint, NULL, NULL, NULL, 0,
 };

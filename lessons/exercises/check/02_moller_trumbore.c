@@ -78,5 +78,5 @@ const ex_driver ex_driver_this = {
     "02_moller_trumbore",
     "Moller-Trumbore by Cramer's rule: D = 0, t < 0, edges and vertices",
     "deck 001, \"Moller-Trumbore Algorithm\" and \"Moller-Trumbore Visualized\"",
-    setup, num_cases, describe, reference, student, hint, NULL, format,
+    setup, num_cases, describe, reference, student, hint, NULL, format, NULL, 0,
 };

@@ -151,5 +151,5 @@ const ex_driver ex_driver_this = {
     "03_ray_box",
     "the ray-AABB slab test: ±0 direction components, rays starting inside, infinite t",
     "deck 000, \"Bounding Volumes\" (AABB: \"min-max\"); deck 001, \"Bounding Box\"",
-    setup, num_cases, describe, reference, student, NULL, NULL, NULL,
+    setup, num_cases, describe, reference, student, NULL, NULL, NULL, NULL, 0,
 };

@@ -320,5 +320,5 @@ const ex_driver ex_driver_this = {
     "04_bvh_sah",
     "the SAH cost of one split, then the split choice: full sweep, every-B sweep, bins",
     "deck 001, \"Surface Area Heuristic\" and \"Building Partitions\" (the three loops)",
-    setup, num_cases, describe, reference, student, hint, teardown, NULL,
+    setup, num_cases, describe, reference, student, hint, teardown, NULL, NULL, 0,
 };

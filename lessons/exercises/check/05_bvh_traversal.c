@@ -210,5 +210,5 @@ const ex_driver ex_driver_this = {
     "05_bvh_traversal",
     "BVH traversal: the naive recursive walk, then the ordered one",
     "deck 001, \"BVH Traversal\" and \"Better BVH Traversal\"; deck 000, \"BVH traversal (1)-(3)\"",
-    setup, num_cases, describe, reference, student, hint, teardown, NULL,
+    setup, num_cases, describe, reference, student, hint, teardown, NULL, NULL, 0,
 };

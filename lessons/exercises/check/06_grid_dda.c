@@ -195,5 +195,5 @@ const ex_driver ex_driver_this = {
     "06_grid_dda",
     "the uniform grid: the resolution formula, then the 3D-DDA cell walk",
     "deck 000, \"Uniform Grids\" (Resolution) and \"Uniform Grid Traversal\" (3D-DDA)",
-    setup, num_cases, describe, reference, student, hint, teardown, format,
+    setup, num_cases, describe, reference, student, hint, teardown, format, NULL, 0,
 };

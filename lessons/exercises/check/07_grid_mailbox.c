@@ -142,5 +142,5 @@ const ex_driver ex_driver_this = {
     "07_grid_mailbox",
     "mailboxing on the uniform grid: the per-ray cache of object IDs",
     "deck 000, \"Uniform Grid Traversal\" (Mailboxing: per-ray cache of object IDs)",
-    setup, num_cases, describe, reference, student, hint, teardown, NULL,
+    setup, num_cases, describe, reference, student, hint, teardown, NULL, NULL, 0,
 };

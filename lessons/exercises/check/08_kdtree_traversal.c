@@ -359,5 +359,5 @@ const ex_driver ex_driver_this = {
     "kd-tree traversal: front to back, with a stack of (node, t_near, t_far)",
     "deck 000, \"kD-Tree Traversal\", \"kD-Tree Traversal (1)-(11)\", \"kD-Tree Traversal Operation\" and "
     "\"kD-Tree Traversal: Inner Loop\"",
-    setup, num_cases, describe, reference, student, hint, teardown, NULL,
+    setup, num_cases, describe, reference, student, hint, teardown, NULL, NULL, 0,
 };

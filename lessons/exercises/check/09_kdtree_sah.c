@@ -254,5 +254,5 @@ const ex_driver ex_driver_this = {
     "09_kdtree_sah",
     "the kd-tree's SAH split: events, the sweep, planar triangles, the empty-space bonus",
     "deck 000, \"Building good kD-trees\" (SAH, candidate events, minimum cost split) and \"Cost-Optimized Split\"",
-    setup, num_cases, describe, reference, student, hint, teardown, NULL,
+    setup, num_cases, describe, reference, student, hint, teardown, NULL, NULL, 0,
 };

@@ -152,5 +152,5 @@ const ex_driver ex_driver_this = {
     "the private exercise: a worst-case scene, where tests per ray grow like n",
     "deck 000, \"Spatial index structures\" (\"worst case complexity is still O(n). Private exercise: come up "
     "with a worst case example\")",
-    NULL, num_cases, describe, reference, student, hint, NULL, format,
+    NULL, num_cases, describe, reference, student, hint, NULL, format, NULL, 0,
 };

@@ -400,5 +400,5 @@ const ex_driver ex_driver_this = {
     "the recursive BVH build: partition in the middle, leaves, equal centroids",
     "deck 001, \"BVH Partitioning\" (\"Split in the middle\"), \"Recurse with each child node\", \"Edge Cases\" "
     "(\"primitives with same centroid\")",
-    setup, num_cases, describe, reference, student, hint, teardown, format,
+    setup, num_cases, describe, reference, student, hint, teardown, format, NULL, 0,
 };

@@ -190,5 +190,5 @@ const ex_driver ex_driver_this = {
     "12_bvh_refit",
     "BVH refit: the vertices moved, every node's box recomputed bottom-up",
     "deck 001, \"Primitive vs. Spatial\" (\"Easier to update (animation)\") and \"Bounding Volume Hierarchy (BVH)\"",
-    setup, num_cases, describe, reference, student, hint, teardown, format,
+    setup, num_cases, describe, reference, student, hint, teardown, format, NULL, 0,
 };

@@ -386,5 +386,5 @@ const ex_driver ex_driver_this = {
     "octree traversal: front to back, the children in the order the ray meets them",
     "deck 000, \"Octrees and Quadtrees\" (\"simplest hierarchical grid\") with the front-to-back walk of "
     "\"kD-Tree Traversal\"; Revelles et al. 2000 for the child order",
-    setup, num_cases, describe, reference, student, hint, teardown, NULL,
+    setup, num_cases, describe, reference, student, hint, teardown, NULL, NULL, 0,
 };

@@ -175,5 +175,5 @@ const ex_driver ex_driver_this = {
     "14_bsp_painter",
     "the BSP tree's back-to-front order: the painter's algorithm from any eye",
     "deck 000, \"BSP Trees\" (\"enumerating objects in back to front order\")",
-    setup, num_cases, describe, reference, student, hint, teardown, format,
+    setup, num_cases, describe, reference, student, hint, teardown, format, NULL, 0,
 };

@@ -305,5 +305,5 @@ const ex_driver ex_driver_this = {
     "15_sphere_obb_dop",
     "the sphere, OBB and 14-DOP ray tests: tangent rays, parallel slabs, flat volumes",
     "deck 000, \"Bounding Volumes\" (sphere, OBB, slabs)",
-    setup, num_cases, describe, reference, student, hint, NULL, NULL,
+    setup, num_cases, describe, reference, student, hint, NULL, NULL, NULL, 0,
 };

@@ -271,5 +271,5 @@ const ex_driver ex_driver_this = {
     "16_kd_termination",
     "the kd-tree build's termination rule: split only if it pays, stretched over several levels",
     "deck 000, \"Termination Criteria\" and \"Building good kD-trees\"",
-    setup, num_cases, describe, reference, student, hint, teardown, format,
+    setup, num_cases, describe, reference, student, hint, teardown, format, NULL, 0,
 };

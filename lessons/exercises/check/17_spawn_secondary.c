@@ -262,5 +262,5 @@ const ex_driver ex_driver_this = {
     "17_spawn_secondary",
     "a secondary ray's origin offset by the hit point's error bound, and the shadow ray to a light",
     "deck 001, \"Ray-Triangle Intersection\" (\"be careful about the numerical rounding errors\"); PBR 3.9.5",
-    setup, num_cases, describe, reference, student, hint, NULL, format,
+    setup, num_cases, describe, reference, student, hint, NULL, format, NULL, 0,
 };

@@ -351,5 +351,5 @@ const ex_driver ex_driver_this = {
     "18_light_buffer",
     "the light buffer's cached occluder: test the cell's last occluder first, then its list",
     "deck 000, \"Directional Partitioning\" (\"Variation: Light buffer (for shadow rays)\")",
-    setup, num_cases, describe, reference, student, hint, teardown, format,
+    setup, num_cases, describe, reference, student, hint, teardown, format, NULL, 0,
 };

@@ -329,5 +329,5 @@ const ex_driver ex_driver_this = {
     "BVH leaf re-indexing: each leaf's triangles contiguous, in the order the leaves are laid out",
     "deck 001, \"What About Ordering?\" and \"After re-indexing (sorting) based on leaf nodes\" (\"Only need to "
     "store 2 integers per leaf node!\")",
-    setup, num_cases, describe, reference, student, hint, teardown, format,
+    setup, num_cases, describe, reference, student, hint, teardown, format, NULL, 0,
 };

@@ -15,10 +15,26 @@
 #include "sidx/sidx.h"
 #include "sidx/exercise.h"
 
+/* One promise of the exercise's hand-out (its contract): a range, a tie,
+ * a special value, an output left untouched on refusal, the order of the
+ * checks, what a miss returns.  Every rule has at least one case that
+ * tests it and one planted mistake that breaks exactly it
+ * (tests/exercises/mistakes.txt, its `rule` line); docs/exercises.md
+ * lists the same table, and `sidx-check --rules NAME` prints it. */
+typedef struct ex_rule {
+    const char *id;        /* short and stable, a word or two joined by '-': "tmin-inclusive" */
+    const char *statement; /* the hand-out's promise, in its words */
+    const char *hint;      /* what a student whose code breaks it is told */
+} ex_rule;
+
 typedef struct ex_case_info {
     char name[160];      /* what the case is about: "ray parallel to the plane (N·d = 0)" */
     char what[512];      /* the input: the ray, the node, ... */
     const char *hint;    /* the case's hint in the slide's words, or NULL */
+    /* The ids of the rules (ex_driver.rules) this case tests, separated by
+     * spaces ("tmin-inclusive parallel-miss"), or NULL: a case of the
+     * exercise's general algorithm only. */
+    const char *rules;
     /* For sidx-view --events (the runner prints the command with the
      * traces): the structure and its build knobs as sidx-view options
      * ("kdtree", "--no-mailbox" or NULL), the scene (a built-in name, or
@@ -45,6 +61,9 @@ typedef struct ex_driver {
     /* Prints an event the library's printer cannot (a NOTE, whose text
      * stays in the child): 1 if it wrote buf, 0 for the default; or NULL. */
     int (*format)(const sidx_event *e, char *buf, size_t size);
+    /* The hand-out's rules, num_rules of them (NULL, 0: none listed). */
+    const ex_rule *rules;
+    size_t num_rules;
 } ex_driver;
 
 extern const ex_driver ex_driver_this;
