@@ -83,5 +83,17 @@ else
     fail "scale --passes 2 exits $?: $(tail -3 "$TMP/scale.txt")"
 fi
 
-[ $failed = 0 ] && echo "bench: trace, run and scale time a cold pass and warm passes (--passes)"
+# lazy: both kinds of first image (bounce and shadow), their ratios, and
+# the lazy hits equal to the eager ones (a small terrain, one round)
+if "$BENCH" lazy --accel bvh --size 24 --frames 2 --rounds 1 heightfield:24 >"$TMP/lazy.txt" 2>&1; then
+    for key in first_ratio total_ratio shadow_first_ratio shadow_total_ratio shadow_built_first; do
+        [ -n "$(num $key "$TMP/lazy.txt")" ] || fail "lazy: no \"$key\" in $(cat "$TMP/lazy.txt")"
+    done
+    [ "$(num shadow_rays "$TMP/lazy.txt")" -gt 0 ] 2>/dev/null || fail "lazy: no shadow ray in $(cat "$TMP/lazy.txt")"
+    grep -q '"hits_identical":true' "$TMP/lazy.txt" || fail "lazy: hits differ: $(cat "$TMP/lazy.txt")"
+else
+    fail "lazy exits $?: $(tail -3 "$TMP/lazy.txt")"
+fi
+
+[ $failed = 0 ] && echo "bench: trace, run and scale time a cold pass and warm passes (--passes); lazy times both first images"
 exit $failed

@@ -2,23 +2,33 @@
  * saves when the camera sees part of a scene.
  *
  * Per scene, eager and lazy in interleaved rounds, on one thread, in the
- * thread's CPU time (so other load on the machine does not count):
- *   first image  the build, one PX x PX primary frame from the scene's
- *                camera (closest hits with the hit point), and one diffuse
- *                bounce from every hit (sidx_ray_spawn, a direction drawn
- *                on the hemisphere facing the camera);
- *   N frames     the same build, then N such frames from viewpoints spread
- *                around the scene (the first one the camera's), the total.
+ * thread's CPU time (so other load on the machine does not count), two
+ * kinds of frame, each from a build of its own:
+ *   bounce       one PX x PX primary frame from the scene's camera
+ *                (closest hits with the hit point) and one diffuse bounce
+ *                from every hit (sidx_ray_spawn, a direction drawn on the
+ *                hemisphere facing the camera): a path tracer's first pass;
+ *   shadow       the same primary frame and one shadow ray per hit to a
+ *                point light above the camera's target (sidx_ray_spawn_to,
+ *                sidx_accel_occluded): what an interactive viewer shows
+ *                first.  A shadow ray runs towards the light, so it
+ *                enters far fewer of the unbuilt subtrees than a bounce.
+ * For each kind: the first image (the build and one frame) and N frames
+ * (the same build, then N frames from viewpoints spread around the scene,
+ * the first one the camera's), the total.
  * Printed per scene: the medians over the rounds, their ratios lazy / eager,
  * the fraction of the primitives whose subtrees are built after the first
  * image and after N frames, and whether every hit of the lazy runs equals
- * the eager run's bit for bit (an FNV hash over t, prim, u, v, normal).
+ * the eager run's bit for bit (an FNV hash over t, prim, u, v, normal, and
+ * each shadow ray's answer).
  *
  * Scenes: "stadium" (built-in stadium, detail 16384: the teapot among
  * ~100k triangles of stands, seen from beside the teapot) and
  * "heightfield:D" (2 D^2 triangles of terrain, seen from a low camera at
  * one edge); any other SCENE (file or built-in) is seen from outside its
- * box, as the test kit's primary rays. */
+ * box, as the test kit's primary rays, and "inside:FILE" (the mesh of FILE
+ * seen from the middle of its box, a third of the way up, facing the
+ * nearer of the two long walls: Sponza's atrium from inside). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -26,8 +36,9 @@
 #include "bench.h"
 
 typedef struct cam {
-    sidx_vec3 eye, at;
-    float fov; /* vertical, radians */
+    sidx_vec3 eye, at, light; /* light: the shadow frames' point light */
+    float fov;                /* vertical, radians */
+    int look_around;          /* the frames turn the view about the eye (inside:), not the eye about the target */
 } cam;
 
 typedef struct frame_out {
@@ -55,8 +66,9 @@ static uint64_t hash_hit(uint64_t h, const sidx_hit *x)
 }
 
 /* One frame: px x px primary rays through the camera, closest hits with
- * their points, then one diffuse bounce per hit. */
-static void frame(const sidx_accel *a, const cam *c, uint32_t px, uint64_t seed, frame_out *out)
+ * their points, then one diffuse bounce (shadow = 0) or one shadow ray to
+ * the light (shadow = 1) per hit. */
+static void frame(const sidx_accel *a, const cam *c, uint32_t px, uint64_t seed, int shadow, frame_out *out)
 {
     const sidx_vec3 fwd = unit(sidx_v3_sub(c->at, c->eye));
     sidx_vec3 right = sidx_v3_cross(fwd, sidx_v3(0, 1, 0));
@@ -80,6 +92,15 @@ static void frame(const sidx_accel *a, const cam *c, uint32_t px, uint64_t seed,
             out->hash = hash_hit(out->hash, &h);
             if (h.prim == SIDX_NO_HIT) continue;
             out->hits++;
+            if (shadow) {
+                sidx_ray sr;
+                int blocked = 0;
+                if (sidx_ray_spawn_to(&h, c->light, &sr) != SIDX_OK) continue;
+                if (sidx_accel_occluded(a, &sr, NULL, &blocked) != SIDX_OK) out->nomem = 1;
+                out->hash = fnv(out->hash, &blocked, sizeof blocked);
+                out->bounces++;
+                continue;
+            }
             /* a direction on the hemisphere facing the camera */
             sidx_vec3 n = unit(h.ng);
             if (sidx_v3_dot(n, d) > 0.0f) n = sidx_v3_scale(n, -1.0f);
@@ -95,13 +116,21 @@ static void frame(const sidx_accel *a, const cam *c, uint32_t px, uint64_t seed,
 }
 
 /* Viewpoint k of n: the camera's eye turned about the vertical axis
- * through its target by 2 pi k / n. */
+ * through its target by 2 pi k / n; inside a scene, the target turned
+ * about the eye (the camera looks around the room). */
 static cam turned(const cam *c, uint32_t k, uint32_t n)
 {
     const float phi = 6.28318531f * (float)k / (float)n, cs = cosf(phi), sn = sinf(phi);
-    const sidx_vec3 rel = sidx_v3_sub(c->eye, c->at);
+    if (c->look_around) {
+        const sidx_vec3 rel = sidx_v3_sub(c->at, c->eye);
+        cam o = *c;
+        o.at = sidx_v3_add(c->eye, sidx_v3(cs * rel.x + sn * rel.z, rel.y, -sn * rel.x + cs * rel.z));
+        return o;
+    }
+    const sidx_vec3 rel = sidx_v3_sub(c->eye, c->at), lrel = sidx_v3_sub(c->light, c->at);
     cam o = *c;
     o.eye = sidx_v3_add(c->at, sidx_v3(cs * rel.x + sn * rel.z, rel.y, -sn * rel.x + cs * rel.z));
+    o.light = sidx_v3_add(c->at, sidx_v3(cs * lrel.x + sn * lrel.z, lrel.y, -sn * lrel.x + cs * lrel.z));
     return o;
 }
 
@@ -120,7 +149,7 @@ static double built_fraction(const sidx_accel *a)
 }
 
 static int run_once(const char *accel, const sidx_mesh *m, uint32_t lazy, const cam *c, uint32_t px, uint32_t frames,
-                    run_out *o)
+                    int shadow, run_out *o)
 {
     sidx_build_options bo;
     memset(&bo, 0, sizeof bo);
@@ -134,12 +163,12 @@ static int run_once(const char *accel, const sidx_mesh *m, uint32_t lazy, const 
         return 0;
     }
     frame_out f = {0xcbf29ce484222325ull, 0, 0, 0};
-    frame(a, c, px, 1, &f);
+    frame(a, c, px, 1, shadow, &f);
     o->first_ms = tk_thread_cpu_ms() - t0;
     o->built_first = built_fraction(a);
     for (uint32_t k = 1; k < frames; ++k) {
         const cam ck = turned(c, k, frames);
-        frame(a, &ck, px, 1 + k, &f);
+        frame(a, &ck, px, 1 + k, shadow, &f);
     }
     o->total_ms = tk_thread_cpu_ms() - t0;
     o->built_total = built_fraction(a);
@@ -163,17 +192,27 @@ static double median(double *v, int n)
     return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
+/* The shadow frames' light: above the camera's target, three times the
+ * camera's distance up, so that it lights what the camera sees. */
+static void place_light(cam *c)
+{
+    const float dist = sidx_v3_length(sidx_v3_sub(c->eye, c->at));
+    c->light = sidx_v3_add(c->at, sidx_v3(0.25f * dist, 3.0f * dist, 0.25f * dist));
+}
+
 /* The scene and its camera. */
 static int open_scene(const char *spec, sidx_mesh *m, cam *c)
 {
     sidx_error err;
     memset(m, 0, sizeof *m);
+    memset(c, 0, sizeof *c);
     c->fov = 0.7f;
     if (!strcmp(spec, "stadium")) {
         if (sidx_scene_make("stadium", 16384, m, &err) != SIDX_OK) goto fail;
         /* beside the teapot, looking at it: the teapot, the floor, a slice of the stands */
         c->eye = sidx_v3(0.9f, 0.35f, 0.9f);
         c->at = sidx_v3(0.0f, 0.2f, 0.0f);
+        place_light(c);
         return 1;
     }
     if (!strncmp(spec, "heightfield:", 12)) {
@@ -182,6 +221,21 @@ static int open_scene(const char *spec, sidx_mesh *m, cam *c)
         /* low over one edge, looking along the terrain */
         c->eye = sidx_v3(0.0f, 0.12f, 1.05f);
         c->at = sidx_v3(0.0f, 0.0f, 0.6f);
+        place_light(c);
+        return 1;
+    }
+    if (!strncmp(spec, "inside:", 7)) {
+        if (sidx_scene_open(spec + 7, m, &err) != SIDX_OK) goto fail;
+        const sidx_aabb b = sidx_mesh_bounds(m);
+        const sidx_vec3 ctr = sidx_aabb_centroid(b), e = sidx_aabb_extent(b);
+        /* the middle of the box, a third of the way up; the walls along
+         * the longer horizontal axis are the long ones: face one of them */
+        c->eye = sidx_v3(ctr.x, b.min.y + e.y / 3.0f, ctr.z);
+        c->at = e.x >= e.z ? sidx_v3(ctr.x, c->eye.y, b.min.z) : sidx_v3(b.min.x, c->eye.y, ctr.z);
+        /* the light high in the box above the camera (a point inside an
+         * open atrium), not three camera distances up */
+        c->light = sidx_v3(ctr.x, b.min.y + 0.9f * e.y, ctr.z);
+        c->look_around = 1;
         return 1;
     }
     if (sidx_scene_open(spec, m, &err) != SIDX_OK) goto fail;
@@ -190,6 +244,7 @@ static int open_scene(const char *spec, sidx_mesh *m, cam *c)
     const float r = sidx_v3_length(e);
     c->at = ctr;
     c->eye = sidx_v3_add(ctr, sidx_v3(0.3f * r, 0.4f * r, 1.2f * r));
+    place_light(c);
     return 1;
 fail:
     fprintf(stderr, "sidx-bench lazy: scene %s: %s\n", spec, err.message);
@@ -200,11 +255,14 @@ static void lazy_usage(FILE *f)
 {
     fprintf(f, "usage: sidx-bench lazy [--accel NAME] [--lazy-size N] [--size PX] [--frames N] [--rounds N]\n"
                "                       [SCENE ...]\n"
-               "Time to the first image (build, one PX x PX primary frame, one diffuse bounce per hit) and\n"
-               "the total over N frames from viewpoints around the scene, lazy build (opt.lazy) against\n"
-               "eager, on one thread in thread CPU time, medians over interleaved rounds; the fraction\n"
-               "of primitives built after the first image and after N frames; whether the hits agree\n"
-               "bit for bit.  SCENE: stadium, heightfield:D, or a mesh file / built-in scene (seen from\n"
+               "Time to the first image (the build and one PX x PX primary frame) and the total over N\n"
+               "frames from viewpoints around the scene, lazy build (opt.lazy) against eager, for two\n"
+               "kinds of frame: one diffuse bounce per hit (first_ratio, total_ratio) and one shadow ray\n"
+               "per hit to a point light, what an interactive viewer shows first (shadow_first_ratio,\n"
+               "shadow_total_ratio); on one thread in thread CPU time, medians over interleaved rounds;\n"
+               "the fraction of primitives built after the first image and after N frames; whether the\n"
+               "hits agree bit for bit.  SCENE: stadium, heightfield:D, inside:FILE (from the middle of\n"
+               "the box facing a long wall: Sponza's atrium), or a mesh file / built-in scene (seen from\n"
                "outside its box).  Default: stadium heightfield:1024.\n"
                "  --accel NAME     a structure with lazy builds (default bvh)\n"
                "  --lazy-size N    opt.lazy (default 1: the library's default size)\n"
@@ -273,40 +331,47 @@ int bench_cmd_lazy(int argc, char **argv)
         sidx_mesh m;
         cam c;
         if (!open_scene(scenes[s], &m, &c)) return BENCH_FAIL;
-        double ef[99] = {0}, et[99] = {0}, lf[99] = {0}, lt[99] = {0};
-        run_out e = {0}, l = {0};
+        /* [kind][eager, lazy][round]: kind 0 bounce, 1 shadow */
+        static double first[2][2][99], total[2][2][99];
+        run_out last[2][2];
+        memset(last, 0, sizeof last);
         int same = 1, nomem = 0;
-        for (int r = 0; r < rounds; ++r) {
-            /* interleaved, the order swapped each round */
-            for (int k = 0; k < 2; ++k) {
-                const int is_lazy = (k + r) % 2;
-                run_out o;
-                if (!run_once(accel, &m, is_lazy ? lazy : 0, &c, px, frames, &o)) {
-                    sidx_mesh_free(&m);
-                    return BENCH_FAIL;
+        for (int r = 0; r < rounds; ++r)
+            for (int kind = 0; kind < 2; ++kind) {
+                /* interleaved, the order swapped each round */
+                for (int k = 0; k < 2; ++k) {
+                    const int is_lazy = (k + r) % 2;
+                    run_out o;
+                    if (!run_once(accel, &m, is_lazy ? lazy : 0, &c, px, frames, kind, &o)) {
+                        sidx_mesh_free(&m);
+                        return BENCH_FAIL;
+                    }
+                    nomem |= o.nomem;
+                    first[kind][is_lazy][r] = o.first_ms;
+                    total[kind][is_lazy][r] = o.total_ms;
+                    last[kind][is_lazy] = o;
                 }
-                nomem |= o.nomem;
-                if (is_lazy) {
-                    lf[r] = o.first_ms;
-                    lt[r] = o.total_ms;
-                    l = o;
-                } else {
-                    ef[r] = o.first_ms;
-                    et[r] = o.total_ms;
-                    e = o;
-                }
+                same &= last[kind][0].hash == last[kind][1].hash;
             }
-            same &= e.hash == l.hash;
-        }
-        const double mef = median(ef, rounds), met = median(et, rounds), mlf = median(lf, rounds),
-                     mlt = median(lt, rounds);
+        double mf[2][2], mt[2][2];
+        for (int kind = 0; kind < 2; ++kind)
+            for (int z = 0; z < 2; ++z) {
+                mf[kind][z] = median(first[kind][z], rounds);
+                mt[kind][z] = median(total[kind][z], rounds);
+            }
+        const run_out *lb = &last[0][1], *ls = &last[1][1];
         printf("{\"scene\":\"%s\",\"accel\":\"%s\",\"tris\":%u,\"size\":%u,\"frames\":%u,\"rounds\":%d,"
-               "\"hits\":%zu,\"bounces\":%zu,"
+               "\"hits\":%zu,\"bounces\":%zu,\"shadow_rays\":%zu,"
                "\"eager_first_ms\":%.1f,\"lazy_first_ms\":%.1f,\"first_ratio\":%.3f,"
                "\"eager_total_ms\":%.1f,\"lazy_total_ms\":%.1f,\"total_ratio\":%.3f,"
-               "\"built_first\":%.4f,\"built_total\":%.4f,\"hits_identical\":%s}\n",
-               scenes[s], accel, m.num_triangles, px, frames, rounds, l.hits, l.bounces, mef, mlf, mlf / mef, met, mlt,
-               mlt / met, l.built_first, l.built_total, same && !nomem ? "true" : "false");
+               "\"built_first\":%.4f,\"built_total\":%.4f,"
+               "\"shadow_eager_first_ms\":%.1f,\"shadow_lazy_first_ms\":%.1f,\"shadow_first_ratio\":%.3f,"
+               "\"shadow_eager_total_ms\":%.1f,\"shadow_lazy_total_ms\":%.1f,\"shadow_total_ratio\":%.3f,"
+               "\"shadow_built_first\":%.4f,\"shadow_built_total\":%.4f,\"hits_identical\":%s}\n",
+               scenes[s], accel, m.num_triangles, px, frames, rounds, lb->hits, lb->bounces, ls->bounces, mf[0][0],
+               mf[0][1], mf[0][1] / mf[0][0], mt[0][0], mt[0][1], mt[0][1] / mt[0][0], lb->built_first, lb->built_total,
+               mf[1][0], mf[1][1], mf[1][1] / mf[1][0], mt[1][0], mt[1][1], mt[1][1] / mt[1][0], ls->built_first,
+               ls->built_total, same && !nomem ? "true" : "false");
         fflush(stdout);
         sidx_mesh_free(&m);
         if (!same || nomem) return BENCH_FAIL;
