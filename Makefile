@@ -153,9 +153,9 @@ LIBSO := $(BUILD)/lib/libsidx.so
 VIZA := $(BUILD)/lib/libsidxviz.a
 # The library again with every hook compiled out (-DSIDX_NO_HOOKS), linked
 # into sidx-bench-nohooks: `sidx-bench run` compares it with sidx-bench.
-# NOHOOKS=0 leaves that second library out of the build (.ci/run's clang
-# build: the gcc build of make test compiles it, and nothing but make bench
-# runs it).
+# NOHOOKS=0 leaves that second library out of the build (a second tree
+# for another compiler: the gcc build of make test compiles it, and
+# nothing but make bench runs it).
 NOHOOKS ?= 1
 PROGS := $(VIZ_PROGS) $(if $(wildcard lessons/tour.c),$(BUILD)/bin/sidx-tour) \
          $(if $(BENCH_SRC),$(BUILD)/bin/sidx-bench $(if $(filter 1,$(NOHOOKS)),$(BUILD)/bin/sidx-bench-nohooks))
@@ -283,8 +283,11 @@ TEST_SCRIPTS := $(filter-out $(TEST_SKIP),$(wildcard tests/run_*.sh))
 TEST_SUITES = $(filter-out $(TEST_SKIP:%=$(BUILD)/tests/%),$(TESTS))
 FAST_TESTS ?= $(if $(SANFLAGS),1,0)
 FAST_ENV := $(if $(filter 1 2,$(FAST_TESTS)),SIDX_FAST_TESTS=$(FAST_TESTS))
+# Under ASan, LeakSanitizer ignores the system libraries' own leaks
+# (tests/lsan.supp: fontconfig's, reached through Graphviz).
+SAN_ENV := $(if $(filter 1,$(SAN)),LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp:print_suppressions=0)
 test-run:
-	@$(FAST_ENV) JOBS=$(TEST_JOBS) BUILD=$(BUILD) LABEL=test-run sh tests/runner.sh $(TEST_SCRIPTS) $(TEST_SUITES)
+	@$(FAST_ENV) $(SAN_ENV) JOBS=$(TEST_JOBS) BUILD=$(BUILD) LABEL=test-run sh tests/runner.sh $(TEST_SCRIPTS) $(TEST_SUITES)
 
 # ThreadSanitizer over the suites that run threads: the parallel build, the
 # parallel trace and the worker pool (test_parallel), concurrent queries on
