@@ -106,11 +106,9 @@ sidx_status sidx_accel_build(const char *name, const sidx_mesh *mesh, const sidx
 }
 
 /* At or below this many triangles a structure's set-up and traversal
- * overhead is more than testing every triangle.  Measured with `sidx-bench
- * run --builtin flat2d:1,flat2d:2,flat2d:4,cornell --accel brute,bvh,...`:
- * brute force only ties the BVH at 8 triangles on diffuse and shadow rays
- * (and is 3x slower on primary rays, most of which miss the root box); at
- * 16 and more the BVH is 2-20x faster (Cornell box, 36: 7-20x). */
+ * overhead is more than testing every triangle; above it the BVH wins,
+ * on primary rays (most miss the root box) from the smallest scenes on
+ * (figures: docs/performance.md, "The automatic choice"). */
 #define AUTO_BRUTE_MAX_TRIS 4u
 #define AUTO_FLAT_KDTREE_MAX_TRIS 65536u
 
@@ -124,16 +122,16 @@ sidx_status sidx_accel_auto(const sidx_mesh *mesh, const sidx_build_options *opt
     /* A BVH adapts to any density; a uniform grid collapses on uneven
      * scenes (teapot in a stadium), so it is never the automatic pick.
      * The wide BVHs, when registered, beat the binary one on every scene
-     * `sidx-bench run` measures (bvh8 1.3-2x faster than bvh in the
-     * head-to-head "auto:" lines), so the widest one registered wins. */
+     * `sidx-bench run` measures, so the widest one registered wins
+     * (docs/performance.md, "The automatic choice"). */
     static const char *const bvh_pref[] = {"bvh8", "bvh4", "bvh"};
     const char *bvh = NULL;
     for (size_t i = 0; i < sizeof bvh_pref / sizeof bvh_pref[0] && !bvh; ++i)
         if (find_entry(bvh_pref[i])) bvh = bvh_pref[i];
     /* A flat scene (every triangle in one plane: the box has no thickness)
      * of moderate size: the kd-tree's cells tile the plane without overlap
-     * and beat the BVHs by 12-33% (grid:16 .. grid:128); from ~100k
-     * triangles on the 8-wide BVH is faster again (grid:256). */
+     * and beat the BVHs; on large flat scenes the 8-wide BVH is faster
+     * again (docs/performance.md, "The automatic choice"). */
     const sidx_aabb box = sidx_mesh_bounds(mesh);
     const sidx_vec3 ext = sidx_aabb_extent(box);
     const float lo = fminf(ext.x, fminf(ext.y, ext.z)), hi = fmaxf(ext.x, fmaxf(ext.y, ext.z));
@@ -198,8 +196,8 @@ static SIDX_INLINE void finish_hit(const sidx_accel *a, const sidx_ray *r, const
 /* A traced query: the same steps between its RAY_BEGIN and RAY_END
  * events.  A function of its own so that the untraced call below needs
  * no event on its stack and stays a short frame around the structure's
- * walk: it runs once per ray, which for an incoherent diffuse ray through
- * bvh8 is ~60 of ~750 instructions (callgrind). */
+ * walk: it runs once per ray, a visible share of a short walk such as
+ * bvh8's (docs/performance.md, "The entry path"). */
 static SIDX_NOINLINE void intersect_traced(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
                                            sidx_hit *hit)
 {

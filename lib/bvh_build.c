@@ -427,22 +427,6 @@ static uint32_t build_node(builder *B, uint32_t first, uint32_t count, uint32_t 
     return ni;
 }
 
-/* Expected cost of the finished tree under the SAH, relative to the root:
- * Σ_inner C_trav·A(n)/A(root) + Σ_leaves C_tri·N·A(n)/A(root). */
-double sidx__bvh_tree_sah(const bvh *b, float c_trav, float c_tri)
-{
-    if (b->num_nodes == 0) return 0.0;
-    const double root = sidx_aabb_area(bvh_node_box(&b->nodes[0]));
-    if (!(root > 0.0)) return (double)b->num_prims * c_tri;
-    double s = 0.0;
-    for (uint32_t i = 0; i < b->num_nodes; ++i) {
-        const bvh_node *n = &b->nodes[i];
-        const double ar = sidx_aabb_area(bvh_node_box(n)) / root;
-        s += bvh_is_leaf(n) ? ar * c_tri * bvh_count(n) : ar * c_trav;
-    }
-    return s;
-}
-
 static void fill_tris(const sidx_mesh *m, bvh *b)
 {
     for (uint32_t i = 0; i < b->num_prims; ++i)

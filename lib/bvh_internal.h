@@ -220,7 +220,7 @@ sidx_status sidx__sbvh_lazy_build(const sidx_accel *a, sidx__sbvh_lazy *L, uint3
 void sidx__sbvh_lazy_release(const sidx_accel *a, sidx__sbvh_lazy *L, uint32_t r);
 void sidx__sbvh_lazy_free(const sidx_accel *a, sidx__sbvh_lazy *L);
 
-/* bvh_build.c: the tree's expected cost under the SAH (stats sah_cost). */
+/* bvh_sah.c: the tree's expected cost under the SAH (stats sah_cost). */
 double sidx__bvh_tree_sah(const bvh *b, float c_trav, float c_tri);
 
 /* bvh_optimize.c: reinsertion (Bittner et al. 2013) over a built binary

@@ -309,7 +309,7 @@ static uint32_t spatial_bins(uint32_t n)
  * bin and leaving its last.  The chopping here only estimates the SAH of
  * each plane, so it cuts the reference's box at the bin planes instead of
  * clipping the triangle (split_ref, which the chosen split then does for
- * real): a build under half as long for the same SAH cost and speed
+ * real): a shorter build for the same SAH cost and speed
  * (docs/performance.md, "Spatial splits").
  *
  * A part cut from box B at planes on axis k is B on the two other axes

@@ -41,11 +41,12 @@ static SIDX_NOINLINE void refine_t_plane(const sidx_mesh *m, const sidx_ray *r, 
  * ray far beyond the hit (a short bounce onto a long thin neighbour,
  * Sponza), t loses up to 1e-3 of itself.  The vertices' spread along the
  * ray's dominant axis measures it: when |az| + |bz| + |cz| exceeds 4 t |d_kz|
- * (1% of the bunny's diffuse hits, 25% of Sponza's), t is recomputed on
- * the plane in double (refine_t_plane); otherwise the test's t stands.
- * Which triangle is closest and its u, v stay the test's (watertightness
- * is the test's), only t changes.  Bound and figures: docs/spawning.md,
- * "Precision of t". */
+ * (a few hits of a scene of small even triangles, many of one with long
+ * thin ones), t is recomputed on the plane in double (refine_t_plane);
+ * otherwise the test's t stands.  Which triangle is closest and its u, v
+ * stay the test's (watertightness is the test's), only t changes.  Bound:
+ * docs/spawning.md, "Precision of t"; figures: docs/performance.md,
+ * "Precision of the closest hit's t". */
 static SIDX_INLINE void refine_t(const sidx_mesh *m, const sidx_ray *r, sidx_hit *hit)
 {
     const uint32_t *ix = m->indices + 3u * hit->prim;

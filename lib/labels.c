@@ -35,9 +35,12 @@ static size_t lower_bound(const struct sidx__labels *L, uint32_t node)
 sidx_status sidx_accel_set_node_label(sidx_accel *a, uint32_t node, const char *label, sidx_error *err)
 {
     if (!a) return sidx__fail(err, SIDX_ERR_INVALID_ARG, "sidx_accel_set_node_label: structure is NULL");
+    /* The node count from the structure's own statistics, through its
+     * vtable: labels sit beside the structure and call nothing of accel.c,
+     * which calls them (sidx__labels_free) when it destroys the structure. */
     sidx_accel_stats st;
     memset(&st, 0, sizeof st);
-    sidx_accel_stats_get(a, &st);
+    a->vt->stats(a, &st);
     if (node >= st.nodes)
         return sidx__fail(err, SIDX_ERR_INVALID_ARG, "sidx_accel_set_node_label: %s has no node %u (%u nodes)",
                           a->name, node, st.nodes);

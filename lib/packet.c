@@ -489,7 +489,7 @@ sidx_status sidx_trace_tiles(const sidx_accel *a, const sidx_ray *rays, uint32_t
     sidx_ray pr[SIDX_PACKET_MAX];
     sidx_hit ph[SIDX_PACKET_MAX];
     const int avx =
-        sidx__packet_have_avx2(); /* once per image: getenv scans the environment (a third of an empty tile) */
+        sidx__packet_have_avx2(); /* once per image: getenv scans the environment (docs/performance.md, Packets) */
     const int wide = sidx__is_wide(a) && !a->lazy && !(opt && opt->mode == SIDX_PACKET_SINGLE);
     sidx_packet_stats dummy;
     memset(&dummy, 0, sizeof dummy);

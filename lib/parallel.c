@@ -33,9 +33,10 @@
 
  * On one thread (threads = 0 or 1, no build hook) the same code runs
  * with no pool: the top phase, then every task on the caller.  Streaming
- * the packed references instead of gathering through idx[] makes it 3.0x
- * fewer instructions and 2.1x less time than bvh_build.c's recursion on
- * the bunny, which is therefore kept only for traced builds.
+ * the packed references instead of gathering through idx[] makes it
+ * cheaper than bvh_build.c's recursion, which is therefore kept only for
+ * traced builds (docs/performance.md, Binary BVH, "The binned build on
+ * one thread").
 
  * Every split sees the same triangles in the same index order as in the
  * sequential build (partitioning stays sequential and in place, the same

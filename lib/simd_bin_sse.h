@@ -76,11 +76,12 @@ static void bounds_range(const par_build *build, uint32_t first, uint32_t count,
 
 /* ---- the SAH sweep over a node's bins --------------------------------------------- */
 
-/* The non-empty bins of one axis into used[] (the scan over all 32 bins
- * of every small node was a tenth of the build); returns how many.  Each
- * bin index is written and the count advanced by 0 or 1: 6-8% faster
- * than SSE compares of 4 counts followed by a loop over the set bits,
- * whose exits mispredicted. */
+/* The non-empty bins of one axis into used[] (a scan over all 32 bins
+ * of every small node cost a large share of the build); returns how
+ * many.  Each bin index is written and the count advanced by 0 or 1, with
+ * no branch: SSE compares of 4 counts followed by a loop over the set
+ * bits were slower, their exits mispredicted (docs/performance.md,
+ * "Parallel build and trace"). */
 static inline uint32_t used_bins(const uint32_t *cnt, uint32_t nb, uint32_t *used)
 {
     uint32_t k = 0;

@@ -2,7 +2,7 @@
  * the library tests SIDX_SIMD_X86 and SIDX_SIMD_SSE2, never the
  * compiler's own __SSE2__ or __x86_64__, and names SIMD types and
  * intrinsics only inside the simd_*.h kernel headers (docs/architecture.md,
- * "SIMD kernels"; tests/check_simd_rules.sh checks it).
+ * "SIMD kernels"; tests/run_simd_rules.sh checks it).
  *
  *   SIDX_SIMD_X86   x86 or x86-64: the CPU may have SSE4.1, AVX2 or
  *                   AVX-512, picked at run time (__builtin_cpu_supports)

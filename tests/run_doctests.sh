@@ -28,7 +28,9 @@
 # Embree) is reported as skipped.  Besides the commands: README.md stays
 # at most 170 lines, and every lesson's header names the library function
 # it is about ("Read: lib/FILE.c, FUNCTION", several separated by ";"),
-# which must be defined in that file.  DOCTEST_ONLY=TEXT runs only the entries whose first doc line
+# which must be defined in that file, and every path of the repository a
+# comment of lib/, viz/ or lessons/ names (tests/X.sh, docs/Y.md, ...)
+# exists.  DOCTEST_ONLY=TEXT runs only the entries whose first doc line
 # contains TEXT; DOCTEST_TIMES=1 prints the seconds each run takes.  Run
 # from the repository root; exit 1 if anything failed.
 
@@ -132,6 +134,18 @@ done
 lines=$(wc -l <README.md)
 [ "$lines" -le $README_MAX ] || bad "README.md has $lines lines, at most $README_MAX (move details to docs/)"
 
+# ---- paths named in the sources' comments exist --------------------------------
+# A comment that sends the reader to tests/X.sh or docs/Y.md must name a
+# file that is there; placeholders in capitals (lessons/exercises/NAME.c)
+# and wildcards are not files.
+paths=0
+for p in $(grep -ohE '(^|[^A-Za-z0-9_./])(tests|docs|lib|viz|lessons)/[A-Za-z0-9_./*-]+\.(sh|c|h|md|awk|txt|def|html|js)\b' \
+               lib/*.[ch] lib/include/sidx/*.h viz/*.[ch] lessons/*.[ch] | sed 's/^[^a-z]//' | sort -u); do
+    case $p in *"*"* | *[A-Z][A-Z]*) continue ;; esac
+    paths=$((paths + 1))
+    [ -e "$p" ] || bad "a comment in lib/, viz/ or lessons/ names $p, which does not exist: $(grep -lF "$p" lib/*.[ch] lib/include/sidx/*.h viz/*.[ch] lessons/*.[ch] | tr '\n' ' ')"
+done
+
 reads=0
 for f in lessons/[0-9]*.c; do
     r=$(awk 'NR == 1, /\*\// {
@@ -161,7 +175,8 @@ done
 summary=$(cut -f1 "$T/cmds" | sed 's|^lessons/.*|lessons/*.c|' | sort | uniq -c |
           awk '{ printf "%s%d %s%s", sep, $1, (NR == 1 ? "commands from " : "from "), $2; sep = ", " }')
 echo "doc tests: $summary checked ($ran runs, $skipped skipped);" \
-     "README.md $lines lines (at most $README_MAX); $reads lesson Read: functions defined"
+     "README.md $lines lines (at most $README_MAX); $reads lesson Read: functions defined;" \
+     "$paths paths named in comments exist"
 if [ $fail -ne 0 ]; then
     echo "doc tests: $fail failed"
     exit 1

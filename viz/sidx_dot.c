@@ -10,6 +10,7 @@
 #include <unistd.h>
 #include "sidx/sidx.h"
 #include "sidx/viz.h"
+#include "args.h"
 
 static void usage(FILE *f)
 {
@@ -45,31 +46,19 @@ static void usage(FILE *f)
 
 int main(int argc, char **argv)
 {
-    const char *accel = NULL, *scene = NULL, *out = NULL;
+    const char *out = NULL;
     sidx_dot_options opt;
     sidx_build_options bo;
     memset(&opt, 0, sizeof opt);
     memset(&bo, 0, sizeof bo);
+    viz_args args = {.prog = "sidx-dot", .usage = usage, .build = &bo, .scene_operand = 1};
     for (int i = 1; i < argc; ++i) {
+        const int took = viz_arg(&args, argc, argv, &i);
+        if (took == VIZ_ARG_TAKEN) continue;
+        if (took != VIZ_ARG_OWN) return took;
         const char *a = argv[i];
         const int has_val = i + 1 < argc;
-        char msg[160];
-        const int knob = sidx_viz_build_knob(a, has_val ? argv[i + 1] : NULL, &bo, msg, sizeof msg);
-        if (knob < 0) {
-            fprintf(stderr, "sidx-dot: %s\n", msg);
-            return 2;
-        } else if (knob > 0) {
-            i += knob - 1;
-        } else if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
-            usage(stdout);
-            return 0;
-        } else if (!strcmp(a, "--list")) {
-            for (size_t k = 0; k < sidx_accel_registered_count(); ++k)
-                printf("%-14s %s\n", sidx_accel_registered_name(k), sidx_accel_registered_description(k));
-            return 0;
-        } else if (!strcmp(a, "--accel") && has_val) {
-            accel = argv[++i];
-        } else if ((!strcmp(a, "-o") || !strcmp(a, "--output")) && has_val) {
+        if ((!strcmp(a, "-o") || !strcmp(a, "--output")) && has_val) {
             out = argv[++i];
         } else if (!strcmp(a, "--depth") && has_val) {
             char *end;
@@ -93,33 +82,21 @@ int main(int argc, char **argv)
                 opt.max_width = v;
             else
                 opt.max_nodes = v;
-        } else if (!strcmp(a, "--ray") && has_val) {
-            if (sidx_viz_parse_ray(argv[++i], &opt.ray_org, &opt.ray_dir) != 0) {
-                fprintf(stderr, "sidx-dot: --ray wants ox,oy,oz,dx,dy,dz (finite, non-zero direction), not '%s'\n",
-                        argv[i]);
-                return 2;
-            }
-            opt.has_ray = 1;
-        } else if (a[0] == '-' && a[1] != '\0') {
-            fprintf(stderr, "sidx-dot: unknown option or missing value: %s\n", a);
-            usage(stderr);
-            return 2;
-        } else if (!scene) {
-            scene = a;
         } else {
-            fprintf(stderr, "sidx-dot: more than one SCENE ('%s', '%s')\n", scene, a);
-            return 2;
+            return viz_arg_unknown(&args, a);
         }
     }
+    const char *accel = args.accel, *scene = args.scene;
     if (!accel || !scene || !out) {
         fprintf(stderr, "sidx-dot: --accel, SCENE and -o are required\n");
         usage(stderr);
         return 2;
     }
-    if (!sidx_accel_is_registered(accel)) {
-        fprintf(stderr, "sidx-dot: no structure named '%s' (try --list)\n", accel);
-        return 2;
-    }
+    const int bad_accel = viz_arg_check_accel(&args);
+    if (bad_accel) return bad_accel;
+    opt.has_ray = args.ray_text != NULL;
+    opt.ray_org = args.org;
+    opt.ray_dir = args.dir;
     opt.build = &bo;
     /* on a terminal, say what takes time: the build of a big scene, Graphviz's layout */
     if (isatty(STDERR_FILENO)) opt.progress = stderr;

@@ -30,6 +30,7 @@
 #include <unistd.h>
 #include "sidx/sidx.h"
 #include "sidx/viz.h"
+#include "args.h"
 
 static void usage(FILE *f)
 {
@@ -807,31 +808,19 @@ out:
 int main(int argc, char **argv)
 {
     if (argc > 1 && !strcmp(argv[1], "--diff")) return diff_main(argc, argv);
-    const char *accel = NULL, *scene = NULL, *ray_text = NULL;
-    int all = 0, json = 0, build = 0, has_ray = 0, bounds = 0, panel = 0, brk = BREAK_NONE;
+    int all = 0, json = 0, build = 0, bounds = 0, panel = 0, brk = BREAK_NONE;
     unsigned long long start = 0;
-    sidx_vec3 org = {0, 0, 0}, dir = {0, 0, 0};
     sidx_traversal trav = SIDX_TRAVERSE_DEFAULT;
     sidx_build_options bo;
     memset(&bo, 0, sizeof bo);
+    viz_args args = {.prog = "sidx-step", .usage = usage, .build = &bo, .scene_operand = 1};
     for (int i = 1; i < argc; ++i) {
+        const int took = viz_arg(&args, argc, argv, &i);
+        if (took == VIZ_ARG_TAKEN) continue;
+        if (took != VIZ_ARG_OWN) return took;
         const char *a = argv[i];
         const int has_val = i + 1 < argc;
-        char msg[160];
-        const int knob = sidx_viz_build_knob(a, has_val ? argv[i + 1] : NULL, &bo, msg, sizeof msg);
-        if (knob < 0) {
-            fprintf(stderr, "sidx-step: %s\n", msg);
-            return 2;
-        } else if (knob > 0) {
-            i += knob - 1;
-        } else if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
-            usage(stdout);
-            return 0;
-        } else if (!strcmp(a, "--list")) {
-            for (size_t k = 0; k < sidx_accel_registered_count(); ++k)
-                printf("%-14s %s\n", sidx_accel_registered_name(k), sidx_accel_registered_description(k));
-            return 0;
-        } else if (!strcmp(a, "--all")) {
+        if (!strcmp(a, "--all")) {
             all = 1;
         } else if (!strcmp(a, "--json")) {
             json = 1;
@@ -841,8 +830,6 @@ int main(int argc, char **argv)
             bounds = 1;
         } else if (!strcmp(a, "--panel")) {
             panel = 1;
-        } else if (!strcmp(a, "--accel") && has_val) {
-            accel = argv[++i];
         } else if (!strcmp(a, "--traversal") && has_val) {
             if (sidx_traversal_parse(argv[++i], &trav) != SIDX_OK) {
                 fprintf(stderr, "sidx-step: --traversal wants default, stack, ordered or naive, not '%s'\n", argv[i]);
@@ -865,34 +852,20 @@ int main(int argc, char **argv)
                         argv[i]);
                 return 2;
             }
-        } else if (!strcmp(a, "--ray") && has_val) {
-            ray_text = argv[++i];
-            if (sidx_viz_parse_ray(ray_text, &org, &dir) != 0) {
-                fprintf(stderr, "sidx-step: --ray wants ox,oy,oz,dx,dy,dz (finite, non-zero direction), not '%s'\n",
-                        ray_text);
-                return 2;
-            }
-            has_ray = 1;
-        } else if (a[0] == '-' && a[1] != '\0') {
-            fprintf(stderr, "sidx-step: unknown option or missing value: %s\n", a);
-            usage(stderr);
-            return 2;
-        } else if (!scene) {
-            scene = a;
         } else {
-            fprintf(stderr, "sidx-step: more than one SCENE ('%s', '%s')\n", scene, a);
-            return 2;
+            return viz_arg_unknown(&args, a);
         }
     }
+    const char *accel = args.accel, *scene = args.scene, *ray_text = args.ray_text;
+    const int has_ray = ray_text != NULL;
+    const sidx_vec3 org = args.org, dir = args.dir;
     if (!accel || !scene || (!has_ray && !build)) {
         fprintf(stderr, "sidx-step: --accel, SCENE and --ray (or --build) are required\n");
         usage(stderr);
         return 2;
     }
-    if (!sidx_accel_is_registered(accel)) {
-        fprintf(stderr, "sidx-step: no structure named '%s' (try --list)\n", accel);
-        return 2;
-    }
+    const int bad_accel = viz_arg_check_accel(&args);
+    if (bad_accel) return bad_accel;
 
     sidx_mesh mesh;
     sidx_error err;

@@ -16,6 +16,7 @@
 #include <string.h>
 #include <SDL.h>
 #include <SDL_image.h>
+#include "args.h"
 #include "page.h"
 #include "view.h"
 
@@ -186,34 +187,21 @@ static int run_window(view_state *v, int w, int h)
 
 int main(int argc, char **argv)
 {
-    const char *accel = NULL, *scene = "flat2d", *shot = NULL, *html = NULL, *events = NULL;
-    int w = 1100, h = 700, has_ray = 0, has_step = 0, level = -1;
+    const char *scene = "flat2d", *shot = NULL, *html = NULL, *events = NULL;
+    int w = 1100, h = 700, has_step = 0, level = -1;
     long step = 0;
     float yaw = NAN, pitch = NAN, zoom = NAN;
     view_mode mode = VIEW_2D;
-    sidx_vec3 org = {0, 0, 0}, dir = {0, 0, 0};
     sidx_build_options knobs;
     memset(&knobs, 0, sizeof knobs);
+    viz_args args = {.prog = "sidx-view", .usage = usage, .build = &knobs, .scene_operand = 0};
     for (int i = 1; i < argc; ++i) {
+        const int took = viz_arg(&args, argc, argv, &i);
+        if (took == VIZ_ARG_TAKEN) continue;
+        if (took != VIZ_ARG_OWN) return took;
         const char *a = argv[i];
         const int has_val = i + 1 < argc;
-        char msg[160];
-        const int knob = sidx_viz_build_knob(a, has_val ? argv[i + 1] : NULL, &knobs, msg, sizeof msg);
-        if (knob < 0) {
-            fprintf(stderr, "sidx-view: %s\n", msg);
-            return 2;
-        } else if (knob > 0) {
-            i += knob - 1;
-        } else if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
-            usage(stdout);
-            return 0;
-        } else if (!strcmp(a, "--list")) {
-            for (size_t k = 0; k < sidx_accel_registered_count(); ++k)
-                printf("%-14s %s\n", sidx_accel_registered_name(k), sidx_accel_registered_description(k));
-            return 0;
-        } else if (!strcmp(a, "--accel") && has_val) {
-            accel = argv[++i];
-        } else if (!strcmp(a, "--scene") && has_val) {
+        if (!strcmp(a, "--scene") && has_val) {
             scene = argv[++i];
         } else if (!strcmp(a, "--events") && has_val) {
             events = argv[++i];
@@ -256,24 +244,16 @@ int main(int argc, char **argv)
             if (!strcmp(a, "--yaw")) yaw = f;
             else if (!strcmp(a, "--pitch")) pitch = f;
             else zoom = f;
-        } else if (!strcmp(a, "--ray") && has_val) {
-            if (sidx_viz_parse_ray(argv[++i], &org, &dir) != 0) {
-                fprintf(stderr, "sidx-view: --ray wants ox,oy,oz,dx,dy,dz (finite, non-zero direction), not '%s'\n",
-                        argv[i]);
-                return 2;
-            }
-            has_ray = 1;
         } else {
-            fprintf(stderr, "sidx-view: unknown option or missing value: %s\n", a);
-            usage(stderr);
-            return 2;
+            return viz_arg_unknown(&args, a);
         }
     }
-    if (!accel) accel = default_accel();
-    if (!sidx_accel_is_registered(accel)) {
-        fprintf(stderr, "sidx-view: no structure named '%s' (try --list)\n", accel);
-        return 2;
-    }
+    if (!args.accel) args.accel = default_accel();
+    const int bad_accel = viz_arg_check_accel(&args);
+    if (bad_accel) return bad_accel;
+    const char *accel = args.accel;
+    const int has_ray = args.ray_text != NULL;
+    sidx_vec3 org = args.org, dir = args.dir;
     /* before the build: a window that cannot open is said at once */
     if (!html && !shot && !display_reachable()) return 1;
 
