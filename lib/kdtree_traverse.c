@@ -66,11 +66,11 @@ typedef struct kd_slide_entry {
 typedef struct kd_leaves {
     float best_t;                /* the closest hit so far; bounds every later test */
     int found;
-    const wide_tri4 *best_block; /* the best hit's triangle copy (u, v, normal at the end) */
+    const tri4_block *best_block; /* the best hit's triangle copy (u, v, normal at the end) */
     unsigned best_lane;
     int simd, mailbox;
 #if KD_SIMD
-    wide_tri_ray simd_ray;
+    tri4_ray simd_ray;
 #endif
 } kd_leaves;
 
@@ -79,7 +79,7 @@ static SIDX_INLINE int kd_enter_root(const sidx_accel *a, const sidx_ray *r, con
 static SIDX_INLINE void kd_leaves_init(kd_leaves *L, const sidx_accel *a, const sidx_ray *r, uint32_t *mbox,
                                        float best_t, const int traced);
 static SIDX_INLINE int kd_test_leaf(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, kd_leaves *L,
-                                    uint32_t *mbox, const wide_tri4 *sub_blocks, const kd_node *leaf, uint32_t node,
+                                    uint32_t *mbox, const tri4_block *sub_blocks, const kd_node *leaf, uint32_t node,
                                     uint32_t visited, const int traced, const int any);
 static SIDX_INLINE void kd_finish(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, const kd_leaves *L,
                                   sidx_hit *hit);
@@ -366,7 +366,7 @@ static SIDX_INLINE void kd_leaves_init(kd_leaves *L, const sidx_accel *a, const 
     L->best_lane = 0;
 #if KD_SIMD
     L->simd = !traced && a->opt.tri == SIDX_TRI_WATERTIGHT;
-    wide_tri_ray_init(&L->simd_ray, r);
+    tri4_ray_init(&L->simd_ray, r);
 #else
     (void)r;
     (void)traced;
@@ -379,18 +379,18 @@ static SIDX_INLINE void kd_leaves_init(kd_leaves *L, const sidx_accel *a, const 
 /* u, v and the normal of the closest hit, when the query asks: from the
  * block's copy of the triangle, which is in cache, instead of the mesh
  * look-ups a diffuse ray mostly misses.  Run once, when the walk returns.
- * u, v by wide_lane_hit_uv (the accepting test's float edge functions and
+ * u, v by tri4_lane_hit_uv (the accepting test's float edge functions and
  * its own last step, so its bits, or the whole test again when that does
  * not apply). */
 static SIDX_NOINLINE void kd_hit_attrs(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
-                                       const wide_tri4 *block, unsigned lane, sidx_hit *hit)
+                                       const tri4_block *block, unsigned lane, sidx_hit *hit)
 {
     float u = 0.0f, v = 0.0f;
-    if ((q->flags & SIDX_QUERY_UV) && wide_lane_hit_uv(a, r, block, lane, &u, &v)) {
+    if ((q->flags & SIDX_QUERY_UV) && tri4_lane_hit_uv(a, r, block, lane, &u, &v)) {
         hit->u = u;
         hit->v = v;
     }
-    if (q->flags & SIDX_QUERY_NORMAL) hit->ng = wide_lane_normal(block, lane);
+    if (q->flags & SIDX_QUERY_NORMAL) hit->ng = tri4_lane_normal(block, lane);
 }
 
 /* The closest hit, written once when the walk ends. */
@@ -407,14 +407,14 @@ static SIDX_INLINE void kd_finish(const sidx_accel *a, const sidx_ray *r, const 
 /* A block the SIMD kernel declined (some lane's edge function is exactly
  * 0): the scalar test, which redoes those in double, lane by lane; the
  * smallest t wins, the lowest lane on ties, as in the kernel. */
-static SIDX_NOINLINE int kd_block_scalar(const sidx_accel *a, const sidx_ray *r, const wide_tri4 *block, float best,
+static SIDX_NOINLINE int kd_block_scalar(const sidx_accel *a, const sidx_ray *r, const tri4_block *block, float best,
                                          float *t_out, unsigned *lane_out)
 {
     int found = 0;
     for (unsigned l = 0; l < 4; ++l) {
-        if (block->prim[l] == WIDE_PAD_PRIM) continue;
+        if (block->prim[l] == TRI4_PAD_PRIM) continue;
         float t;
-        if (wide_lane_test(a, r, block, l, best, &t, NULL, NULL)) {
+        if (tri4_lane_test(a, r, block, l, best, &t, NULL, NULL)) {
             best = t;
             *t_out = t;
             *lane_out = l;
@@ -454,7 +454,7 @@ static SIDX_NOINLINE int kd_block_scalar(const sidx_accel *a, const sidx_ray *r,
  * always refers to a test the trace reported.  With another triangle test
  * all walks test the leaf's own references only. */
 static SIDX_INLINE int kd_test_leaf(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, kd_leaves *L,
-                                    uint32_t *mbox, const wide_tri4 *sub_blocks, const kd_node *leaf, uint32_t node,
+                                    uint32_t *mbox, const tri4_block *sub_blocks, const kd_node *leaf, uint32_t node,
                                     uint32_t visited, const int traced, const int any)
 {
     const kd_tree *kd = a->impl; /* its blocks unless the leaf is in a lazy tree's subtree (sub_blocks) */
@@ -462,12 +462,12 @@ static SIDX_INLINE int kd_test_leaf(const sidx_accel *a, const sidx_ray *r, cons
     (void)visited;
 #if KD_SIMD
     if (L->simd) {
-        const wide_tri4 *block = (sub_blocks ? sub_blocks : kd->blocks) + (offset >> 2),
+        const tri4_block *block = (sub_blocks ? sub_blocks : kd->blocks) + (offset >> 2),
                         *const end = (sub_blocks ? sub_blocks : kd->blocks) + ((offset + count + 3u) >> 2);
         for (; block < end; ++block) {
             float t;
             unsigned lane;
-            int h = wide_tri4_test(block, &L->simd_ray, L->best_t, &t, &lane, NULL);
+            int h = tri4_test(block, &L->simd_ray, L->best_t, &t, &lane, NULL);
             if (SIDX_UNLIKELY(h < 0)) h = kd_block_scalar(a, r, block, L->best_t, &t, &lane);
             if (h) {
                 if (any) return 1;
@@ -486,12 +486,12 @@ static SIDX_INLINE int kd_test_leaf(const sidx_accel *a, const sidx_ray *r, cons
         end = (end + 3u) & ~3u;
     }
     for (; ref < end; ++ref) {
-        const wide_tri4 *block = &(sub_blocks ? sub_blocks : kd->blocks)[ref >> 2];
+        const tri4_block *block = &(sub_blocks ? sub_blocks : kd->blocks)[ref >> 2];
         const unsigned lane = ref & 3u;
         const uint32_t prim = block->prim[lane];
         const int own = ref - offset < count; /* one of this leaf's references */
         uint32_t *const slot = &mbox[prim & (KD_MAILBOX - 1u)];
-        if (prim == WIDE_PAD_PRIM) continue;
+        if (prim == TRI4_PAD_PRIM) continue;
         if (L->mailbox) {
             if (*slot == prim) {
                 if (own)
@@ -502,7 +502,7 @@ static SIDX_INLINE int kd_test_leaf(const sidx_accel *a, const sidx_ray *r, cons
             if (own) *slot = prim;
         }
         float t;
-        const int h = wide_lane_test(a, r, block, lane, L->best_t, &t, NULL, NULL);
+        const int h = tri4_lane_test(a, r, block, lane, L->best_t, &t, NULL, NULL);
         if (own)
             SIDX_EMIT(traced, q->hook, SIDX_EV_PRIM_TEST, e_.ray_id = q->ray_id; e_.prim = prim; e_.node = node;
                       e_.result = h; e_.t = h ? t : INFINITY);

@@ -3,10 +3,10 @@
  * Woop et al. 2013 on a leaf block's four lanes, SSE2 only so it inlines
  * into the SSE4.1 and AVX2 walks and the packet walk alike (the blend is
  * done with and/or).  The ray's lane-broadcast constants are set up once
- * per ray (wide_tri_ray_init).  Returns 1 with the smallest t in
+ * per ray (tri4_ray_init).  Returns 1 with the smallest t in
  * [tmin, best) (lowest lane on ties), 0 for no hit, -1 when some lane's
  * edge function is exactly 0 and the block must take the scalar path
- * (wide_lane_test, which redoes those in double).  When it returns 1 and
+ * (tri4_lane_test, which redoes those in double).  When it returns 1 and
  * vw_det_out is not NULL, vw_det_out[0..3], [4..7], [8..11] receive the lanes'
  * V, W and det — the floats the scalar test computes too (no edge
  * function was 0, so it would not have switched to double) — from which
@@ -15,7 +15,7 @@
  * Included by tri4.h where SSE2 is there (every x86-64):
  * the wide walks (simd_wide_tri4.h), the wide packets (packet_wide.c) and
  * the kd-tree's leaf blocks use it.  The reference is the scalar
- * watertight test on each lane (wide_lane_test, tri4.h);
+ * watertight test on each lane (tri4_lane_test, tri4.h);
  * the names are the paper's (a, b, c the corners relative to the origin,
  * A, B, C sheared, U, V, W the edge functions, T the scaled distance). */
 #ifndef SIDX_SIMD_TRI4_SSE_H
@@ -23,13 +23,13 @@
 
 #include <immintrin.h>
 
-typedef struct wide_tri_ray {
+typedef struct tri4_ray {
     __m128 org_kx, org_ky, org_kz; /* the origin on the permuted axes kx, ky, kz */
     __m128 sx, sy, sz, tmin;      /* the shear constants, tmin */
     uint32_t kx4, ky4, kz4; /* float offsets of the permuted axes inside a block's vertex */
-} wide_tri_ray;
+} tri4_ray;
 
-static SIDX_INLINE void wide_tri_ray_init(wide_tri_ray *ray, const sidx_ray *r)
+static SIDX_INLINE void tri4_ray_init(tri4_ray *ray, const sidx_ray *r)
 {
     const float *o = sidx_v3_array(&r->org);
     ray->org_kx = _mm_set1_ps(o[r->kx]); ray->org_ky = _mm_set1_ps(o[r->ky]); ray->org_kz = _mm_set1_ps(o[r->kz]);
@@ -40,8 +40,8 @@ static SIDX_INLINE void wide_tri_ray_init(wide_tri_ray *ray, const sidx_ray *r)
 
 /* The kernel on the ray's permuted axes of a block: row_x, row_y, row_z
  * point at vertex 0's kx, ky, kz row (vertex k's at +12k floats). */
-static SIDX_INLINE int wide_tri4_test_axes(const float *row_x, const float *row_y, const float *row_z,
-                                           const wide_tri_ray *ray, float best, float *t_out, unsigned *lane_out,
+static SIDX_INLINE int tri4_test_axes(const float *row_x, const float *row_y, const float *row_z,
+                                           const tri4_ray *ray, float best, float *t_out, unsigned *lane_out,
                                            float *vw_det_out)
 {
     const __m128 ax = _mm_sub_ps(_mm_load_ps(row_x), ray->org_kx);
@@ -93,11 +93,11 @@ static SIDX_INLINE int wide_tri4_test_axes(const float *row_x, const float *row_
     return 1;
 }
 
-static SIDX_INLINE int wide_tri4_test(const wide_tri4 *block, const wide_tri_ray *ray, float best, float *t_out,
+static SIDX_INLINE int tri4_test(const tri4_block *block, const tri4_ray *ray, float best, float *t_out,
                                       unsigned *lane_out, float *vw_det_out)
 {
     const float *v = &block->v[0][0][0]; /* vertex k, axis x, lane l at v[12k + 4x + l] */
-    return wide_tri4_test_axes(v + ray->kx4, v + ray->ky4, v + ray->kz4, ray, best, t_out, lane_out, vw_det_out);
+    return tri4_test_axes(v + ray->kx4, v + ray->ky4, v + ray->kz4, ray, best, t_out, lane_out, vw_det_out);
 }
 
 #endif

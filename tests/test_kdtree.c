@@ -158,10 +158,10 @@ static void check_structure(const sidx_accel *a, const sidx_mesh *m)
     assert_int_equal(kd->num_blocks, (kd->num_refs + 3u) / 4u);
     assert_int_equal((uintptr_t)kd->blocks % 64u, 0);
     for (uint32_t i = 0; i < 4u * kd->num_blocks; ++i) {
-        const wide_tri4 *B = &kd->blocks[i / 4u];
+        const tri4_block *B = &kd->blocks[i / 4u];
         const uint32_t l = i % 4u;
         if (i >= kd->num_refs) { /* padding: NaN vertices never hit */
-            assert_int_equal(B->prim[l], WIDE_PAD_PRIM);
+            assert_int_equal(B->prim[l], TRI4_PAD_PRIM);
             assert_true(B->v[0][0][l] != B->v[0][0][l]);
             continue;
         }
