@@ -31,10 +31,9 @@
  *     (tri4_test, bit-identical to the scalar test but for the sign
  *     of a zero t).  The blocks are cut from the reference array, not per
  *     leaf, so a leaf's first and last block may hold neighbouring leaves'
- *     triangles: the traversal tests those lanes too.  That is harmless:
- *     a hit on any scene triangle is a true hit, so the best so far is
- *     still a true hit and the early termination argument (every triangle hit before t_far of
- *     the current cell lies in a cell already visited) is unchanged.
+ *     triangles: the traversal masks those lanes off (tri4_test_lanes),
+ *     so a leaf tests its own triangles only, as the slides' leaf does,
+ *     and a trace never shows a hit on a triangle the leaf does not list.
  *     This costs 40 bytes per reference, which the SIMD test pays for
  *     (docs/performance.md, kd-tree); `prims` keeps the original triangle
  *     ids per reference for the public view (sidx_kdtree_refs).

@@ -39,10 +39,14 @@ static SIDX_INLINE void tri4_ray_init(tri4_ray *ray, const sidx_ray *r)
 }
 
 /* The kernel on the ray's permuted axes of a block: row_x, row_y, row_z
- * point at vertex 0's kx, ky, kz row (vertex k's at +12k floats). */
-static SIDX_INLINE int tri4_test_axes(const float *row_x, const float *row_y, const float *row_z,
-                                           const tri4_ray *ray, float best, float *t_out, unsigned *lane_out,
-                                           float *vw_det_out)
+ * point at vertex 0's kx, ky, kz row (vertex k's at +12k floats).
+ * masked (a constant): only the lanes whose word in keep is all ones take
+ * part, the others neither hit nor send the block to the scalar path (a
+ * kd leaf's block holding a neighbouring leaf's references, tri4_test_lanes);
+ * unmasked, the code is the kernel without those two ANDs. */
+static SIDX_INLINE int tri4_kernel(const float *row_x, const float *row_y, const float *row_z, const tri4_ray *ray,
+                                   float best, float *t_out, unsigned *lane_out, float *vw_det_out, const int masked,
+                                   const __m128 keep)
 {
     const __m128 ax = _mm_sub_ps(_mm_load_ps(row_x), ray->org_kx);
     const __m128 ay = _mm_sub_ps(_mm_load_ps(row_y), ray->org_ky);
@@ -60,7 +64,8 @@ static SIDX_INLINE int tri4_test_axes(const float *row_x, const float *row_y, co
     const __m128 V = _mm_sub_ps(_mm_mul_ps(Ax, Cy), _mm_mul_ps(Ay, Cx));
     const __m128 W = _mm_sub_ps(_mm_mul_ps(Bx, Ay), _mm_mul_ps(By, Ax));
     const __m128 zero = _mm_setzero_ps();
-    const __m128 anyzero = _mm_or_ps(_mm_or_ps(_mm_cmpeq_ps(U, zero), _mm_cmpeq_ps(V, zero)), _mm_cmpeq_ps(W, zero));
+    __m128 anyzero = _mm_or_ps(_mm_or_ps(_mm_cmpeq_ps(U, zero), _mm_cmpeq_ps(V, zero)), _mm_cmpeq_ps(W, zero));
+    if (masked) anyzero = _mm_and_ps(anyzero, keep);
     if (SIDX_UNLIKELY(_mm_movemask_ps(anyzero))) return -1;
     /* No edge function is ±0 now, so "some < 0 and some > 0" is "the sign
      * bits differ": two XORs instead of six compares.  Lanes whose det is
@@ -71,7 +76,8 @@ static SIDX_INLINE int tri4_test_axes(const float *row_x, const float *row_y, co
     const __m128 mixed = _mm_castsi128_ps(
         _mm_srai_epi32(_mm_castps_si128(_mm_or_ps(_mm_xor_ps(U, V), _mm_xor_ps(U, W))), 31)); /* sign to all bits */
     const __m128 det = _mm_add_ps(_mm_add_ps(U, V), W);
-    const __m128 cand = _mm_andnot_ps(mixed, _mm_or_ps(_mm_cmplt_ps(det, zero), _mm_cmpgt_ps(det, zero)));
+    __m128 cand = _mm_andnot_ps(mixed, _mm_or_ps(_mm_cmplt_ps(det, zero), _mm_cmpgt_ps(det, zero)));
+    if (masked) cand = _mm_and_ps(cand, keep);
     if (!_mm_movemask_ps(cand)) return 0;
     const __m128 T = _mm_add_ps(
         _mm_add_ps(_mm_mul_ps(U, _mm_mul_ps(ray->sz, az)), _mm_mul_ps(V, _mm_mul_ps(ray->sz, bz))),
@@ -93,11 +99,27 @@ static SIDX_INLINE int tri4_test_axes(const float *row_x, const float *row_y, co
     return 1;
 }
 
+static SIDX_INLINE int tri4_test_axes(const float *row_x, const float *row_y, const float *row_z,
+                                      const tri4_ray *ray, float best, float *t_out, unsigned *lane_out,
+                                      float *vw_det_out)
+{
+    return tri4_kernel(row_x, row_y, row_z, ray, best, t_out, lane_out, vw_det_out, 0, _mm_setzero_ps());
+}
+
 static SIDX_INLINE int tri4_test(const tri4_block *block, const tri4_ray *ray, float best, float *t_out,
                                       unsigned *lane_out, float *vw_det_out)
 {
     const float *v = &block->v[0][0][0]; /* vertex k, axis x, lane l at v[12k + 4x + l] */
     return tri4_test_axes(v + ray->kx4, v + ray->ky4, v + ray->kz4, ray, best, t_out, lane_out, vw_det_out);
+}
+
+/* tri4_test on the lanes whose word in keep is all ones only: the same
+ * arithmetic, so a lane's t is the unmasked kernel's bit for bit. */
+static SIDX_INLINE int tri4_test_lanes(const tri4_block *block, const tri4_ray *ray, __m128 keep, float best,
+                                       float *t_out, unsigned *lane_out)
+{
+    const float *v = &block->v[0][0][0];
+    return tri4_kernel(v + ray->kx4, v + ray->ky4, v + ray->kz4, ray, best, t_out, lane_out, NULL, 1, keep);
 }
 
 #endif
