@@ -15,7 +15,8 @@
  * longest median) in a kd-tree, and one ray running across the board in
  * its plane, chosen so that it meets a triangle that straddles cells: the
  * hit is found in a cell the hit point does not lie in.  The traversal's
- * events are printed by the printer sink, and after every step the lesson
+ * events are printed by the printer sink (an inner node's line gives its
+ * plane, t_split and which of the three cases the walk takes), and after every step the lesson
  * prints the slide's two lines — Current: the node being visited, Stack:
  * the deferred far children (with their t intervals) — and marks the
  * step where a hit is found but the walk CANNOT terminate.
@@ -150,7 +151,7 @@ int main(int argc, char **argv)
     const sidx_hook ph = sidx_printer_hook(&pr);
     typedef struct { uint32_t node; float t0, t1; } entry;
     entry stack[128];
-    int sp = 0, consistent = 1, step = 0, cannot = 0;
+    int sp = 0, consistent = 1, step = 0, cannot = 0, inner = 0, cases_ok = 1;
     uint32_t current = UINT32_MAX;
     float cur_far = INFINITY;
     printf("\n");
@@ -163,6 +164,15 @@ int main(int argc, char **argv)
             current = e->node;
             cur_far = e->t_far;
             show = 1;
+            if (e->axis >= 0) { /* an inner node: t_split and the case it takes, as the slide has them */
+                const float tol = 1e-5f * fmaxf(fabsf(e->t_near), fabsf(e->t_far));
+                const int both_next = i + 1 < rec.count && rec.events[i + 1].type == SIDX_EV_STACK_PUSH;
+                ++inner;
+                if (e->result == SIDX_SPLIT_FAR_ONLY) cases_ok &= e->t < e->t_near && !both_next;
+                else if (e->result == SIDX_SPLIT_NEAR_ONLY) cases_ok &= e->t > e->t_far && !both_next;
+                else cases_ok &= e->result == SIDX_SPLIT_BOTH && both_next &&
+                                 (e->t != e->t || (e->t >= e->t_near - tol && e->t <= e->t_far + tol));
+            }
             break;
         case SIDX_EV_STACK_PUSH:
             if (sp < 128) stack[sp++] = (entry){e->node, e->t_near, e->t_far};
@@ -202,6 +212,7 @@ int main(int argc, char **argv)
     lesson_check("same_hit", h.t == hb.t);
     lesson_check("stack_trace_consistent", consistent);
     lesson_check("cannot_terminate_seen", cannot && found);
+    lesson_check("split_cases_shown", inner > 0 && cases_ok);
     sidx_recorder_free(&rec);
     sidx_accel_destroy(kd);
     sidx_accel_destroy(ref);

@@ -40,6 +40,21 @@
 #include "bvh_internal.h"
 #include "tri4.h" /* the leaves' blocks of four triangles */
 
+/* The wide BVH's names for the shared block and its kernel (tri4.h). */
+typedef tri4_block wide_tri4;
+#if SIDX_TRI4_SSE
+typedef tri4_ray wide_tri_ray;
+#endif
+#define WIDE_PAD_PRIM TRI4_PAD_PRIM
+#define wide_set_lane tri4_set_lane
+#define wide_lane_vertex tri4_lane_vertex
+#define wide_lane_normal tri4_lane_normal
+#define wide_lane_test tri4_lane_test
+#define wide_lane_hit_uv tri4_lane_hit_uv
+#define wide_tri_ray_init tri4_ray_init
+#define wide_tri4_test tri4_test
+#define wide_tri4_test_axes tri4_test_axes
+
 #define WIDE_LEAF_BIT 0x80000000u
 #define WIDE_EMPTY 0xFFFFFFFFu
 /* Lazy trees (opt.lazy; bvh_wide.c, "lazy builds"): a child WIDE_LAZY_BIT | r

@@ -916,7 +916,7 @@ static void kd_free(const sidx_accel *a, kd_tree *kd)
 /* One copy of each reference's triangle, four references to a block in
  * structure-of-arrays form, in reference order (kdtree_internal.h).  The
  * lanes past the last reference get NaN vertices (no comparison on them
- * is true, so the SIMD test never reports them) and WIDE_PAD_PRIM. */
+ * is true, so the SIMD test never reports them) and TRI4_PAD_PRIM. */
 sidx_status sidx__kd_make_blocks(const sidx_accel *a, kd_tree *kd, const sidx_mesh *m)
 {
     sidx__free(a, kd->blocks_mem);
@@ -924,18 +924,18 @@ sidx_status sidx__kd_make_blocks(const sidx_accel *a, kd_tree *kd, const sidx_me
     kd->blocks_mem = NULL;
     const uint32_t nb = (kd->num_refs + 3u) / 4u;
     kd->num_blocks = nb;
-    kd->blocks_mem = sidx__alloc(a, (size_t)(nb ? nb : 1u) * sizeof(wide_tri4) + 64u, 1);
+    kd->blocks_mem = sidx__alloc(a, (size_t)(nb ? nb : 1u) * sizeof(tri4_block) + 64u, 1);
     if (!kd->blocks_mem) return SIDX_ERR_NOMEM;
-    kd->blocks = (wide_tri4 *)(void *)(((uintptr_t)kd->blocks_mem + 63u) & ~(uintptr_t)63u);
+    kd->blocks = (tri4_block *)(void *)(((uintptr_t)kd->blocks_mem + 63u) & ~(uintptr_t)63u);
     for (uint32_t i = 0; i < 4u * nb; ++i) {
-        wide_tri4 *B = &kd->blocks[i / 4u];
+        tri4_block *B = &kd->blocks[i / 4u];
         const uint32_t l = i % 4u;
         if (i < kd->num_refs) {
             const sidx_vec3 p[3] = {sidx_mesh_vertex(m, kd->prims[i], 0), sidx_mesh_vertex(m, kd->prims[i], 1),
                                     sidx_mesh_vertex(m, kd->prims[i], 2)};
-            wide_set_lane(B, l, p, kd->prims[i]);
+            tri4_set_lane(B, l, p, kd->prims[i]);
         } else {
-            wide_set_lane(B, l, NULL, 0);
+            tri4_set_lane(B, l, NULL, 0);
         }
     }
     return SIDX_OK;
@@ -1131,7 +1131,7 @@ void sidx__kd_stats(const sidx_accel *a, sidx_accel_stats *s)
     const uint32_t full = kd->leaves - kd->empty_leaves;
     s->mean_leaf_prims = full ? (double)kd->num_refs / (double)full : 0.0;
     s->bytes = sizeof *kd + (size_t)kd->num_nodes * sizeof(kd_node) + (size_t)kd->num_refs * sizeof(uint32_t) +
-               (size_t)kd->num_blocks * sizeof(wide_tri4);
+               (size_t)kd->num_blocks * sizeof(tri4_block);
     s->sah_cost = kd->sah_cost;
     const kd_lazy *L = kd->lazy;
     if (L) {
@@ -1255,7 +1255,7 @@ static kd_tree *expand_build(const sidx_accel *a, kd_tree *kd, kd_lazy_rec *rec,
     __atomic_fetch_add(&L->built_refs, (uint64_t)sub->num_refs, __ATOMIC_RELAXED);
     __atomic_fetch_add(&L->built_bytes,
                        (uint64_t)(sizeof *sub + (size_t)sub->num_nodes * sizeof(kd_node) +
-                                  (size_t)sub->num_refs * sizeof(uint32_t) + (size_t)sub->num_blocks * sizeof(wide_tri4)),
+                                  (size_t)sub->num_refs * sizeof(uint32_t) + (size_t)sub->num_blocks * sizeof(tri4_block)),
                        __ATOMIC_RELAXED);
     __atomic_fetch_sub(&L->unbuilt, 1u, __ATOMIC_RELAXED);
     __atomic_fetch_sub(&L->unbuilt_refs, (uint64_t)rec->count, __ATOMIC_RELAXED);

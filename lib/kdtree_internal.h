@@ -21,20 +21,19 @@
  *   - nodes are written depth first as the build recurses, sibling pairs
  *     allocated together, so a subtree is one contiguous run of memory;
  *   - the leaves' triangles are copied, one copy per *reference*, into
- *     blocks of four in structure-of-arrays form (`blocks`, wide_tri4,
+ *     blocks of four in structure-of-arrays form (`blocks`, tri4_block,
  *     tri4.h, the wide BVH's leaf blocks too): reference i of the leaf array sits
  *     in block i / 4, lane i % 4.  The leaf's node already holds its
  *     reference offset, so a leaf reads its blocks directly: no index to
  *     chase ("Memory should be separated by rate of access": traversal
  *     steps touch only the 8-byte nodes, leaves only their blocks).  One
  *     SSE pass then runs the watertight test on four references at once
- *     (wide_tri4_test, bit-identical to the scalar test but for the sign
+ *     (tri4_test, bit-identical to the scalar test but for the sign
  *     of a zero t).  The blocks are cut from the reference array, not per
  *     leaf, so a leaf's first and last block may hold neighbouring leaves'
- *     triangles: the traversal tests those lanes too.  That is harmless:
- *     a hit on any scene triangle is a true hit, so the best so far is
- *     still a true hit and the early termination argument (every triangle hit before t_far of
- *     the current cell lies in a cell already visited) is unchanged.
+ *     triangles: the traversal masks those lanes off (tri4_test_lanes),
+ *     so a leaf tests its own triangles only, as the slides' leaf does,
+ *     and a trace never shows a hit on a triangle the leaf does not list.
  *     This costs 40 bytes per reference, which the SIMD test pays for
  *     (docs/performance.md, kd-tree); `prims` keeps the original triangle
  *     ids per reference for the public view (sidx_kdtree_refs).
@@ -45,7 +44,7 @@
 
 #include "sidx_internal.h"
 #include "sidx/kdtree.h"
-#include "tri4.h" /* wide_tri4, wide_tri4_test */
+#include "tri4.h" /* tri4_block, tri4_test */
 
 /* Low 2 bits of kd_node.bits: the split axis, or 3 for a leaf. */
 #define KD_LEAF_FLAG 3u
@@ -116,9 +115,9 @@ typedef struct kd_tree {
     uint32_t num_nodes;
     uint32_t *prims;        /* leaf primitive references (original triangle ids), for the public view */
     uint32_t num_refs;
-    wide_tri4 *blocks;      /* reference i in blocks[i / 4], lane i % 4; 64-byte aligned in blocks_mem */
+    tri4_block *blocks;      /* reference i in blocks[i / 4], lane i % 4; 64-byte aligned in blocks_mem */
     void *blocks_mem;
-    uint32_t num_blocks;    /* (num_refs + 3) / 4; padding lanes have NaN vertices, WIDE_PAD_PRIM */
+    uint32_t num_blocks;    /* (num_refs + 3) / 4; padding lanes have NaN vertices, TRI4_PAD_PRIM */
     sidx_aabb bounds;       /* the root cell: the scene box */
     /* statistics, filled by the build */
     uint32_t leaves, empty_leaves, max_depth;

@@ -22,7 +22,8 @@
  *                  sidx-view), whose events retell that loop, and for the
  *                  naive traversal.
  *   kd_walk_fast   the same decisions without branches, never entering an
- *                  empty leaf, leaves tested four references per SSE pass.
+ *                  empty leaf, leaves tested up to four references per SSE
+ *                  pass.
  *                  Used for every other query: it is what the measurements
  *                  chose; it reads less like the slide.
  *
@@ -66,11 +67,11 @@ typedef struct kd_slide_entry {
 typedef struct kd_leaves {
     float best_t;                /* the closest hit so far; bounds every later test */
     int found;
-    const wide_tri4 *best_block; /* the best hit's triangle copy (u, v, normal at the end) */
+    const tri4_block *best_block; /* the best hit's triangle copy (u, v, normal at the end) */
     unsigned best_lane;
     int simd, mailbox;
 #if KD_SIMD
-    wide_tri_ray simd_ray;
+    tri4_ray simd_ray;
 #endif
 } kd_leaves;
 
@@ -79,7 +80,7 @@ static SIDX_INLINE int kd_enter_root(const sidx_accel *a, const sidx_ray *r, con
 static SIDX_INLINE void kd_leaves_init(kd_leaves *L, const sidx_accel *a, const sidx_ray *r, uint32_t *mbox,
                                        float best_t, const int traced);
 static SIDX_INLINE int kd_test_leaf(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, kd_leaves *L,
-                                    uint32_t *mbox, const wide_tri4 *sub_blocks, const kd_node *leaf, uint32_t node,
+                                    uint32_t *mbox, const tri4_block *sub_blocks, const kd_node *leaf, uint32_t node,
                                     uint32_t visited, const int traced, const int any);
 static SIDX_INLINE void kd_finish(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, const kd_leaves *L,
                                   sidx_hit *hit);
@@ -106,9 +107,13 @@ static SIDX_INLINE void kd_finish(const sidx_accel *a, const sidx_ray *r, const 
  *     the ray (a hit in the first child need not be the closest);
  *   - a split exactly at a non-parallel ray's origin gives t_split = ±0 =
  *     t_near: both children, the near one with an empty interval;
- *   - the stop test widens t_far by 1 + 2γ₃ (Ize 2013) so a hit computed a
- *     rounding error past the cell still ends the walk, and a popped cell
- *     starting beyond the best hit is skipped: it cannot hold a closer one;
+ *   - a hit within 2γ₃ (Ize 2013) of the cell's far end does not end the
+ *     walk, and a popped cell starting within 2γ₃ beyond the best hit is
+ *     still entered: where the ray meets an edge or vertex on a split
+ *     plane, the triangle across the plane may give a t an ulp smaller,
+ *     and the walk returns the smallest t of all the triangles it crosses,
+ *     as the brute force does.  A cell starting further on is skipped: it
+ *     cannot hold a closer hit;
  *   - an empty leaf holds nothing to test; the fast walk never enters one,
  *     the slide walk enters it and goes straight on to the next cell (no
  *     stop test there, as the fast walk makes none), so both stop alike. */
@@ -158,23 +163,26 @@ static SIDX_INLINE int kd_walk_slide(const sidx_accel *a, const sidx_ray *r, con
             }
         }
         ++visited;
-        SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id; e_.node = lazy ? kd_id(cur, node) : node;
-                  e_.depth = depth;
-                  e_.t_near = t_near; e_.t_far = t_far);
-
         if (!kd_is_leaf(n)) {
             const uint32_t axis = kd_axis(n);
             const float t_split = (n->u.split - origin[axis]) * inv_dir[axis];
             /* "Near and far depend on direction of ray!" */
             const uint32_t left = kd_child(n), negative = r->sign[axis];
             const uint32_t near_child = left + negative, far_child = left + 1u - negative;
-            ++depth;
             /* "Three cases" ("kD-Tree Traversal Operation"), each bound
              * widened by 2γ₃ (edge cases above) */
-            if (t_split < t_near - fabsf(t_near) * KD_TS_EPS) {
+            const int split_case = t_split < t_near - fabsf(t_near) * KD_TS_EPS  ? SIDX_SPLIT_FAR_ONLY
+                                   : t_split > t_far + fabsf(t_far) * KD_TS_EPS ? SIDX_SPLIT_NEAR_ONLY
+                                                                                : SIDX_SPLIT_BOTH;
+            /* the node's plane, t_split and the case taken (docs/events.md) */
+            SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id;
+                      e_.node = lazy ? kd_id(cur, node) : node; e_.depth = depth; e_.t_near = t_near; e_.t_far = t_far;
+                      e_.axis = (int32_t)axis; e_.pos = n->u.split; e_.t = t_split; e_.result = split_case);
+            ++depth;
+            if (split_case == SIDX_SPLIT_FAR_ONLY) {
                 /* the plane lies before the cell: far child only */
                 node = far_child;
-            } else if (t_split > t_far + fabsf(t_far) * KD_TS_EPS) {
+            } else if (split_case == SIDX_SPLIT_NEAR_ONLY) {
                 /* the plane lies beyond the cell: near child only */
                 node = near_child;
             } else {
@@ -204,6 +212,8 @@ static SIDX_INLINE int kd_walk_slide(const sidx_accel *a, const sidx_ray *r, con
             continue;
         }
 
+        SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id; e_.node = lazy ? kd_id(cur, node) : node;
+                  e_.depth = depth; e_.t_near = t_near; e_.t_far = t_far);
         /* A leaf: test its triangles.  "Traversal can be terminated as soon
          * as surface intersection is found in the current node": stop if
          * the best hit lies in this cell; a hit beyond it is kept but the
@@ -213,7 +223,7 @@ static SIDX_INLINE int kd_walk_slide(const sidx_accel *a, const sidx_ray *r, con
             if (kd_test_leaf(a, r, q, &leaves, mbox, lazy ? cur->blocks : NULL, n, lazy ? kd_id(cur, node) : node,
                              visited, traced, any))
                 return 1;
-            if (leaves.found && may_stop && leaves.best_t <= t_far + fabsf(t_far) * KD_TS_EPS) {
+            if (leaves.found && may_stop && leaves.best_t < t_far - fabsf(t_far) * KD_TS_EPS) {
                 SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id;
                           e_.reason = SIDX_TERM_HIT_IN_CELL; e_.t = leaves.best_t; e_.count = visited;
                           e_.node = lazy ? kd_id(cur, node) : node; e_.t_near = t_near; e_.t_far = t_far);
@@ -232,7 +242,7 @@ static SIDX_INLINE int kd_walk_slide(const sidx_accel *a, const sidx_ray *r, con
                 return leaves.found;
             }
             const kd_slide_entry next = stack[--stack_size];
-            const int enter = naive || next.t_near <= leaves.best_t;
+            const int enter = naive || next.t_near <= leaves.best_t + fabsf(leaves.best_t) * KD_TS_EPS;
             /* result: dropped, entered, or entered with the ray in its parent's split plane */
             SIDX_EMIT(traced, q->hook, SIDX_EV_STACK_POP, e_.ray_id = q->ray_id;
                       e_.node = lazy ? kd_id(subs[stack_size], next.node) : next.node;
@@ -327,7 +337,7 @@ static SIDX_INLINE int kd_walk_fast(const sidx_accel *a, const sidx_ray *r, cons
             continue;
         }
         if (kd_test_leaf(a, r, q, &leaves, mbox, lazy ? cur->blocks : NULL, n, node, 0, 0, any)) return 1;
-        if (leaves.found && may_stop && leaves.best_t <= t_far + fabsf(t_far) * KD_TS_EPS) {
+        if (leaves.found && may_stop && leaves.best_t < t_far - fabsf(t_far) * KD_TS_EPS) {
             kd_finish(a, r, q, &leaves, hit);
             return 1;
         }
@@ -341,7 +351,7 @@ static SIDX_INLINE int kd_walk_fast(const sidx_accel *a, const sidx_ray *r, cons
             node = stack[stack_size].node;
             t_near = stack[stack_size].t_near;
             t_far = stack[stack_size].t_far;
-            if (t_near <= leaves.best_t) {
+            if (t_near <= leaves.best_t + fabsf(leaves.best_t) * KD_TS_EPS) {
                 if (lazy) {
                     cur = subs[stack_size];
                     nodes = cur->nodes;
@@ -355,8 +365,9 @@ static SIDX_INLINE int kd_walk_fast(const sidx_accel *a, const sidx_ray *r, cons
 /* ==== leaves and events, shared by both walks ============================== */
 
 /* Untraced walks with the default (watertight) test run the SSE kernel on
- * whole blocks; traced walks test lane by lane, so that each test of the
- * leaf's references and each mailbox hit is reported (kd_test_leaf). */
+ * the leaf's lanes of its blocks; traced walks test lane by lane, so that
+ * each test of the leaf's references and each mailbox hit is reported
+ * (kd_test_leaf). */
 static SIDX_INLINE void kd_leaves_init(kd_leaves *L, const sidx_accel *a, const sidx_ray *r, uint32_t *mbox,
                                        float best_t, const int traced)
 {
@@ -366,7 +377,7 @@ static SIDX_INLINE void kd_leaves_init(kd_leaves *L, const sidx_accel *a, const 
     L->best_lane = 0;
 #if KD_SIMD
     L->simd = !traced && a->opt.tri == SIDX_TRI_WATERTIGHT;
-    wide_tri_ray_init(&L->simd_ray, r);
+    tri4_ray_init(&L->simd_ray, r);
 #else
     (void)r;
     (void)traced;
@@ -379,18 +390,18 @@ static SIDX_INLINE void kd_leaves_init(kd_leaves *L, const sidx_accel *a, const 
 /* u, v and the normal of the closest hit, when the query asks: from the
  * block's copy of the triangle, which is in cache, instead of the mesh
  * look-ups a diffuse ray mostly misses.  Run once, when the walk returns.
- * u, v by wide_lane_hit_uv (the accepting test's float edge functions and
+ * u, v by tri4_lane_hit_uv (the accepting test's float edge functions and
  * its own last step, so its bits, or the whole test again when that does
  * not apply). */
 static SIDX_NOINLINE void kd_hit_attrs(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
-                                       const wide_tri4 *block, unsigned lane, sidx_hit *hit)
+                                       const tri4_block *block, unsigned lane, sidx_hit *hit)
 {
     float u = 0.0f, v = 0.0f;
-    if ((q->flags & SIDX_QUERY_UV) && wide_lane_hit_uv(a, r, block, lane, &u, &v)) {
+    if ((q->flags & SIDX_QUERY_UV) && tri4_lane_hit_uv(a, r, block, lane, &u, &v)) {
         hit->u = u;
         hit->v = v;
     }
-    if (q->flags & SIDX_QUERY_NORMAL) hit->ng = wide_lane_normal(block, lane);
+    if (q->flags & SIDX_QUERY_NORMAL) hit->ng = tri4_lane_normal(block, lane);
 }
 
 /* The closest hit, written once when the walk ends. */
@@ -404,17 +415,27 @@ static SIDX_INLINE void kd_finish(const sidx_accel *a, const sidx_ray *r, const 
 }
 
 #if KD_SIMD
-/* A block the SIMD kernel declined (some lane's edge function is exactly
- * 0): the scalar test, which redoes those in double, lane by lane; the
- * smallest t wins, the lowest lane on ties, as in the kernel. */
-static SIDX_NOINLINE int kd_block_scalar(const sidx_accel *a, const sidx_ray *r, const wide_tri4 *block, float best,
-                                         float *t_out, unsigned *lane_out)
+/* Row r: lane l's index in a leaf whose first reference sits in lane r of
+ * its first block, l − r, its sign bit flipped (kd_test_leaf). */
+static _Alignas(16) const uint32_t kd_lane_index[4][4] = {
+    {0x80000000u, 0x80000001u, 0x80000002u, 0x80000003u},
+    {0x7FFFFFFFu, 0x80000000u, 0x80000001u, 0x80000002u},
+    {0x7FFFFFFEu, 0x7FFFFFFFu, 0x80000000u, 0x80000001u},
+    {0x7FFFFFFDu, 0x7FFFFFFEu, 0x7FFFFFFFu, 0x80000000u},
+};
+
+/* A block the SIMD kernel declined (some kept lane's edge function is
+ * exactly 0): the scalar test, which redoes those in double, on the kept
+ * lanes (bits of `lanes`) one by one; the smallest t wins, the lowest lane
+ * on ties, as in the kernel. */
+static SIDX_NOINLINE int kd_block_scalar(const sidx_accel *a, const sidx_ray *r, const tri4_block *block,
+                                         unsigned lanes, float best, float *t_out, unsigned *lane_out)
 {
     int found = 0;
     for (unsigned l = 0; l < 4; ++l) {
-        if (block->prim[l] == WIDE_PAD_PRIM) continue;
+        if (!(lanes >> l & 1u)) continue;
         float t;
-        if (wide_lane_test(a, r, block, l, best, &t, NULL, NULL)) {
+        if (tri4_lane_test(a, r, block, l, best, &t, NULL, NULL)) {
             best = t;
             *t_out = t;
             *lane_out = l;
@@ -425,8 +446,21 @@ static SIDX_NOINLINE int kd_block_scalar(const sidx_accel *a, const sidx_ray *r,
 }
 #endif
 
-/* Test a leaf's triangles against the best hit so far (which bounds every
- * test).  Returns 1 when an any-hit query is answered.
+/* Test a leaf's triangles, and only those, against the best hit so far
+ * (which bounds every test).  Returns 1 when an any-hit query is answered.
+ *
+ * The blocks are cut from the reference array, not per leaf
+ * (kdtree_internal.h), so a leaf's first and last block may hold a
+ * neighbouring leaf's references.  With the default (watertight) test
+ * where SSE2 is there, the untraced walks run the SSE kernel on each of
+ * the leaf's blocks with those lanes masked off (tri4_test_lanes): one
+ * pass for four references, and a hit is only ever on one of the leaf's
+ * own triangles.  The traced walks test the same references one by one
+ * with the scalar test, in the same order, whose t is the kernel's bit for
+ * bit; a strictly smaller t replaces the best, so the lowest reference
+ * wins a tie in both, and both walks return the same hit.  Each test a
+ * traced walk reports (PRIM_TEST, MAILBOX_HIT) is of a triangle the leaf
+ * lists, and a HIT_UPDATE always follows the PRIM_TEST that found it.
  *
  * Mailboxing (deck 000, uniform grids: "Per-ray cache of object IDs —
  * data local to a ray (better!)"), in the scalar loop: a triangle
@@ -434,41 +468,31 @@ static SIDX_NOINLINE int kd_block_scalar(const sidx_accel *a, const sidx_ray *r,
  * direct-mapped table on the stack, keyed by the triangle's id; a
  * collision only evicts (a re-test is correct, just slower), so concurrent
  * queries share nothing.  The SIMD block loop has none: re-testing a lane
- * inside a block costs nothing.
- *
- * With the default (watertight) test where SSE2 is there, the untraced
- * walks test every block holding one of the leaf's references, all four
- * lanes: a neighbouring leaf's triangle costs nothing extra in the SSE
- * pass and a hit on it is a true hit (kdtree_internal.h).  Which of two
- * triangles hit at exactly the same t is kept depends on the order of the
- * tests, so the scalar loop of a traced walk tests the same lanes in the
- * same order (the lowest lane wins, as in the kernel): testing the leaf's
- * own references alone keeps the other triangle when the ray meets an
- * edge two triangles share and a neighbour's lane holds one of them
- * (tests/test_kdtree.c, slide walk against fast walk, finds such rays on
- * cornell and the icosphere).  It reports only
- * the leaf's own references (PRIM_TEST, MAILBOX_HIT: each test after a
- * NODE_ENTER is of a triangle the leaf lists); a neighbour's lane shows
- * only if it becomes the closest hit (HIT_UPDATE, with no PRIM_TEST
- * before it), and only then enters the mailbox, so that a mailbox hit
- * always refers to a test the trace reported.  With another triangle test
- * all walks test the leaf's own references only. */
+ * inside a block costs nothing, and gives the same answer (the same t,
+ * not below the best it set). */
 static SIDX_INLINE int kd_test_leaf(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, kd_leaves *L,
-                                    uint32_t *mbox, const wide_tri4 *sub_blocks, const kd_node *leaf, uint32_t node,
+                                    uint32_t *mbox, const tri4_block *sub_blocks, const kd_node *leaf, uint32_t node,
                                     uint32_t visited, const int traced, const int any)
 {
     const kd_tree *kd = a->impl; /* its blocks unless the leaf is in a lazy tree's subtree (sub_blocks) */
+    const tri4_block *const blocks = sub_blocks ? sub_blocks : kd->blocks;
     const uint32_t count = kd_count(leaf), offset = kd_offset(leaf);
     (void)visited;
 #if KD_SIMD
     if (L->simd) {
-        const wide_tri4 *block = (sub_blocks ? sub_blocks : kd->blocks) + (offset >> 2),
-                        *const end = (sub_blocks ? sub_blocks : kd->blocks) + ((offset + count + 3u) >> 2);
-        for (; block < end; ++block) {
+        const tri4_block *block = blocks + (offset >> 2), *const end = blocks + ((offset + count + 3u) >> 2);
+        /* lane l of the k-th block is reference 4k + l − (offset mod 4) of
+         * the leaf, its own when that lies in [0, count): one unsigned
+         * compare (sign bits flipped for SSE2's signed one) */
+        const __m128i limit = _mm_set1_epi32((int)(count ^ 0x80000000u));
+        __m128i index = _mm_load_si128((const __m128i *)(const void *)kd_lane_index[offset & 3u]);
+        for (; block < end; ++block, index = _mm_add_epi32(index, _mm_set1_epi32(4))) {
+            const __m128 keep = _mm_castsi128_ps(_mm_cmplt_epi32(index, limit));
             float t;
             unsigned lane;
-            int h = wide_tri4_test(block, &L->simd_ray, L->best_t, &t, &lane, NULL);
-            if (SIDX_UNLIKELY(h < 0)) h = kd_block_scalar(a, r, block, L->best_t, &t, &lane);
+            int h = tri4_test_lanes(block, &L->simd_ray, keep, L->best_t, &t, &lane);
+            if (SIDX_UNLIKELY(h < 0))
+                h = kd_block_scalar(a, r, block, (unsigned)_mm_movemask_ps(keep), L->best_t, &t, &lane);
             if (h) {
                 if (any) return 1;
                 L->found = 1;
@@ -480,34 +504,22 @@ static SIDX_INLINE int kd_test_leaf(const sidx_accel *a, const sidx_ray *r, cons
         return 0;
     }
 #endif
-    uint32_t ref = offset, end = offset + count;
-    if (KD_SIMD && a->opt.tri == SIDX_TRI_WATERTIGHT) { /* the SSE pass's lanes */
-        ref &= ~3u;
-        end = (end + 3u) & ~3u;
-    }
-    for (; ref < end; ++ref) {
-        const wide_tri4 *block = &(sub_blocks ? sub_blocks : kd->blocks)[ref >> 2];
+    for (uint32_t ref = offset; ref < offset + count; ++ref) {
+        const tri4_block *block = &blocks[ref >> 2];
         const unsigned lane = ref & 3u;
         const uint32_t prim = block->prim[lane];
-        const int own = ref - offset < count; /* one of this leaf's references */
-        uint32_t *const slot = &mbox[prim & (KD_MAILBOX - 1u)];
-        if (prim == WIDE_PAD_PRIM) continue;
         if (L->mailbox) {
+            uint32_t *const slot = &mbox[prim & (KD_MAILBOX - 1u)];
             if (*slot == prim) {
-                if (own)
-                    SIDX_EMIT(traced, q->hook, SIDX_EV_MAILBOX_HIT, e_.ray_id = q->ray_id; e_.prim = prim;
-                              e_.node = node);
+                SIDX_EMIT(traced, q->hook, SIDX_EV_MAILBOX_HIT, e_.ray_id = q->ray_id; e_.prim = prim; e_.node = node);
                 continue;
             }
-            if (own) *slot = prim;
+            *slot = prim;
         }
         float t;
-        const int h = wide_lane_test(a, r, block, lane, L->best_t, &t, NULL, NULL);
-        if (own)
-            SIDX_EMIT(traced, q->hook, SIDX_EV_PRIM_TEST, e_.ray_id = q->ray_id; e_.prim = prim; e_.node = node;
-                      e_.result = h; e_.t = h ? t : INFINITY);
-        else if (h && L->mailbox)
-            *slot = prim; /* reported below (HIT_UPDATE): its own leaf then shows a mailbox hit */
+        const int h = tri4_lane_test(a, r, block, lane, L->best_t, &t, NULL, NULL);
+        SIDX_EMIT(traced, q->hook, SIDX_EV_PRIM_TEST, e_.ray_id = q->ray_id; e_.prim = prim; e_.node = node;
+                  e_.result = h; e_.t = h ? t : INFINITY);
         if (h) {
             if (any) {
                 SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = SIDX_TERM_ANY_HIT;

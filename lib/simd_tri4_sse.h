@@ -3,10 +3,10 @@
  * Woop et al. 2013 on a leaf block's four lanes, SSE2 only so it inlines
  * into the SSE4.1 and AVX2 walks and the packet walk alike (the blend is
  * done with and/or).  The ray's lane-broadcast constants are set up once
- * per ray (wide_tri_ray_init).  Returns 1 with the smallest t in
+ * per ray (tri4_ray_init).  Returns 1 with the smallest t in
  * [tmin, best) (lowest lane on ties), 0 for no hit, -1 when some lane's
  * edge function is exactly 0 and the block must take the scalar path
- * (wide_lane_test, which redoes those in double).  When it returns 1 and
+ * (tri4_lane_test, which redoes those in double).  When it returns 1 and
  * vw_det_out is not NULL, vw_det_out[0..3], [4..7], [8..11] receive the lanes'
  * V, W and det — the floats the scalar test computes too (no edge
  * function was 0, so it would not have switched to double) — from which
@@ -15,7 +15,7 @@
  * Included by tri4.h where SSE2 is there (every x86-64):
  * the wide walks (simd_wide_tri4.h), the wide packets (packet_wide.c) and
  * the kd-tree's leaf blocks use it.  The reference is the scalar
- * watertight test on each lane (wide_lane_test, tri4.h);
+ * watertight test on each lane (tri4_lane_test, tri4.h);
  * the names are the paper's (a, b, c the corners relative to the origin,
  * A, B, C sheared, U, V, W the edge functions, T the scaled distance). */
 #ifndef SIDX_SIMD_TRI4_SSE_H
@@ -23,13 +23,13 @@
 
 #include <immintrin.h>
 
-typedef struct wide_tri_ray {
+typedef struct tri4_ray {
     __m128 org_kx, org_ky, org_kz; /* the origin on the permuted axes kx, ky, kz */
     __m128 sx, sy, sz, tmin;      /* the shear constants, tmin */
     uint32_t kx4, ky4, kz4; /* float offsets of the permuted axes inside a block's vertex */
-} wide_tri_ray;
+} tri4_ray;
 
-static SIDX_INLINE void wide_tri_ray_init(wide_tri_ray *ray, const sidx_ray *r)
+static SIDX_INLINE void tri4_ray_init(tri4_ray *ray, const sidx_ray *r)
 {
     const float *o = sidx_v3_array(&r->org);
     ray->org_kx = _mm_set1_ps(o[r->kx]); ray->org_ky = _mm_set1_ps(o[r->ky]); ray->org_kz = _mm_set1_ps(o[r->kz]);
@@ -39,10 +39,14 @@ static SIDX_INLINE void wide_tri_ray_init(wide_tri_ray *ray, const sidx_ray *r)
 }
 
 /* The kernel on the ray's permuted axes of a block: row_x, row_y, row_z
- * point at vertex 0's kx, ky, kz row (vertex k's at +12k floats). */
-static SIDX_INLINE int wide_tri4_test_axes(const float *row_x, const float *row_y, const float *row_z,
-                                           const wide_tri_ray *ray, float best, float *t_out, unsigned *lane_out,
-                                           float *vw_det_out)
+ * point at vertex 0's kx, ky, kz row (vertex k's at +12k floats).
+ * masked (a constant): only the lanes whose word in keep is all ones take
+ * part, the others neither hit nor send the block to the scalar path (a
+ * kd leaf's block holding a neighbouring leaf's references, tri4_test_lanes);
+ * unmasked, the code is the kernel without those two ANDs. */
+static SIDX_INLINE int tri4_kernel(const float *row_x, const float *row_y, const float *row_z, const tri4_ray *ray,
+                                   float best, float *t_out, unsigned *lane_out, float *vw_det_out, const int masked,
+                                   const __m128 keep)
 {
     const __m128 ax = _mm_sub_ps(_mm_load_ps(row_x), ray->org_kx);
     const __m128 ay = _mm_sub_ps(_mm_load_ps(row_y), ray->org_ky);
@@ -60,7 +64,8 @@ static SIDX_INLINE int wide_tri4_test_axes(const float *row_x, const float *row_
     const __m128 V = _mm_sub_ps(_mm_mul_ps(Ax, Cy), _mm_mul_ps(Ay, Cx));
     const __m128 W = _mm_sub_ps(_mm_mul_ps(Bx, Ay), _mm_mul_ps(By, Ax));
     const __m128 zero = _mm_setzero_ps();
-    const __m128 anyzero = _mm_or_ps(_mm_or_ps(_mm_cmpeq_ps(U, zero), _mm_cmpeq_ps(V, zero)), _mm_cmpeq_ps(W, zero));
+    __m128 anyzero = _mm_or_ps(_mm_or_ps(_mm_cmpeq_ps(U, zero), _mm_cmpeq_ps(V, zero)), _mm_cmpeq_ps(W, zero));
+    if (masked) anyzero = _mm_and_ps(anyzero, keep);
     if (SIDX_UNLIKELY(_mm_movemask_ps(anyzero))) return -1;
     /* No edge function is ±0 now, so "some < 0 and some > 0" is "the sign
      * bits differ": two XORs instead of six compares.  Lanes whose det is
@@ -71,7 +76,8 @@ static SIDX_INLINE int wide_tri4_test_axes(const float *row_x, const float *row_
     const __m128 mixed = _mm_castsi128_ps(
         _mm_srai_epi32(_mm_castps_si128(_mm_or_ps(_mm_xor_ps(U, V), _mm_xor_ps(U, W))), 31)); /* sign to all bits */
     const __m128 det = _mm_add_ps(_mm_add_ps(U, V), W);
-    const __m128 cand = _mm_andnot_ps(mixed, _mm_or_ps(_mm_cmplt_ps(det, zero), _mm_cmpgt_ps(det, zero)));
+    __m128 cand = _mm_andnot_ps(mixed, _mm_or_ps(_mm_cmplt_ps(det, zero), _mm_cmpgt_ps(det, zero)));
+    if (masked) cand = _mm_and_ps(cand, keep);
     if (!_mm_movemask_ps(cand)) return 0;
     const __m128 T = _mm_add_ps(
         _mm_add_ps(_mm_mul_ps(U, _mm_mul_ps(ray->sz, az)), _mm_mul_ps(V, _mm_mul_ps(ray->sz, bz))),
@@ -93,11 +99,27 @@ static SIDX_INLINE int wide_tri4_test_axes(const float *row_x, const float *row_
     return 1;
 }
 
-static SIDX_INLINE int wide_tri4_test(const wide_tri4 *block, const wide_tri_ray *ray, float best, float *t_out,
+static SIDX_INLINE int tri4_test_axes(const float *row_x, const float *row_y, const float *row_z,
+                                      const tri4_ray *ray, float best, float *t_out, unsigned *lane_out,
+                                      float *vw_det_out)
+{
+    return tri4_kernel(row_x, row_y, row_z, ray, best, t_out, lane_out, vw_det_out, 0, _mm_setzero_ps());
+}
+
+static SIDX_INLINE int tri4_test(const tri4_block *block, const tri4_ray *ray, float best, float *t_out,
                                       unsigned *lane_out, float *vw_det_out)
 {
     const float *v = &block->v[0][0][0]; /* vertex k, axis x, lane l at v[12k + 4x + l] */
-    return wide_tri4_test_axes(v + ray->kx4, v + ray->ky4, v + ray->kz4, ray, best, t_out, lane_out, vw_det_out);
+    return tri4_test_axes(v + ray->kx4, v + ray->ky4, v + ray->kz4, ray, best, t_out, lane_out, vw_det_out);
+}
+
+/* tri4_test on the lanes whose word in keep is all ones only: the same
+ * arithmetic, so a lane's t is the unmasked kernel's bit for bit. */
+static SIDX_INLINE int tri4_test_lanes(const tri4_block *block, const tri4_ray *ray, __m128 keep, float best,
+                                       float *t_out, unsigned *lane_out)
+{
+    const float *v = &block->v[0][0][0];
+    return tri4_kernel(v + ray->kx4, v + ray->ky4, v + ray->kz4, ray, best, t_out, lane_out, NULL, 1, keep);
 }
 
 #endif

@@ -340,6 +340,14 @@ static void format_event(sink_out *o, const sidx_event *ev, int show_bounds)
             out_printf(o, " enter  depth %" PRIu32 "  ", ev->depth);
         }
         out_interval(o, ev->t_near, ev->t_far);
+        if (!has_cell(ev) && ev->axis >= 0 && ev->axis <= 2 && ev->result >= 0 && ev->result <= 2) {
+            /* a kd-tree's inner node: t_split and the case taken (sidx_split_case) */
+            static const char *const split_case[3] = {"plane before the cell: far child only",
+                                                      "plane beyond the cell: near child only",
+                                                      "both: near then far"};
+            out_printf(o, "  %s=%g at t_split=%g: %s", axis_name(ev->axis), (double)ev->pos, (double)ev->t,
+                       split_case[ev->result]);
+        }
         break;
     case SIDX_EV_BOX_TEST:
         out_puts(o, "box node ");
@@ -704,6 +712,12 @@ static void json_event(sink_out *o, const sidx_event *ev, int unused)
         json_id(o, "depth", ev->depth);
         json_float(o, "t_near", ev->t_near);
         json_float(o, "t_far", ev->t_far);
+        if (ev->axis >= 0) { /* a kd-tree's inner node: its plane, t_split, the case taken */
+            json_i32(o, "axis", ev->axis);
+            json_float(o, "pos", ev->pos);
+            json_float(o, "t", ev->t);
+            json_i32(o, "result", ev->result);
+        }
         break;
     case SIDX_EV_BOX_TEST:
         json_id(o, "node", ev->node);

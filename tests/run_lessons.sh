@@ -64,7 +64,7 @@ expect() {
                          middle_lambda_best=1" ;;
     08_teapot_in_stadium) echo "same_hits=1 uniform_grid_worst=1 adaptive_beats_uniform=1 irregular_adapts=1" ;;
     09_kdtree_build) echo "same_hits=1 sah_cost_lower=1 sah_thin_leaves=1 cost_curve_min_is_split=1" ;;
-    10_kdtree_traversal) echo "same_hit=1 stack_trace_consistent=1 cannot_terminate_seen=1" ;;
+    10_kdtree_traversal) echo "same_hit=1 stack_trace_consistent=1 cannot_terminate_seen=1 split_cases_shown=1" ;;
     11_kd_node_layout) echo "decoded_matches=1 children_side_by_side=1" ;;
     12_octree_bsp) echo "same_hits=1 kd_deck_constants_fewer_tris_than_octree=1 kd_default_c_trav_fatter_leaves=1
                          painter_order_back_to_front=1" ;;

@@ -158,10 +158,10 @@ static void check_structure(const sidx_accel *a, const sidx_mesh *m)
     assert_int_equal(kd->num_blocks, (kd->num_refs + 3u) / 4u);
     assert_int_equal((uintptr_t)kd->blocks % 64u, 0);
     for (uint32_t i = 0; i < 4u * kd->num_blocks; ++i) {
-        const wide_tri4 *B = &kd->blocks[i / 4u];
+        const tri4_block *B = &kd->blocks[i / 4u];
         const uint32_t l = i % 4u;
         if (i >= kd->num_refs) { /* padding: NaN vertices never hit */
-            assert_int_equal(B->prim[l], WIDE_PAD_PRIM);
+            assert_int_equal(B->prim[l], TRI4_PAD_PRIM);
             assert_true(B->v[0][0][l] != B->v[0][0][l]);
             continue;
         }
@@ -1277,6 +1277,75 @@ static void test_slide_walk_equals_fast_walk(void **state)
     free(rays);
 }
 
+/* ---- a trace reports the test behind each hit ------------------------------------------------- */
+
+/* Per ray: the (prim, t) pairs of the PRIM_TEST hits and the prims tested
+ * so far.  A HIT_UPDATE must repeat a PRIM_TEST hit (same prim, same t
+ * bits) reported before it, and a MAILBOX_HIT name a prim tested before:
+ * a trace never shows a closest hit no test produced. */
+typedef struct test_trail {
+    uint32_t prim[512];
+    float t[512];
+    int hit[512];
+    size_t n;
+    unsigned orphans, updates;
+} test_trail;
+
+static void trail_fn(const sidx_event *e, void *user)
+{
+    test_trail *tr = user;
+    if (e->type == SIDX_EV_RAY_BEGIN) tr->n = 0;
+    if (e->type == SIDX_EV_PRIM_TEST && tr->n < 512) {
+        tr->prim[tr->n] = e->prim;
+        tr->t[tr->n] = e->t;
+        tr->hit[tr->n++] = e->result == 1;
+    }
+    if (e->type == SIDX_EV_HIT_UPDATE || e->type == SIDX_EV_MAILBOX_HIT) {
+        int found = 0;
+        for (size_t i = 0; i < tr->n && !found; ++i)
+            found = tr->prim[i] == e->prim &&
+                    (e->type == SIDX_EV_MAILBOX_HIT || (tr->hit[i] && memcmp(&tr->t[i], &e->t, sizeof e->t) == 0));
+        tr->orphans += !found;
+        tr->updates += e->type == SIDX_EV_HIT_UPDATE;
+    }
+}
+
+static void test_trace_shows_each_hit_test(void **state)
+{
+    (void)state;
+    const char *const sc[] = {"kd-slide", "flat2d", "teapot"};
+    const size_t per_kind = tk_tiny_tests() ? 20 : tk_fast_tests() ? 80 : 300;
+    tk_rayrec *rays = malloc(per_kind * 3 * sizeof *rays);
+    assert_non_null(rays);
+    for (size_t s = 0; s < sizeof sc / sizeof sc[0]; ++s) {
+        sidx_mesh m;
+        make_scene(sc[s], 0, &m);
+        for (int kind = 0; kind < 3; ++kind) /* primary, diffuse, shadow */
+            tk_make_rays(&m, (tk_ray_kind)kind, per_kind, 501 + s + (uint64_t)kind, rays + (size_t)kind * per_kind);
+        for (size_t k = 0; k < N_BUILDERS; ++k) {
+            sidx_accel *a = NULL;
+            assert_int_equal(sidx_scene_accel_build(sc[s], builders[k], &m, NULL, &a, NULL), SIDX_OK);
+            test_trail tr;
+            memset(&tr, 0, sizeof tr);
+            const sidx_hook hook = {trail_fn, &tr, 0};
+            sidx_query q = {0, SIDX_TRAVERSE_DEFAULT, &hook, 0};
+            for (size_t i = 0; i < per_kind * 3; ++i) {
+                sidx_ray r;
+                if (tk_ray_from(&rays[i], &r) != SIDX_OK) continue;
+                sidx_hit h = sidx_hit_none();
+                assert_int_equal(sidx_accel_intersect(a, &r, &q, &h), SIDX_OK);
+            }
+            if (tr.orphans) print_message("%s on %s: %u of %u closest-hit updates without their test\n", builders[k],
+                                          sc[s], tr.orphans, tr.updates);
+            assert_int_equal(tr.orphans, 0);
+            assert_true(tr.updates > 0);
+            sidx_accel_destroy(a);
+        }
+        sidx_mesh_free(&m);
+    }
+    free(rays);
+}
+
 /* ---- allocation failures ------------------------------------------------------------------------ */
 
 typedef struct fail_alloc {
@@ -1484,6 +1553,7 @@ int main(void)
         cmocka_unit_test(test_menger),
         cmocka_unit_test(test_mailbox),
         cmocka_unit_test(test_slide_walk_equals_fast_walk),
+        cmocka_unit_test(test_trace_shows_each_hit_test),
         cmocka_unit_test(test_alloc_failures),
         cmocka_unit_test(test_empty_mesh),
         cmocka_unit_test(test_build_from_splits),

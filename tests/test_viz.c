@@ -1671,7 +1671,7 @@ static void kd_slide_programs_show_labels(void **state)
     snprintf(cmd, sizeof cmd, "%s/sidx-step --accel kdtree kd-slide --ray 0,4.2,0,1,0.15,0 --panel </dev/null",
              bin_dir);
     char *out = run_capture(cmd);
-    assert_non_null(strstr(out, "  node 0 enter  depth 0  t=[1, 9.5]  [A]"));
+    assert_non_null(strstr(out, "  node 0 enter  depth 0  t=[1, 9.5]  x=4 at t_split=4: both: near then far  [A]"));
     assert_non_null(strstr(out, "| B [1, 4]             | C [4, 9.5]\n"));
     assert_non_null(strstr(out, "| L4 leaf [4, 5.33333] | L5 [5.33333, 7.5]  L3 [7.5, 9.5]\n"));
     assert_non_null(strstr(out, "terminate: hit_in_cell  visited 8  best t=8.33333  [L3]"));

@@ -106,6 +106,15 @@ typedef enum sidx_stack_result {
                                 and the pop, which enters the node) */
 } sidx_stack_result;
 
+/* `result` of a kd-tree's NODE_ENTER at an inner node, with axis, pos =
+ * the split plane and t = t_split: the case of "kD-Tree Traversal
+ * Operation" the walk takes there.  docs/events.md. */
+typedef enum sidx_split_case {
+    SIDX_SPLIT_FAR_ONLY = 0,  /* t_split < t_near: the plane lies before the cell, far child only */
+    SIDX_SPLIT_NEAR_ONLY = 1, /* t_split > t_far: the plane lies beyond the cell, near child only */
+    SIDX_SPLIT_BOTH = 2       /* t_near <= t_split <= t_far: both, near then far (the far one on the stack) */
+} sidx_split_case;
+
 typedef struct sidx_event {
     sidx_event_type type;
     const char *structure; /* "bvh", "kdtree", ... (static) */
