@@ -21,7 +21,7 @@ typedef struct res_case {
     const char *name;
 } res_case;
 
-#define RES_FIXED 7
+#define RES_FIXED 8
 #define RES_RANDOM 10
 #define RES_CASES (RES_FIXED + RES_RANDOM)
 static res_case res_cases[RES_CASES] = {
@@ -32,6 +32,8 @@ static res_case res_cases[RES_CASES] = {
     {{10, 10, 0}, 200, 2, "a flat scene (d_z = 0): one cell on that axis, the root over the other two"},
     {{0.5f, 6, 0}, 50, 4, "a flat, thin scene (d_z = 0)"},
     {{10, 0.01f, 0.01f}, 10, 1, "a needle: d = (10, 0.01, 0.01), under half a cell across: at least 1"},
+    /* R = 10.4999999 in double (pow or cbrt alike), 10.500001 in float: 10 cells, not 11 */
+    {{3, 3, 3}, 343, 3.3749999035714285, "a cube where R = 10.4999999: float arithmetic rounds it up to 11"},
 };
 
 #define HINT_FORMULA                                                                                       \
@@ -41,6 +43,9 @@ static res_case res_cases[RES_CASES] = {
 #define HINT_FLAT                                                                                          \
     "an axis of zero extent (a flat scene) gets one cell, and the formula is taken over the other k axes: "  \
     "V is their product and the root is the k-th, R = d·(λn/V)^(1/k)"
+#define HINT_DOUBLE                                                                                        \
+    "compute R in double, not float: float keeps 7 digits, and a value just below k + 0.5 (10.4999999) "    \
+    "comes out as k + 0.5 and rounds up a cell"
 #define HINT_ROUND "round to the nearest integer (floor(x + 0.5)), do not truncate: 5.85 cells are 6"
 #define HINT_MIN_ONE                                                                                       \
     "every axis gets at least 1 cell: an axis thinner than half a cell rounds to 0, which must become 1"
@@ -71,7 +76,8 @@ static res_case res_cases[RES_CASES] = {
 
 /* The hand-out's promises (lessons/exercises/06_grid_dda.c). */
 static const ex_rule rules[] = {
-    {"res-formula", "R_i = d_i·∛(λn/V), V = d_x·d_y·d_z, computed in double", HINT_FORMULA},
+    {"res-formula", "R_i = d_i·∛(λn/V), V = d_x·d_y·d_z", HINT_FORMULA},
+    {"res-double", "R is computed in double", HINT_DOUBLE},
     {"res-round", "R is rounded to the nearest integer", HINT_ROUND},
     {"res-min-one", "every axis gets at least 1 cell", HINT_MIN_ONE},
     {"res-flat", "an axis of zero extent gets one cell; the formula runs over the other k axes, k-th root",
@@ -92,7 +98,7 @@ static const ex_rule rules[] = {
     {"stop-in-cell", "the walk stops when best->t <= t_out, or when the cell index leaves [0, res - 1]",
      HINT_STOP},
 };
-enum { R_RES, R_ROUND, R_MIN_ONE, R_FLAT, R_START, R_TMAX, R_ZERO, R_TIE, R_INTERVAL, R_PRIMS, R_STOP };
+enum { R_RES, R_DOUBLE, R_ROUND, R_MIN_ONE, R_FLAT, R_START, R_TMAX, R_ZERO, R_TIE, R_INTERVAL, R_PRIMS, R_STOP };
 
 static const char *const hint_formula = HINT_FORMULA;
 static const char *const hint_flat = HINT_FLAT;
@@ -100,7 +106,7 @@ static const char *const hint_flat = HINT_FLAT;
 /* The rules a resolution case tests. */
 static const char *const res_rules[RES_FIXED] = {
     "res-formula res-round", "res-formula", "res-formula res-round", "res-round", "res-flat", "res-flat res-round",
-    "res-min-one"};
+    "res-min-one", "res-double"};
 /* The rules of the walk's hand-made rays (grid_fixed, scene "slanted"), and of the others. */
 static const char *const walk_rules[GRID_FIXED] = {
     "tie-later-axis cell-interval", "tie-later-axis cell-interval", "zero-dir", "zero-dir walk-start",
@@ -234,6 +240,7 @@ static const char *hint(size_t i, const sidx_event *ref, const sidx_event *stu)
             if (stu->cell[k] == 0 && ref->cell[k] != 0) return rules[R_MIN_ONE].hint;
         for (int k = 0; k < 3; ++k)
             if (stu->cell[k] == ref->cell[k] - 1 && res_cases[i].d[2] != 0.0f) return rules[R_ROUND].hint;
+        if (i == RES_FIXED - 1) return rules[R_DOUBLE].hint; /* the case only float gets wrong */
         return NULL;
     }
     i -= RES_CASES;
