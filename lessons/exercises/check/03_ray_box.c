@@ -97,21 +97,27 @@ static int setup(void)
     cases[k].tmax = tmax_;                                                                                 \
     ++k
     const sidx_aabb U = B(-1, -1, -1, 1, 1, 1);
-    BC("head-on along +x", hint_slab, "slab", U, ex_ray(-5, 0.25f, 0.125f, 1, 0.0625f, 0.03125f, 0, INFINITY), 0, INFINITY);
+    BC("head-on along +x", hint_slab, "slab",
+       U, ex_ray(-5, 0.25f, 0.125f, 1, 0.0625f, 0.03125f, 0, INFINITY), 0, INFINITY);
     BC("oblique, all components non-zero", hint_slab, "slab", U, ex_ray(-3, -2, -4, 1, 0.75f, 1.25f, 0, INFINITY), 0,
        INFINITY);
-    BC("negative direction on every axis", hint_neg, "negative-dir", U, ex_ray(4, 3, 5, -1, -0.75f, -1.25f, 0, INFINITY), 0,
+    BC("negative direction on every axis", hint_neg, "negative-dir",
+       U, ex_ray(4, 3, 5, -1, -0.75f, -1.25f, 0, INFINITY), 0,
        INFINITY);
-    BC("miss: passes beside the box", hint_slab, "slab untouched-on-miss", U, ex_ray(-5, 3, 0, 1, 0.125f, 0, 0, INFINITY), 0, INFINITY);
-    BC("+0 direction component, origin inside that slab", hint_zero, "zero-dir", U, ex_ray(-5, 0.5f, 0, 1, 0, 0, 0, INFINITY),
+    BC("miss: passes beside the box", hint_slab, "slab untouched-on-miss",
+       U, ex_ray(-5, 3, 0, 1, 0.125f, 0, 0, INFINITY), 0, INFINITY);
+    BC("+0 direction component, origin inside that slab", hint_zero, "zero-dir",
+       U, ex_ray(-5, 0.5f, 0, 1, 0, 0, 0, INFINITY),
        0, INFINITY);
-    BC("+0 direction component, origin outside that slab", hint_zero, "zero-dir untouched-on-miss", U, ex_ray(-5, 2, 0, 1, 0, 0, 0, INFINITY),
+    BC("+0 direction component, origin outside that slab", hint_zero, "zero-dir untouched-on-miss",
+       U, ex_ray(-5, 2, 0, 1, 0, 0, 0, INFINITY),
        0, INFINITY);
     BC("-0 direction component, origin inside that slab", hint_zero, "zero-dir negative-dir", U,
        ex_ray(5, 0.5f, 0.25f, -1, -0.0f, 0.0f, 0, INFINITY), 0, INFINITY);
     BC("-0 direction component, origin outside that slab", hint_zero, "zero-dir untouched-on-miss", U,
        ex_ray(5, -3, 0.25f, -1, -0.0f, -0.0f, 0, INFINITY), 0, INFINITY);
-    BC("two zero components: a ray along the z axis", hint_zero, "zero-dir", U, ex_ray(0.5f, -0.5f, 9, 0, 0, -1, 0, INFINITY),
+    BC("two zero components: a ray along the z axis", hint_zero, "zero-dir",
+       U, ex_ray(0.5f, -0.5f, 9, 0, 0, -1, 0, INFINITY),
        0, INFINITY);
     BC("ray on a face plane of the box (d = 0 on that axis)", hint_on_plane, "on-face", U,
        ex_ray(-5, 1, 0.5f, 1, 0, 0, 0, INFINITY), 0, INFINITY);
@@ -119,16 +125,22 @@ static int setup(void)
        ex_ray(-5, -1, 0.5f, 1, 0, 0, 0, INFINITY), 0, INFINITY);
     BC("ray on the max face plane, -0 on that axis (NaN at the near plane)", hint_on_plane, "on-face", U,
        ex_ray(-5, 1, 0.5f, 1, -0.0f, 0, 0, INFINITY), 0, INFINITY);
-    BC("origin inside the box", hint_inside, "clip-tmin", U, ex_ray(0.25f, 0.5f, -0.5f, 1, -1, 0.5f, 0, INFINITY), 0, INFINITY);
-    BC("origin inside, tmin > 0", hint_inside, "clip-tmin", U, ex_ray(0, 0, 0, 0.5f, 0.25f, 1, 0.5f, INFINITY), 0.5f, INFINITY);
-    BC("box behind the origin", hint_clip_tmin, "clip-tmin untouched-on-miss", U, ex_ray(5, 0, 0, 1, 0, 0, 0, INFINITY), 0, INFINITY);
-    BC("box beyond tmax", hint_clip_tmax, "clip-tmax untouched-on-miss", U, ex_ray(-5, 0, 0, 1, 0, 0, 0, 3.0f), 0, 3.0f);
+    BC("origin inside the box", hint_inside, "clip-tmin",
+       U, ex_ray(0.25f, 0.5f, -0.5f, 1, -1, 0.5f, 0, INFINITY), 0, INFINITY);
+    BC("origin inside, tmin > 0", hint_inside, "clip-tmin",
+       U, ex_ray(0, 0, 0, 0.5f, 0.25f, 1, 0.5f, INFINITY), 0.5f, INFINITY);
+    BC("box behind the origin", hint_clip_tmin, "clip-tmin untouched-on-miss",
+       U, ex_ray(5, 0, 0, 1, 0, 0, 0, INFINITY), 0, INFINITY);
+    BC("box beyond tmax", hint_clip_tmax, "clip-tmax untouched-on-miss",
+       U, ex_ray(-5, 0, 0, 1, 0, 0, 0, 3.0f), 0, 3.0f);
     BC("tmax inside the box", hint_clip_tmax, "clip-tmax", U, ex_ray(-5, 0, 0, 1, 0, 0, 0, 5.0f), 0, 5.0f);
-    BC("flat box (zero thickness in z)", hint_slab, "slab touch", B(-1, -1, 0, 1, 1, 0), ex_ray(0.5f, 0.5f, 3, 0, 0.25f, -1, 0,
+    BC("flat box (zero thickness in z)", hint_slab, "slab touch",
+       B(-1, -1, 0, 1, 1, 0), ex_ray(0.5f, 0.5f, 3, 0, 0.25f, -1, 0,
        INFINITY), 0, INFINITY);
     BC("flat box crossed head-on (t_near == t_far)", hint_touch, "touch", B(-1, -1, 0, 1, 1, 0),
        ex_ray(0.5f, 0.5f, 3, 0, 0, -1, 0, INFINITY), 0, INFINITY);
-    BC("touching an edge of the box (t_near == t_far)", hint_touch, "touch", U, ex_ray(-2, 0, 0.5f, 1, 1, 0, 0, INFINITY), 0,
+    BC("touching an edge of the box (t_near == t_far)", hint_touch, "touch",
+       U, ex_ray(-2, 0, 0.5f, 1, 1, 0, 0, INFINITY), 0,
        INFINITY);
     BC("origin on the exit face, leaving (t_near == t_far == tmin)", hint_touch, "touch clip-tmin", U,
        ex_ray(1, 0.25f, 0.5f, 1, 0.5f, 0.25f, 0, INFINITY), 0, INFINITY);
@@ -209,7 +221,8 @@ static void student(size_t i, const sidx_hook *h)
     float tn = T_BEFORE, tf = T_BEFORE;
     const int hit = ray_box(&c->ray, &c->box, c->tmin, c->tmax, &tn, &tf);
     emit(h, i, hit, tn, tf);
-    if (!hit && !(same_bits(tn, T_BEFORE) && same_bits(tf, T_BEFORE))) emit_written(h, same_bits(tn, T_BEFORE) ? tf : tn);
+    if (!hit && !(same_bits(tn, T_BEFORE) && same_bits(tf, T_BEFORE)))
+        emit_written(h, same_bits(tn, T_BEFORE) ? tf : tn);
 }
 
 static int format(const sidx_event *e, char *buf, size_t size)

@@ -446,7 +446,8 @@ static const char *hint(size_t i, const sidx_event *ref, const sidx_event *stu)
     if (stu && stu->type == SIDX_EV_BUILD_CANDIDATE) {
         if (!ref_has_axis(c, stu->axis)) return rules[R_FLAT].hint;
     }
-    if ((ref && ref->type == SIDX_EV_BUILD_SPLIT) || (stu && stu->type == SIDX_EV_BUILD_SPLIT)) return rules[R_BEST].hint;
+    if ((ref && ref->type == SIDX_EV_BUILD_SPLIT) || (stu && stu->type == SIDX_EV_BUILD_SPLIT))
+        return rules[R_BEST].hint;
     if (!ref || !stu) return NULL;
     if (ref->axis == stu->axis && ref->pos == stu->pos && ref->count == stu->count && ref->aux == stu->aux) {
         /* the right plane, the wrong cost */
