@@ -49,7 +49,7 @@ static const ex_rule rules[] = {
      TRI_HINT_TMAX},
     {"edges-count", "p on the triangle's boundary (an edge, a vertex) is inside", TRI_HINT_INSIDE},
     {"outside-miss", "p outside the triangle is a miss, even though the ray hits its plane", TRI_HINT_OUTSIDE},
-    {"untouched-on-miss", "*t is written only on a hit (return 1); a miss returns 0 and leaves *t as it was",
+    {"untouched-on-miss", "the output t is written only on a hit (return 1); a miss returns 0 and leaves it as it was",
      TRI_HINT_UNTOUCHED},
 };
 enum { R_T, R_PARALLEL, R_BOTH, R_BEHIND, R_TMIN, R_TMIN_INCL, R_TMAX, R_EDGES, R_OUTSIDE, R_UNTOUCHED };

@@ -35,7 +35,8 @@ static void emit_uv(const sidx_hook *h, float u, float v)
 /* The hand-out's promises (lessons/exercises/02_moller_trumbore.c). */
 static const ex_rule rules[] = {
     {"t-formula", "t = -((s x e2)·e1) / D by Cramer's rule, with D = (e1 x d)·e2", HINT_T},
-    {"barycentrics", "u = -((s x e2)·d) / D and v = ((e1 x d)·s) / D are written to *u and *v on a hit", HINT_UV},
+    {"barycentrics", "u = -((s x e2)·d) / D and v = ((e1 x d)·s) / D are written to the outputs u and v on a hit",
+     HINT_UV},
     {"parallel-miss", "D = 0 (a parallel ray, a degenerate triangle: no unique solution) is a miss",
      HINT_PARALLEL},
     {"both-sides", "D < 0 (the ray meets the triangle's back) is a hit too", HINT_BACKFACE},
@@ -45,7 +46,8 @@ static const ex_rule rules[] = {
     {"tmax-exclusive", "t >= tmax (the argument) is a miss: the range excludes tmax", TRI_HINT_TMAX},
     {"edges-count", "u >= 0, v >= 0, u + v <= 1: edges and vertices count", TRI_HINT_INSIDE},
     {"outside-miss", "u < 0, v < 0 or u + v > 1 is a miss", TRI_HINT_OUTSIDE},
-    {"untouched-on-miss", "*t, *u, *v are written only on a hit; a miss returns 0 and leaves them as they were",
+    {"untouched-on-miss",
+     "the outputs t, u, v are written only on a hit; a miss returns 0 and leaves them as they were",
      TRI_HINT_UNTOUCHED},
 };
 enum { R_T, R_UV, R_PARALLEL, R_BOTH, R_BEHIND, R_TMIN, R_TMIN_INCL, R_TMAX, R_EDGES, R_OUTSIDE, R_UNTOUCHED };

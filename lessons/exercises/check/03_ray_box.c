@@ -63,7 +63,7 @@ static const ex_rule rules[] = {
     {"clip-arguments", "the clip is to the arguments tmin and tmax, not to the ray's own interval",
      HINT_CLIP_ARGS},
     {"touch", "t_near <= t_far is a hit, equality included (a flat box, an edge, a face at tmin)", HINT_TOUCH},
-    {"untouched-on-miss", "*t_near and *t_far are written only on a hit; a miss returns 0 and leaves them",
+    {"untouched-on-miss", "the outputs t_near and t_far are written only on a hit; a miss returns 0 and leaves them",
      HINT_UNTOUCHED},
 };
 enum { R_SLAB, R_NEG, R_ZERO, R_ON_FACE, R_TMIN, R_TMAX, R_ARGS, R_TOUCH, R_UNTOUCHED };
