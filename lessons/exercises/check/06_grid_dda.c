@@ -21,7 +21,7 @@ typedef struct res_case {
     const char *name;
 } res_case;
 
-#define RES_FIXED 8
+#define RES_FIXED 9
 #define RES_RANDOM 10
 #define RES_CASES (RES_FIXED + RES_RANDOM)
 static res_case res_cases[RES_CASES] = {
@@ -34,6 +34,8 @@ static res_case res_cases[RES_CASES] = {
     {{10, 0.01f, 0.01f}, 10, 1, "a needle: d = (10, 0.01, 0.01), under half a cell across: at least 1"},
     /* R = 10.4999999 in double (pow or cbrt alike), 10.500001 in float: 10 cells, not 11 */
     {{3, 3, 3}, 343, 3.3749999035714285, "a cube where R = 10.4999999: float arithmetic rounds it up to 11"},
+    /* V = 3.3·2.7·1.9 is 16.9289998 in double, 16.9289989 in float: R_x = 10.4999999 or 10.5000001 */
+    {{3.3f, 2.7f, 1.9f}, 500, 1.0906549669491397, "a box whose volume float rounds: R_x = 10.4999999 in double"},
 };
 
 #define HINT_FORMULA                                                                                       \
@@ -106,7 +108,7 @@ static const char *const hint_flat = HINT_FLAT;
 /* The rules a resolution case tests. */
 static const char *const res_rules[RES_FIXED] = {
     "res-formula res-round", "res-formula", "res-formula res-round", "res-round", "res-flat", "res-flat res-round",
-    "res-min-one", "res-double"};
+    "res-min-one", "res-double", "res-double"};
 /* The rules of the walk's hand-made rays (grid_fixed, scene "slanted"), and of the others. */
 static const char *const walk_rules[GRID_FIXED] = {
     "tie-later-axis cell-interval", "tie-later-axis cell-interval", "zero-dir", "zero-dir walk-start",
@@ -240,7 +242,7 @@ static const char *hint(size_t i, const sidx_event *ref, const sidx_event *stu)
             if (stu->cell[k] == 0 && ref->cell[k] != 0) return rules[R_MIN_ONE].hint;
         for (int k = 0; k < 3; ++k)
             if (stu->cell[k] == ref->cell[k] - 1 && res_cases[i].d[2] != 0.0f) return rules[R_ROUND].hint;
-        if (i == RES_FIXED - 1) return rules[R_DOUBLE].hint; /* the case only float gets wrong */
+        if (i < RES_FIXED && strstr(res_rules[i], "res-double")) return rules[R_DOUBLE].hint; /* only float fails it */
         return NULL;
     }
     i -= RES_CASES;
