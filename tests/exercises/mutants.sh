@@ -97,7 +97,8 @@ for name in $names; do
     awk -F '\t' -v s="$sample" -v ops=",$ops," '
         { split($2, w, " ") }
         (ops == ",," || index(ops, "," w[1] ",")) && ($1 - 1) % s == 0 { print $1 }' "$d/index" >"$d/run"
-    sed "s|.*|--one $name $d/$name.&.c $d/&.result|" "$d/run" |
+    # (an empty list runs nothing: xargs would run the script once, with no argument)
+    [ -s "$d/run" ] && sed "s|.*|--one $name $d/$name.&.c $d/&.result|" "$d/run" |
         xargs -P "$jobs" -n 4 sh "$0" 2>/dev/null
     # the verdicts, joined with the list of equivalent mutants
     awk -F '\t' -v name="$name" -v d="$d" -v equiv="$equiv" -v sampled="$sample" '
@@ -165,7 +166,8 @@ if [ "$mistakes" = 1 ] && [ -f tests/exercises/mistakes.txt ]; then
         /^expect / { expects = expects substr($0, 9) "\n"; next }
         /^rule / { next }
         END { flush() }' tests/exercises/mistakes.txt
-    cut -f 3 "$md/index" | sed 's|\(.*/\)\([^/]*\)--\([^/]*\)\.c$|--one \2 & \1\2--\3.result|' |
+    touch "$md/index"
+    [ -s "$md/index" ] && cut -f 3 "$md/index" | sed 's|\(.*/\)\([^/]*\)--\([^/]*\)\.c$|--one \2 & \1\2--\3.result|' |
         xargs -P "$jobs" -n 4 sh "$0" 2>/dev/null
     nm_total=0
     nm_bad=0
