@@ -35,8 +35,11 @@ static plane_case planes[PLANE_FIXED + PLANE_RANDOM];
 
 /* The hand-out's promises (lessons/exercises/01_ray_triangle.c). */
 static const ex_rule rules[] = {
-    {"t-formula", "t = (c - N·o) / (N·d); the triangle's plane has N = (p1 - p0) x (p2 - p0), c = N·p0",
-     HINT_PLANE_T},
+    {"t-formula", "t = (c - N·o) / (N·d), with the ray's own d and N as given", HINT_PLANE_T},
+    {"tri-plane",
+     "the triangle's t is that of its plane, N = (p1 - p0) x (p2 - p0), c = N·p0; step ii) only decides hit or "
+     "miss",
+     HINT_TRI_T},
     {"parallel-miss", "N·d = 0 (parallel to the plane, or lying in it) is a miss", HINT_PARALLEL},
     {"both-sides", "a ray meeting the plane or the triangle from its back (N·d > 0) hits it too",
      HINT_BOTH_SIDES},
@@ -52,7 +55,7 @@ static const ex_rule rules[] = {
     {"untouched-on-miss", "the output t is written only on a hit (return 1); a miss returns 0 and leaves it as it was",
      TRI_HINT_UNTOUCHED},
 };
-enum { R_T, R_PARALLEL, R_BOTH, R_BEHIND, R_TMIN, R_TMIN_INCL, R_TMAX, R_EDGES, R_OUTSIDE, R_UNTOUCHED };
+enum { R_T, R_TRI_PLANE, R_PARALLEL, R_BOTH, R_BEHIND, R_TMIN, R_TMIN_INCL, R_TMAX, R_EDGES, R_OUTSIDE, R_UNTOUCHED };
 
 static const char *const hint_plane = "t = (c - N·o) / (N·d): plug the ray o + t·d into N·x = c and solve for t";
 static const char *const hint_plane_parallel = HINT_PARALLEL;
@@ -116,6 +119,7 @@ static void describe(size_t i, ex_case_info *out)
         /* the two-step test has no D: its parallel case is N·d = 0 */
         if (out->hint == hint_parallel) out->hint = hint_plane_parallel;
         if (out->hint == hint_backface) out->hint = rules[R_BOTH].hint;
+        if (out->rules && !strcmp(out->rules, "t-formula")) out->rules = "tri-plane";
         return;
     }
     const plane_case *p = &planes[i];
@@ -166,7 +170,6 @@ static int format(const sidx_event *e, char *buf, size_t size)
 }
 
 static const char *const hint_plane_t = HINT_PLANE_T;
-static const char *const hint_tri_t = HINT_TRI_T;
 
 /* What differs decides: another t is the formula for t; an output
  * written on a miss is the untouched rule; a hit where the reference
@@ -183,7 +186,7 @@ static const char *hint(size_t i, const sidx_event *ref, const sidx_event *stu)
     const int plane = i < NP;
     const sidx_ray *r = plane ? &planes[i].ray : &tri_cases[i - NP].ray;
     const float tmax = plane ? r->tmax : tri_cases[i - NP].tmax;
-    if (ref->result == 1 && stu->result == 1) return plane ? hint_plane_t : hint_tri_t;
+    if (ref->result == 1 && stu->result == 1) return plane ? hint_plane_t : rules[R_TRI_PLANE].hint;
     if (ref->result == 0 && stu->result == 1) {
         const char *h = tri_range_hint(stu->t, r->tmin, tmax, rules[R_PARALLEL].hint);
         if (h) return h;

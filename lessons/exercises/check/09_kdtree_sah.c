@@ -195,6 +195,9 @@ static size_t num_cases(void) { return ncases; }
     "start event at each box's min and an end event at its max (one planar event for a flat box), sorted "  \
     "by position, ends before planars before starts at one position; one candidate per distinct position " \
     "strictly inside the cell, x then y then z"
+#define HINT_ORDER                                                                                         \
+    "at one position the ends come first, then the planars, then the starts: a triangle that ends at p and " \
+    "one that starts at p lie on different sides, none on both"
 #define HINT_COUNTS                                                                                        \
     "at a plane p: N_L = the triangles that start (or lie) before p, N_R = those that end after p; the "    \
     "plane's own end and planar events leave the right side before the cost is taken, its start events "   \
@@ -217,7 +220,7 @@ static size_t num_cases(void) { return ncases; }
 static const ex_rule rules[] = {
     {"events", "a start event at each box's min, an end at its max; a box flat on the axis gives one planar event",
      HINT_EVENTS},
-    {"event-order", "at one position ends come first, then planars, then starts", HINT_EVENTS},
+    {"event-order", "at one position ends come first, then planars, then starts", HINT_ORDER},
     {"inside-cell", "a position is a candidate only strictly inside the cell", HINT_EVENTS},
     {"sweep-counts",
      "N_R loses the ends and planars at p before the cost; N_L gains the starts and planars at p after it",
@@ -234,6 +237,28 @@ static const char *const hint_counts = HINT_COUNTS;
 static const char *const hint_planar = HINT_PLANAR;
 static const char *const hint_cost = HINT_COST;
 static const char *const hint_best = HINT_BEST;
+
+/* 1 if a box of case c lies flat in the plane p of axis (a planar
+ * event at p). */
+static int planar_at(const node_case *c, int axis, float p)
+{
+    for (uint32_t k = 0; k < c->n; ++k)
+        if (sidx_v3_get(c->boxes[k].min, axis) == p && sidx_v3_get(c->boxes[k].max, axis) == p) return 1;
+    return 0;
+}
+
+/* 1 if a box of case c ends at p on axis and another starts there. */
+static int touch_at(const node_case *c, int axis, float p)
+{
+    int ends = 0, starts = 0;
+    for (uint32_t k = 0; k < c->n; ++k) {
+        const float lo = sidx_v3_get(c->boxes[k].min, axis), hi = sidx_v3_get(c->boxes[k].max, axis);
+        if (lo == hi) continue;
+        ends |= hi == p;
+        starts |= lo == p;
+    }
+    return ends && starts;
+}
 
 /* 1 if a box of case c is flat on some axis (a planar event). */
 static int has_planar(const node_case *c)
@@ -278,14 +303,23 @@ static void student(size_t i, const sidx_hook *h)
     kd_split(&ex, c->node, c->cell, c->boxes, c->n, C_TRAV, C_TRI, BONUS);
 }
 
+/* What differs decides: the split is the first-cheapest rule; another
+ * plane the events; at the same plane the same counts the cost (or the
+ * bonus, with an empty side); the same total on other sides the planar
+ * rule; fewer in all at a flat box's plane the planar event; more in all
+ * where boxes touch the order at one position; else the sweep's counts. */
 static const char *hint(size_t i, const sidx_event *ref, const sidx_event *stu)
 {
-    (void)i;
     if ((ref && ref->type == SIDX_EV_BUILD_SPLIT) || (stu && stu->type == SIDX_EV_BUILD_SPLIT)) return hint_best;
     if (!ref || !stu || ref->axis != stu->axis || ref->pos != stu->pos) return hint_events;
     if (ref->count == stu->count && ref->aux == stu->aux)
         return ref->count == 0 || ref->aux == 0 ? rules[R_BONUS].hint : hint_cost; /* an empty side: the bonus */
-    if (ref->count + ref->aux == stu->count + stu->aux) return hint_planar; /* same total: a planar on the other side */
+    const uint32_t want = ref->count + ref->aux, got = stu->count + stu->aux;
+    if (want == got) return hint_planar; /* same total: a planar on the other side */
+    /* fewer in all at a flat box's plane: it was no planar event, on neither side */
+    if (got < want && planar_at(&cases[i], ref->axis, ref->pos)) return hint_events;
+    /* more in all where one box ends and another starts: the order at one position */
+    if (got > want && touch_at(&cases[i], ref->axis, ref->pos)) return rules[R_ORDER].hint;
     return hint_counts;
 }
 
