@@ -4,13 +4,15 @@
  *
  * 1. ray_plane: the plane N·x = c.  Plug the ray o + t·d into it and solve
  *    for t = (c − N·o) / (N·d).  Return 1 and write *t when the ray meets
- *    the plane at a t in [r->tmin, r->tmax); return 0 otherwise — think of
- *    N·d = 0 (what does it mean?) and of a negative t.
+ *    the plane at a t in [r->tmin, r->tmax); return 0 otherwise, with *t
+ *    left as it was — think of N·d = 0 (what does it mean?), of a negative
+ *    t, and of a ray whose tmin is not 0.
  * 2. ray_triangle_two_step: "i) compute ray-plane intersection to find
  *    point p on plane; ii) perform point-in-triangle test for point p" with
  *    barycentric coordinates.  The plane through p0, p1, p2 has
  *    N = (p1 − p0) × (p2 − p0) and c = N·p0.  A hit needs t in
- *    [r->tmin, tmax) and p inside the triangle or on its boundary.
+ *    [r->tmin, tmax) and p inside the triangle or on its boundary; on a
+ *    miss return 0 and leave *t as it was.
  *
  * Helpers: sidx/math.h (sidx_v3_dot, sidx_v3_cross, sidx_v3_sub,
  * sidx_ray_at, ...).  Check with:   make exercise EX=01_ray_triangle

@@ -9,8 +9,8 @@
  *     u = −((s × e2)·d) / D,   v = ((e1 × d)·s) / D,   t = −((s × e2)·e1) / D
  * Return 1 and write *t, *u, *v when there is a unique solution with
  * u >= 0, v >= 0, u + v <= 1 (edges and vertices count) and t in
- * [r->tmin, tmax); return 0 otherwise.  "What if D = 0? What does it
- * mean?"  "What if t is negative?"
+ * [r->tmin, tmax); return 0 otherwise, with *t, *u, *v left as they were.
+ * "What if D = 0? What does it mean?"  "What if t is negative?"
  *
  * Helpers: sidx/math.h.  Check with:   make exercise EX=02_moller_trumbore
  * Only the function body is yours to write. */

@@ -7,7 +7,9 @@
  * the ray, slab k is crossed between (min.k − o.k)/d.k and
  * (max.k − o.k)/d.k; the ray is inside the box over the largest entry to
  * the smallest exit.  Clip that interval to [tmin, tmax]: return 1 and
- * write *t_near, *t_far when it is not empty (t_near <= t_far), else 0.
+ * write *t_near, *t_far when it is not empty (t_near <= t_far), else
+ * return 0 and leave them as they were.  tmin and tmax are the interval
+ * you are given (the caller's), not necessarily the ray's own.
  *
  * Awkward cases the checker tries: a direction component of +0 or −0
  * (r->inv_dir holds ±inf there, r->sign[k] is 1 for a negative component,

@@ -1,7 +1,8 @@
 #!/bin/sh
 # mutants.sh — the mutation test of the exercises' batteries.
 #
-#   sh tests/exercises/mutants.sh [--sample N] [--jobs J] [--keep DIR] [NAME...]
+#   sh tests/exercises/mutants.sh [--sample N] [--jobs J] [--keep DIR]
+#                                 [--no-mistakes | --mistakes-only] [--ops LIST] [NAME...]
 #
 # For each exercise NAME (default: every one with a reference solution),
 # tests/exercises/mutate.awk writes the systematic mutants of
@@ -25,7 +26,10 @@
 # --sample N runs every N-th mutant of each exercise (a deterministic
 # sample, for make test).  Exit 1 if a non-equivalent mutant survives, an
 # equivalent one is killed (the list is stale), or a mistake is not caught
-# as its record says.  BUILD (default build) names the build directory.
+# as its record says.  --mistakes-only runs the planted mistakes alone,
+# --ops LIST (comma-separated operator names, e.g. conj,float) only the
+# mutants of those operators; both with NAMEs, the run covers just those
+# exercises.  BUILD (default build) names the build directory.
 set -u
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
@@ -37,12 +41,16 @@ jobs=2
 keep=
 names=
 mistakes=1
+mutants=1
+ops=
 while [ $# -gt 0 ]; do
     case $1 in
     --sample) sample=$2; shift 2 ;;
     --jobs) jobs=$2; shift 2 ;;
     --keep) keep=$2; shift 2 ;;
     --no-mistakes) mistakes=0; shift ;;
+    --mistakes-only) mutants=0; shift ;;
+    --ops) ops=$2; shift 2 ;;
     --one)
         # internal: --one NAME FILE RESULT — one mutant, its class in RESULT
         out=$("$checker" "$2" "$3" --timeout 1 2>&1)
@@ -77,15 +85,20 @@ fi
 equiv=tests/exercises/equivalent.txt
 start=$(date +%s)
 fail=0
-printf '%-22s %9s %7s %7s %10s %7s %8s %7s\n' exercise generated invalid killed equivalent memory survived score
+[ "$mutants" = 0 ] || printf '%-22s %9s %7s %7s %10s %7s %8s %7s\n' exercise generated invalid killed equivalent memory survived score
 for name in $names; do
+    [ "$mutants" = 1 ] || break
     sol=lessons/exercises/solutions/$name.c
     [ -f "$sol" ] || { echo "mutants.sh: no $sol" >&2; exit 2; }
     d=$tmp/$name
     mkdir -p "$d"
     awk -v out="$d" -v name="$name" -f "$here/mutate.awk" "$sol" >"$d/index" || exit 2
-    awk -F '\t' -v s="$sample" '($1 - 1) % s == 0 { print $1 }' "$d/index" >"$d/run"
-    sed "s|.*|--one $name $d/$name.&.c $d/&.result|" "$d/run" |
+    # --ops: the operator is the description's first word
+    awk -F '\t' -v s="$sample" -v ops=",$ops," '
+        { split($2, w, " ") }
+        (ops == ",," || index(ops, "," w[1] ",")) && ($1 - 1) % s == 0 { print $1 }' "$d/index" >"$d/run"
+    # (an empty list runs nothing: xargs would run the script once, with no argument)
+    [ -s "$d/run" ] && sed "s|.*|--one $name $d/$name.&.c $d/&.result|" "$d/run" |
         xargs -P "$jobs" -n 4 sh "$0" 2>/dev/null
     # the verdicts, joined with the list of equivalent mutants
     awk -F '\t' -v name="$name" -v d="$d" -v equiv="$equiv" -v sampled="$sample" '
@@ -151,8 +164,10 @@ if [ "$mistakes" = 1 ] && [ -f tests/exercises/mistakes.txt ]; then
         /^new / { new = substr($0, 9); next }
         /^exit / { ex = $2 + 0; next }
         /^expect / { expects = expects substr($0, 9) "\n"; next }
+        /^rule / { next }
         END { flush() }' tests/exercises/mistakes.txt
-    cut -f 3 "$md/index" | sed 's|\(.*/\)\([^/]*\)--\([^/]*\)\.c$|--one \2 & \1\2--\3.result|' |
+    touch "$md/index"
+    [ -s "$md/index" ] && cut -f 3 "$md/index" | sed 's|\(.*/\)\([^/]*\)--\([^/]*\)\.c$|--one \2 & \1\2--\3.result|' |
         xargs -P "$jobs" -n 4 sh "$0" 2>/dev/null
     nm_total=0
     nm_bad=0

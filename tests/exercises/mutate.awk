@@ -18,6 +18,16 @@
 #   field    a write to a struct field (n->bmin[k] = E, node->count = E,
 #            a[i].f = E) that is no output above: dropped, or its value
 #            replaced by the constant 0
+#   conj     one conjunct of a condition dropped: a && b -> a, and -> b
+#   swapret  two adjacent early returns (if (...) return ...;) swapped:
+#            the checks in the other order
+#   early    an output written before a refusal: the assignment (*x = E,
+#            best->f = E, ...) moved above the nearest early return before it
+#   float    a line that computes in double computed in float (double ->
+#            float, and pow, floor, sqrt, cbrt, fabs to their float forms)
+#   acc0     an accumulation started at 0: a variable that a later line
+#            updates from itself (v = f(v, ...), v += ...) initialised to 0
+#            instead of its first element, +-INFINITY or the empty box
 # Comment lines, preprocessor lines and lines holding a string are skipped.
 
 function trim(s) { sub(/^[ \t]+/, "", s); sub(/[ \t]+$/, "", s); return s }
@@ -144,6 +154,152 @@ function is_update(lhs) {
     return lhs ~ /best|t_?max|t_far|t_near|^t[01]$|tmax|cost/ && lhs !~ /^(t_split|tt|t)$/
 }
 
+# Like emit, with two lines changed (a statement moved, two lines swapped).
+function emit2(ln1, new1, ln2, new2, desc,    f, k) {
+    ++count
+    f = out "/" name "." count ".c"
+    for (k = 1; k <= nlines; ++k) print (k == ln1 ? new1 : k == ln2 ? new2 : lines[k]) > f
+    close(f)
+    printf "%d\t%s | %s\n", count, desc, trim(code[ln1])
+}
+
+# The operand of a && that ends before offset at (scanning left) or starts
+# after it (scanning right): its first and last offsets in s, at the same
+# parenthesis depth, bounded by an unmatched parenthesis, a ',', '?', ':',
+# ';', an assignment, || or &&.
+function operand_left(s, at,    k, depth, c, c2) {
+    depth = 0
+    for (k = at - 1; k >= 1; --k) {
+        c = substr(s, k, 1)
+        c2 = substr(s, k - 1, 2)
+        if (c == ")") { ++depth; continue }
+        if (c == "(") { if (depth == 0) break; --depth; continue }
+        if (depth > 0) continue
+        if (c2 == "&&" || c2 == "||") break
+        if (c == "," || c == "?" || c == ":" || c == ";") break
+        if (c == "=" && substr(s, k - 1, 1) !~ /[=!<>]/ && substr(s, k + 1, 1) != "=") break
+    }
+    return k + 1
+}
+function operand_right(s, at,    k, depth, c, c2, n) {
+    depth = 0
+    n = length(s)
+    for (k = at; k <= n; ++k) {
+        c = substr(s, k, 1)
+        c2 = substr(s, k, 2)
+        if (c == "(") { ++depth; continue }
+        if (c == ")") { if (depth == 0) break; --depth; continue }
+        if (depth > 0) continue
+        if (c2 == "&&" || c2 == "||") break
+        if (c == "," || c == "?" || c == ":" || c == ";") break
+    }
+    return k - 1
+}
+
+# conj: each "A && B" on the line becomes A, and B (a duplicate of an
+# earlier mutant of the line is skipped).
+function conjuncts(ln,    s, pos, at, l0, r1, left, right, a, b, nw, seen) {
+    s = code[ln]
+    if (s ~ /for \(/) return # a loop's bound and its allocation checks: the bound operator's
+    pos = 1
+    split("", seen)
+    while ((at = index(substr(s, pos), " && ")) > 0) {
+        at += pos - 1
+        pos = at + 4
+        l0 = operand_left(s, at)
+        r1 = operand_right(s, at + 4)
+        left = substr(s, l0, at - l0)
+        right = substr(s, at + 4, r1 - at - 3)
+        a = trim(left)
+        b = trim(right)
+        if (a == "" || b == "") continue
+        nw = substr(s, 1, l0 - 1) left substr(s, r1 + 1)
+        if (!(("b" b) in seen)) { seen["b" b] = 1; emit(ln, nw, "conj drop '" b "'") }
+        nw = substr(s, 1, l0 - 1) (substr(left, 1, 1) == " " ? " " : "") b substr(s, r1 + 1)
+        if (!(("b" a) in seen)) { seen["b" a] = 1; emit(ln, nw, "conj drop '" a "'") }
+    }
+}
+
+function is_early_return(s) { return s ~ /^[ \t]*if \(.*\) return [^;]*;[ \t]*$/ }
+
+# Every whole-word occurrence of w in s replaced by v.
+function subst_word(s, w, v,    out, at, pre, post) {
+    out = ""
+    while ((at = index(s, w)) > 0) {
+        pre = at > 1 ? substr(s, at - 1, 1) : ""
+        post = substr(s, at + length(w), 1)
+        if (pre ~ /[A-Za-z0-9_]/ || post ~ /[A-Za-z0-9_]/) {
+            out = out substr(s, 1, at + length(w) - 1)
+        } else {
+            out = out substr(s, 1, at - 1) v
+        }
+        s = substr(s, at + length(w))
+    }
+    return out s
+}
+
+# float: the line's double arithmetic in float.
+function to_float(s,    t) {
+    t = subst_word(s, "double", "float")
+    t = subst_word(t, "pow", "powf")
+    t = subst_word(t, "floor", "floorf")
+    t = subst_word(t, "sqrt", "sqrtf")
+    t = subst_word(t, "cbrt", "cbrtf")
+    t = subst_word(t, "fabs", "fabsf")
+    return t
+}
+
+# 1 if a statement after line ln (within 25 lines; a loop header is
+# none, the loop's body on its line is) updates v from itself: v += / -= / *= / |= ..., or v = ...v....
+function accumulates(v, ln,    m, t, lead) {
+    lead = "(^|[;{)][ \t]*|^[ \t]*)\\*?"
+    for (m = ln + 1; m <= nlines && m <= ln + 25; ++m) {
+        t = code[m]
+        # a loop's header is no update; its body on the same line may be
+        if (match(t, /for \([^;]*;[^;]*;[^)]*\)/)) t = substr(t, RSTART + RLENGTH)
+        if (t == "") continue
+        if (t ~ (lead v " (\\+|-|\\*|\\|)= ")) return 1
+        if (t ~ (lead v " = [^;]*[^A-Za-z0-9_.>]" v "[^A-Za-z0-9_]")) return 1
+    }
+    return 0
+}
+
+# acc0: each initialiser NAME = RHS on line ln (a declaration's, or an
+# assignment) of an accumulation, RHS replaced by the start at 0.
+function acc_zero(ln,    s, rest, off, v, rhs, at, end, depth, k, c, zero, head, decl_re) {
+    s = code[ln]
+    decl_re = "^[ \t]*(const )?(float|double|int|uint32_t|uint64_t|size_t|unsigned|sidx_[a-z0-9_]+) "
+    if (s ~ /for \(/) return
+    off = 0
+    rest = s
+    while (match(rest, /[A-Za-z_][A-Za-z0-9_]* = /)) {
+        v = substr(rest, RSTART, RLENGTH - 3)
+        at = off + RSTART + RLENGTH       # the RHS's first offset in s
+        head = substr(s, 1, off + RSTART - 1)
+        # the RHS ends at a ',' or ';' outside parentheses
+        depth = 0
+        for (k = at; k <= length(s); ++k) {
+            c = substr(s, k, 1)
+            if (c == "(" || c == "{") ++depth
+            else if (c == ")" || c == "}") --depth
+            else if ((c == "," || c == ";") && depth == 0) break
+        }
+        end = k - 1
+        rhs = substr(s, at, end - at + 1)
+        off = end
+        rest = substr(s, end + 1)
+        if (head ~ /(->|\.)$/ || substr(s, off + 1 - length(rhs) - 4, 1) ~ /[=!<>]/) continue
+        if ((" " rhs " ") ~ ("[^A-Za-z0-9_.>]" v "[^A-Za-z0-9_]")) continue # an update, not a start
+        # a start: a statement of its own, or a declaration
+        if (head !~ /^[ \t]*\*?$/ && s !~ decl_re) continue
+        if (!accumulates(v, ln)) continue
+        if (rhs == "sidx_aabb_empty()") zero = "(sidx_aabb){{0, 0, 0}, {0, 0, 0}}"
+        else if (rhs ~ /^(0|0\.0f?|0u|NULL)$/ || rhs ~ /[{]/) continue
+        else zero = "0"
+        emit(ln, substr(s, 1, at - 1) zero substr(s, end + 1), "acc0 " v " from 0 (not " rhs ")")
+    }
+}
+
 {
     lines[NR] = $0
     nlines = NR
@@ -268,6 +424,37 @@ END {
                          "sibling " l1[ln, k] " = " r1[m, j])
                 }
             }
+        }
+    }
+    # the operators of the rules: a conjunct dropped, the float arithmetic,
+    # an accumulation's start, two checks swapped, an output written early
+    for (ln = 1; ln <= nlines; ++ln) {
+        s = code[ln]
+        if (s == "" || (s ~ /^[A-Za-z_].*\(/ && s !~ /^[ \t]/)) continue
+        conjuncts(ln)
+        t = to_float(s)
+        if (t != s) emit(ln, t, "float")
+        acc_zero(ln)
+        if (ln < nlines && is_early_return(s) && is_early_return(code[ln + 1]))
+            emit2(ln, code[ln + 1], ln + 1, s, "swapret with '" trim(code[ln + 1]) "'")
+    }
+    for (ln = 1; ln <= nlines; ++ln) {
+        if (code[ln] == "") continue
+        n = statements(code[ln])
+        for (k = 1; k <= n; ++k) {
+            if (!is_output(st_lhs[k])) continue
+            # the nearest early return above, in the same function
+            for (m = ln - 1; m >= 1 && m >= ln - 12; --m) {
+                if (lines[m] ~ /^[A-Za-z_{}]/) { m = 0; break }
+                if (code[m] != "" && is_early_return(code[m])) break
+            }
+            if (m < 1 || m < ln - 12) continue
+            stmt = substr(code[ln], st_at[k], st_end[k] - st_at[k] + 1)
+            rest = substr(code[ln], 1, st_at[k] - 1) substr(code[ln], st_end[k] + 1)
+            if (trim(rest) == "") rest = ""
+            match(code[m], /^[ \t]*/)
+            emit2(m, substr(code[m], 1, RLENGTH) stmt " " substr(code[m], RLENGTH + 1), ln, rest,
+                  "early " trim(stmt) " above '" trim(code[m]) "'")
         }
     }
 }

@@ -7,6 +7,7 @@
  * "bvh-everyb", "bvh"), whose BUILD_CANDIDATE and BUILD_SPLIT events of
  * one node are the student's candidates and choice for that node's
  * triangles, one for one. */
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include "check.h"
@@ -87,6 +88,7 @@ typedef struct node_case {
     uint32_t *prims;
     sidx_event *ev; /* the library's CANDIDATE and SPLIT events of the node */
     size_t nev;
+    char rules[160]; /* the rules the case tests (node_rules) */
 } node_case;
 static node_case nodes[NBUILDERS][NSCENES][NODES_PER];
 static uint32_t num_nodes[NBUILDERS][NSCENES];
@@ -101,6 +103,28 @@ static uint32_t subtree_prims(const sidx_bvh_node *nd, const uint32_t *pr, uint3
     }
     n = subtree_prims(nd, pr, node + 1, out, n);
     return subtree_prims(nd, pr, x->left_or_first, out, n);
+}
+
+/* The rules a node case tests: by builder, and by what its triangles
+ * hold (a flat axis, equal centroids, fewer than 2·B triangles). */
+static void node_rules(const node_case *c, int b, int s, char *out, size_t size)
+{
+    static const char *const by_builder[NBUILDERS] = {"node-box sweep-midpoint first-cheapest",
+                                                      "every-b sweep-midpoint",
+                                                      "bin-index bin-plane node-box first-cheapest"};
+    int flat = 0, ties = 0;
+    for (int axis = 0; axis < 3; ++axis) {
+        float lo = INFINITY, hi = -INFINITY;
+        for (uint32_t k = 0; k < c->count; ++k) {
+            const float v = sidx_v3_get(cents[s][c->prims[k]], axis);
+            lo = v < lo ? v : lo;
+            hi = v > hi ? v : hi;
+            for (uint32_t q = 0; q < k && !ties; ++q) ties = v == sidx_v3_get(cents[s][c->prims[q]], axis);
+        }
+        flat |= !(hi > lo);
+    }
+    snprintf(out, size, "%s%s%s%s", by_builder[b], flat ? " skip-flat-axis" : "", ties && b == 0 ? " sort-ties" : "",
+             b == 1 && c->count < 2 * EVERY_B ? " every-b-half" : "");
 }
 
 static int setup(void)
@@ -150,6 +174,7 @@ static int setup(void)
                 if (!c->ev || !c->prims) return -1;
                 memcpy(c->ev, rec.ev + first, c->nev * sizeof *c->ev);
                 c->count = subtree_prims(nd, pr, c->node, c->prims, 0);
+                node_rules(c, b, s, c->rules, sizeof c->rules);
             }
             free(rec.ev);
             sidx_accel_destroy(a);
@@ -208,23 +233,70 @@ static const node_case *split_case(size_t i, int *b_out, int *s_out)
     return NULL;
 }
 
-static const char *const hint_cost =
-    "C = C_trav + S_A/S_C·N_A·C_tri + S_B/S_C·N_B·C_tri: each child's probability is its SURFACE AREA "
-    "(2·(xy + yz + zx), \"not the volume\") relative to the parent's, times its primitive count";
-static const char *const hint_sweep =
-    "\"sort(primitives, axis) — sort primitives by centroid\" (ties by triangle index), then for i = 1 .. n-1: "
-    "a = bbox(primitives[0,i]), b = bbox(primitives[i,n]), report the candidate at pos = the midpoint of "
-    "centroids i-1 and i; all three axes, x first, skipping an axis where every centroid is equal";
-static const char *const hint_everyb =
-    "\"check every B primitives\": only the positions i that are multiples of B (B = 8), never coarser than "
-    "half the node (B = n/2 when 8 > n/2)";
-static const char *const hint_bins =
-    "\"find bin that triangle lies in\": bin = (int)((c - cmin)·nb/extent) over the CENTROID bounds, clamped "
-    "to [0, nb-1]; plane j (1 .. nb-1) at cmin + extent·j/nb puts bins 0 .. j-1 left; a plane with an empty "
-    "side is no candidate";
-static const char *const hint_best =
-    "\"if (cost < best_cost)\": keep the first cheapest candidate over all axes (strictly cheaper replaces "
-    "it) and report it with sidx_ex_split";
+#define HINT_AREA                                                                                          \
+    "C = C_trav + S_A/S_C·N_A·C_tri + S_B/S_C·N_B·C_tri: each child's probability is its SURFACE AREA "      \
+    "(2·(xy + yz + zx), \"not the volume\") relative to the parent's, times its primitive count"
+#define HINT_COUNTS                                                                                        \
+    "each child's area is weighted by its own primitive count, times C_tri, over the parent's area: "       \
+    "C = C_trav + (A_L·N_L + A_R·N_R)·C_tri / A_parent, each area times its primitive count (not added to it)"
+#define HINT_SWEEP                                                                                         \
+    "\"sort(primitives, axis) — sort primitives by centroid\" (ties by triangle index), then for i = 1 .. n-1: " \
+    "a = bbox(primitives[0,i]), b = bbox(primitives[i,n]), report the candidate at pos = the midpoint of "   \
+    "centroids i-1 and i; all three axes, x first, skipping an axis where every centroid is equal"
+#define HINT_FLAT                                                                                          \
+    "skip an axis on which every centroid is equal (the centroid bounds have no extent there): no plane "   \
+    "separates the triangles, so that axis has no candidate at all"
+#define HINT_TIES                                                                                          \
+    "triangles of equal centroid are sorted by triangle index: at such a tie the boxes left and right of "  \
+    "position i, and so the cost, depend on that order"
+#define HINT_NODE_BOX                                                                                      \
+    "the parent's area is that of the node's box, the union of its triangles' BOXES, not the bounds of "    \
+    "their centroids"
+#define HINT_EVERYB                                                                                        \
+    "\"check every B primitives\": only the positions i that are multiples of B (B = 8), never coarser than " \
+    "half the node (B = n/2 when 8 > n/2)"
+#define HINT_BINS                                                                                          \
+    "\"find bin that triangle lies in\": bin = (int)((c - cmin)·nb/extent) over the CENTROID bounds, clamped " \
+    "to [0, nb-1]; plane j (1 .. nb-1) at cmin + extent·j/nb puts bins 0 .. j-1 left; a plane with an empty " \
+    "side is no candidate"
+#define HINT_BIN_INDEX                                                                                     \
+    "a triangle's bin is (int)((c - cmin)·(nb/extent)) computed in float, truncated (not rounded), clamped " \
+    "to [0, nb-1]: the counts left and right of a plane follow from the bins"
+#define HINT_BIN_PLANE                                                                                     \
+    "plane j (1 .. nb-1) lies at cmin + extent·j/nb over the CENTROID bounds [cmin, cmin + extent] (not the " \
+    "node's box) and puts bins 0 .. j-1 left"
+#define HINT_BEST                                                                                          \
+    "\"if (cost < best_cost)\": keep the first cheapest candidate over all axes (strictly cheaper replaces " \
+    "it) and report it with sidx_ex_split"
+
+/* The hand-out's promises (lessons/exercises/04_bvh_sah.c). */
+static const ex_rule rules[] = {
+    {"sah-area", "the probabilities are surface areas, 2·(xy + yz + zx), relative to the parent's", HINT_AREA},
+    {"sah-counts", "C = C_trav + (A_L·N_L + A_R·N_R)·C_tri / A_parent: each area times its own count",
+     HINT_COUNTS},
+    {"skip-flat-axis", "an axis on which every centroid is equal is skipped", HINT_FLAT},
+    {"sort-ties", "the sweep sorts by centroid, ties by triangle index", HINT_TIES},
+    {"node-box", "the cost is over the node's box, the union of its triangles' boxes", HINT_NODE_BOX},
+    {"sweep-midpoint", "the sweep's candidate at position i lies at the midpoint of centroids i-1 and i",
+     HINT_SWEEP},
+    {"every-b", "step = B: only the positions i that are multiples of step", HINT_EVERYB},
+    {"every-b-half", "step is never coarser than half the node: step = count / 2 when B is larger",
+     HINT_EVERYB},
+    {"bin-index", "a triangle's bin is (int)((c - cmin)·(bins / extent)) in float, clamped to [0, bins - 1]",
+     HINT_BIN_INDEX},
+    {"bin-plane", "plane j = 1 .. bins-1 lies at cmin + extent·j/bins over the centroid bounds, bins 0 .. j-1 left",
+     HINT_BIN_PLANE},
+    {"first-cheapest", "the split is the cheapest candidate, the first of equal ones (cost < best_cost)",
+     HINT_BEST},
+};
+enum { R_AREA, R_COUNTS, R_FLAT, R_TIES, R_NODE_BOX, R_MID, R_EVERYB, R_HALF, R_BIN_INDEX, R_BIN_PLANE,
+       R_BEST };
+
+static const char *const hint_cost = HINT_AREA;
+static const char *const hint_sweep = HINT_SWEEP;
+static const char *const hint_everyb = HINT_EVERYB;
+static const char *const hint_bins = HINT_BINS;
+
 
 static void describe(size_t i, ex_case_info *out)
 {
@@ -240,6 +312,7 @@ static void describe(size_t i, ex_case_info *out)
                  (double)c->right.min.x, (double)c->right.min.y, (double)c->right.min.z, (double)c->right.max.x,
                  (double)c->right.max.y, (double)c->right.max.z, c->nr, (double)C_TRAV, (double)C_TRI);
         out->hint = hint_cost;
+        out->rules = "sah-area sah-counts";
         return;
     }
     if (i >= COST_CASES + num_split_cases()) {
@@ -248,6 +321,7 @@ static void describe(size_t i, ex_case_info *out)
                  binned ? builder_what[2] : builder_what[0]);
         snprintf(out->what, sizeof out->what, "4 triangles, each with the box [0 0 0]-[1 1 0]: no plane separates them");
         out->hint = binned ? hint_bins : hint_sweep;
+        out->rules = "skip-flat-axis";
         return;
     }
     int b = 0, s = 0;
@@ -257,6 +331,7 @@ static void describe(size_t i, ex_case_info *out)
     snprintf(out->what, sizeof out->what, "%u triangles of %s; C_trav = %g, C_tri = %g", c->count, scene_names[s],
              (double)C_TRAV, (double)C_TRI);
     out->hint = b == 0 ? hint_sweep : b == 1 ? hint_everyb : hint_bins;
+    out->rules = c->rules;
 }
 
 static void reference(size_t i, const sidx_hook *h)
@@ -306,13 +381,82 @@ static void student(size_t i, const sidx_hook *h)
         split_sweep(&ex, c->node, c->prims, c->count, boxes[s], cents[s], b == 0 ? 1u : EVERY_B, C_TRAV, C_TRI);
 }
 
+static int cmp_float(const void *a, const void *b)
+{
+    const float x = *(const float *)a, y = *(const float *)b;
+    return (x > y) - (x < y);
+}
+
+/* 1 if the sorted centroids of node c on axis are equal at positions
+ * nl - 1 and nl (a tie the sort breaks by triangle index). */
+static int tie_at(const node_case *c, int s, int axis, uint32_t nl)
+{
+    if (nl == 0 || nl >= c->count) return 0;
+    float *v = malloc(c->count * sizeof *v);
+    if (!v) return 0;
+    for (uint32_t k = 0; k < c->count; ++k) v[k] = sidx_v3_get(cents[s][c->prims[k]], axis);
+    qsort(v, c->count, sizeof *v, cmp_float);
+    const int tie = v[nl - 1] == v[nl];
+    free(v);
+    return tie;
+}
+
+/* 1 if b's cost is a's with the parent's area taken from the centroid
+ * bounds instead of the node's box. */
+static int cost_over_centroids(const node_case *c, int s, float ref_cost, float stu_cost)
+{
+    sidx_aabb bb = sidx_aabb_empty(), cb = sidx_aabb_empty();
+    for (uint32_t k = 0; k < c->count; ++k) {
+        bb = sidx_aabb_union(bb, boxes[s][c->prims[k]]);
+        cb = sidx_aabb_grow(cb, cents[s][c->prims[k]]);
+    }
+    const float want = C_TRAV + (ref_cost - C_TRAV) * (sidx_aabb_area(bb) / sidx_aabb_area(cb));
+    return fabsf(want - stu_cost) <= 1e-4f * fabsf(want);
+}
+
+/* 1 if node c's reference trace has a candidate on axis. */
+static int ref_has_axis(const node_case *c, int axis)
+{
+    for (size_t k = 0; k < c->nev; ++k)
+        if (c->ev[k].type == SIDX_EV_BUILD_CANDIDATE && c->ev[k].axis == axis) return 1;
+    return 0;
+}
+
+/* What differs decides.  Cost cases: a cost that the volumes give names
+ * the area, any other the counts.  Split cases: a candidate on an axis
+ * the reference has none on is the flat axis; the split is the first-cheapest rule; the same
+ * plane with another cost is the node's box (the cost over the centroid
+ * bounds), a tie of centroids (the sort's order) or the formula; another
+ * plane in the bins is the plane's position (another position) or the
+ * bin index (other counts). */
 static const char *hint(size_t i, const sidx_event *ref, const sidx_event *stu)
 {
-    if (i < COST_CASES) return NULL;
-    if ((ref && ref->type == SIDX_EV_BUILD_SPLIT) || (stu && stu->type == SIDX_EV_BUILD_SPLIT)) return hint_best;
-    if (ref && stu && ref->axis == stu->axis && ref->pos == stu->pos && ref->count == stu->count &&
-        ref->aux == stu->aux)
-        return hint_cost; /* the right plane, the wrong cost */
+    if (i < COST_CASES) {
+        if (!ref || !stu) return NULL;
+        const cost_case *c = &cost_cases[i];
+        const sidx_vec3 el = sidx_aabb_extent(c->left), er = sidx_aabb_extent(c->right),
+                        ep = sidx_aabb_extent(c->parent);
+        const float vol = C_TRAV + C_TRI * (el.x * el.y * el.z * (float)c->nl + er.x * er.y * er.z * (float)c->nr) /
+                                       (ep.x * ep.y * ep.z);
+        return fabsf(vol - stu->cost) <= 1e-4f * fabsf(vol) ? rules[R_AREA].hint : rules[R_COUNTS].hint;
+    }
+    if (i >= COST_CASES + num_split_cases()) return stu ? rules[R_FLAT].hint : NULL;
+    int b = 0, s = 0;
+    const node_case *c = split_case(i, &b, &s);
+    if (stu && stu->type == SIDX_EV_BUILD_CANDIDATE) {
+        if (!ref_has_axis(c, stu->axis)) return rules[R_FLAT].hint;
+    }
+    if ((ref && ref->type == SIDX_EV_BUILD_SPLIT) || (stu && stu->type == SIDX_EV_BUILD_SPLIT))
+        return rules[R_BEST].hint;
+    if (!ref || !stu) return NULL;
+    if (ref->axis == stu->axis && ref->pos == stu->pos && ref->count == stu->count && ref->aux == stu->aux) {
+        /* the right plane, the wrong cost */
+        if (cost_over_centroids(c, s, ref->cost, stu->cost)) return rules[R_NODE_BOX].hint;
+        if (b != 2 && tie_at(c, s, ref->axis, ref->count)) return rules[R_TIES].hint;
+        return rules[R_COUNTS].hint;
+    }
+    if (b == 2 && ref->axis == stu->axis)
+        return ref->pos != stu->pos ? rules[R_BIN_PLANE].hint : rules[R_BIN_INDEX].hint;
     return NULL;
 }
 
@@ -320,5 +464,5 @@ const ex_driver ex_driver_this = {
     "04_bvh_sah",
     "the SAH cost of one split, then the split choice: full sweep, every-B sweep, bins",
     "deck 001, \"Surface Area Heuristic\" and \"Building Partitions\" (the three loops)",
-    setup, num_cases, describe, reference, student, hint, teardown, NULL, NULL, 0,
+    setup, num_cases, describe, reference, student, hint, teardown, NULL, rules, sizeof rules / sizeof rules[0],
 };

@@ -3,6 +3,7 @@
  * Reference: the library's own recursive walks (q.traversal NAIVE and
  * ORDERED) over a "bvh" built with the textbook slab test, whose events
  * are the slide's steps one for one. */
+#include <stdlib.h>
 #include <string.h>
 #include "check.h"
 #include "sidx/bvh.h"
@@ -83,6 +84,77 @@ static void split(size_t i, int *ordered, int *s, int *r)
     *r = (int)(i % RAYS);
 }
 
+#define HINT_BOX_BEST                                                                                      \
+    "\"if (hit.prim == NULL || hit.t > best.t) return\": test the box over [ray.tmin, best.t], so a box that " \
+    "begins behind the best hit so far is a miss"
+#define HINT_NAIVE_ORDER                                                                                   \
+    "test the node's box first; a leaf then tests its primitives prims[first .. first + count), an inner "  \
+    "node traverses BOTH children, child1 (node + 1) before child2 (left_or_first)"
+#define HINT_NEARER                                                                                        \
+    "\"pick node with better time\": test both children's boxes, then visit first the one the ray enters "  \
+    "first (smaller t_near; on a tie child1)"
+#define HINT_TIE                                                                                           \
+    "the two children's boxes begin at the same t_near: on a tie child1 (node + 1) goes first; only a "     \
+    "strictly smaller t_near puts child2 first"
+#define HINT_FAR                                                                                           \
+    "\"Only check far bbox if closest primitive in the near bbox is farther than the closest point "        \
+    "intersected in the far bbox\": visit the second child only if its box was hit and its t_near < best.t"
+#define HINT_UPDATE                                                                                        \
+    "\"if (hit.prim != NULL && hit.t < best.t)\": a closer hit replaces best (prim and t) and is reported "  \
+    "with sidx_ex_hit_update"
+#define HINT_PRIMS                                                                                         \
+    "test each primitive of the leaf against the best hit so far: sidx_ex_test_triangle(ex, prim, best->t, " \
+    "&t), with best->t as its tmax"
+#define HINT_LEAF_IDS                                                                                      \
+    "a leaf holds the triangles prims[first .. first + count), first = left_or_first: the triangle ids are " \
+    "prims[i], not the positions i themselves"
+#define HINT_INTERVAL                                                                                      \
+    "the same child entered with another interval: \"pick node with better time\" uses the times its box "  \
+    "test gave, so enter each child over (t_near, t_far) of that test, hit(child, t_near, t_far)"
+
+/* The hand-out's promises (lessons/exercises/05_bvh_traversal.c). */
+static const ex_rule rules[] = {
+    {"box-over-best", "the naive walk tests a node's box over [ray tmin, best->t] and returns on a miss",
+     HINT_BOX_BEST},
+    {"naive-both-children", "the naive walk enters the node, then traverses both children, child1 before child2",
+     HINT_NAIVE_ORDER},
+    {"leaf-prims", "a leaf tests the triangles prims[first .. first + count)", HINT_LEAF_IDS},
+    {"leaf-bound", "each triangle is tested against the best hit so far (tmax = best->t)", HINT_PRIMS},
+    {"hit-update", "a closer hit updates best->prim and best->t and is reported with sidx_ex_hit_update",
+     HINT_UPDATE},
+    {"nearer-first", "the ordered walk tests both children's boxes and visits first the one entered first",
+     HINT_NEARER},
+    {"tie-child1", "of two children entered at the same t_near, child1 goes first", HINT_TIE},
+    {"far-cull", "the second child is visited only if its box was hit and its t_near < best->t", HINT_FAR},
+    {"child-interval", "each child is entered over the [t_near, t_far] its own box test gave", HINT_INTERVAL},
+};
+enum { R_BOX_BEST, R_NAIVE, R_LEAF_IDS, R_PRIMS, R_UPDATE, R_NEARER, R_TIE, R_FAR, R_INTERVAL };
+
+static const char *const hint_box_best = HINT_BOX_BEST;
+static const char *const hint_naive_order = HINT_NAIVE_ORDER;
+static const char *const hint_nearer = HINT_NEARER;
+static const char *const hint_far = HINT_FAR;
+static const char *const hint_update = HINT_UPDATE;
+static const char *const hint_prims = HINT_PRIMS;
+static const char *const hint_interval = HINT_INTERVAL;
+
+static void reference(size_t i, const sidx_hook *h);
+
+/* 1 if the reference's walk of case i meets two children whose boxes the
+ * ray enters at the same t_near (the order's tie). */
+static int has_tie(size_t i)
+{
+    ex_trace rec = {NULL, 0, 0};
+    const sidx_hook h = {ex_trace_hook_fn, &rec, SIDX_EVMASK(SIDX_EV_BOX_TEST)};
+    reference(i, &h);
+    int tie = 0;
+    /* after the root's, the ordered walk tests boxes in pairs: child1, then child2 */
+    for (size_t k = 1; k + 1 < rec.n && !tie; k += 2)
+        tie = rec.ev[k].result == 1 && rec.ev[k + 1].result == 1 && rec.ev[k].t_near == rec.ev[k + 1].t_near;
+    free(rec.ev);
+    return tie;
+}
+
 static void describe(size_t i, ex_case_info *out)
 {
     int ordered, s, r;
@@ -90,6 +162,9 @@ static void describe(size_t i, ex_case_info *out)
     snprintf(out->name, sizeof out->name, "%s walk, scene %s, ray %d (%s)", ordered ? "ordered" : "naive",
              scene_names[s], r + 1, ray_kind[s][r]);
     ex_describe_walk(out, &rays[s][r], "bvh", NULL, scene_names[s], &meshes[s]);
+    out->rules = !ordered    ? "box-over-best naive-both-children leaf-prims leaf-bound hit-update"
+                 : has_tie(i) ? "nearer-first tie-child1 far-cull child-interval leaf-prims leaf-bound hit-update"
+                              : "nearer-first far-cull child-interval leaf-prims leaf-bound hit-update";
 }
 
 static void reference(size_t i, const sidx_hook *h)
@@ -118,33 +193,29 @@ static void counting_fn(const sidx_event *ev, void *user)
     sidx_hook_emit(c->inner, ev);
 }
 
-static const char *const hint_box_best =
-    "\"if (hit.prim == NULL || hit.t > best.t) return\": test the box over [ray.tmin, best.t], so a box that "
-    "begins behind the best hit so far is a miss";
-static const char *const hint_naive_order =
-    "test the node's box first; a leaf then tests its primitives prims[first .. first + count), an inner node "
-    "traverses BOTH children, child1 (node + 1) before child2 (left_or_first)";
-static const char *const hint_nearer =
-    "\"pick node with better time\": test both children's boxes, then visit first the one the ray enters first "
-    "(smaller t_near; on a tie child1)";
-static const char *const hint_far =
-    "\"Only check far bbox if closest primitive in the near bbox is farther than the closest point intersected "
-    "in the far bbox\": visit the second child only if its box was hit and its t_near < best.t";
-static const char *const hint_update =
-    "\"if (hit.prim != NULL && hit.t < best.t)\": a closer hit replaces best (prim and t) and is reported with "
-    "sidx_ex_hit_update";
-static const char *const hint_prims =
-    "test each primitive of the leaf against the best hit so far: sidx_ex_test_triangle(ex, prim, best->t, &t)";
-
-static const char *const hint_interval =
-    "the same child entered with another interval: \"pick node with better time\" uses the times its box "
-    "test gave, so enter each child over (t_near, t_far) of that test, hit(child, t_near, t_far)";
+/* 1 if the ray of case i enters the boxes of nodes a and b at the same
+ * t_near (two siblings the walk orders). */
+static int sibling_tie(size_t i, uint32_t a, uint32_t b)
+{
+    int ordered, s, r;
+    split(i, &ordered, &s, &r);
+    const sidx_bvh_node *nodes = NULL;
+    uint32_t nn = 0;
+    sidx_bvh_nodes(accels[s], &nodes, &nn, NULL);
+    if (a >= nn || b >= nn) return 0;
+    const sidx_aabb ba = sidx_bvh_box(&nodes[a]), bb = sidx_bvh_box(&nodes[b]);
+    float na, fa, nb, fb;
+    const sidx_ray *ray = &rays[s][r];
+    return sidx_intersect_aabb(SIDX_BOX_PLAIN, ray, &ba, ray->tmin, INFINITY, &na, &fa) &&
+           sidx_intersect_aabb(SIDX_BOX_PLAIN, ray, &bb, ray->tmin, INFINITY, &nb, &fb) && na == nb;
+}
 
 /* What differs decides: the same box tested over another interval is the
  * culling by best.t; a hit update, or another primitive step, is the
- * leaf; in the ordered walk the same child entered with another interval
- * is the box test's interval, another child at the same depth is the
- * near-first order, and a child entered or skipped is the far-child rule;
+ * leaf (another triangle: the ids through prims[]); in the ordered walk
+ * the same child entered with another interval is the box test's
+ * interval, another child at the same depth is the near-first order (the
+ * tie rule when both boxes begin at the same t_near), and a child entered or skipped is the far-child rule;
  * in the naive walk anything else is its order. */
 static const char *hint(size_t i, const sidx_event *ref, const sidx_event *stu)
 {
@@ -153,14 +224,15 @@ static const char *hint(size_t i, const sidx_event *ref, const sidx_event *stu)
         return hint_box_best;
     if (ref && stu && ref->type == SIDX_EV_HIT_UPDATE) return hint_update;
     if (stu && stu->type == SIDX_EV_HIT_UPDATE) return hint_update;
-    if (ref && stu && ref->type == SIDX_EV_PRIM_TEST && stu->type == SIDX_EV_PRIM_TEST) return hint_prims;
+    if (ref && stu && ref->type == SIDX_EV_PRIM_TEST && stu->type == SIDX_EV_PRIM_TEST)
+        return ref->prim != stu->prim ? rules[R_LEAF_IDS].hint : hint_prims;
     if (ordered) {
         if (ref && stu && ref->type == SIDX_EV_NODE_ENTER && stu->type == SIDX_EV_NODE_ENTER &&
             ref->node == stu->node)
             return hint_interval;
         if (ref && stu && ref->type == SIDX_EV_NODE_ENTER && stu->type == SIDX_EV_NODE_ENTER &&
             ref->depth == stu->depth)
-            return hint_nearer;
+            return sibling_tie(i, ref->node, stu->node) ? rules[R_TIE].hint : hint_nearer;
         if ((stu && stu->type == SIDX_EV_NODE_ENTER) || (ref && ref->type == SIDX_EV_NODE_ENTER)) return hint_far;
         return hint_nearer;
     }
@@ -210,5 +282,5 @@ const ex_driver ex_driver_this = {
     "05_bvh_traversal",
     "BVH traversal: the naive recursive walk, then the ordered one",
     "deck 001, \"BVH Traversal\" and \"Better BVH Traversal\"; deck 000, \"BVH traversal (1)-(3)\"",
-    setup, num_cases, describe, reference, student, hint, teardown, NULL, NULL, 0,
+    setup, num_cases, describe, reference, student, hint, teardown, NULL, rules, sizeof rules / sizeof rules[0],
 };

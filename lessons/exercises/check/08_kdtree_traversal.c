@@ -205,11 +205,118 @@ static void teardown(void)
 
 static size_t num_cases(void) { return NSCENES * RAYS; }
 
+#define HINT_DIRECTION                                                                                     \
+    "\"Near and far depend on direction of ray!\": the near child is the left one (below the plane) for a "   \
+    "positive direction on the split axis, the right one for a negative direction, whichever side the "    \
+    "origin is on"
+#define HINT_ZERO                                                                                          \
+    "\"Near and far depend on direction of ray!\": a -0 direction component is negative too (ray->sign, not " \
+    "d < 0): inv_dir = -inf, and t_split = +-inf keeps the ray on its origin's side"
+#define HINT_TIE                                                                                           \
+    "\"Three cases\": only a plane strictly before the cell (t_split < t_near) or strictly beyond it "        \
+    "(t_split > t_far) rules a child out; a tie, t_split == t_near or t_split == t_far, goes to both children " \
+    "(push the far one)"
+#define HINT_NAN                                                                                           \
+    "a ray inside the split plane (t_split = NaN) belongs to both cells: go to both over the whole "        \
+    "interval, and no early exit for the rest of the ray"
+#define HINT_STOP                                                                                          \
+    "\"Traversal can be terminated as soon as surface intersection is found in the current node\": after a " \
+    "leaf, stop if the best hit lies in this cell (best->t <= t_far, widened by |t_far|*KD_EPS)"
+#define HINT_CANNOT                                                                                        \
+    "\"CANNOT terminate !!!\": a hit beyond the current cell (best->t > t_far) may be hidden by a triangle in " \
+    "a cell still on the stack; keep it as the best so far and go on"
+#define HINT_POP                                                                                           \
+    "pop the cell last pushed (\"Maintain stack of sub-trees still to traverse\"), and skip a popped cell "  \
+    "whose t_near lies beyond best->t: it cannot hold a closer hit"
+#define HINT_LEAF                                                                                          \
+    "a leaf tests each of its triangles refs[first .. first + count) against the best hit so far, "         \
+    "sidx_ex_test_triangle(ex, prim, best->t, &t), and reports a closer one with sidx_ex_hit_update"
+#define HINT_STOP_NOHIT                                                                                    \
+    "\"Traversal can be terminated as soon as surface intersection is found in the current node\": only a "  \
+    "hit stops the walk; with no hit (best->prim == SIDX_NO_HIT) pop the next cell, and return 0 when the "  \
+    "stack is empty"
+#define HINT_START                                                                                         \
+    "the loop is \"given (node, t_near, t_far)\": start at the root, sidx_ex_node_enter(ex, 0, 0, t_near, "   \
+    "t_far), and report every cell you enter"
+#define HINT_NEAR_INTERVAL                                                                                 \
+    "the same child with another interval: when the plane cuts the cell, \"continue with (near child, "      \
+    "t_near, t_split)\" (t_far becomes t_split), and when it lies beyond the cell the near child keeps "     \
+    "(t_near, t_far)"
+#define HINT_FAR_INTERVAL                                                                                  \
+    "the same far child with another interval: it is pushed as (far child, t_split, t_far), and when the "  \
+    "plane lies before the cell the far child keeps (t_near, t_far)"
+#define HINT_DEPTH                                                                                         \
+    "the same cell at another depth: the root has depth 0, a child its parent's depth + 1, and a popped "   \
+    "cell the depth it was pushed with (keep it on the stack with the node)"
+#define HINT_STACK_SIZE                                                                                    \
+    "the stack size a step reports: sidx_ex_push gives the size AFTER the push (1 for the first), "         \
+    "sidx_ex_pop the size BEFORE the pop"
+/* The hand-out's promises (lessons/exercises/08_kdtree_traversal.c). */
+static const ex_rule rules[] = {
+    {"start-root", "the walk starts at the root (node 0, depth 0) over the [t_near, t_far] it is given",
+     HINT_START},
+    {"depth", "a child has its parent's depth + 1; a popped cell gets back the depth it was pushed with",
+     HINT_DEPTH},
+    {"near-by-direction", "the near child is the left one unless the direction is negative on the split axis",
+     HINT_DIRECTION},
+    {"neg-zero", "a -0 direction component counts as negative (ray->sign)", HINT_ZERO},
+    {"tie-both", "t_split == t_near or t_split == t_far goes to both children", HINT_TIE},
+    {"push-far",
+     "when both children are visited, the far one is pushed with sidx_ex_push(ex, far, stack size after the "
+     "push, t_split, t_far); a pop reports the size before it",
+     HINT_STACK_SIZE},
+    {"child-intervals",
+     "the near child gets (t_near, t_split), the far one (t_split, t_far), t_split clamped into [t_near, "
+     "t_far]; a child alone keeps (t_near, t_far)",
+     HINT_NEAR_INTERVAL},
+    {"nan-both", "a NaN t_split goes to both children over the whole interval, and no early exit follows",
+     HINT_NAN},
+    {"leaf-tests", "a leaf tests refs[first .. first + count) against best->t and reports a closer hit",
+     HINT_LEAF},
+    {"stop-in-cell", "after a leaf the walk returns 1 if the best hit lies in this cell", HINT_STOP},
+    {"cannot-terminate", "a hit beyond the current cell does not end the walk", HINT_CANNOT},
+    {"stop-needs-hit", "only a hit stops the walk; with none, return 0 when the stack is empty",
+     HINT_STOP_NOHIT},
+    {"pop-skip", "a popped cell whose t_near lies beyond best->t is skipped (pop the next)", HINT_POP},
+};
+enum { R_START, R_DEPTH, R_DIRECTION, R_ZERO, R_TIE, R_PUSH, R_INTERVALS, R_NAN, R_LEAF, R_STOP, R_CANNOT,
+       R_STOP_NOHIT, R_POP };
+
+static const char *const hint_direction = HINT_DIRECTION;
+static const char *const hint_zero = HINT_ZERO;
+static const char *const hint_tie = HINT_TIE;
+static const char *const hint_nan = HINT_NAN;
+static const char *const hint_stop = HINT_STOP;
+static const char *const hint_cannot = HINT_CANNOT;
+static const char *const hint_pop = HINT_POP;
+static const char *const hint_leaf = HINT_LEAF;
+static const char *const hint_stop_nohit = HINT_STOP_NOHIT;
+static const char *const hint_start = HINT_START;
+static const char *const hint_near_interval = HINT_NEAR_INTERVAL;
+static const char *const hint_far_interval = HINT_FAR_INTERVAL;
+
+/* The rules a ray of each kind tests (beyond those of every walk:
+ * start-root depth near-by-direction leaf-tests push-far child-intervals
+ * stop-in-cell pop-skip). */
+static const char *kind_rules(int r)
+{
+    if (r >= K_BEYOND && r < K_INSIDE) return "cannot-terminate stop-in-cell near-by-direction leaf-tests";
+    if (r >= K_ON_PLANE && r < K_TFAR_TIE) return "tie-both child-intervals push-far";
+    if (r >= K_TFAR_TIE && r < K_NEG_ZERO) return "tie-both child-intervals stop-needs-hit";
+    if (r >= K_NEG_ZERO && r < K_IN_PLANE) return "neg-zero near-by-direction";
+    if (r >= K_IN_PLANE && r < K_TMAX) return "nan-both pop-skip";
+    if (r == K_TMIN_TIE) return "tie-both child-intervals";
+    if (r == K_ULP || r == K_EXIT) return "tie-both child-intervals";
+    if (r >= K_TMAX) return "stop-needs-hit";
+    return "start-root depth near-by-direction leaf-tests push-far child-intervals stop-in-cell pop-skip";
+}
+
 static void describe(size_t i, ex_case_info *out)
 {
     const int s = (int)(i / RAYS), r = (int)(i % RAYS);
     snprintf(out->name, sizeof out->name, "scene %s, ray %d (%s)", scene_names[s], r + 1, ray_kind[s][r]);
     ex_describe_walk(out, &rays[s][r], "kdtree", "--no-mailbox", scene_names[s], &meshes[s]);
+    out->rules = kind_rules(r);
 }
 
 static void reference(size_t i, const sidx_hook *h)
@@ -221,47 +328,6 @@ static void reference(size_t i, const sidx_hook *h)
     sidx_hit hit;
     sidx_accel_intersect(accels[s], &rays[s][r], &q, &hit);
 }
-
-static const char *const hint_direction =
-    "\"Near and far depend on direction of ray!\": the near child is the left one (below the plane) for a "
-    "positive direction on the split axis, the right one for a negative direction, whichever side the origin "
-    "is on";
-static const char *const hint_zero =
-    "\"Near and far depend on direction of ray!\": a -0 direction component is negative too (ray->sign, not "
-    "d < 0): inv_dir = -inf, and t_split = +-inf keeps the ray on its origin's side";
-static const char *const hint_tie =
-    "\"Three cases\": only a plane strictly before the cell (t_split < t_near) or strictly beyond it (t_split > "
-    "t_far) rules a child out; a tie, t_split == t_near or t_split == t_far, goes to both children (push the "
-    "far one)";
-static const char *const hint_nan =
-    "a ray inside the split plane (t_split = NaN) belongs to both cells: go to both over the whole interval, and "
-    "no early exit for the rest of the ray";
-static const char *const hint_stop =
-    "\"Traversal can be terminated as soon as surface intersection is found in the current node\": after a leaf, "
-    "stop if the best hit lies in this cell (best->t <= t_far, widened by |t_far|*KD_EPS)";
-static const char *const hint_cannot =
-    "\"CANNOT terminate !!!\": a hit beyond the current cell (best->t > t_far) may be hidden by a triangle in a "
-    "cell still on the stack; keep it as the best so far and go on";
-static const char *const hint_pop =
-    "pop the cell last pushed (\"Maintain stack of sub-trees still to traverse\"), and skip a popped cell "
-    "whose t_near lies beyond best->t: it cannot hold a closer hit";
-static const char *const hint_leaf =
-    "a leaf tests each of its triangles refs[first .. first + count) against the best hit so far, "
-    "sidx_ex_test_triangle(ex, prim, best->t, &t), and reports a closer one with sidx_ex_hit_update";
-
-static const char *const hint_stop_nohit =
-    "\"Traversal can be terminated as soon as surface intersection is found in the current node\": only a hit "
-    "stops the walk; with no hit (best->prim == SIDX_NO_HIT) pop the next cell, and return 0 when the stack is "
-    "empty";
-static const char *const hint_start =
-    "the loop is \"given (node, t_near, t_far)\": start at the root, sidx_ex_node_enter(ex, 0, 0, t_near, "
-    "t_far), and report every cell you enter";
-static const char *const hint_near_interval =
-    "the same child with another interval: when the plane cuts the cell, \"continue with (near child, t_near, "
-    "t_split)\" (t_far becomes t_split), and when it lies beyond the cell the near child keeps (t_near, t_far)";
-static const char *const hint_far_interval =
-    "the same far child with another interval: it is pushed as (far child, t_split, t_far), and when the plane "
-    "lies before the cell the far child keeps (t_near, t_far)";
 
 /* The hint follows what differs at the first divergence: a stop where
  * the reference goes on (or the reverse) is the termination rule; the
@@ -278,6 +344,10 @@ static const char *hint(size_t i, const sidx_event *ref, const sidx_event *stu)
                                 hint_start, hint_leaf};
     const char *w = ex_walk_hint(ref, stu, &walk);
     if (w) return w;
+    /* the same step but for its depth: a cell's depth, or the stack's size */
+    if (ref && stu && ref->type == stu->type && ref->node == stu->node && ref->depth != stu->depth &&
+        ref->t_near == stu->t_near && ref->t_far == stu->t_far)
+        return ref->type == SIDX_EV_NODE_ENTER ? rules[R_DEPTH].hint : rules[R_PUSH].hint;
     if ((ref && ref->type == SIDX_EV_STACK_POP) || (stu && stu->type == SIDX_EV_STACK_POP)) return hint_pop;
     if (ref && ref->type == SIDX_EV_TERMINATE && stu && stu->type == SIDX_EV_NODE_ENTER) return hint_pop;
     if (ref && stu && (ref->type == SIDX_EV_STACK_PUSH) != (stu->type == SIDX_EV_STACK_PUSH))
@@ -359,5 +429,5 @@ const ex_driver ex_driver_this = {
     "kd-tree traversal: front to back, with a stack of (node, t_near, t_far)",
     "deck 000, \"kD-Tree Traversal\", \"kD-Tree Traversal (1)-(11)\", \"kD-Tree Traversal Operation\" and "
     "\"kD-Tree Traversal: Inner Loop\"",
-    setup, num_cases, describe, reference, student, hint, teardown, NULL, NULL, 0,
+    setup, num_cases, describe, reference, student, hint, teardown, NULL, rules, sizeof rules / sizeof rules[0],
 };

@@ -190,25 +190,84 @@ static void teardown(void)
 
 static size_t num_cases(void) { return ncases; }
 
-static const char *const hint_events =
-    "\"Build a set of candidate split locations based on BBox of triangles (in/out events)\": per axis a start "
-    "event at each box's min and an end event at its max (one planar event for a flat box), sorted by "
-    "position, ends before planars before starts at one position; one candidate per distinct position "
-    "strictly inside the cell, x then y then z";
-static const char *const hint_counts =
-    "at a plane p: N_L = the triangles that start (or lie) before p, N_R = those that end after p; the plane's "
-    "own end and planar events leave the right side before the cost is taken, its start events join the "
-    "left side after";
-static const char *const hint_planar =
-    "a triangle lying in the plane (planar event) is tried on either side: the cost with it left and with it "
-    "right, the cheaper one (left on a tie) is the candidate";
-static const char *const hint_cost =
-    "\"Cost(c) = C_trav + SA(L)/SA(c)·TriCount(L) + SA(R)/SA(c)·TriCount(R)\" (times C_tri), SA of the child "
-    "CELLS (the cell cut at p), and when one side is empty the cost times (1 - empty bonus): cutting off empty "
-    "space \"produces large chunks of empty space\"";
-static const char *const hint_best =
-    "\"Walk through candidates to find minimum cost split\": keep the first cheapest (strictly cheaper "
-    "replaces it) and report it with sidx_ex_split";
+#define HINT_EVENTS                                                                                        \
+    "\"Build a set of candidate split locations based on BBox of triangles (in/out events)\": per axis a "    \
+    "start event at each box's min and an end event at its max (one planar event for a flat box), sorted "  \
+    "by position, ends before planars before starts at one position; one candidate per distinct position " \
+    "strictly inside the cell, x then y then z"
+#define HINT_ORDER                                                                                         \
+    "at one position the ends come first, then the planars, then the starts: a triangle that ends at p and " \
+    "one that starts at p lie on different sides, none on both"
+#define HINT_COUNTS                                                                                        \
+    "at a plane p: N_L = the triangles that start (or lie) before p, N_R = those that end after p; the "    \
+    "plane's own end and planar events leave the right side before the cost is taken, its start events "   \
+    "join the left side after"
+#define HINT_PLANAR                                                                                        \
+    "a triangle lying in the plane (planar event) is tried on either side: the cost with it left and with " \
+    "it right, the cheaper one (left on a tie) is the candidate"
+#define HINT_COST                                                                                          \
+    "\"Cost(c) = C_trav + SA(L)/SA(c)·TriCount(L) + SA(R)/SA(c)·TriCount(R)\" (times C_tri), SA of the "     \
+    "child CELLS (the cell cut at p), and when one side is empty the cost times (1 - empty bonus): cutting " \
+    "off empty space \"produces large chunks of empty space\""
+#define HINT_BONUS                                                                                         \
+    "a plane with no triangle on one side (N_L = 0 or N_R = 0) cuts off empty space: its cost is "          \
+    "multiplied by (1 - empty_bonus) (\"Cost-Optimized Split\")"
+#define HINT_BEST                                                                                          \
+    "\"Walk through candidates to find minimum cost split\": keep the first cheapest (strictly cheaper "      \
+    "replaces it) and report it with sidx_ex_split"
+
+/* The hand-out's promises (lessons/exercises/09_kdtree_sah.c). */
+static const ex_rule rules[] = {
+    {"events", "a start event at each box's min, an end at its max; a box flat on the axis gives one planar event",
+     HINT_EVENTS},
+    {"event-order", "at one position ends come first, then planars, then starts", HINT_ORDER},
+    {"inside-cell", "a position is a candidate only strictly inside the cell", HINT_EVENTS},
+    {"sweep-counts",
+     "N_R loses the ends and planars at p before the cost; N_L gains the starts and planars at p after it",
+     HINT_COUNTS},
+    {"planar-side", "the triangles lying in the plane go to the cheaper side, left on a tie", HINT_PLANAR},
+    {"sah-cost", "cost = C_trav + C_tri·(P_L·N_L + P_R·N_R), P the child cell's area over the cell's", HINT_COST},
+    {"empty-bonus", "when N_L or N_R is 0 the cost is multiplied by (1 - empty_bonus)", HINT_BONUS},
+    {"first-cheapest", "the split is the cheapest candidate, the first of equal ones", HINT_BEST},
+};
+enum { R_EVENTS, R_ORDER, R_INSIDE, R_COUNTS, R_PLANAR, R_COST, R_BONUS, R_BEST };
+
+static const char *const hint_events = HINT_EVENTS;
+static const char *const hint_counts = HINT_COUNTS;
+static const char *const hint_planar = HINT_PLANAR;
+static const char *const hint_cost = HINT_COST;
+static const char *const hint_best = HINT_BEST;
+
+/* 1 if a box of case c lies flat in the plane p of axis (a planar
+ * event at p). */
+static int planar_at(const node_case *c, int axis, float p)
+{
+    for (uint32_t k = 0; k < c->n; ++k)
+        if (sidx_v3_get(c->boxes[k].min, axis) == p && sidx_v3_get(c->boxes[k].max, axis) == p) return 1;
+    return 0;
+}
+
+/* 1 if a box of case c ends at p on axis and another starts there. */
+static int touch_at(const node_case *c, int axis, float p)
+{
+    int ends = 0, starts = 0;
+    for (uint32_t k = 0; k < c->n; ++k) {
+        const float lo = sidx_v3_get(c->boxes[k].min, axis), hi = sidx_v3_get(c->boxes[k].max, axis);
+        if (lo == hi) continue;
+        ends |= hi == p;
+        starts |= lo == p;
+    }
+    return ends && starts;
+}
+
+/* 1 if a box of case c is flat on some axis (a planar event). */
+static int has_planar(const node_case *c)
+{
+    for (uint32_t k = 0; k < c->n; ++k)
+        for (int a = 0; a < 3; ++a)
+            if (sidx_v3_get(c->boxes[k].min, a) == sidx_v3_get(c->boxes[k].max, a)) return 1;
+    return 0;
+}
 
 static void describe(size_t i, ex_case_info *out)
 {
@@ -223,6 +282,10 @@ static void describe(size_t i, ex_case_info *out)
              (double)c->cell.min.x, (double)c->cell.min.y, (double)c->cell.min.z, (double)c->cell.max.x,
              (double)c->cell.max.y, (double)c->cell.max.z, c->n, (double)C_TRAV, (double)C_TRI, (double)BONUS);
     out->hint = hint_events;
+    out->rules = c->scene < 0      ? "inside-cell events"
+                 : has_planar(c) ? "events event-order inside-cell sweep-counts planar-side sah-cost empty-bonus "
+                                   "first-cheapest"
+                                 : "events event-order inside-cell sweep-counts sah-cost empty-bonus first-cheapest";
 }
 
 static void reference(size_t i, const sidx_hook *h)
@@ -240,13 +303,23 @@ static void student(size_t i, const sidx_hook *h)
     kd_split(&ex, c->node, c->cell, c->boxes, c->n, C_TRAV, C_TRI, BONUS);
 }
 
+/* What differs decides: the split is the first-cheapest rule; another
+ * plane the events; at the same plane the same counts the cost (or the
+ * bonus, with an empty side); the same total on other sides the planar
+ * rule; fewer in all at a flat box's plane the planar event; more in all
+ * where boxes touch the order at one position; else the sweep's counts. */
 static const char *hint(size_t i, const sidx_event *ref, const sidx_event *stu)
 {
-    (void)i;
     if ((ref && ref->type == SIDX_EV_BUILD_SPLIT) || (stu && stu->type == SIDX_EV_BUILD_SPLIT)) return hint_best;
     if (!ref || !stu || ref->axis != stu->axis || ref->pos != stu->pos) return hint_events;
-    if (ref->count == stu->count && ref->aux == stu->aux) return hint_cost;
-    if (ref->count + ref->aux == stu->count + stu->aux) return hint_planar; /* same total: a planar on the other side */
+    if (ref->count == stu->count && ref->aux == stu->aux)
+        return ref->count == 0 || ref->aux == 0 ? rules[R_BONUS].hint : hint_cost; /* an empty side: the bonus */
+    const uint32_t want = ref->count + ref->aux, got = stu->count + stu->aux;
+    if (want == got) return hint_planar; /* same total: a planar on the other side */
+    /* fewer in all at a flat box's plane: it was no planar event, on neither side */
+    if (got < want && planar_at(&cases[i], ref->axis, ref->pos)) return hint_events;
+    /* more in all where one box ends and another starts: the order at one position */
+    if (got > want && touch_at(&cases[i], ref->axis, ref->pos)) return rules[R_ORDER].hint;
     return hint_counts;
 }
 
@@ -254,5 +327,5 @@ const ex_driver ex_driver_this = {
     "09_kdtree_sah",
     "the kd-tree's SAH split: events, the sweep, planar triangles, the empty-space bonus",
     "deck 000, \"Building good kD-trees\" (SAH, candidate events, minimum cost split) and \"Cost-Optimized Split\"",
-    setup, num_cases, describe, reference, student, hint, teardown, NULL, NULL, 0,
+    setup, num_cases, describe, reference, student, hint, teardown, NULL, rules, sizeof rules / sizeof rules[0],
 };

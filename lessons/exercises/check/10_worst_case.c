@@ -25,19 +25,37 @@ static const uint32_t sizes[NSIZES] = {64, 256, 1024};
 
 static size_t num_cases(void) { return NSTRUCT * NSIZES; }
 
-static const char *const hint_bvh =
-    "a BVH separates objects, not space: make every triangle's box (nearly) the whole scene's box, e.g. long "
-    "thin slivers all crossing the scene, so no split separates them and every ray enters every leaf";
-static const char *const hint_grid =
-    "a grid's cells all have one size (\"cannot adapt to non-uniform distribution of geometry\"): put nearly "
-    "all triangles into ONE cell (a teapot in a stadium) and keep the box large with a far-away triangle";
-static const char *const hint_kd =
-    "a kd-tree splits space, and cannot separate triangles that all straddle every plane: slivers crossing "
-    "the whole scene end in one leaf (or in every leaf)";
+#define HINT_BVH                                                                                           \
+    "a BVH separates objects, not space: make every triangle's box (nearly) the whole scene's box, e.g. "   \
+    "long thin slivers all crossing the scene, so no split separates them and every ray enters every leaf"
+#define HINT_GRID                                                                                          \
+    "a grid's cells all have one size (\"cannot adapt to non-uniform distribution of geometry\"): put "      \
+    "nearly all triangles into ONE cell (a teapot in a stadium) and keep the box large with a far-away "     \
+    "triangle"
+#define HINT_KD                                                                                            \
+    "a kd-tree splits space, and cannot separate triangles that all straddle every plane: slivers crossing " \
+    "the whole scene end in one leaf (or in every leaf)"
+#define HINT_COUNT                                                                                         \
+    "worst_case_scene(structure, n, out) must give a valid mesh of exactly n triangles: n·3 vertices, n "   \
+    "index triples each naming vertices that exist, passed to sidx_mesh_from_arrays with n triangles"
+#define HINT_VALID                                                                                         \
+    "sidx_mesh_from_arrays refused your arrays (or the mesh is invalid), so the scene is empty: n index "   \
+    "triples each naming vertices that exist (every index < the number of vertices you pass)"
 
-static const char *const hint_count =
-    "worst_case_scene(structure, n, out) must give a valid mesh of exactly n triangles: n·3 vertices, n "
-    "index triples each naming vertices that exist, passed to sidx_mesh_from_arrays with n triangles";
+/* The hand-out's promises (lessons/exercises/10_worst_case.c). */
+static const ex_rule rules[] = {
+    {"exact-n", "the scene has exactly n triangles", HINT_COUNT},
+    {"valid-mesh", "the scene is a valid mesh written with sidx_mesh_from_arrays", HINT_VALID},
+    {"bvh-grows", "on \"bvh\" the rays need at least n/2 triangle tests each, at every n", HINT_BVH},
+    {"grid-grows", "on \"grid\" the rays need at least n/2 triangle tests each, at every n", HINT_GRID},
+    {"kdtree-grows", "on \"kdtree\" the rays need at least n/2 triangle tests each, at every n", HINT_KD},
+};
+enum { R_COUNT, R_VALID, R_BVH, R_GRID, R_KD };
+
+static const char *const hint_bvh = HINT_BVH;
+static const char *const hint_grid = HINT_GRID;
+static const char *const hint_kd = HINT_KD;
+static const char *const hint_count = HINT_COUNT;
 
 static void describe(size_t i, ex_case_info *out)
 {
@@ -49,6 +67,9 @@ static void describe(size_t i, ex_case_info *out)
              "worst_case_scene(\"%s\", %u), %d rays each aimed at a triangle's centre from outside", structures[s], n,
              RAYS);
     out->hint = s == 0 ? hint_bvh : s == 1 ? hint_grid : hint_kd;
+    out->rules = s == 0   ? "exact-n valid-mesh bvh-grows"
+                 : s == 1 ? "exact-n valid-mesh grid-grows"
+                          : "exact-n valid-mesh kdtree-grows";
 }
 
 /* aux = 1 marks the criterion (the reference), 0 a measurement. */
@@ -123,12 +144,15 @@ static void student(size_t i, const sidx_hook *h)
     sidx_mesh_free(&m);
 }
 
-/* What differs decides: a scene of another size (or an invalid mesh) is
- * the size rule, too few tests per ray the structure's own weakness. */
+/* What differs decides: an empty or invalid mesh is the validity rule
+ * (sidx_mesh_from_arrays refuses an index past the vertices), a scene of
+ * another size the size rule, too few tests per ray the structure's own
+ * weakness (the case's hint). */
 static const char *hint(size_t i, const sidx_event *ref, const sidx_event *stu)
 {
     (void)i;
-    if (ref && stu && stu->type == SIDX_EV_NOTE && stu->cell[1] != ref->cell[1]) return hint_count;
+    if (ref && stu && stu->type == SIDX_EV_NOTE && stu->cell[1] != ref->cell[1])
+        return stu->cell[1] <= 0 ? rules[R_VALID].hint : hint_count;
     return NULL;
 }
 
@@ -152,5 +176,5 @@ const ex_driver ex_driver_this = {
     "the private exercise: a worst-case scene, where tests per ray grow like n",
     "deck 000, \"Spatial index structures\" (\"worst case complexity is still O(n). Private exercise: come up "
     "with a worst case example\")",
-    NULL, num_cases, describe, reference, student, hint, NULL, format, NULL, 0,
+    NULL, num_cases, describe, reference, student, hint, NULL, format, rules, sizeof rules / sizeof rules[0],
 };
