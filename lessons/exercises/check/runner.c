@@ -1672,7 +1672,7 @@ int main(int argc, char **argv)
         }
         if (html_path) {
             const page_text pt = {result, detail, hint, hint2, hint2_label, diagnosis, differs,
-                                  i + 1, n, first_rs == RUN_OK ? k + 1 : fstu.n};
+                                  i + 1, n, first_rs == RUN_OK ? k + 1 : fstu.n + 1}; /* a crash: the step that never came */
             if (write_html(html_path, &info, &fref, &fstu, &pt) == 0) printf("  %-10s %s\n", "page", html_path);
         }
         if (first_rs != RUN_OK) {
