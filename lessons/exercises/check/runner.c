@@ -1016,7 +1016,7 @@ static long best_rule(const ex_driver *d, const rule_count *rc, size_t failed)
 /* One line: which rules' cases fail and how many, e.g.
  * rule tmin-inclusive ("t = tmin is a hit"): fails 4 of its 4 cases; 0 of the 83 other cases fail */
 static void diagnosis_text(const ex_driver *d, const rule_count *rc, long best, size_t failed, size_t ran, size_t n,
-                           char *buf, size_t size)
+                           long only, char *buf, size_t size)
 {
     size_t o = 0;
 #define DIAG_PUT(...) appendf(buf, size, &o, __VA_ARGS__)
@@ -1040,7 +1040,9 @@ static void diagnosis_text(const ex_driver *d, const rule_count *rc, long best, 
         DIAG_PUT("fails %zu of the %zu case%s run%s", failed, ran, ran == 1 ? "" : "s",
                  d->num_rules ? "; none of the failing cases tests a rule of the hand-out" : "");
     }
-    if (ran < n)
+    if (only)
+        DIAG_PUT(" (case %ld alone: --case)", only);
+    else if (ran < n)
         DIAG_PUT(" (cases 1 to %zu of %zu run: past the first failure the checker stops after %d crashes or "
                  "time-outs, or %.1f s of CPU)",
                  ran, n, EX_DIAG_CRASHES, EX_DIAG_CPU);
@@ -1587,7 +1589,7 @@ int main(int argc, char **argv)
          * else the driver's hint for the divergence (or the case's) first */
         const long best = best_rule(d, rcount, failed);
         char diagnosis[2048];
-        diagnosis_text(d, rcount, best, failed, ran, n, diagnosis, sizeof diagnosis);
+        diagnosis_text(d, rcount, best, failed, ran, n, only, diagnosis, sizeof diagnosis);
         const char *rule_hint = best >= 0 ? d->rules[best].hint : NULL;
         const int explains_all = best >= 0 && rcount[best].failed == failed;
         const sidx_event *re = k < fref.n ? &fref.ev[k] : NULL, *se = k < fstu.n ? &fstu.ev[k] : NULL;
