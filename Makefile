@@ -482,6 +482,18 @@ EX_CHECK_SRC := $(wildcard lessons/exercises/check/*.c)
 EX_CHECK_OBJ := $(EX_CHECK_SRC:%.c=$(BUILD)/obj/%.o)
 $(BUILD)/obj/viz/sidx_check.o: CFLAGS += -DSIDX_CHECK_SRCDIR='"$(CURDIR)"' -DSIDX_CHECK_SANFLAGS='"$(SANFLAGS)"'
 $(BUILD)/bin/sidx-check: $(EX_CHECK_OBJ)
+# The runner writes a failing case as a web page (--html): viz/check_page.html
+# with viz/page_common.js spliced in, as the bytes of a C array the runner
+# includes (sidx_check_page_html), so the checker needs no file beside it.
+$(BUILD)/gen/check_page_html.inc: viz/check_page.html viz/page_common.js
+	@mkdir -p $(dir $@)
+	@$(call PAGE_COMMON_CHECK,$<)
+	@if [ "$$(grep -c '"@SIDX_CHECK_DATA@"' $<)" != 1 ]; then echo "$< wants exactly one \"@SIDX_CHECK_DATA@\""; exit 1; fi
+	{ echo '/* generated from viz/check_page.html and viz/page_common.js by the Makefile: do not edit */'; \
+	  echo 'static const unsigned char sidx_check_page_html[] = {'; \
+	  $(PAGE_COMMON_SPLICE) $< | od -An -v -tx1 | sed -e 's/\([0-9a-f][0-9a-f]\)/0x\1,/g'; echo '0x00};'; } > $@.tmp && mv $@.tmp $@
+$(BUILD)/obj/lessons/exercises/check/runner.o: $(BUILD)/gen/check_page_html.inc
+$(BUILD)/obj/lessons/exercises/check/runner.o: CFLAGS += -I$(BUILD)/gen
 
 # make exercise EX=NAME: check lessons/exercises/NAME.c, the stub a student
 # edits in place.  make exercises-handout: the repository without the

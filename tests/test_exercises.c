@@ -72,10 +72,16 @@ static int drain(FILE *p, char **out)
     return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
 }
 
+/* Where the checks write each exercise's rule table (--rules-out
+ * DIR/NAME.rules) while solutions_pass runs them, or "": the tables come
+ * with the solutions' checks at no extra build (load_tables). */
+static char rules_dir[64];
+
 static FILE *start_check(const char *name, const char *file)
 {
-    char cmd[3 * PATH_MAX];
-    snprintf(cmd, sizeof cmd, "'%s' '%s' '%s' 2>&1", checker, name, file);
+    char cmd[3 * PATH_MAX + 256], extra[256] = "";
+    if (rules_dir[0]) snprintf(extra, sizeof extra, " --rules-out '%s/%.63s.rules'", rules_dir, name);
+    snprintf(cmd, sizeof cmd, "'%s' '%s' '%s'%s 2>&1", checker, name, file, extra);
     FILE *p = popen(cmd, "r");
     assert_non_null(p);
     return p;
@@ -145,6 +151,8 @@ static void check_every(const char *dir, int want, const char *const *expect)
     }
 }
 
+static void load_tables(void);
+
 static void solutions_pass(void **state)
 {
     (void)state;
@@ -153,7 +161,15 @@ static void solutions_pass(void **state)
         return;
     }
     static const char *const expect[] = {"pass", NULL};
+    char dir[] = "/tmp/sidx-test-rules-XXXXXX";
+    assert_non_null(mkdtemp(dir));
+    snprintf(rules_dir, sizeof rules_dir, "%s", dir);
     check_every("lessons/exercises/solutions", 0, expect);
+    load_tables(); /* from the files the checks wrote */
+    char cmd[sizeof dir + 16];
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+    assert_int_equal(system(cmd), 0);
+    rules_dir[0] = '\0';
 }
 
 static void stubs_fail_cleanly(void **state)
@@ -171,6 +187,7 @@ typedef struct mistake {
     int exit_;
     char expect[8][256];
     int nexp;
+    char rule[64]; /* the rule of the exercise's table it breaks, or "" */
 } mistake;
 
 static char *slurp(const char *path)
@@ -243,12 +260,198 @@ static int read_mistakes(mistake *ms, int max)
             snprintf(ms[n].new_, sizeof ms[n].new_, "%s", val);
         } else if (!strcmp(key, "exit")) {
             ms[n].exit_ = atoi(val);
+        } else if (!strcmp(key, "rule")) {
+            snprintf(ms[n].rule, sizeof ms[n].rule, "%s", val);
         } else if (!strcmp(key, "expect") && ms[n].nexp < 8) {
             snprintf(ms[n].expect[ms[n].nexp++], 256, "%s", val);
         }
     }
     fclose(f);
     return n >= max ? -2 : n + 1;
+}
+
+/* ---- the rule tables ------------------------------------------------------------------ */
+
+/* One rule of `sidx-check --rules NAME`: id, statement, hint and the cases
+ * that test it (blank-separated case numbers). */
+#define MAX_RULES 64
+typedef struct rule_row {
+    char id[64], hint[1024], cases[1024];
+} rule_row;
+typedef struct rule_table {
+    char name[64];
+    int rc, n; /* the exit status of --rules; the rules */
+    rule_row row[MAX_RULES];
+} rule_table;
+
+/* A field of a tab-separated line: copies up to the next tab (or the end) into out. */
+static const char *tab_field(const char *p, char *out, size_t size)
+{
+    const size_t len = strcspn(p, "\t\n");
+    snprintf(out, size, "%.*s", (int)len, p);
+    return p[len] == '\t' ? p + len + 1 : p + len;
+}
+
+static void parse_rules(rule_table *t, const char *text)
+{
+    t->n = 0;
+    for (const char *p = text; *p && t->n < MAX_RULES;) {
+        const char *end = p + strcspn(p, "\n");
+        if (end > p) {
+            rule_row *r = &t->row[t->n++];
+            char statement[1024];
+            const char *q = tab_field(p, r->id, sizeof r->id);
+            q = tab_field(q, statement, sizeof statement);
+            q = tab_field(q, r->hint, sizeof r->hint);
+            tab_field(q, r->cases, sizeof r->cases);
+        }
+        p = *end ? end + 1 : end;
+    }
+}
+
+/* Every exercise's table from sidx-check --rules (each builds that
+ * exercise's checker: CHECK_JOBS at a time), read once. */
+static rule_table tables[32];
+static int ntables = -1;
+
+static void load_tables(void)
+{
+    if (ntables >= 0) return;
+    char list[32][64];
+    const int n = names(list, 32);
+    for (int i = 0; i < n; i += CHECK_JOBS) {
+        FILE *p[CHECK_JOBS];
+        const int m = n - i < CHECK_JOBS ? n - i : CHECK_JOBS;
+        for (int j = 0; j < m; ++j) {
+            char cmd[sizeof checker + 256];
+            if (rules_dir[0]) /* written by solutions_pass's checks */
+                snprintf(cmd, sizeof cmd, "cat '%s/%.63s.rules' 2>&1", rules_dir, list[i + j]);
+            else
+                snprintf(cmd, sizeof cmd, "'%s' --rules %.63s 2>&1", checker, list[i + j]);
+            p[j] = popen(cmd, "r");
+            assert_non_null(p[j]);
+        }
+        for (int j = 0; j < m; ++j) {
+            rule_table *t = &tables[i + j];
+            char *out;
+            snprintf(t->name, sizeof t->name, "%.63s", list[i + j]);
+            t->rc = drain(p[j], &out);
+            if (t->rc == 0) parse_rules(t, out);
+            else print_message("sidx-check --rules %s: exit %d\n%s", t->name, t->rc, out);
+            free(out);
+        }
+    }
+    ntables = n;
+}
+
+static const rule_row *find_rule(const char *name, const char *id)
+{
+    load_tables();
+    for (int i = 0; i < ntables; ++i) {
+        if (strcmp(tables[i].name, name) != 0) continue;
+        for (int r = 0; r < tables[i].n; ++r)
+            if (!strcmp(tables[i].row[r].id, id)) return &tables[i].row[r];
+    }
+    return NULL;
+}
+
+/* The rule ids docs/exercises.md lists for exercise name: the first
+ * column, in backticks, of the table under its "### NAME" heading in the
+ * section "The rules each hand-out states"; their count, -1 without the
+ * heading. */
+static int doc_rule_ids(const char *doc, const char *name, char ids[][64], int max)
+{
+    const char *sec = strstr(doc, "\n## The rules each hand-out states");
+    if (!sec) return -1;
+    const char *end = strstr(sec + 1, "\n## ");
+    char head[96];
+    snprintf(head, sizeof head, "\n### %.63s\n", name);
+    const char *h = strstr(sec, head);
+    if (!h || (end && h > end)) return -1;
+    const char *stop = strstr(h + strlen(head), "\n#");
+    int n = 0;
+    for (const char *p = h + strlen(head); *p && (!stop || p < stop);) {
+        const char *eol = p + strcspn(p, "\n");
+        if (p[0] == '|' && p[strspn(p, "| ")] == '`') {
+            const char *a = strchr(p, '`') + 1, *b = strchr(a, '`');
+            if (b && b < eol && n < max) snprintf(ids[n++], 64, "%.*s", (int)(b - a), a);
+        }
+        p = *eol ? eol + 1 : eol;
+    }
+    return n;
+}
+
+/* Every exercise's rule table agrees with docs/exercises.md (the same ids),
+ * every case names only rules of the table (--rules exits 0), every rule
+ * has a case and a planted mistake, and every mistake's rule is in its
+ * exercise's table.  A table still empty passes. */
+static void rule_tables_agree(void **state)
+{
+    (void)state;
+    static mistake ms[MAX_MISTAKES];
+    const int nm = read_mistakes(ms, MAX_MISTAKES);
+    char *doc = slurp("docs/exercises.md");
+    assert_non_null(doc);
+    load_tables();
+    assert_true(ntables >= 4);
+    int bad = 0, rules = 0;
+    { /* sidx-check --rules NAME prints what the check wrote with --rules-out (the exercise with most rules) */
+        int w = 0;
+        for (int i = 1; i < ntables; ++i)
+            if (tables[i].n > tables[w].n) w = i;
+        char cmd[sizeof checker + 128], *out;
+        snprintf(cmd, sizeof cmd, "'%s' --rules %.63s 2>&1", checker, tables[w].name);
+        FILE *p = popen(cmd, "r");
+        assert_non_null(p);
+        assert_int_equal(drain(p, &out), 0);
+        static rule_table again;
+        parse_rules(&again, out);
+        free(out);
+        assert_int_equal(again.n, tables[w].n);
+        for (int r = 0; r < again.n; ++r) {
+            assert_string_equal(again.row[r].id, tables[w].row[r].id);
+            assert_string_equal(again.row[r].hint, tables[w].row[r].hint);
+            assert_string_equal(again.row[r].cases, tables[w].row[r].cases);
+        }
+    }
+    for (int i = 0; i < ntables; ++i) {
+        const rule_table *t = &tables[i];
+        if (t->rc != 0) {
+            ++bad;
+            continue;
+        }
+        static char ids[MAX_RULES][64];
+        const int nd = doc_rule_ids(doc, t->name, ids, MAX_RULES);
+        if (nd < 0) {
+            print_message("docs/exercises.md: no \"### %s\" under \"The rules each hand-out states\"\n", t->name);
+            ++bad;
+        }
+        for (int d = 0; d < nd; ++d)
+            if (!find_rule(t->name, ids[d])) {
+                print_message("%s: docs/exercises.md lists the rule %s, which sidx-check --rules lacks\n", t->name, ids[d]);
+                ++bad;
+            }
+        for (int r = 0; r < t->n; ++r) {
+            const rule_row *row = &t->row[r];
+            ++rules;
+            int in_doc = 0, mistakes = 0;
+            for (int d = 0; d < nd; ++d) in_doc |= !strcmp(ids[d], row->id);
+            for (int k = 0; k < nm; ++k) mistakes += !strcmp(ms[k].name, t->name) && !strcmp(ms[k].rule, row->id);
+            if (!in_doc) print_message("%s: the rule %s is not in docs/exercises.md\n", t->name, row->id);
+            if (!row->cases[0]) print_message("%s: no case tests the rule %s\n", t->name, row->id);
+            if (nm >= 0 && !mistakes) print_message("%s: no planted mistake breaks the rule %s\n", t->name, row->id);
+            if (!row->hint[0]) print_message("%s: the rule %s has no hint\n", t->name, row->id);
+            bad += !in_doc + !row->cases[0] + (nm >= 0 && !mistakes) + !row->hint[0];
+        }
+    }
+    for (int k = 0; k < nm; ++k)
+        if (ms[k].rule[0] && !find_rule(ms[k].name, ms[k].rule)) {
+            print_message("%s--%s: the rule %s is not in the exercise's table\n", ms[k].name, ms[k].slug, ms[k].rule);
+            ++bad;
+        }
+    print_message("%d exercises, %d rules\n", ntables, rules);
+    free(doc);
+    assert_int_equal(bad, 0);
 }
 
 /* At the small sizes: the records kept, in file order (see the header). */
@@ -303,6 +506,14 @@ static void planted_mistakes_caught(void **state)
                 print_message("%s--%s: the report lacks \"%s\"\n", m->name, m->slug, m->expect[k]);
                 ok = 0;
             }
+        if (m->rule[0]) { /* the hint of the rule it breaks */
+            const rule_row *r = find_rule(m->name, m->rule);
+            if (!r) print_message("%s--%s: no rule %s in sidx-check --rules %s\n", m->name, m->slug, m->rule, m->name);
+            else if (!strstr(out[i], r->hint))
+                print_message("%s--%s: the report lacks the hint of the rule %s: \"%s\"\n", m->name, m->slug, m->rule,
+                              r->hint);
+            ok = ok && r && strstr(out[i], r->hint);
+        }
         if (!ok) print_message("%s--%s: exit %d (want %d)\n%s", m->name, m->slug, rc[i], m->exit_, out[i]);
         assert_true(ok);
         free(out[i]);
@@ -333,6 +544,68 @@ static void step_path(char *step, size_t size)
     char *slash = strrchr(step, '/');
     assert_non_null(slash);
     snprintf(slash + 1, size - (size_t)(slash + 1 - step), "sidx-step");
+}
+
+/* The text after "label" on the report's line that starts with it
+ * ("  reference  ..."), or NULL. */
+static char *report_line(const char *report, const char *label)
+{
+    char key[64];
+    snprintf(key, sizeof key, "\n  %-10s ", label);
+    const char *a = strstr(report, key);
+    if (!a) return NULL;
+    a += strlen(key);
+    return strndup(a, strcspn(a, "\n"));
+}
+
+/* The page sidx-check --html wrote (path) opens in headless Chromium from
+ * file:// without a script error, and the step it highlights first is the
+ * report's: the step number and the two events' lines.  Without chromium
+ * it says so and returns. */
+static void page_agrees(const char *path, const char *report)
+{
+    const char *browser = system("command -v chromium >/dev/null 2>&1") == 0          ? "chromium"
+                          : system("command -v chromium-browser >/dev/null 2>&1") == 0 ? "chromium-browser"
+                                                                                        : NULL;
+    if (!browser) {
+        print_message("no chromium: the --html page is not opened\n");
+        return;
+    }
+    char real[PATH_MAX], cmd[4 * PATH_MAX + 512];
+    assert_non_null(realpath(path, real));
+    snprintf(cmd, sizeof cmd,
+             "timeout 60 %s --headless --no-sandbox --disable-gpu --disable-quic --no-first-run "
+             "--disable-background-networking --disable-component-update --disable-sync "
+             "--user-data-dir=%s.profile --dump-dom 'file://%s' 2>/dev/null; rm -rf '%s.profile'",
+             browser, real, real, real);
+    FILE *p = popen(cmd, "r");
+    assert_non_null(p);
+    char *dom;
+    drain(p, &dom);
+    char *st = strstr(dom, "<pre id=\"state\">"), *end = st ? strstr(st, "</pre>") : NULL;
+    if (end) *end = '\0'; /* #state alone */
+    if (!end || strstr(st, "error=")) print_message("the page's DOM:\n%.2000s\n", dom);
+    assert_non_null(end);
+    assert_null(strstr(st, "error="));
+    assert_non_null(strstr(st, "status=ready"));
+    /* the step: "leaves the reference at step K" */
+    const char *at = strstr(report, "leaves the reference at step ");
+    assert_non_null(at);
+    char want[96];
+    snprintf(want, sizeof want, "\npart=%ld\n", strtol(at + strlen("leaves the reference at step "), NULL, 10));
+    assert_non_null(strstr(st, want));
+    const char *const labels[] = {"reference", "yours"};
+    for (int k = 0; k < 2; ++k) {
+        char *line = report_line(report, labels[k]);
+        assert_non_null(line);
+        char key[600];
+        snprintf(key, sizeof key, "\n%s=%s\n", labels[k], line);
+        /* the DOM escapes nothing in these lines but &, < and > */
+        if (!strstr(st, key)) print_message("the page's first highlighted step lacks \"%s\":\n%.600s\n", key + 1, st);
+        assert_non_null(strstr(st, key));
+        free(line);
+    }
+    free(dom);
 }
 
 /* sidx-check --trace writes both traces and the sidx-view commands that
@@ -369,10 +642,13 @@ static void traces_and_diff(void **state)
     /* a directory that does not exist yet is made, with the ones above it */
     char tdir[sizeof dir + 16];
     snprintf(tdir, sizeof tdir, "%s/new/traces", dir);
-    snprintf(cmd, sizeof cmd, "'%s' 05_bvh_traversal %s --trace %s", checker, file, tdir);
+    char page[sizeof dir + 16];
+    snprintf(page, sizeof page, "%s/case.html", dir);
+    snprintf(cmd, sizeof cmd, "'%s' 05_bvh_traversal %s --trace %s --html %s", checker, file, tdir, page);
     p = popen(cmd, "r");
     assert_non_null(p);
     assert_int_equal(drain(p, &out), 1);
+    page_agrees(page, out);
     /* with SDL2 the report names the two sidx-view commands, and each opens its trace */
     char viewer[PATH_MAX + 32];
     snprintf(viewer, sizeof viewer, "%s", step);
@@ -406,6 +682,72 @@ static void traces_and_diff(void **state)
     assert_int_equal(WEXITSTATUS(st), 2);
     snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
     assert_int_equal(system(cmd), 0);
+}
+
+/* Runs sidx-check NAME on NAME's solution with old replaced by new (and
+ * extra arguments); returns its exit status and report. */
+static int check_planted(const char *name, const char *old, const char *new_, const char *extra, char **out)
+{
+    mistake m;
+    memset(&m, 0, sizeof m);
+    snprintf(m.name, sizeof m.name, "%s", name);
+    snprintf(m.slug, sizeof m.slug, "inline");
+    snprintf(m.old, sizeof m.old, "%s", old);
+    snprintf(m.new_, sizeof m.new_, "%s", new_);
+    char dir[] = "/tmp/sidx-test-ex-XXXXXX", file[PATH_MAX], cmd[3 * PATH_MAX];
+    assert_non_null(mkdtemp(dir));
+    assert_int_equal(plant(&m, dir, file, sizeof file), 0);
+    snprintf(cmd, sizeof cmd, "'%s' %s '%s' %s 2>&1", checker, name, file, extra);
+    FILE *p = popen(cmd, "r");
+    assert_non_null(p);
+    const int rc = drain(p, out);
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+    assert_int_equal(system(cmd), 0);
+    return rc;
+}
+
+/* The report's diagnosis and hints: two diverging events that print
+ * alike (a painter that enters node 0 at depth 0 over [0, inf], the
+ * reference over [0, 0]) show the field that differs; the diagnosis line
+ * counts the failing cases, also in --summary's last field; a recursion
+ * that never reaches its base case is told so. */
+static void diagnosis_and_differs(void **state)
+{
+    (void)state;
+    if (access("lessons/exercises/solutions", R_OK) != 0) {
+        print_message("skipped: no solutions (a handout tree)\n");
+        return;
+    }
+    char *out, summary[] = "/tmp/sidx-test-sum-XXXXXX", extra[64];
+    const int fd = mkstemp(summary);
+    assert_true(fd >= 0);
+    close(fd);
+    snprintf(extra, sizeof extra, "--summary %s", summary);
+    int rc = check_planted("14_bsp_painter", "sidx_ex_node_enter(ex, node, depth, 0.0f, 0.0f);",
+                           "sidx_ex_node_enter(ex, node, depth, 0.0f, INFINITY);", extra, &out);
+    if (rc != 1 || !strstr(out, "differs    t_far 0 vs inf (reference vs yours)")) print_message("%s", out);
+    assert_int_equal(rc, 1);
+    assert_non_null(strstr(out, "  reference  node 0 enter  depth 0\n  yours      node 0 enter  depth 0\n"));
+    assert_non_null(strstr(out, "differs    t_far 0 vs inf (reference vs yours)"));
+    char *diag = report_line(out, "diagnosis");
+    assert_non_null(diag);
+    assert_non_null(strstr(diag, "fails 20 of"));
+    char *sum = slurp(summary);
+    assert_non_null(sum);
+    const char *last = strrchr(sum, '\t');
+    assert_non_null(last);
+    assert_true(!strncmp(last + 1, diag, strlen(diag)));
+    free(sum);
+    free(diag);
+    free(out);
+    unlink(summary);
+    /* a leaf never reached: the node's own range is split again and again */
+    rc = check_planted("11_bvh_build", "    if (nl == 0) {\n", "    if (nl == 0 && count == 0) {\n", "", &out);
+    if (rc != 2 || !strstr(out, "does the recursion reach its base case?")) print_message("%s", out);
+    assert_int_equal(rc, 2);
+    assert_non_null(strstr(out, "crashed: signal 11"));
+    assert_non_null(strstr(out, "endless recursion (the stack overflowed)"));
+    free(out);
 }
 
 /* The reference solution of 08_kdtree_traversal retells the library's
@@ -566,12 +908,15 @@ int main(void)
         printf("test_exercises: skipped: no sidx-check beside this suite (build it with make build)\n");
         return 0;
     }
+    if (getenv("EX_TEST")) cmocka_set_test_filter(getenv("EX_TEST")); /* EX_TEST=rule_tables_agree: that test alone */
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(solutions_pass),
         cmocka_unit_test(stubs_fail_cleanly),
+        cmocka_unit_test(rule_tables_agree),
         cmocka_unit_test(planted_mistakes_caught),
         cmocka_unit_test(usage_and_errors),
         cmocka_unit_test(traces_and_diff),
+        cmocka_unit_test(diagnosis_and_differs),
         cmocka_unit_test(kd_walk_bit_exact),
         cmocka_unit_test(variants_pass),
         cmocka_unit_test(mutant_sample_killed),

@@ -396,13 +396,14 @@ function stackList(r, name, dataNode) {
   if (r.more) { var mo = document.createElement('li'); mo.textContent = '... ' + r.more + ' more'; st.appendChild(mo); }
 }
 /* The 30 event lines around step k of n (text(j): event j's line), the current one marked,
- * event `part` marked as where two walks part. */
-function eventLines(k, n, text, part) {
+ * event `part` marked as where two walks part; into the element with id `into` (default
+ * "events"). */
+function eventLines(k, n, text, part, into) {
   var lines = 30, first = Math.max(0, Math.min(k - 1 - (lines >> 1), n - lines)), html = [];
   for (var j = first; j < first + lines && j < n; ++j)
     html.push('<div data-i="' + j + '" class="' + (j === k - 1 ? 'cur' : j < k - 1 ? 'past' : 'future') +
               (j === part ? ' part' : '') + '">' + ('    ' + (j + 1)).slice(-5) + ' ' + esc(text(j)) + '</div>');
-  $('events').innerHTML = html.join('');
+  $(into || 'events').innerHTML = html.join('');
 }
 
 /* ---- the stepper's buttons and keys --------------------------------------------------- */

@@ -48,6 +48,8 @@ static void usage(FILE *f)
 {
     fprintf(f,
             "usage: sidx-check NAME FILE.c [--trace DIR] [--timeout S] [--memory MB] [--case K] [--verbose]\n"
+            "                             [--html FILE]\n"
+            "       sidx-check --rules NAME\n"
             "       sidx-check --class DIR [--jobs N] [--out DIR2] [--timeout S] [--memory MB]\n"
             "       sidx-check --list\n"
             "\n"
@@ -57,6 +59,10 @@ static void usage(FILE *f)
             "reference did, what your code did, the input and a hint from the slides.\n"
             "\n"
             "  --list          the exercises\n"
+            "  --rules NAME    the rules exercise NAME's hand-out states, one a line, tab-separated:\n"
+            "                  id, statement, hint, the cases that test each\n"
+            "  --html FILE     write the failing case as a web page: the reference's steps and yours\n"
+            "                  side by side over the case's scene, up to where they part, with the hint\n"
             "  --trace DIR     write DIR/reference.jsonl and DIR/yours.jsonl for the failing case\n"
             "                  (or for case K) as JSON Lines: compare them with sidx-step --diff; for\n"
             "                  a walk the report also prints the two sidx-view --events commands\n"
@@ -602,7 +608,7 @@ static int class_mode(const char *dir, const char *out_arg, long jobs, char **pa
 
 int main(int argc, char **argv)
 {
-    const char *name = NULL, *file = NULL, *class_dir = NULL, *out = NULL, *summary = NULL;
+    const char *name = NULL, *file = NULL, *class_dir = NULL, *out = NULL, *summary = NULL, *rules = NULL;
     long jobs = sysconf(_SC_NPROCESSORS_ONLN);
     char *pass[20];
     int npass = 0;
@@ -614,7 +620,8 @@ int main(int argc, char **argv)
         } else if (!strcmp(a, "--list")) {
             for (size_t k = 0; k < NEX; ++k) printf("%-20s %s\n", exercises[k].name, exercises[k].title);
             return 0;
-        } else if ((!strcmp(a, "--trace") || !strcmp(a, "--timeout") || !strcmp(a, "--case") || !strcmp(a, "--memory")) &&
+        } else if ((!strcmp(a, "--trace") || !strcmp(a, "--timeout") || !strcmp(a, "--case") || !strcmp(a, "--memory") ||
+                    !strcmp(a, "--html") || !strcmp(a, "--rules-out")) &&
                    i + 1 < argc) {
             if (npass > 12) return 2;
             if (!strcmp(a, "--trace")) make_parents(argv[i + 1]);
@@ -623,6 +630,8 @@ int main(int argc, char **argv)
         } else if (!strcmp(a, "--verbose")) {
             if (npass > 12) return 2;
             pass[npass++] = argv[i];
+        } else if (!strcmp(a, "--rules") && i + 1 < argc) {
+            rules = argv[++i];
         } else if (!strcmp(a, "--class") && i + 1 < argc) {
             class_dir = argv[++i];
         } else if (!strcmp(a, "--out") && i + 1 < argc) {
@@ -650,6 +659,23 @@ int main(int argc, char **argv)
         }
     }
     if (jobs < 1) jobs = 1;
+    if (rules) { /* the rule table, from the checker built with the reference solution (else the stub) */
+        if (name || file || class_dir) {
+            fprintf(stderr, "sidx-check: --rules NAME takes no other NAME, FILE or --class\n");
+            return 2;
+        }
+        size_t k = 0;
+        while (k < NEX && strcmp(exercises[k].name, rules) != 0) ++k;
+        if (k == NEX) {
+            fprintf(stderr, "sidx-check: no exercise named '%s' (sidx-check --list)\n", rules);
+            return 2;
+        }
+        char src[PATH_MAX];
+        snprintf(src, sizeof src, "%s/lessons/exercises/solutions/%s.c", SIDX_CHECK_SRCDIR, rules);
+        if (access(src, R_OK) != 0) snprintf(src, sizeof src, "%s/lessons/exercises/%s.c", SIDX_CHECK_SRCDIR, rules);
+        char *rv[] = {"--rules"};
+        return check_one(k, src, rv, 1, NULL);
+    }
     if (class_dir) {
         if (name) {
             fprintf(stderr, "sidx-check: --class takes no NAME or FILE\n");

@@ -23,6 +23,7 @@
 #include <link.h>
 #include <poll.h>
 #include <signal.h>
+#include <stdarg.h>
 #include <stdint.h>
 #include <time.h>
 #include <ucontext.h>
@@ -221,7 +222,10 @@ static struct containment {
     /* the last crash: "at FILE:LINE in f()" or "" */
     char where[2200];
     int where_is_student;
-} cx = {.memory_mb = EX_MEMORY_MB};
+    int recursion;      /* frames of the crashing student function in the backtrace */
+    int locate;         /* name a crash's place (addr2line); off for the cases run for the diagnosis */
+    double wall_cap;    /* > 0: a case's wall time limit below --timeout (the cases run for the diagnosis) */
+} cx = {.memory_mb = EX_MEMORY_MB, .locate = 1};
 
 static int crash_fd = -1;
 
@@ -445,7 +449,8 @@ static void locate_crash(int fd)
     }
     close(pfd[1]);
     FILE *f = fdopen(pfd[0], "r");
-    char fn[512], loc[PATH_MAX + 64], first[sizeof cx.where] = "";
+    char fn[512], loc[PATH_MAX + 64], first[sizeof cx.where] = "", student_fn[512] = "";
+    cx.recursion = 0;
     while (f && fgets(fn, sizeof fn, f) && fgets(loc, sizeof loc, f)) {
         fn[strcspn(fn, "\n")] = '\0';
         loc[strcspn(loc, " \n")] = '\0'; /* drops " (discriminator N)" */
@@ -453,9 +458,15 @@ static void locate_crash(int fd)
         if (!colon || loc[0] == '?' || colon[1] == '?' || colon[1] == '0') continue;
         *colon = '\0';
         if (!strcmp(loc, cx.source_real)) {
-            snprintf(cx.where, sizeof cx.where, "%.2000s:%.16s, in %.120s()", cx.source, colon + 1, fn);
-            cx.where_is_student = 1;
-            break;
+            /* the innermost frame in the student's file names the place; the
+             * frames of that same function below it count the recursion */
+            if (!cx.where_is_student) {
+                snprintf(cx.where, sizeof cx.where, "%.2000s:%.16s, in %.120s()", cx.source, colon + 1, fn);
+                snprintf(student_fn, sizeof student_fn, "%s", fn);
+                cx.where_is_student = 1;
+            }
+            if (!strcmp(fn, student_fn)) ++cx.recursion;
+            continue;
         }
         if (!first[0]) snprintf(first, sizeof first, "%.2000s:%.16s, in %.120s()", loc, colon + 1, fn);
     }
@@ -501,7 +512,13 @@ static double now_s(void)
 }
 
 /* *cpu: the time-out was spent computing (an endless loop), not waiting. */
-static run_status run_student(size_t i, unsigned timeout, ex_trace *out, int *sig, int *code, int *cpu)
+/* The mark the child writes after each case of a run of several (its
+ * node: the case's index): no event type of the library has this value. */
+#define EX_CASE_END ((sidx_event_type)0x4558)
+
+/* Runs the student's cases i..last (last = i: one case) in one child; a
+ * run of several writes EX_CASE_END after each case. */
+static run_status run_student(size_t i, size_t last, unsigned timeout, ex_trace *out, int *sig, int *code, int *cpu)
 {
     char casedir[sizeof cx.dir + 16], path[sizeof cx.dir + 16], cpath[sizeof cx.dir + 16];
     snprintf(casedir, sizeof casedir, "%s/case-XXXXXX", cx.dir);
@@ -535,7 +552,16 @@ static run_status run_student(size_t i, unsigned timeout, ex_trace *out, int *si
         contain_child(casedir, timeout, pfd[1], cfd);
         child_out o = {fd, 0};
         sidx_hook h = {child_hook_fn, &o, 0};
-        ex_driver_this.student(i, &h);
+        for (size_t c = i; c <= last; ++c) {
+            o.n = 0;
+            ex_driver_this.student(c, &h);
+            if (last > i) {
+                sidx_event m = sidx_event_blank(SIDX_EV_NOTE);
+                m.type = EX_CASE_END;
+                m.node = (uint32_t)c;
+                write_all(fd, &m, sizeof m);
+            }
+        }
         write_all(fd, done_mark, sizeof done_mark);
         fflush(stdout);
         _exit(0);
@@ -543,7 +569,7 @@ static run_status run_student(size_t i, unsigned timeout, ex_trace *out, int *si
     close(pfd[1]);
     /* Reads the output until the child closes it, within the time limit;
      * stops a child that writes too much or runs out of time. */
-    const double deadline = now_s() + timeout;
+    const double deadline = now_s() + (cx.wall_cap > 0 && cx.wall_cap < timeout ? cx.wall_cap : timeout);
     size_t bytes = 0;
     int killed_output = 0, killed_time = 0, open_ = 1, st = 0, reaped = 0, busy = 0;
     char buf[65536];
@@ -631,7 +657,7 @@ static run_status run_student(size_t i, unsigned timeout, ex_trace *out, int *si
             rs = RUN_OUTPUT;
         } else {
             rs = RUN_CRASH;
-            locate_crash(cfd);
+            if (cx.locate) locate_crash(cfd);
         }
     } else if (WIFEXITED(st) && WEXITSTATUS(st) == 3) {
         rs = RUN_TOO_MANY;
@@ -646,6 +672,28 @@ static run_status run_student(size_t i, unsigned timeout, ex_trace *out, int *si
 }
 
 /* ---- comparison ---------------------------------------------------------------- */
+
+/* Appends to buf (size bytes, o used): the text is cut at the end of buf. */
+#if defined(__GNUC__)
+__attribute__((format(printf, 4, 5)))
+#endif
+static void appendf(char *buf, size_t size, size_t *o, const char *fmt, ...)
+{
+    if (*o + 1 >= size) return;
+    va_list ap;
+    va_start(ap, fmt);
+    const int w = vsnprintf(buf + *o, size - *o, fmt, ap);
+    va_end(ap);
+    if (w > 0) *o = *o + (size_t)w < size ? *o + (size_t)w : size - 1;
+}
+
+/* An id as the printer shows it: "none" for UINT32_MAX. */
+static const char *u32_text(uint32_t v, char *buf)
+{
+    if (v == UINT32_MAX) return "none";
+    snprintf(buf, 16, "%u", v);
+    return buf;
+}
 
 static int same_float(float a, float b)
 {
@@ -689,6 +737,99 @@ static int same_event(const sidx_event *a, const sidx_event *b)
                a->count == b->count && same_float(a->t_near, b->t_near) && same_float(a->t_far, b->t_far);
     default: return 1;
     }
+}
+
+/* The fields same_event compares that differ between a and b (events of
+ * one type), as "t_near 0.5 vs 0.50000006, depth 0 vs 1": what tells two
+ * diverging events apart when the printer shows them alike (it prints t
+ * to 6 digits, and not every field).  Floats to 9 digits, enough to tell
+ * any two floats apart.  Empty when the types differ. */
+static void diff_fields(const sidx_event *a, const sidx_event *b, char *buf, size_t size)
+{
+    size_t o = 0;
+    buf[0] = '\0';
+    if (!a || !b || a->type != b->type) return;
+#define DIFF_PUT(...) appendf(buf, size, &o, __VA_ARGS__)
+#define DIFF_U(f)                                                                                                \
+    if (a->f != b->f) DIFF_PUT("%s" #f " %s vs %s", o ? ", " : "", u32_text(a->f, ta), u32_text(b->f, tb))
+#define DIFF_I(f)                                                                                                \
+    if (a->f != b->f) DIFF_PUT("%s" #f " %d vs %d", o ? ", " : "", (int)a->f, (int)b->f)
+#define DIFF_F(f)                                                                                                \
+    if (!same_float(a->f, b->f)) DIFF_PUT("%s" #f " %.9g vs %.9g", o ? ", " : "", (double)a->f, (double)b->f)
+#define DIFF_CELL()                                                                                              \
+    if (a->cell[0] != b->cell[0] || a->cell[1] != b->cell[1] || a->cell[2] != b->cell[2])                        \
+    DIFF_PUT("%scell (%d, %d, %d) vs (%d, %d, %d)", o ? ", " : "", a->cell[0], a->cell[1], a->cell[2], b->cell[0], \
+             b->cell[1], b->cell[2])
+    char ta[16], tb[16];
+    switch (a->type) {
+    case SIDX_EV_BOX_TEST:
+        DIFF_U(node);
+        DIFF_I(result);
+        if (a->result == 1 && b->result == 1) {
+            DIFF_F(t_near);
+            DIFF_F(t_far);
+        }
+        break;
+    case SIDX_EV_NODE_ENTER:
+        DIFF_U(node);
+        DIFF_U(depth);
+        DIFF_F(t_near);
+        DIFF_F(t_far);
+        DIFF_CELL();
+        break;
+    case SIDX_EV_STACK_PUSH:
+    case SIDX_EV_STACK_POP:
+        DIFF_U(node);
+        DIFF_U(depth);
+        DIFF_F(t_near);
+        DIFF_F(t_far);
+        break;
+    case SIDX_EV_PRIM_TEST:
+        DIFF_U(prim);
+        DIFF_I(result);
+        if (a->result == 1 && b->result == 1) DIFF_F(t);
+        break;
+    case SIDX_EV_HIT_UPDATE:
+        DIFF_U(prim);
+        DIFF_F(t);
+        break;
+    case SIDX_EV_MAILBOX_HIT: DIFF_U(prim); break;
+    case SIDX_EV_TERMINATE:
+        DIFF_I(reason);
+        DIFF_F(t);
+        DIFF_U(count);
+        break;
+    case SIDX_EV_RAY_END:
+        DIFF_U(prim);
+        DIFF_F(t);
+        DIFF_I(result);
+        break;
+    case SIDX_EV_RAY_BEGIN:
+        DIFF_F(t_near);
+        DIFF_F(t_far);
+        break;
+    case SIDX_EV_BUILD_CANDIDATE:
+    case SIDX_EV_BUILD_SPLIT:
+        DIFF_U(node);
+        DIFF_I(axis);
+        DIFF_F(pos);
+        DIFF_F(cost);
+        DIFF_U(count);
+        DIFF_U(aux);
+        break;
+    case SIDX_EV_NOTE:
+        DIFF_CELL();
+        DIFF_U(count);
+        DIFF_F(t_near);
+        DIFF_F(t_far);
+        break;
+    default: break;
+    }
+#undef DIFF_PUT
+#undef DIFF_U
+#undef DIFF_I
+#undef DIFF_F
+#undef DIFF_CELL
 }
 
 static void print_event(FILE *f, const char *label, const sidx_event *e)
@@ -753,17 +894,21 @@ static void usage(FILE *f)
 {
     fprintf(f,
             "usage: (built by sidx-check) run [--case K] [--trace DIR] [--viewer PATH] [--timeout SECONDS]\n"
-            "                                 [--verbose]\n"
+            "                                 [--verbose] [--html FILE] | --rules\n"
             "  --case K        run only case K (1-based)\n"
             "  --trace DIR     write DIR/reference.jsonl and DIR/yours.jsonl for the first failing case\n"
             "                  (or for case K)\n"
+            "  --html FILE     write the first failing case as a web page: both walks side by side\n"
             "  --viewer PATH   sidx-view, to print the commands that step through the traces\n"
             "  --timeout S     time limit per case (default 2 s)\n"
             "  --verbose       one line per case\n"
             "  --source FILE   the student's file (to name a crash's FILE:LINE)\n"
             "  --memory MB     memory per case (default %lu MiB)\n"
             "  --summary FILE  write the verdict as one tab-separated line: result, case, cases, step,\n"
-            "                  case name, detail, hint\n",
+            "                  case name, detail, hint, diagnosis\n"
+            "  --rules         print the exercise's rule table, one rule a line, tab-separated: id,\n"
+            "                  statement, hint, the cases that test it (1-based, blank-separated)\n"
+            "  --rules-out FILE  write that table to FILE, and check\n",
             EX_MEMORY_MB);
 }
 
@@ -777,7 +922,7 @@ static void put_field(FILE *f, const char *s, int last)
 }
 
 static void write_summary(const char *result, size_t case_, size_t cases, size_t step, const char *name,
-                          const char *detail, const char *hint)
+                          const char *detail, const char *hint, const char *diagnosis)
 {
     if (!summary_path) return;
     FILE *f = fopen(summary_path, "w");
@@ -785,22 +930,499 @@ static void write_summary(const char *result, size_t case_, size_t cases, size_t
     fprintf(f, "%s\t%zu\t%zu\t%zu\t", result, case_, cases, step);
     put_field(f, name, 0);
     put_field(f, detail, 0);
-    put_field(f, hint, 1);
+    put_field(f, hint, 0);
+    put_field(f, diagnosis, 1);
     fclose(f);
 }
+
+/* ---- the rules and the diagnosis ------------------------------------------------------ */
+
+/* After the first failing case the runner goes on through the battery, so
+ * that the hint comes from the pattern of all failing cases (which rules'
+ * cases fail) rather than from the first.  Those further cases run in one
+ * child, one after another (run_rest), and cost at most EX_DIAG_CPU
+ * seconds of CPU for the whole run, the runner and its children (a
+ * passing check runs every case anyway, a child each); the run stops after
+ * EX_DIAG_CRASHES of them crash or time out. */
+#define EX_DIAG_CPU 1.2
+#define EX_DIAG_MIN_WALL 0.2
+#define EX_DIAG_CRASHES 8
+/* A crash with this many frames of the crashing function in its backtrace
+ * (of EX_CRASH_FRAMES) is a recursion that never reached its base case. */
+#define EX_RECURSION_FRAMES 8
+
+static double cpu_used(void)
+{
+    struct rusage a, b;
+    getrusage(RUSAGE_SELF, &a);
+    getrusage(RUSAGE_CHILDREN, &b);
+    return (double)(a.ru_utime.tv_sec + a.ru_stime.tv_sec + b.ru_utime.tv_sec + b.ru_stime.tv_sec) +
+           1e-6 * (double)(a.ru_utime.tv_usec + a.ru_stime.tv_usec + b.ru_utime.tv_usec + b.ru_stime.tv_usec);
+}
+
+/* The index of the rule named by the len characters at id, or -1. */
+static long rule_index(const ex_driver *d, const char *id, size_t len)
+{
+    for (size_t r = 0; r < d->num_rules; ++r)
+        if (strlen(d->rules[r].id) == len && !strncmp(d->rules[r].id, id, len)) return (long)r;
+    return -1;
+}
+
+/* Marks in member[] (num_rules entries) the rules a case's list names;
+ * returns 0, or -1 with the unknown id in bad. */
+static int case_rules(const ex_driver *d, const char *list, unsigned char *member, char *bad, size_t bad_size)
+{
+    memset(member, 0, d->num_rules ? d->num_rules : 1);
+    for (const char *p = list; p && *p;) {
+        p += strspn(p, " \t,");
+        const size_t len = strcspn(p, " \t,");
+        if (!len) break;
+        const long r = rule_index(d, p, len);
+        if (r < 0) {
+            snprintf(bad, bad_size, "%.*s", (int)(len < 100 ? len : 100), p);
+            return -1;
+        }
+        member[r] = 1;
+        p += len;
+    }
+    return 0;
+}
+
+typedef struct rule_count {
+    size_t cases, run, failed;
+} rule_count;
+
+/* The rule that best explains the failing cases: the largest product of
+ * the share of its cases that fail and the share of the failures that are
+ * its cases (a rule whose every case fails and that accounts for every
+ * failure scores 1); ties go to the rule with more failing cases, then to
+ * the first in the table.  -1 when no failing case tests a rule. */
+static long best_rule(const ex_driver *d, const rule_count *rc, size_t failed)
+{
+    long best = -1;
+    double best_score = 0;
+    for (size_t r = 0; r < d->num_rules; ++r) {
+        if (!rc[r].failed || !rc[r].run) continue;
+        const double score = ((double)rc[r].failed / (double)rc[r].run) * ((double)rc[r].failed / (double)failed);
+        if (best < 0 || score > best_score + 1e-12 ||
+            (score > best_score - 1e-12 && rc[r].failed > rc[best].failed)) {
+            best = (long)r;
+            best_score = score;
+        }
+    }
+    return best;
+}
+
+/* One line: which rules' cases fail and how many, e.g.
+ * rule tmin-inclusive ("t = tmin is a hit"): fails 4 of its 4 cases; 0 of the 83 other cases fail */
+static void diagnosis_text(const ex_driver *d, const rule_count *rc, long best, size_t failed, size_t ran, size_t n,
+                           long only, char *buf, size_t size)
+{
+    size_t o = 0;
+#define DIAG_PUT(...) appendf(buf, size, &o, __VA_ARGS__)
+    buf[0] = '\0';
+    if (best >= 0) {
+        const rule_count *b = &rc[best];
+        DIAG_PUT("rule %s (\"%s\"): fails %zu of its %zu case%s; %zu of the %zu other cases fail", d->rules[best].id,
+                 d->rules[best].statement, b->failed, b->run, b->run == 1 ? "" : "s", failed - b->failed,
+                 ran - b->run);
+        int also = 0;
+        for (size_t r = 0; r < d->num_rules; ++r) {
+            if ((long)r == best || !rc[r].failed) continue;
+            if (also == 3) {
+                DIAG_PUT(", ...");
+                break;
+            }
+            DIAG_PUT("%s rule %s: %zu of %zu", also ? "," : "; also", d->rules[r].id, rc[r].failed, rc[r].run);
+            ++also;
+        }
+    } else {
+        DIAG_PUT("fails %zu of the %zu case%s run%s", failed, ran, ran == 1 ? "" : "s",
+                 d->num_rules ? "; none of the failing cases tests a rule of the hand-out" : "");
+    }
+    if (only)
+        DIAG_PUT(" (case %ld alone: --case)", only);
+    else if (ran < n)
+        DIAG_PUT(" (cases 1 to %zu of %zu run: past the first failure the checker stops after %d crashes or "
+                 "time-outs, or %.1f s of CPU)",
+                 ran, n, EX_DIAG_CRASHES, EX_DIAG_CPU);
+#undef DIAG_PUT
+}
+
+/* --rules: the table, tab-separated, with the cases that test each rule;
+ * exit 2 when a case names a rule the table lacks. */
+static int print_rules(const ex_driver *d, FILE *out)
+{
+    const size_t n = d->num_cases();
+    unsigned char *member = malloc(d->num_rules ? d->num_rules : 1);
+    char **cases = calloc(d->num_rules ? d->num_rules : 1, sizeof *cases);
+    size_t *len = calloc(d->num_rules ? d->num_rules : 1, sizeof *len);
+    if (!member || !cases || !len) return 2;
+    int rc = 0;
+    for (size_t i = 0; i < n && rc == 0; ++i) {
+        ex_case_info info;
+        memset(&info, 0, sizeof info);
+        d->describe(i, &info);
+        char bad[128];
+        if (case_rules(d, info.rules, member, bad, sizeof bad) != 0) {
+            fprintf(stderr, "sidx-check %s: case %zu names the rule '%s', which the exercise's rule table lacks\n",
+                    d->name, i + 1, bad);
+            rc = 2;
+            break;
+        }
+        for (size_t r = 0; r < d->num_rules; ++r) {
+            if (!member[r]) continue;
+            char num[24];
+            const int w = snprintf(num, sizeof num, "%s%zu", len[r] ? " " : "", i + 1);
+            char *grown = realloc(cases[r], len[r] + (size_t)w + 1);
+            if (!grown) {
+                rc = 2;
+                break;
+            }
+            memcpy(grown + len[r], num, (size_t)w + 1);
+            cases[r] = grown;
+            len[r] += (size_t)w;
+        }
+    }
+    for (size_t r = 0; r < d->num_rules && rc == 0; ++r) {
+        put_field(out, d->rules[r].id, 0);
+        put_field(out, d->rules[r].statement, 0);
+        put_field(out, d->rules[r].hint, 0);
+        put_field(out, cases[r] ? cases[r] : "", 1);
+    }
+    for (size_t r = 0; r < d->num_rules; ++r) free(cases[r]);
+    free(cases);
+    free(len);
+    free(member);
+    return rc;
+}
+
+/* ---- a case that does not return -------------------------------------------------------- */
+
+/* The detail of a run that did not return (the report's "your code ..."
+ * line) and its --summary result. */
+static const char *failure_detail(run_status rs, int sig, int code, int cpu, unsigned timeout, const char *where,
+                                  int where_is_student, char *detail, size_t size)
+{
+    if (rs == RUN_TIMEOUT && cpu) {
+        snprintf(detail, size, "did not finish within %u s: it kept computing (an endless loop?)", timeout);
+        return "timeout";
+    }
+    if (rs == RUN_TIMEOUT) {
+        snprintf(detail, size, "did not finish within %u s: it was waiting (sleep? reading input?)", timeout);
+        return "timeout";
+    }
+    if (rs == RUN_TOO_MANY) {
+        snprintf(detail, size, "reported more than %u steps (an endless loop?)", EX_MAX_EVENTS);
+        return "timeout";
+    }
+    if (rs == RUN_OUTPUT) {
+        snprintf(detail, size,
+                 "wrote too much: more than %u MiB of output in one case (a print in an endless loop?)",
+                 EX_MAX_OUTPUT >> 20);
+        return "output";
+    }
+    if (rs == RUN_MEMORY) {
+        snprintf(detail, size, "ran out of memory (the limit is %lu MiB per case)%s%s%s%s", cx.memory_mb,
+                 sig ? ": " : "", sig ? strsignal(sig) : "", where[0] ? " at " : "", where);
+        return "memory";
+    }
+    if (sig && where[0])
+        snprintf(detail, size, "crashed: signal %d (%s) at %s%s", sig, strsignal(sig), where,
+                 where_is_student ? "" : " (outside your file)");
+    else if (sig)
+        snprintf(detail, size, "crashed: signal %d (%s)", sig, strsignal(sig));
+    else
+        snprintf(detail, size, "crashed: it stopped with exit status %d before returning", code);
+    return "crash";
+}
+
+/* The hint for the kind of failure, or NULL when the kind says nothing
+ * beyond the place (a fault at a line: the rules' and the case's hints
+ * say more). */
+static const char *failure_hint(run_status rs, int sig, int cpu, int recursion)
+{
+    switch (rs) {
+    case RUN_TIMEOUT:
+        return cpu ? "an endless loop: does every loop end? A stack that empties, an index that reaches its bound, "
+                     "a walk that moves on to the next node or cell after each step"
+                   : "your code waited: it must not sleep or read input";
+    case RUN_TOO_MANY:
+        return "far more steps than any case needs: the walk visits the same nodes or cells again and again "
+               "(is each child pushed once? does each step move on?)";
+    case RUN_OUTPUT:
+        return "a print in a loop that does not end, or one on every step: print less, or run one case (--case K)";
+    case RUN_MEMORY:
+        return "an allocation beyond the limit: check the count given to malloc (negative, unset, or growing "
+               "without end) and what your code does when malloc returns NULL";
+    case RUN_CRASH:
+        if (recursion >= EX_RECURSION_FRAMES)
+            return "endless recursion (the stack overflowed): does the recursion reach its base case? Each call "
+                   "must work on a smaller part (a child, a range that shrinks) and stop at a leaf";
+        if (sig == SIGFPE) return "an integer division by zero at that line: which count is 0 in this case?";
+        return NULL;
+    default: return NULL;
+    }
+}
+
+/* ---- the page of the first failing case (--html) --------------------------------------- */
+
+/* viz/check_page.html with viz/page_common.js spliced in, as bytes
+ * (sidx_check_page_html[], the Makefile writes it from the page). */
+#include "check_page_html.inc"
+
+#define EX_PAGE_DATA "\"@SIDX_CHECK_DATA@\""
+#define EX_PAGE_MAX_TRIANGLES 20000u
+
+/* s as a JSON string; '<' escaped, so no text closes the page's script. */
+static void json_str(FILE *f, const char *s)
+{
+    fputc('"', f);
+    for (const unsigned char *p = (const unsigned char *)(s ? s : ""); *p; ++p) {
+        if (*p == '"' || *p == '\\') fprintf(f, "\\%c", *p);
+        else if (*p == '\n') fputs("\\n", f);
+        else if (*p < 32 || *p == '<' || *p == 127) fprintf(f, "\\u%04x", *p);
+        else fputc(*p, f);
+    }
+    fputc('"', f);
+}
+
+static void json_num(FILE *f, float v)
+{
+    if (isnan(v)) fputs("\"nan\"", f);
+    else if (isinf(v)) fputs(v > 0 ? "\"inf\"" : "\"-inf\"", f);
+    else fprintf(f, "%.9g", (double)v);
+}
+
+static void json_id(FILE *f, uint32_t v)
+{
+    if (v == UINT32_MAX) fputs("null", f);
+    else fprintf(f, "%u", v);
+}
+
+static void event_line(const sidx_event *e, char *buf, size_t size)
+{
+    if (!ex_driver_this.format || !ex_driver_this.format(e, buf, size)) sidx_event_format(e, buf, size);
+    size_t k = strspn(buf, " ");
+    memmove(buf, buf + k, strlen(buf + k) + 1);
+}
+
+static void json_trace(FILE *f, const ex_trace *t)
+{
+    fputc('[', f);
+    for (size_t k = 0; k < t->n; ++k) {
+        const sidx_event *e = &t->ev[k];
+        char line[512];
+        event_line(e, line, sizeof line);
+        fprintf(f, "%s\n{\"type\":", k ? "," : "");
+        json_str(f, sidx_event_type_name(e->type));
+        fputs(",\"node\":", f);
+        json_id(f, e->node);
+        fputs(",\"prim\":", f);
+        json_id(f, e->prim);
+        fprintf(f, ",\"result\":%d,\"t\":", (int)e->result);
+        json_num(f, e->t);
+        fputs(",\"t_near\":", f);
+        json_num(f, e->t_near);
+        fputs(",\"t_far\":", f);
+        json_num(f, e->t_far);
+        const sidx_aabb *b = &e->bounds;
+        if (b->min.x <= b->max.x && b->min.y <= b->max.y && b->min.z <= b->max.z && isfinite(b->min.x) &&
+            isfinite(b->max.x) && isfinite(b->min.y) && isfinite(b->max.y)) {
+            const float v[6] = {b->min.x, b->min.y, b->min.z, b->max.x, b->max.y, b->max.z};
+            fputs(",\"box\":[", f);
+            for (int j = 0; j < 6; ++j) {
+                if (j) fputc(',', f);
+                json_num(f, v[j]);
+            }
+            fputc(']', f);
+        }
+        fputs(",\"line\":", f);
+        json_str(f, line);
+        fputc('}', f);
+    }
+    fputc(']', f);
+}
+
+typedef struct page_text {
+    const char *result, *detail, *hint, *hint2, *hint2_label, *diagnosis, *differs;
+    size_t case_, cases, step;
+} page_text;
+
+/* Writes the page of the first failing case: the template with its data
+ * placeholder replaced by one JSON object (the case, both traces with
+ * their printed lines, the step where they part, the hint, the scene's
+ * triangles and the ray when the case has them).  0, or -1 with a
+ * message on stderr. */
+static int write_html(const char *path, const ex_case_info *info, const ex_trace *ref, const ex_trace *stu,
+                      const page_text *pt)
+{
+    const char *tpl = (const char *)sidx_check_page_html;
+    const char *hole = strstr(tpl, EX_PAGE_DATA);
+    FILE *f = hole ? fopen(path, "w") : NULL;
+    if (!f) {
+        fprintf(stderr, "sidx-check: cannot write %s: %s\n", path, hole ? strerror(errno) : "no page template");
+        return -1;
+    }
+    const ex_driver *d = &ex_driver_this;
+    fwrite(tpl, 1, (size_t)(hole - tpl), f);
+    fputs("{\"exercise\":", f);
+    json_str(f, d->name);
+    fputs(",\"title\":", f);
+    json_str(f, d->title);
+    fputs(",\"slide\":", f);
+    json_str(f, d->slide);
+    fprintf(f, ",\"case\":%zu,\"cases\":%zu,\"step\":%zu,\"result\":", pt->case_, pt->cases, pt->step);
+    json_str(f, pt->result);
+    fputs(",\"name\":", f);
+    json_str(f, info->name);
+    fputs(",\"input\":", f);
+    json_str(f, info->what);
+    fputs(",\"detail\":", f);
+    json_str(f, pt->detail);
+    fputs(",\"hint\":", f);
+    json_str(f, pt->hint);
+    fputs(",\"hint2\":", f);
+    json_str(f, pt->hint2);
+    fputs(",\"hint2_label\":", f);
+    json_str(f, pt->hint2_label);
+    fputs(",\"diagnosis\":", f);
+    json_str(f, pt->diagnosis);
+    fputs(",\"differs\":", f);
+    json_str(f, pt->differs);
+    fputs(",\"ray\":", f);
+    if (info->view_ray) {
+        const sidx_ray *r = info->view_ray;
+        const float v[8] = {r->org.x, r->org.y, r->org.z, r->dir.x, r->dir.y, r->dir.z, r->tmin, r->tmax};
+        fputc('[', f);
+        for (int j = 0; j < 8; ++j) {
+            if (j) fputc(',', f);
+            json_num(f, v[j]);
+        }
+        fputc(']', f);
+    } else {
+        fputs("null", f);
+    }
+    /* the scene: the case's mesh, or its built-in scene */
+    sidx_mesh opened;
+    memset(&opened, 0, sizeof opened);
+    const sidx_mesh *m = info->view_mesh;
+    if (!m && info->view_scene) {
+        sidx_error err;
+        if (sidx_scene_open(info->view_scene, &opened, &err) == SIDX_OK) m = &opened;
+    }
+    fputs(",\"pos\":[", f);
+    if (m && m->num_triangles <= EX_PAGE_MAX_TRIANGLES)
+        for (uint32_t v = 0; v < m->num_vertices; ++v) {
+            if (v) fputc(',', f);
+            json_num(f, m->positions[v].x);
+            fputc(',', f);
+            json_num(f, m->positions[v].y);
+            fputc(',', f);
+            json_num(f, m->positions[v].z);
+        }
+    fputs("],\"idx\":[", f);
+    if (m && m->num_triangles <= EX_PAGE_MAX_TRIANGLES)
+        for (uint32_t k = 0; k < 3u * m->num_triangles; ++k) fprintf(f, k ? ",%u" : "%u", m->indices[k]);
+    fputs("]", f);
+    if (m == &opened) sidx_mesh_free(&opened);
+    fputs(",\"ref\":", f);
+    json_trace(f, ref);
+    fputs(",\"yours\":", f);
+    json_trace(f, stu);
+    fputs("}", f);
+    const char *rest = hole + strlen(EX_PAGE_DATA);
+    fwrite(rest, 1, strlen(rest), f);
+    if (fclose(f) != 0) {
+        fprintf(stderr, "sidx-check: cannot write %s: %s\n", path, strerror(errno));
+        return -1;
+    }
+    return 0;
+}
+
+/* How many events from the start agree: ref against stu's events
+ * [from, to). */
+static size_t agree_prefix(const ex_trace *ref, const ex_trace *stu, size_t from, size_t to)
+{
+    size_t k = 0;
+    while (k < ref->n && from + k < to && same_event(&ref->ev[k], &stu->ev[from + k])) ++k;
+    return k;
+}
+
+static size_t g_nr; /* the driver's num_rules, as count_case indexes member[] */
+
+static void count_case(const unsigned char *member, rule_count *rcount, size_t i, int fails)
+{
+    for (size_t r = 0; r < g_nr; ++r)
+        if (member[i * g_nr + r]) {
+            ++rcount[r].run;
+            rcount[r].failed += fails != 0;
+        }
+}
+
+/* The cases from i on after the first failure, for the diagnosis: one
+ * child runs them one after another (a child per case would cost most of
+ * the time: fork's copy of the checker's memory), within the CPU left.
+ * Each case that returns is compared with the reference; a crash ends the
+ * run there (that case fails, the next run starts after it); a time-out
+ * ends it without counting the case, which may only have been cut short by
+ * the budget.  Returns the case to go on with (n: all done). */
+static size_t run_rest(size_t i, size_t n, unsigned timeout, double left, ex_trace *stu, ex_trace *ref,
+                       const unsigned char *member, rule_count *rcount, size_t *ran, size_t *failed,
+                       size_t *crashes, int verbose)
+{
+    const ex_driver *d = &ex_driver_this;
+    int sig = 0, code = 0, cpu = 0;
+    cx.wall_cap = left < EX_DIAG_MIN_WALL ? EX_DIAG_MIN_WALL : left;
+    const run_status rs = run_student(i, n - 1, timeout, stu, &sig, &code, &cpu);
+    if (rs == RUN_ERROR) return n;
+    size_t from = 0;
+    for (size_t e = 0; e < stu->n && i < n; ++e) {
+        if (stu->ev[e].type != EX_CASE_END) continue;
+        if (stu->ev[e].node != i) return n; /* not the mark expected: the student's code wrote over the file */
+        ref->n = 0;
+        sidx_hook rh = {ex_trace_hook_fn, ref, 0};
+        d->reference(i, &rh);
+        const size_t k = agree_prefix(ref, stu, from, e);
+        const int agree = k == ref->n && from + k == e;
+        count_case(member, rcount, i, !agree);
+        *failed += !agree;
+        ++*ran;
+        if (verbose) {
+            ex_case_info info;
+            memset(&info, 0, sizeof info);
+            d->describe(i, &info);
+            printf("case %3zu %-5s %s\n", i + 1, agree ? "ok" : "FAIL", info.name);
+        }
+        from = e + 1;
+        ++i;
+    }
+    if (rs == RUN_OK || i >= n) return n;
+    ++*crashes;
+    if (rs == RUN_TIMEOUT) return n; /* cut short: case i is not counted, and the budget is spent */
+    count_case(member, rcount, i, 1); /* a crash, out of memory, too many steps or too much output */
+    ++*failed;
+    ++*ran;
+    if (verbose) printf("case %3zu CRASH\n", i + 1);
+    return i + 1;
+}
+
+/* ---- main ------------------------------------------------------------------------------- */
 
 int main(int argc, char **argv)
 {
     const ex_driver *d = &ex_driver_this;
-    const char *trace_dir = NULL, *viewer = NULL;
+    const char *trace_dir = NULL, *viewer = NULL, *html_path = NULL, *rules_out = NULL;
     unsigned timeout = 2;
     long only = 0;
-    int verbose = 0;
+    int verbose = 0, rules_only = 0;
     for (int i = 1; i < argc; ++i) {
         if (!strcmp(argv[i], "--trace") && i + 1 < argc) {
             trace_dir = argv[++i];
         } else if (!strcmp(argv[i], "--viewer") && i + 1 < argc) {
             viewer = argv[++i];
+        } else if (!strcmp(argv[i], "--html") && i + 1 < argc) {
+            html_path = argv[++i];
         } else if (!strcmp(argv[i], "--timeout") && i + 1 < argc) {
             timeout = (unsigned)strtoul(argv[++i], NULL, 10);
             if (timeout == 0) timeout = 1;
@@ -808,6 +1430,10 @@ int main(int argc, char **argv)
             only = strtol(argv[++i], NULL, 10);
         } else if (!strcmp(argv[i], "--verbose")) {
             verbose = 1;
+        } else if (!strcmp(argv[i], "--rules")) {
+            rules_only = 1;
+        } else if (!strcmp(argv[i], "--rules-out") && i + 1 < argc) {
+            rules_out = argv[++i];
         } else if (!strcmp(argv[i], "--source") && i + 1 < argc) {
             cx.source = argv[++i];
         } else if (!strcmp(argv[i], "--summary") && i + 1 < argc) {
@@ -822,6 +1448,15 @@ int main(int argc, char **argv)
             usage(stderr);
             return 2;
         }
+    }
+    if (rules_only) {
+        if (d->setup && d->setup() != 0) {
+            fprintf(stderr, "sidx-check %s: the checker could not set up its scenes\n", d->name);
+            return 2;
+        }
+        const int rc = print_rules(d, stdout);
+        if (d->teardown) d->teardown();
+        return rc;
     }
     if (cx.source && !realpath(cx.source, cx.source_real)) cx.source_real[0] = '\0';
     const ssize_t len = readlink("/proc/self/exe", cx.exe, sizeof cx.exe - 1);
@@ -840,15 +1475,57 @@ int main(int argc, char **argv)
         fprintf(stderr, "sidx-check %s: the checker could not set up its scenes\n", d->name);
         return 2;
     }
+    if (rules_out) { /* the table as --rules prints it, beside the check (the tests read it) */
+        FILE *f = fopen(rules_out, "w");
+        const int bad = !f || print_rules(d, f) != 0;
+        if ((f && fclose(f) != 0) || bad) {
+            fprintf(stderr, "sidx-check %s: cannot write the rule table to %s\n", d->name, rules_out);
+            return 2;
+        }
+    }
     const size_t n = d->num_cases();
     if (only < 0 || (size_t)only > n) {
         fprintf(stderr, "sidx-check %s: --case wants 1..%zu\n", d->name, n);
         return 2;
     }
-    ex_trace ref = {0}, stu = {0};
+    /* which rules each case tests; a case naming a rule the table lacks is the checker's own fault */
+    const size_t nr = d->num_rules;
+    g_nr = nr;
+    unsigned char *member = calloc(n * (nr ? nr : 1) + 1, 1);
+    rule_count *rcount = calloc(nr ? nr : 1, sizeof *rcount);
+    if (!member || !rcount) {
+        fprintf(stderr, "sidx-check %s: out of memory\n", d->name);
+        return 2;
+    }
+    for (size_t i = 0; i < n; ++i) {
+        ex_case_info info;
+        memset(&info, 0, sizeof info);
+        d->describe(i, &info);
+        char bad[128];
+        if (case_rules(d, info.rules, member + i * (nr ? nr : 1), bad, sizeof bad) != 0) {
+            fprintf(stderr, "sidx-check %s: case %zu names the rule '%s', which the exercise's rule table lacks\n",
+                    d->name, i + 1, bad);
+            return 2;
+        }
+        for (size_t r = 0; r < nr; ++r) rcount[r].cases += member[i * nr + r];
+    }
+
+    ex_trace ref = {0}, stu = {0}, fref = {0}, fstu = {0};
     int rc = 0;
-    size_t steps = 0, ran = 0;
-    for (size_t i = only ? (size_t)only - 1 : 0; i < (only ? (size_t)only : n); ++i) {
+    size_t steps = 0, ran = 0, failed = 0, diag_crashes = 0;
+    /* the first failing case, reported in full */
+    size_t first = SIZE_MAX, first_k = 0;
+    run_status first_rs = RUN_OK;
+    int first_sig = 0, first_code = 0, first_cpu = 0, first_where_is_student = 0, first_recursion = 0;
+    char first_where[sizeof cx.where] = "";
+    int traces_written = 0;
+    for (size_t i = only ? (size_t)only - 1 : 0; i < (only ? (size_t)only : n);) {
+        if (first != SIZE_MAX) { /* the rest, for the diagnosis */
+            const double left = EX_DIAG_CPU - cpu_used();
+            if (left <= 0 || diag_crashes >= EX_DIAG_CRASHES) break;
+            i = run_rest(i, n, timeout, left, &stu, &ref, member, rcount, &ran, &failed, &diag_crashes, verbose);
+            continue;
+        }
         ex_case_info info;
         memset(&info, 0, sizeof info);
         d->describe(i, &info);
@@ -857,110 +1534,170 @@ int main(int argc, char **argv)
         d->reference(i, &rh);
         int sig = 0, code = 0;
         int cpu = 0;
-        const run_status rs = run_student(i, timeout, &stu, &sig, &code, &cpu);
-        ++ran;
+        const run_status rs = run_student(i, i, timeout, &stu, &sig, &code, &cpu);
         if (rs == RUN_ERROR) {
             fprintf(stderr, "sidx-check %s: cannot run case %zu: %s\n", d->name, i + 1, strerror(errno));
             rc = 2;
             break;
         }
-        if (rs != RUN_OK) {
-            char detail[sizeof cx.where + 160];
-            const char *result = "crash";
-            if (rs == RUN_TIMEOUT && cpu) {
-                snprintf(detail, sizeof detail, "did not finish within %u s: it kept computing (an endless loop?)",
-                         timeout);
-                result = "timeout";
-            } else if (rs == RUN_TIMEOUT) {
-                snprintf(detail, sizeof detail, "did not finish within %u s: it was waiting (sleep? reading input?)",
-                         timeout);
-                result = "timeout";
-            } else if (rs == RUN_TOO_MANY) {
-                snprintf(detail, sizeof detail, "reported more than %u steps (an endless loop?)", EX_MAX_EVENTS);
-                result = "timeout";
-            } else if (rs == RUN_OUTPUT) {
-                snprintf(detail, sizeof detail, "wrote too much: more than %u MiB of output in one case (a print in an "
-                         "endless loop?)", EX_MAX_OUTPUT >> 20);
-                result = "output";
-            } else if (rs == RUN_MEMORY) {
-                snprintf(detail, sizeof detail, "ran out of memory (the limit is %lu MiB per case)%s%s%s%s",
-                         cx.memory_mb, sig ? ": " : "", sig ? strsignal(sig) : "", cx.where[0] ? " at " : "",
-                         cx.where);
-                result = "memory";
-            } else if (sig && cx.where[0]) {
-                snprintf(detail, sizeof detail, "crashed: signal %d (%s) at %s%s", sig, strsignal(sig), cx.where,
-                         cx.where_is_student ? "" : " (outside your file)");
-            } else if (sig) {
-                snprintf(detail, sizeof detail, "crashed: signal %d (%s)", sig, strsignal(sig));
-            } else {
-                snprintf(detail, sizeof detail, "crashed: it stopped with exit status %d before returning", code);
+        ++ran;
+        size_t k = 0;
+        int agree = 0;
+        if (rs == RUN_OK) {
+            k = agree_prefix(&ref, &stu, 0, stu.n);
+            agree = k == ref.n && k == stu.n;
+            steps += k;
+        }
+        count_case(member, rcount, i, !agree);
+        if (verbose)
+            printf("case %3zu %-5s %s\n", i + 1, agree ? "ok" : rs == RUN_OK ? "FAIL" : "CRASH", info.name);
+        if (trace_dir && rs == RUN_OK && (!agree || only)) {
+            /* not written: the report says so (write_jsonl said why) */
+            traces_written = write_jsonl(trace_dir, "reference.jsonl", &ref) == 0 &&
+                             write_jsonl(trace_dir, "yours.jsonl", &stu) == 0;
+        }
+        ++i;
+        if (agree) continue;
+        ++failed;
+        /* the first failing case: keep its traces and what the run said */
+        first = i - 1;
+        first_k = k;
+        first_rs = rs;
+        first_sig = sig;
+        first_code = code;
+        first_cpu = cpu;
+        first_recursion = cx.recursion;
+        first_where_is_student = cx.where_is_student;
+        snprintf(first_where, sizeof first_where, "%s", cx.where);
+        ex_trace t = fref;
+        fref = ref;
+        ref = t;
+        t = fstu;
+        fstu = stu;
+        stu = t;
+        cx.locate = 0;
+    }
+    if (rc == 0 && first != SIZE_MAX) {
+        const size_t i = first, k = first_k;
+        ex_case_info info;
+        memset(&info, 0, sizeof info);
+        d->describe(i, &info);
+        /* the diagnosis, and the hints in their order (docs/exercises.md,
+         * "Hints"): for a crash or time-out its kind's hint, else the hint
+         * of the rule the failing cases point to; for a divergence the
+         * rule's hint first when the rule accounts for every failing case,
+         * else the driver's hint for the divergence (or the case's) first */
+        const long best = best_rule(d, rcount, failed);
+        char diagnosis[2048];
+        diagnosis_text(d, rcount, best, failed, ran, n, only, diagnosis, sizeof diagnosis);
+        const char *rule_hint = best >= 0 ? d->rules[best].hint : NULL;
+        const int explains_all = best >= 0 && rcount[best].failed == failed;
+        const sidx_event *re = k < fref.n ? &fref.ev[k] : NULL, *se = k < fstu.n ? &fstu.ev[k] : NULL;
+        const char *hint = NULL, *hint2 = NULL, *hint2_label = NULL;
+        char detail[sizeof cx.where + 200] = "", differs[1024] = "";
+        const char *result = "fail";
+        if (first_rs != RUN_OK) {
+            result = failure_detail(first_rs, first_sig, first_code, first_cpu, timeout, first_where,
+                                    first_where_is_student, detail, sizeof detail);
+            const char *kind = failure_hint(first_rs, first_sig, first_cpu, first_recursion);
+            /* a fault at a line: the rule of this case's that the pattern points to, else the case's own */
+            const char *why = rule_hint && member[i * (nr ? nr : 1) + (size_t)best] ? rule_hint : NULL;
+            for (size_t r = 0; !why && r < nr; ++r)
+                if (member[i * nr + r]) why = d->rules[r].hint;
+            if (!why) why = rule_hint ? rule_hint : info.hint;
+            hint = kind ? kind : why;
+            if (kind && why) {
+                hint2 = why;
+                hint2_label = "rule";
             }
-            print_student_output();
+        } else {
+            const char *step_hint = d->hint ? d->hint(i, re, se) : NULL;
+            if (!step_hint) step_hint = info.hint;
+            if (explains_all || !step_hint) {
+                hint = rule_hint ? rule_hint : step_hint;
+                hint2 = rule_hint ? step_hint : NULL;
+                hint2_label = "this step";
+            } else {
+                hint = step_hint;
+                hint2 = rule_hint;
+                hint2_label = "rule";
+            }
+            if (hint2 && hint && !strcmp(hint, hint2)) hint2 = NULL;
+            /* the fields that differ, when the two events print alike */
+            if (re && se) {
+                char a[512], b[512];
+                event_line(re, a, sizeof a);
+                event_line(se, b, sizeof b);
+                if (!strcmp(a, b)) diff_fields(re, se, differs, sizeof differs);
+            }
+        }
+        print_student_output();
+        if (first_rs != RUN_OK) {
+            write_summary(result, i + 1, n, fstu.n, info.name, detail, hint, diagnosis);
             printf("sidx-check %s: case %zu of %zu, \"%s\":\n", d->name, i + 1, n, info.name);
             printf("  your code %s\n", detail);
-            write_summary(result, i + 1, n, stu.n, info.name, detail, NULL);
             printf("  %-10s %s\n", "input", info.what);
-            if (stu.n) {
-                printf("  the last steps your code reported (of %zu):\n", stu.n);
-                for (size_t k = stu.n > 3 ? stu.n - 3 : 0; k < stu.n; ++k) print_event(stdout, "", &stu.ev[k]);
+            if (fstu.n) {
+                printf("  the last steps your code reported (of %zu):\n", fstu.n);
+                for (size_t j = fstu.n > 3 ? fstu.n - 3 : 0; j < fstu.n; ++j) print_event(stdout, "", &fstu.ev[j]);
             } else {
                 printf("  it reported no step before that\n");
             }
+        } else {
+            write_summary("fail", i + 1, n, k + 1, info.name, info.what, hint, diagnosis);
+            printf("sidx-check %s: case %zu of %zu, \"%s\": your trace leaves the reference at step %zu\n", d->name,
+                   i + 1, n, info.name, k + 1);
+            printf("  %-10s %s\n", "input", info.what);
+            if (k > 0) {
+                printf("  the steps before, which agree:\n");
+                for (size_t j = k > 3 ? k - 3 : 0; j < k; ++j) print_event(stdout, "", &fref.ev[j]);
+            }
+            print_event(stdout, "reference", re);
+            print_event(stdout, "yours", se);
+            if (differs[0]) printf("  %-10s %s (reference vs yours)\n", "differs", differs);
+        }
+        printf("  %-10s %s\n", "diagnosis", diagnosis);
+        if (hint) printf("  %-10s %s\n", "hint", hint);
+        if (hint2) printf("  %-10s %s\n", hint2_label, hint2);
+        printf("  %-10s %s\n", "slide", d->slide);
+        if (first_rs == RUN_OK) {
+            if (traces_written) {
+                printf("  traces     %s/reference.jsonl and %s/yours.jsonl (sidx-step --diff A B)\n", trace_dir,
+                       trace_dir);
+                if (viewer && info.view_accel) print_view_commands(viewer, trace_dir, &info);
+            } else if (trace_dir) {
+                printf("  traces     not written (the message above says why)\n");
+            } else {
+                printf("  traces     add --trace DIR to write both as JSON Lines (sidx-step --diff A B%s)\n",
+                       viewer && info.view_accel ? ", sidx-view --events" : "");
+            }
+        }
+        if (html_path) {
+            const page_text pt = {result, detail, hint, hint2, hint2_label, diagnosis, differs,
+                                  i + 1, n, first_rs == RUN_OK ? k + 1 : fstu.n + 1}; /* a crash: the step that never came */
+            if (write_html(html_path, &info, &fref, &fstu, &pt) == 0) printf("  %-10s %s\n", "page", html_path);
+        }
+        if (first_rs != RUN_OK) {
             printf("CRASH (exit 2)\n");
             rc = 2;
-            break;
-        }
-        size_t k = 0;
-        while (k < ref.n && k < stu.n && same_event(&ref.ev[k], &stu.ev[k])) ++k;
-        steps += k;
-        const int agree = k == ref.n && k == stu.n;
-        int traces_written = 0;
-        if (trace_dir && (!agree || only)) {
-            if (write_jsonl(trace_dir, "reference.jsonl", &ref) != 0 || write_jsonl(trace_dir, "yours.jsonl", &stu) != 0)
-                rc = 2;
-            else
-                traces_written = 1;
-        }
-        if (verbose) printf("case %3zu %-5s %s\n", i + 1, agree ? "ok" : "FAIL", info.name);
-        if (agree) continue;
-        const sidx_event *re = k < ref.n ? &ref.ev[k] : NULL, *se = k < stu.n ? &stu.ev[k] : NULL;
-        const char *hint = d->hint ? d->hint(i, re, se) : NULL;
-        if (!hint) hint = info.hint;
-        print_student_output();
-        write_summary("fail", i + 1, n, k + 1, info.name, info.what, hint);
-        printf("sidx-check %s: case %zu of %zu, \"%s\": your trace leaves the reference at step %zu\n", d->name,
-               i + 1, n, info.name, k + 1);
-        printf("  %-10s %s\n", "input", info.what);
-        if (k > 0) {
-            printf("  the steps before, which agree:\n");
-            for (size_t j = k > 3 ? k - 3 : 0; j < k; ++j) print_event(stdout, "", &ref.ev[j]);
-        }
-        print_event(stdout, "reference", re);
-        print_event(stdout, "yours", se);
-        if (hint) printf("  %-10s %s\n", "hint", hint);
-        printf("  %-10s %s\n", "slide", d->slide);
-        if (traces_written) {
-            printf("  traces     %s/reference.jsonl and %s/yours.jsonl (sidx-step --diff A B)\n", trace_dir, trace_dir);
-            if (viewer && info.view_accel) print_view_commands(viewer, trace_dir, &info);
-        } else if (trace_dir) {
-            printf("  traces     not written (the message above says why)\n");
         } else {
-            printf("  traces     add --trace DIR to write both as JSON Lines (sidx-step --diff A B%s)\n",
-                   viewer && info.view_accel ? ", sidx-view --events" : "");
+            printf("FAIL (exit 1)\n");
+            rc = 1;
         }
-        printf("FAIL (exit 1)\n");
-        rc = 1;
-        break;
     }
     if (rc == 0) {
         print_student_output();
-        write_summary("pass", 0, n, 0, "", "", NULL);
+        write_summary("pass", 0, n, 0, "", "", NULL, NULL);
     }
     remove_tree(cx.dir);
     if (rc == 0)
         printf("sidx-check %s: all %zu case%s pass (%zu steps compared)\n", d->name, ran, ran == 1 ? "" : "s", steps);
     free(ref.ev);
     free(stu.ev);
+    free(fref.ev);
+    free(fstu.ev);
+    free(member);
+    free(rcount);
     if (d->teardown) d->teardown();
     return rc;
 }
