@@ -32,13 +32,16 @@
  *     &t); a closer hit updates best and is reported with
  *     sidx_ex_hit_update.  "Traversal can be terminated as soon as surface
  *     intersection is found in the current node": return 1 if the best hit
- *     lies in this cell (best->t <= t_far + |t_far|·KD_EPS); a hit beyond
- *     it does not end the walk ("CANNOT terminate !!!").  An empty leaf is
- *     entered and left (no stop test);
+ *     lies in this cell, inside it by more than a rounding error
+ *     (best->t < t_far - |t_far|·KD_EPS: a triangle across the far plane
+ *     may give a t an ulp smaller); a hit beyond it does not end the walk
+ *     ("CANNOT terminate !!!").  An empty leaf is entered and left (no
+ *     stop test);
  *   - then pop the next cell, sidx_ex_pop(ex, node, stack size before the
  *     pop, t_near, t_far), restoring its depth too; a popped cell whose
- *     t_near lies beyond best->t cannot hold a closer hit: pop the next
- *     one.  Return 0 when the stack is empty.
+ *     t_near lies beyond best->t (by more than |best->t|·KD_EPS) cannot
+ *     hold a closer hit: pop the next one.  Return 0 when the stack is
+ *     empty.
  * The checker reports the end of the walk from your return value.
  *
  * Check with:   make exercise EX=08_kdtree_traversal

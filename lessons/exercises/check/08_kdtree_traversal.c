@@ -221,13 +221,14 @@ static size_t num_cases(void) { return NSCENES * RAYS; }
     "interval, and no early exit for the rest of the ray"
 #define HINT_STOP                                                                                          \
     "\"Traversal can be terminated as soon as surface intersection is found in the current node\": after a " \
-    "leaf, stop if the best hit lies in this cell (best->t <= t_far, widened by |t_far|*KD_EPS)"
+    "leaf, stop if the best hit lies in this cell, inside it by more than a rounding error (best->t < t_far - "  \
+    "|t_far|*KD_EPS)"
 #define HINT_CANNOT                                                                                        \
     "\"CANNOT terminate !!!\": a hit beyond the current cell (best->t > t_far) may be hidden by a triangle in " \
     "a cell still on the stack; keep it as the best so far and go on"
 #define HINT_POP                                                                                           \
     "pop the cell last pushed (\"Maintain stack of sub-trees still to traverse\"), and skip a popped cell "  \
-    "whose t_near lies beyond best->t: it cannot hold a closer hit"
+    "whose t_near lies beyond best->t (by more than |best->t|*KD_EPS): it cannot hold a closer hit"
 #define HINT_LEAF                                                                                          \
     "a leaf tests each of its triangles refs[first .. first + count) against the best hit so far, "         \
     "sidx_ex_test_triangle(ex, prim, best->t, &t), and reports a closer one with sidx_ex_hit_update"

@@ -61,7 +61,7 @@ int kd_walk(const sidx_ex *ex, const sidx_kd_node *nodes, const uint32_t *refs, 
                 }
             }
             /* stop only if the hit lies in this cell */
-            if (best->prim != SIDX_NO_HIT && may_stop && best->t <= t_far + fabsf(t_far) * KD_EPS) return 1;
+            if (best->prim != SIDX_NO_HIT && may_stop && best->t < t_far - fabsf(t_far) * KD_EPS) return 1;
         }
         for (;;) {
             if (size == 0) return 0;
@@ -71,7 +71,7 @@ int kd_walk(const sidx_ex *ex, const sidx_kd_node *nodes, const uint32_t *refs, 
             depth = next.depth;
             t_near = next.t_near;
             t_far = next.t_far;
-            if (t_near <= best->t) break; /* else it starts beyond the best hit */
+            if (t_near <= best->t + fabsf(best->t) * KD_EPS) break; /* else it starts beyond the best hit */
         }
     }
 }

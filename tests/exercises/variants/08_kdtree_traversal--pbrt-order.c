@@ -66,7 +66,7 @@ int kd_walk(const sidx_ex *ex, const sidx_kd_node *nodes, const uint32_t *refs, 
                 sidx_ex_hit_update(ex, best->prim, t);
             }
         }
-        if (n->u.count != 0 && best->prim != SIDX_NO_HIT && may_stop && best->t <= t_far + fabsf(t_far) * KD_EPS)
+        if (n->u.count != 0 && best->prim != SIDX_NO_HIT && may_stop && best->t < t_far - fabsf(t_far) * KD_EPS)
             return 1;
         do {
             if (size == 0) return 0;
@@ -76,6 +76,6 @@ int kd_walk(const sidx_ex *ex, const sidx_kd_node *nodes, const uint32_t *refs, 
             depth = next.depth;
             t_near = next.t_near;
             t_far = next.t_far;
-        } while (t_near > best->t);
+        } while (t_near > best->t + fabsf(best->t) * KD_EPS);
     }
 }
