@@ -82,6 +82,11 @@ static void cell(const class_job *j, char *buf, size_t size)
     if (!strcmp(j->result, "pass")) snprintf(buf, size, "pass");
     else if (!strcmp(j->result, "fail")) snprintf(buf, size, "case %lu, step %lu", j->case_, j->step);
     else if (!strcmp(j->result, "build")) snprintf(buf, size, "build failed");
+    else if (!strcmp(j->result, "borrowed")) {
+        char sym[200] = "";
+        if (sscanf(j->detail, "%*s %199s", sym) == 1) sym[strcspn(sym, ",")] = '\0';
+        snprintf(buf, size, "borrowed: %s", sym);
+    }
     else if (!strcmp(j->result, "timeout")) snprintf(buf, size, "time-out, case %lu", j->case_);
     else if (!strcmp(j->result, "memory")) snprintf(buf, size, "out of memory, case %lu", j->case_);
     else if (!strcmp(j->result, "output")) snprintf(buf, size, "too much output, case %lu", j->case_);
@@ -330,6 +335,9 @@ int ck_class_mode(const char *dir, const char *out_arg, long jobs, char **pass, 
             }
         } else if (!strcmp(j->result, "build")) {
             fprintf(md, "does not build");
+        } else if (!strcmp(j->result, "borrowed")) {
+            fprintf(md, "borrowed answer: your code ");
+            md_text(md, j->detail);
         } else {
             if (j->case_) fprintf(md, "case %lu of %lu: ", j->case_, j->cases);
             fprintf(md, "your code ");

@@ -13,7 +13,8 @@
  * --class checks a whole class: DIR holds one folder per student with any
  * of the exercise files (NAME.c); every file is checked, N at a time, and
  * a Markdown and a CSV summary and one report per student are written.
- * Exit status: 0 every case passes, 1 a divergence, 2 FILE does not build,
+ * Exit status: 0 every case passes, 1 a divergence or a borrowed answer
+ * (symbols.def), 2 FILE does not build,
  * crashes or runs out of time (or a usage error).  --class: 0 every
  * submission passes, 1 some does not, 2 a usage error or the reports could
  * not be written. */
@@ -28,6 +29,7 @@
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
+#include "borrowed.h"
 #include "class_mode.h"
 
 #ifndef SIDX_CHECK_SRCDIR
@@ -72,7 +74,8 @@ static void usage(FILE *f)
             "  --jobs N        checks at a time (default: the number of cores)\n"
             "  --out DIR2      where the reports go (default DIR/sidx-class-report)\n"
             "\n"
-            "Exit status: 0 every case passes, 1 a divergence, 2 FILE does not build, crashes or\n"
+            "Exit status: 0 every case passes, 1 a divergence or a borrowed answer (a call of the\n"
+            "library's own answer: docs/exercises.md), 2 FILE does not build, crashes or\n"
             "loops (or a usage error).  --class: 0 every submission passes, 1 some does not, 2 a\n"
             "usage error.  Guide: docs/exercises.md.\n");
 }
@@ -190,6 +193,53 @@ static int check_one(size_t k, const char *file, char **pass, int npass, const c
                    name, file);
             goto build_failed;
         }
+    }
+    {
+        /* No borrowed answers: the object's symbols against symbols.def,
+         * before anything runs (borrowed.c) */
+        char first[1024], *lines = NULL;
+        size_t len = 0;
+        FILE *mem = open_memstream(&lines, &len);
+        const int nb = mem ? ck_borrowed(name, obj, mem, first, sizeof first) : -1;
+        if (mem) fclose(mem);
+        if (nb < 0) {
+            printf("sidx-check %s: cannot read the symbols of the compiled %s (nm, of binutils, is needed)\n"
+                   "BUILD FAILED (exit 2)\n", name, file);
+            free(lines);
+            goto build_failed;
+        }
+        if (nb > 0) {
+            printf("sidx-check %s: your code %s\n", name, first);
+            if (nb > 1) {
+                printf("  and:\n");
+                const char *p = strchr(lines, '\n');
+                for (p = p ? p + 1 : ""; *p;) {
+                    const size_t w = strcspn(p, "\n");
+                    printf("    %.*s\n", (int)w, p);
+                    p += w + (p[w] == '\n');
+                }
+            }
+            const ck_symbols *sy = ck_symbols_of(name);
+            printf("  of the library this exercise lets your code call %s%s (and the C library);\n"
+                   "  what it asks you to write is yours to write (docs/exercises.md, \"No borrowed answers\";\n"
+                   "  decided on the compiled object: every function it calls, however the source names it)\n"
+                   "BORROWED (exit 1)\n",
+                   sy && sy->may_call[0] ? "only: " : "nothing but the headers' inline helpers",
+                   sy && sy->may_call[0] ? sy->may_call : "");
+            if (summary) {
+                FILE *f = fopen(summary, "w");
+                if (f) {
+                    for (char *c = first; *c; ++c)
+                        if (*c == '\t') *c = ' ';
+                    fprintf(f, "borrowed\t0\t0\t0\t\t%s\t\n", first);
+                    fclose(f);
+                }
+            }
+            free(lines);
+            rc = 1;
+            goto done;
+        }
+        free(lines);
     }
     {
         char *lv[48], ccw[sizeof cc];
