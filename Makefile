@@ -478,9 +478,11 @@ $(WEB_DIR)/sidx-lab.html: $(WEB_DIR)/sidx-lab.js viz/lab_page.html viz/page_comm
 # The kit's own command-line front end (sidx_check.c, with class mode in
 # class_mode.c) lives beside the drivers and becomes bin/sidx-check; it
 # links neither driver nor runner, which it compiles only for the students.
-EX_FRONT_SRC := lessons/exercises/check/sidx_check.c lessons/exercises/check/class_mode.c lessons/exercises/check/borrowed.c
+EX_FRONT_SRC := lessons/exercises/check/sidx_check.c lessons/exercises/check/class_mode.c lessons/exercises/check/borrowed.c \
+                lessons/exercises/check/sandbox.c
 EX_FRONT_OBJ := $(EX_FRONT_SRC:%.c=$(BUILD)/obj/%.o)
-EX_CHECK_SRC := $(filter-out $(EX_FRONT_SRC),$(wildcard lessons/exercises/check/*.c))
+# sandbox.c serves both: the front end tries it before a class, the runner enters it.
+EX_CHECK_SRC := $(filter-out $(EX_FRONT_SRC),$(wildcard lessons/exercises/check/*.c)) lessons/exercises/check/sandbox.c
 EX_CHECK_OBJ := $(EX_CHECK_SRC:%.c=$(BUILD)/obj/%.o)
 $(BUILD)/obj/lessons/exercises/check/sidx_check.o: CFLAGS += -DSIDX_CHECK_SRCDIR='"$(CURDIR)"' -DSIDX_CHECK_SANFLAGS='"$(SANFLAGS)"'
 $(BUILD)/bin/sidx-check: $(EX_FRONT_OBJ) $(EX_CHECK_OBJ) $(LIBA)

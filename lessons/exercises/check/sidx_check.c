@@ -30,6 +30,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 #include "borrowed.h"
+#include "sandbox.h"
 #include "class_mode.h"
 
 #ifndef SIDX_CHECK_SRCDIR
@@ -62,10 +63,14 @@ static void usage(FILE *f)
             "  --memory MB     memory limit per case (default 1024)\n"
             "  --case K        run only case K\n"
             "  --verbose       one line per case\n"
+            "  --unsafe        run the code without the sandbox (the limits only); --class: run the\n"
+            "                  class even where the sandbox cannot be set up\n"
             "  -h, --help      this help\n"
             "\n"
             "Your code runs in a child process in a temporary directory, with limits on CPU time,\n"
-            "memory, output and processes; the first lines it prints are shown, the rest counted.\n"
+            "memory, output and processes, in a sandbox (Linux namespaces: no file outside the\n"
+            "directory, no network, root or not); its attempts outside are listed; the first lines\n"
+            "it prints are shown, the rest counted.\n"
             "\n"
             "Class mode, for a lecturer:\n"
             "  --class DIR     DIR holds one folder per student, each with any of the exercise files\n"
@@ -162,12 +167,14 @@ static int check_one(size_t k, const char *file, char **pass, int npass, const c
         return 2;
     }
     char inc[PATH_MAX + 32], obj[PATH_MAX + 32], exe[PATH_MAX + 32], driver[2 * PATH_MAX], runner[2 * PATH_MAX],
-        lib[2 * PATH_MAX], san[256];
+        lib[2 * PATH_MAX], san[256], sandbox[2 * PATH_MAX], watch[2 * PATH_MAX];
     snprintf(inc, sizeof inc, "-I%s/lib/include", SIDX_CHECK_SRCDIR);
     snprintf(obj, sizeof obj, "%s/student.o", tmp);
     snprintf(exe, sizeof exe, "%s/check", tmp);
     snprintf(driver, sizeof driver, "%s/obj/lessons/exercises/check/%s.o", bdir, name);
     snprintf(runner, sizeof runner, "%s/obj/lessons/exercises/check/runner.o", bdir);
+    snprintf(sandbox, sizeof sandbox, "%s/obj/lessons/exercises/check/sandbox.o", bdir);
+    snprintf(watch, sizeof watch, "%s/obj/lessons/exercises/check/watch.o", bdir);
     snprintf(lib, sizeof lib, "%s/lib/libsidx.a", bdir);
     snprintf(san, sizeof san, "%s", SIDX_CHECK_SANFLAGS);
     /* CC may be several words ("ccache gcc"); blank or unset: cc */
@@ -249,7 +256,16 @@ static int check_one(size_t k, const char *file, char **pass, int npass, const c
         lv[n++] = obj;
         lv[n++] = driver;
         lv[n++] = runner;
+        lv[n++] = sandbox;
+        lv[n++] = watch;
         lv[n++] = lib;
+        /* every call of these, the student's included, goes through watch.c,
+         * which notes the ones that reach outside the case's directory */
+        lv[n++] = "-Wl,--wrap=open,--wrap=open64,--wrap=openat,--wrap=openat64,--wrap=creat,--wrap=creat64,"
+                  "--wrap=fopen,--wrap=fopen64,--wrap=freopen,--wrap=mkdir,--wrap=unlink,--wrap=remove,"
+                  "--wrap=rmdir,--wrap=rename,--wrap=link,--wrap=symlink,--wrap=truncate,--wrap=chmod,"
+                  "--wrap=connect,--wrap=fork,--wrap=system,--wrap=popen,--wrap=execve,--wrap=execv,"
+                  "--wrap=execvp,--wrap=kill,--wrap=malloc,--wrap=calloc,--wrap=realloc";
         n = add_words(lv, n, 40, san);
         lv[n++] = "-pthread";
         lv[n++] = "-lm";
@@ -313,6 +329,7 @@ done:
 int main(int argc, char **argv)
 {
     const char *name = NULL, *file = NULL, *class_dir = NULL, *out = NULL, *summary = NULL;
+    int unsafe = 0;
     long jobs = sysconf(_SC_NPROCESSORS_ONLN);
     char *pass[20];
     int npass = 0;
@@ -330,8 +347,9 @@ int main(int argc, char **argv)
             if (!strcmp(a, "--trace")) make_parents(argv[i + 1]);
             pass[npass++] = argv[i];
             pass[npass++] = argv[++i];
-        } else if (!strcmp(a, "--verbose")) {
+        } else if (!strcmp(a, "--verbose") || !strcmp(a, "--unsafe")) {
             if (npass > 12) return 2;
+            if (!strcmp(a, "--unsafe")) unsafe = 1;
             pass[npass++] = argv[i];
         } else if (!strcmp(a, "--class") && i + 1 < argc) {
             class_dir = argv[++i];
@@ -371,6 +389,16 @@ int main(int argc, char **argv)
                         pass[j]);
                 return 2;
             }
+        /* A class is checked contained or, by the lecturer's choice, not at all */
+        char why[300];
+        if (!unsafe && ck_sandbox_probe(why, sizeof why) != 0) {
+            fprintf(stderr,
+                    "sidx-check: the sandbox cannot be set up here (%s): the students' code would run with your\n"
+                    "rights, free to read, write and connect wherever you can.  Check the class where user\n"
+                    "namespaces work (docs/exercises.md), or give --unsafe to run it with the limits only.\n",
+                    why);
+            return 2;
+        }
         return ck_class_mode(class_dir, out, jobs, pass, npass, check_one);
     }
     if (!name || !file) {
