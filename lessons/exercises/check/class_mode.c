@@ -29,6 +29,7 @@ typedef struct class_job {
     int rc;
     /* from the summary line */
     char result[16], case_name[200], detail[2400], hint[1024];
+    char attempts[4096]; /* "NOT CONTAINED; write /tmp/x (refused: ...); ..." or "" */
     unsigned long case_, cases, step;
 } class_job;
 
@@ -71,6 +72,7 @@ static void read_summary(class_job *j)
         snprintf(j->case_name, sizeof j->case_name, "%s", next_field(&p));
         snprintf(j->detail, sizeof j->detail, "%s", next_field(&p));
         snprintf(j->hint, sizeof j->hint, "%s", next_field(&p));
+        snprintf(j->attempts, sizeof j->attempts, "%s", next_field(&p));
     }
     fclose(f);
     unlink(j->summary);
@@ -126,6 +128,8 @@ static void csv_field(FILE *f, const char *s, int last)
 
 int ck_class_mode(const char *dir, const char *out_arg, long jobs, char **pass, int npass, ck_check_fn check_one)
 {
+    int unsafe = 0;
+    for (int k = 0; k < npass; ++k) unsafe |= !strcmp(pass[k], "--unsafe");
     char out[PATH_MAX], real_out[PATH_MAX], real_dir[PATH_MAX];
     if (out_arg) snprintf(out, sizeof out, "%s", out_arg);
     else snprintf(out, sizeof out, "%s/sidx-class-report", dir);
@@ -263,10 +267,11 @@ int ck_class_mode(const char *dir, const char *out_arg, long jobs, char **pass, 
         if (csv) fclose(csv);
         return 2;
     }
-    fprintf(csv, "student,exercise,result,case,cases,step,case_name,detail,hint,report\n");
+    fprintf(csv, "student,exercise,result,case,cases,step,case_name,detail,hint,report,outside\n");
     int used[sizeof ck_exercises / sizeof ck_exercises[0]] = {0};
     for (size_t k = 0; k < nj; ++k) used[job[k].ex] = 1;
-    fprintf(md, "# sidx-check: class %s\n\n%zu students, %zu files checked.\n\n| student |", dir, ns, nj);
+    fprintf(md, "# sidx-check: class %s\n\n%zu students, %zu files checked%s.\n\n| student |", dir, ns, nj,
+            unsafe ? ", NOT CONTAINED (--unsafe): the students' code ran with the lecturer's rights" : "");
     for (size_t x = 0; x < ck_num_exercises; ++x)
         if (used[x]) fprintf(md, " %s |", ck_exercises[x].name);
     fprintf(md, "\n|---|");
@@ -285,6 +290,9 @@ int ck_class_mode(const char *dir, const char *out_arg, long jobs, char **pass, 
             char c[300];
             if (j) cell(j, c, sizeof c);
             else snprintf(c, sizeof c, "\u2013");
+            /* tried outside its directory: marked, listed below */
+            if (j && j->attempts[0] && strcmp(j->attempts, "NOT CONTAINED"))
+                snprintf(c + strlen(c), sizeof c - strlen(c), " (escape attempt)");
             fprintf(md, " ");
             md_text(md, c);
             fprintf(md, " |");
@@ -301,6 +309,28 @@ int ck_class_mode(const char *dir, const char *out_arg, long jobs, char **pass, 
                 ok += !strcmp(job[k].result, "pass");
             }
         fprintf(md, "| %s | %d | %d |\n", ck_exercises[x].name, sub, ok);
+    }
+    /* what tried to get out, and what took the library's answer: their own list */
+    int listed = 0;
+    for (size_t k = 0; k < nj; ++k) {
+        const class_job *j = &job[k];
+        const char *att = j->attempts;
+        if (!strncmp(att, "NOT CONTAINED", 13)) att += 13 + strspn(att + 13, "; ");
+        if (!att[0] && strcmp(j->result, "borrowed")) continue;
+        if (!listed++) fprintf(md, "\n## Borrowed answers and attempts outside the sandbox\n\n");
+        fprintf(md, "- **");
+        md_text(md, students[j->student]);
+        fprintf(md, "**, `%s`: ", ck_exercises[j->ex].name);
+        if (!strcmp(j->result, "borrowed")) {
+            fprintf(md, "borrowed answer: ");
+            md_text(md, j->detail);
+            if (att[0]) fprintf(md, "; ");
+        }
+        if (att[0]) {
+            fprintf(md, "tried outside its directory: ");
+            md_text(md, att);
+        }
+        fprintf(md, "\n");
     }
     fprintf(md, "\n## What did not pass\n\n");
     for (size_t k = 0; k < nj; ++k) {
@@ -320,7 +350,8 @@ int ck_class_mode(const char *dir, const char *out_arg, long jobs, char **pass, 
         csv_field(csv, j->case_name, 0);
         csv_field(csv, j->detail, 0);
         csv_field(csv, j->hint, 0);
-        csv_field(csv, rep, 1);
+        csv_field(csv, rep, 0);
+        csv_field(csv, j->attempts, 1);
         if (!strcmp(j->result, "pass")) continue;
         fprintf(md, "- **");
         md_text(md, students[j->student]);
