@@ -16,6 +16,9 @@
 BUILD=${BUILD:-build}
 CHECK=$BUILD/bin/sidx-check
 DIR=tests/exercises/borrowed
+case $BUILD in
+*/san | */tsan) echo "borrowed: skipped under the sanitizers (the check reads symbols, the same in every build)"; exit 0 ;;
+esac
 if [ ! -x "$CHECK" ]; then echo "borrowed: no $CHECK"; exit 1; fi
 fail=0
 n=0

@@ -335,7 +335,9 @@ int __wrap_kill(pid_t pid, int sig)
     if (ck_watch_fd >= 0 && pid != getpid()) {
         const int err = errno;
         char what[64];
-        snprintf(what, sizeof what, "signal %d to %s %d", sig, pid <= 0 ? "process group" : "process", (int)pid);
+        if (pid == -1) snprintf(what, sizeof what, "signal %d to every process (kill -1)", sig);
+        else if (pid == 0) snprintf(what, sizeof what, "signal %d to its process group", sig);
+        else snprintf(what, sizeof what, "signal %d to %s %d", sig, pid < 0 ? "process group" : "process", (int)(pid < 0 ? -pid : pid));
         note("signal", r == 0, err, what);
         errno = err;
     }
