@@ -6,14 +6,16 @@
 # A class of two: "hostile" solves 14_bsp_painter but first tries, in
 # every case, to write ../../NAME (above its directory), a file in /tmp
 # and one in the class folder, to read the reference solution, to connect
-# to a listener on 127.0.0.1 and to fork 20 processes; "borrower" hands in
+# to a listener on 127.0.0.1, to fork 20 processes and to reach every
+# process with kill(-1, 0) (signal 0: nothing is sent); "borrower" hands in
 # 01_ray_triangle calling the library's own tests.  sidx-check --class
 # runs it as root and as the user nobody (setpriv; run as a user, the test
 # runs it as that user only).  Contained, nothing is written or read,
-# nothing connects, no fork succeeds, and the student's report and the
+# nothing connects, no fork succeeds, kill(-1) finds no process, and the student's report and the
 # class summary list every attempt and the borrowed answer.  Then the same
 # class with --unsafe, the sandbox off: the files appear, the reference is
-# read, the connection is made (as root the forks succeed too) and the
+# read, the connection is made, kill(-1) finds processes (as root the forks
+# succeed too) and the
 # report says NOT CONTAINED — each check above can fail.  As root, also:
 # where the sandbox cannot be set up (user namespaces refused to the user,
 # in a user namespace whose limit is 0) class mode refuses to run, and a
@@ -61,7 +63,8 @@ python3 - "$SOL/14_bsp_painter.c" "$C/hostile/14_bsp_painter.c" "../../$REL" "$T
 import sys
 src, dst, rel, tmpf, classf, ref, port = sys.argv[1:]
 s = open(src).read()
-esc = r'''#include <stdio.h>
+esc = r'''#include <signal.h>
+#include <stdio.h>
 #include <string.h>
 #include <unistd.h>
 #include <arpa/inet.h>
@@ -69,7 +72,7 @@ esc = r'''#include <stdio.h>
 #include <sys/socket.h>
 static void escape(void)
 {
-    int wrote = 0, read = 0, connected = 0, forks = 0;
+    int wrote = 0, read = 0, connected = 0, forks = 0, signalled = 0;
     const char *out[] = {"REL", "TMPF", "CLASSF"};
     for (int k = 0; k < 3; ++k) {
         FILE *f = fopen(out[k], "w");
@@ -94,7 +97,8 @@ static void escape(void)
         if (p < 0) break;
         ++forks;
     }
-    printf("escape: wrote %d read %d connected %d forks %d\n", wrote, read, connected, forks);
+    signalled = kill(-1, 0) == 0; /* signal 0: asks whether any other process is in reach, sends nothing */
+    printf("escape: wrote %d read %d connected %d forks %d signalled %d\n", wrote, read, connected, forks, signalled);
 }
 '''
 for k, v in (("REL", rel), ("TMPF", tmpf), ("CLASSF", classf), ("REF", ref), ("PORT", port)):
@@ -149,7 +153,7 @@ contained() {
     # ../../REL lands in the case's own directory, the sandbox's /: one write succeeds there
     grep -q "write    ../../$REL  (case 1, 20 times: done inside its own directory)" "$R/hostile.txt" ||
         bad "$id: the write to ../../ is not reported as kept inside"
-    grep -q "escape: wrote 1 read 0 connected 0 forks 0" "$R/hostile.txt" ||
+    grep -q "escape: wrote 1 read 0 connected 0 forks 0 signalled 0" "$R/hostile.txt" ||
         { bad "$id: the hostile code got out:"; grep "escape:" "$R/hostile.txt" | head -3; }
     grep -q "write    $T/out/escape-tmp.txt  (case 1, 20 times: No such file or directory)" "$R/hostile.txt" ||
         bad "$id: the write to /tmp is not reported as refused"
@@ -157,6 +161,8 @@ contained() {
         bad "$id: the connection is not reported as refused"
     grep -q "process  fork  (case 1, 20 times: Resource temporarily unavailable)" "$R/hostile.txt" ||
         bad "$id: the fork loop is not reported as stopped"
+    grep -q "signal   signal 0 to every process (kill -1)  (case 1, 20 times: No such process)" "$R/hostile.txt" ||
+        bad "$id: kill(-1) is not reported as reaching nothing"
     grep "^| hostile |" "$R/summary.md" | grep -qF "| pass (escape attempt) |" || bad "$id: the summary's table does not mark the attempt"
     grep -q "NOT CONTAINED" "$R/summary.md" "$R/hostile.txt" && bad "$id: contained, but the report says NOT CONTAINED"
 }
@@ -172,7 +178,9 @@ uncontained() {
     grep -q "escape: wrote 3 read 1 connected 1" "$R/hostile.txt" ||
         { bad "$id --unsafe: the attempts did not succeed without the sandbox:"; grep "escape:" "$R/hostile.txt" | head -2; }
     if [ "$id" = root ]; then # root: RLIMIT_NPROC does not bind, the sandbox's nobody is what stops the loop
-        grep -q "escape: wrote 3 read 1 connected 1 forks 20" "$R/hostile.txt" || bad "root --unsafe: the fork loop was stopped all the same"
+        grep -q "escape: wrote 3 read 1 connected 1 forks 20 signalled 1" "$R/hostile.txt" || bad "root --unsafe: the fork loop was stopped all the same"
+    else # a user: RLIMIT_NPROC stops the forks even uncontained; kill(-1) reaches its other processes
+        grep -q "escape: wrote 3 read 1 connected 1 forks 0 signalled 1" "$R/hostile.txt" || bad "$id --unsafe: kill(-1) reached nothing"
     fi
     grep -q "NOT CONTAINED" "$R/hostile.txt" || bad "$id --unsafe: the report does not say NOT CONTAINED"
     grep -q "NOT CONTAINED (--unsafe)" "$R/summary.md" || bad "$id --unsafe: the summary does not say NOT CONTAINED"
