@@ -1,7 +1,9 @@
 /* borrowed.c — no borrowed answers (borrowed.h, symbols.def). */
 #include "borrowed.h"
 
+#include <elf.h>
 #include <errno.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/wait.h>
@@ -66,36 +68,134 @@ static const char *judge(const ck_symbols *s, const char *sym, int defined, char
     return buf;
 }
 
+/* The object's global symbols as nm -P prints them ("name U", "name w",
+ * "name T": undefined, undefined weak, defined), read from its ELF symbol
+ * table here: no program started per check.  A symbol table that cannot
+ * be read gives 0 (then nm is asked). */
+#define ELF_SYMBOLS(fn, Ehdr, Shdr, Sym, BIND)                                                                      \
+    static int fn(const unsigned char *b, size_t n, FILE *to)                                                       \
+    {                                                                                                                \
+        const Ehdr *eh = (const Ehdr *)b;                                                                            \
+        if (n < sizeof *eh || eh->e_shentsize != sizeof(Shdr) || eh->e_shoff > n ||                                  \
+            (n - eh->e_shoff) / sizeof(Shdr) < eh->e_shnum)                                                           \
+            return 0;                                                                                                \
+        const Shdr *sh = (const Shdr *)(b + eh->e_shoff);                                                            \
+        int lines = 0;                                                                                               \
+        for (unsigned k = 0; k < eh->e_shnum; ++k) {                                                                 \
+            if (sh[k].sh_type != SHT_SYMTAB || sh[k].sh_link >= eh->e_shnum) continue;                               \
+            const Shdr *st = &sh[sh[k].sh_link];                                                                     \
+            if (sh[k].sh_offset > n || sh[k].sh_size > n - sh[k].sh_offset || st->sh_offset > n ||                   \
+                st->sh_size > n - st->sh_offset || st->sh_size == 0)                                                 \
+                return 0;                                                                                            \
+            const Sym *sym = (const Sym *)(b + sh[k].sh_offset);                                                     \
+            const char *str = (const char *)(b + st->sh_offset);                                                     \
+            for (size_t j = 0; j < sh[k].sh_size / sizeof(Sym); ++j) {                                               \
+                const int bind = BIND(sym[j].st_info);                                                               \
+                if ((bind != STB_GLOBAL && bind != STB_WEAK) || sym[j].st_name >= st->sh_size) continue;            \
+                const char *nm = str + sym[j].st_name;                                                               \
+                if (!*nm || !memchr(nm, '\0', st->sh_size - sym[j].st_name)) continue;                               \
+                fprintf(to, "%s %s\n", nm, sym[j].st_shndx != SHN_UNDEF ? "T" : bind == STB_WEAK ? "w" : "U");       \
+                ++lines;                                                                                             \
+            }                                                                                                        \
+        }                                                                                                            \
+        return lines;                                                                                                \
+    }
+ELF_SYMBOLS(elf64_symbols, Elf64_Ehdr, Elf64_Shdr, Elf64_Sym, ELF64_ST_BIND)
+ELF_SYMBOLS(elf32_symbols, Elf32_Ehdr, Elf32_Shdr, Elf32_Sym, ELF32_ST_BIND)
+
+static int by_line(const void *a, const void *b) { return strcmp(*(char *const *)a, *(char *const *)b); }
+
+/* The symbol lines of obj, sorted as nm sorts them, in a malloc'd text;
+ * NULL if obj is not an ELF object this reads. */
+static char *read_symbols(const char *obj)
+{
+    FILE *f = fopen(obj, "rb");
+    if (!f) return NULL;
+    unsigned char *b = NULL;
+    size_t n = 0, cap = 0;
+    for (;;) {
+        if (n == cap) {
+            unsigned char *g = realloc(b, cap = cap ? 2 * cap : 1 << 16);
+            if (!g) break;
+            b = g;
+        }
+        const size_t got = fread(b + n, 1, cap - n, f);
+        if (got == 0) break;
+        n += got;
+    }
+    fclose(f);
+    char *text = NULL;
+    size_t len = 0;
+    FILE *m = b && n > EI_CLASS && !memcmp(b, ELFMAG, SELFMAG) ? open_memstream(&text, &len) : NULL;
+    int lines = 0;
+    if (m) {
+        lines = b[EI_CLASS] == ELFCLASS64 ? elf64_symbols(b, n, m) : b[EI_CLASS] == ELFCLASS32 ? elf32_symbols(b, n, m) : 0;
+        fclose(m);
+    }
+    free(b);
+    if (lines <= 0) {
+        free(text);
+        return NULL;
+    }
+    char **row = malloc((size_t)lines * sizeof *row);
+    char *sorted = malloc(len + 1);
+    if (!row || !sorted) {
+        free(row);
+        free(sorted);
+        return text;
+    }
+    int r = 0;
+    for (char *p = strtok(text, "\n"); p && r < lines; p = strtok(NULL, "\n")) row[r++] = p;
+    qsort(row, (size_t)r, sizeof *row, by_line);
+    size_t o = 0;
+    for (int k = 0; k < r; ++k) o += (size_t)sprintf(sorted + o, "%s\n", row[k]);
+    sorted[o] = '\0';
+    free(row);
+    free(text);
+    return sorted;
+}
+
 int ck_borrowed(const char *name, const char *obj, FILE *out, char *first, size_t size)
 {
     if (size) first[0] = '\0';
     const ck_symbols *s = ck_symbols_of(name);
     static const ck_symbols none = {"", "", ""};
     if (!s) s = &none; /* an exercise without a line: the library closed, the C library open */
-    int pfd[2];
-    if (pipe(pfd) != 0) return -1;
+    /* NM given: nm reads the object (a test blinds the check that way) */
+    const char *env_nm = getenv("NM");
+    char *text = env_nm && env_nm[0] ? NULL : read_symbols(obj);
+    FILE *f = text ? fmemopen(text, strlen(text), "r") : NULL;
+    pid_t pid = -1;
+    if (!f) {
+        free(text);
+        text = NULL;
+    }
+    int pfd[2] = {-1, -1};
+    if (!f && pipe(pfd) != 0) return -1;
     fflush(stdout);
     fflush(stderr);
-    const pid_t pid = fork();
-    if (pid < 0) {
+    if (!f) pid = fork();
+    if (!f && pid < 0) {
         close(pfd[0]);
         close(pfd[1]);
         return -1;
     }
-    if (pid == 0) {
+    if (!f && pid == 0) {
         dup2(pfd[1], 1);
         close(pfd[0]);
         close(pfd[1]);
-        const char *nm = getenv("NM");
-        if (!nm || !nm[0]) nm = "nm";
+        const char *nm = env_nm && env_nm[0] ? env_nm : "nm";
         /* -P: "name type [value size]", one symbol a line; U and w (weak)
          * are undefined, an upper-case letter a global definition */
         execlp(nm, nm, "-P", obj, (char *)NULL);
         fprintf(stderr, "sidx-check: cannot run %s: %s\n", nm, strerror(errno));
         _exit(127);
     }
-    close(pfd[1]);
-    FILE *f = fdopen(pfd[0], "r");
+    if (!f) {
+        close(pfd[1]);
+        f = fdopen(pfd[0], "r");
+    }
+    if (pipe(pfd) != 0) return -1;
     char line[1024], verdict[1024];
     /* the verdicts by rank, each rank's in nm's (alphabetical) order */
     char *by_rank[5] = {NULL};
@@ -117,7 +217,8 @@ int ck_borrowed(const char *name, const char *obj, FILE *out, char *first, size_
         ++found;
     }
     if (f) fclose(f);
-    else close(pfd[0]);
+    else if (pfd[0] >= 0) close(pfd[0]);
+    free(text);
     for (int r = 0; r < 5; ++r) {
         if (!rank_out[r]) continue;
         fclose(rank_out[r]);
@@ -125,6 +226,7 @@ int ck_borrowed(const char *name, const char *obj, FILE *out, char *first, size_
         fputs(by_rank[r], out);
         free(by_rank[r]);
     }
+    if (pid < 0) return lines ? found : -1; /* read here */
     int st;
     while (waitpid(pid, &st, 0) < 0)
         if (errno != EINTR) return -1;
