@@ -1,9 +1,10 @@
 /* borrowed.h — no borrowed answers: what a student's object may call.
  *
- * Decided on the compiled object, not on its source text: nm lists every
- * symbol the object calls or takes the address of (a call through a macro,
- * inline assembly, a weak declaration all name it), and every global it
- * defines.  symbols.def lists per exercise what of the library the
+ * Decided on the compiled object, not on its source text: its ELF symbol
+ * table (what nm -P lists; read in process, nm only if NM is set or the
+ * object is not ELF) names every symbol the object calls or takes the
+ * address of (a call through a macro, inline assembly, a weak declaration
+ * all name it), and every global it defines.  symbols.def lists per exercise what of the library the
  * student's code may call and the library's own versions of what the
  * exercise asks it to write. */
 #ifndef SIDX_CK_BORROWED_H

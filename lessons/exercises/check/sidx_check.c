@@ -210,7 +210,7 @@ static int check_one(size_t k, const char *file, char **pass, int npass, const c
         const int nb = mem ? ck_borrowed(name, obj, mem, first, sizeof first) : -1;
         if (mem) fclose(mem);
         if (nb < 0) {
-            printf("sidx-check %s: cannot read the symbols of the compiled %s (nm, of binutils, is needed)\n"
+            printf("sidx-check %s: cannot read the symbols of the compiled %s (not ELF, and no nm to ask)\n"
                    "BUILD FAILED (exit 2)\n", name, file);
             free(lines);
             goto build_failed;
