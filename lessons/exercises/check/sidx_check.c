@@ -1,23 +1,27 @@
 /* sidx-check — check a student's exercise against the library, step by step.
  *
- *   sidx-check NAME FILE.c [--trace DIR] [--timeout S] [--memory MB] [--case K] [--verbose]
- *   sidx-check --class DIR [--jobs N] [--out DIR2] [--timeout S] [--memory MB]
+ *   sidx-check NAME FILE.c [--trace DIR] [--timeout S] [--memory MB] [--case K] [--verbose] [--unsafe]
+ *   sidx-check --class DIR [--jobs N] [--out DIR2] [--timeout S] [--memory MB] [--unsafe]
  *   sidx-check --list
  *
  * Builds FILE.c against the library together with the exercise's checker
- * driver (lessons/exercises/check/NAME.c) and the runner, then runs it: the
- * runner compares the student's trace with the reference on the exercise's
- * battery and reports the first divergence (docs/exercises.md).
+ * driver (lessons/exercises/check/NAME.c), the runner, the sandbox and the
+ * watch of calls outside (sandbox.c, watch.c, linked with --wrap), then
+ * runs it: the runner compares the student's trace with the reference on
+ * the exercise's battery and reports the first divergence
+ * (docs/exercises.md).  Before linking, the object's symbols are checked
+ * against what the exercise lets it call (borrowed.c, symbols.def).
  * The student's code runs contained (the runner's child: limits, a
- * temporary directory, its output capped; docs/exercises.md).
- * --class checks a whole class: DIR holds one folder per student with any
- * of the exercise files (NAME.c); every file is checked, N at a time, and
- * a Markdown and a CSV summary and one report per student are written.
- * Exit status: 0 every case passes, 1 a divergence or a borrowed answer
- * (symbols.def), 2 FILE does not build,
- * crashes or runs out of time (or a usage error).  --class: 0 every
- * submission passes, 1 some does not, 2 a usage error or the reports could
- * not be written. */
+ * temporary directory as its root, Linux namespaces, its output capped;
+ * docs/exercises.md).  --class (class_mode.c) checks a whole class: DIR
+ * holds one folder per student with any of the exercise files (NAME.c);
+ * every file is checked, N at a time, and a Markdown and a CSV summary
+ * and one report per student are written; it runs only where the sandbox
+ * can be set up, unless --unsafe.
+ * Exit status: 0 every case passes, 1 a divergence or a borrowed answer,
+ * 2 FILE does not build, crashes or runs out of time (or a usage error).
+ * --class: 0 every submission passes, 1 some does not, 2 a usage error,
+ * no sandbox, or the reports could not be written. */
 #include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
@@ -44,8 +48,8 @@
 static void usage(FILE *f)
 {
     fprintf(f,
-            "usage: sidx-check NAME FILE.c [--trace DIR] [--timeout S] [--memory MB] [--case K] [--verbose]\n"
-            "       sidx-check --class DIR [--jobs N] [--out DIR2] [--timeout S] [--memory MB]\n"
+            "usage: sidx-check NAME FILE.c [--trace DIR] [--timeout S] [--memory MB] [--case K] [--verbose] [--unsafe]\n"
+            "       sidx-check --class DIR [--jobs N] [--out DIR2] [--timeout S] [--memory MB] [--unsafe]\n"
             "       sidx-check --list\n"
             "\n"
             "Builds FILE.c (your solution of exercise NAME, e.g. lessons/exercises/NAME.c) against\n"
