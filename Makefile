@@ -157,7 +157,7 @@ VIZA := $(BUILD)/lib/libsidxviz.a
 # for another compiler: the gcc build of make test compiles it, and
 # nothing but make bench runs it).
 NOHOOKS ?= 1
-PROGS := $(VIZ_PROGS) $(if $(wildcard lessons/tour.c),$(BUILD)/bin/sidx-tour) \
+PROGS := $(VIZ_PROGS) $(BUILD)/bin/sidx-check $(if $(wildcard lessons/tour.c),$(BUILD)/bin/sidx-tour) \
          $(if $(BENCH_SRC),$(BUILD)/bin/sidx-bench $(if $(filter 1,$(NOHOOKS)),$(BUILD)/bin/sidx-bench-nohooks))
 NOHOOKS_OBJ := $(LIB_SRC:%.c=$(BUILD)/nohooks/obj/%.o)
 ALL_LIBS = $(VIZA) $(LIBA) $(PKG_LIBS) $(LDLIBS)
@@ -478,10 +478,19 @@ $(WEB_DIR)/sidx-lab.html: $(WEB_DIR)/sidx-lab.js viz/lab_page.html viz/page_comm
 # Exercises (docs/exercises.md).  sidx-check links a student's file with
 # the exercise's checker driver and the runner, compiled here, against
 # this build's library (and its sanitizer flags, under SAN=1).
-EX_CHECK_SRC := $(wildcard lessons/exercises/check/*.c)
+# The kit's own command-line front end (sidx_check.c, with class mode in
+# class_mode.c) lives beside the drivers and becomes bin/sidx-check; it
+# links neither driver nor runner, which it compiles only for the students.
+EX_FRONT_SRC := lessons/exercises/check/sidx_check.c lessons/exercises/check/class_mode.c lessons/exercises/check/borrowed.c \
+                lessons/exercises/check/sandbox.c
+EX_FRONT_OBJ := $(EX_FRONT_SRC:%.c=$(BUILD)/obj/%.o)
+# sandbox.c serves both: the front end tries it before a class, the runner enters it.
+EX_CHECK_SRC := $(filter-out $(EX_FRONT_SRC),$(wildcard lessons/exercises/check/*.c)) lessons/exercises/check/sandbox.c
 EX_CHECK_OBJ := $(EX_CHECK_SRC:%.c=$(BUILD)/obj/%.o)
-$(BUILD)/obj/viz/sidx_check.o: CFLAGS += -DSIDX_CHECK_SRCDIR='"$(CURDIR)"' -DSIDX_CHECK_SANFLAGS='"$(SANFLAGS)"'
-$(BUILD)/bin/sidx-check: $(EX_CHECK_OBJ)
+$(BUILD)/obj/lessons/exercises/check/sidx_check.o: CFLAGS += -DSIDX_CHECK_SRCDIR='"$(CURDIR)"' -DSIDX_CHECK_SANFLAGS='"$(SANFLAGS)"'
+$(BUILD)/bin/sidx-check: $(EX_FRONT_OBJ) $(EX_CHECK_OBJ) $(LIBA)
+	@mkdir -p $(dir $@)
+	$(CC) $(LDFLAGS) -o $@ $(EX_FRONT_OBJ) $(LDLIBS)
 # The runner writes a failing case as a web page (--html): viz/check_page.html
 # with viz/page_common.js spliced in, as the bytes of a C array the runner
 # includes (sidx_check_page_html), so the checker needs no file beside it.

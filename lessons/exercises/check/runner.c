@@ -37,6 +37,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 #include "check.h"
+#include "sandbox.h"
 
 /* More events than any case of any battery needs: a student walk past it
  * is going round in circles. */
@@ -180,10 +181,19 @@ static void child_hook_fn(const sidx_event *ev, void *user)
  * (RLIMIT_CPU) and wall time (the parent's deadline), memory
  * (RLIMIT_AS, beyond what the checker itself holds), the size of any file
  * it writes (RLIMIT_FSIZE), no new process (RLIMIT_NPROC = 0: a fork bomb
- * gets EAGAIN) and no core file.  Run as root, the child also enters the
- * directory with chroot and drops to the user nobody, so that it can
- * neither write outside the directory nor escape RLIMIT_NPROC (which does
- * not bind root).  Its stdout and stderr go to a pipe the parent reads:
+ * gets EAGAIN) and no core file.  The child also enters the sandbox
+ * (sandbox.c), for root and for any user: new user (unless root), mount,
+ * network, IPC and PID namespaces, the case's directory as its root
+ * (chroot), no privilege left (root becomes nobody).  So it writes and
+ * reads nothing outside the directory, reaches no network, and its
+ * kill(-1) reaches only its own processes: the child is its PID
+ * namespace's first process (init), for which the signals that end a
+ * process elsewhere go through handlers (init_exit).  Every call that reaches outside the directory
+ * (watch.c, linked in with --wrap) is noted in a file the parent reads
+ * after the case: the report lists them.  Where the sandbox cannot be set
+ * up (no user namespaces for ordinary users) the verdict's first line
+ * says so, and the code runs with the limits only; --unsafe asks for
+ * that.  Its stdout and stderr go to a pipe the parent reads:
  * the first lines are kept to be shown before the verdict, the rest only
  * counted, and a case writing more than EX_MAX_OUTPUT bytes is stopped.
  * A crash writes the faulting address and the backtrace to a file; the
@@ -195,6 +205,7 @@ static void child_hook_fn(const sidx_event *ev, void *user)
 #define EX_MAX_OUTPUT (1u << 20)     /* bytes of output per case */
 #define EX_MEMORY_MB 1024ul          /* memory per case beyond the checker's own */
 #define EX_CRASH_FRAMES 48
+#define EX_MAX_ATTEMPTS 12           /* distinct attempts outside listed in the report */
 
 #if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
 #define EX_SANITIZED 1 /* the sanitizers reserve terabytes of address space: no RLIMIT_AS */
@@ -225,9 +236,35 @@ static struct containment {
     int recursion;      /* frames of the crashing student function in the backtrace */
     int locate;         /* name a crash's place (addr2line); off for the cases run for the diagnosis */
     double wall_cap;    /* > 0: a case's wall time limit below --timeout (the cases run for the diagnosis) */
+    /* the sandbox: 0 contained; 1 not (--unsafe, or it cannot be set up:
+     * why says why) */
+    int unsafe;
+    char why[300];
+    /* the calls that reached outside (watch.c), distinct ones over all cases */
+    struct attempt {
+        char kind[12], result[96], what[320];
+        size_t case_;
+        unsigned long count;
+    } att[EX_MAX_ATTEMPTS];
+    size_t natt;
+    unsigned long more_att;
+    char alloc_failed[80]; /* this case: the first allocation that failed, "malloc(8589934592)", or "" */
 } cx = {.memory_mb = EX_MEMORY_MB, .locate = 1};
 
+/* Shared with the case's processes (MAP_SHARED, made before the first
+ * fork): the PID namespace's first process writes here the wait status of
+ * the process that ran the student's code, and the child why it could not
+ * enter the sandbox. */
+static struct case_shared {
+    int have_status, status;
+    char why[256];
+} *shared;
+
+extern int ck_watch_fd; /* watch.c */
+
 static int crash_fd = -1;
+
+static void init_exit(int sig);
 
 static void crash_handler(int sig, siginfo_t *si, void *ucv)
 {
@@ -253,8 +290,23 @@ static void crash_handler(int sig, siginfo_t *si, void *ucv)
     if (!oom) munmap(m, probe);
     if (write(crash_fd, &oom, 1) < 0 || write(crash_fd, pc, (size_t)n * sizeof pc[0]) < 0) {
     }
+    if (getpid() == 1) init_exit(sig); /* the sandbox's init: a raise would be ignored */
     raise(sig); /* SA_RESETHAND: delivered with the default action once the handler returns */
 }
+
+/* The first process of a PID namespace (the case's child, in the sandbox)
+ * is not killed by a signal it has no handler for, unless the kernel
+ * forces it (a fault): the signals that would end it elsewhere end it
+ * here through the handlers, which hand the status they stand for to the
+ * parent on the shared page. */
+static void init_exit(int sig)
+{
+    shared->status = sig; /* a wait status "killed by sig" */
+    shared->have_status = 1;
+    _exit(128 + sig);
+}
+
+static void init_signal(int sig) { init_exit(sig); }
 
 /* In the child, before the student's code: the directory, the limits, the
  * crash handler. */
@@ -286,9 +338,10 @@ static void contain_child(const char *casedir, unsigned timeout, int out_fd, int
         if (fscanf(statm, "%lu", &pages) != 1) pages = 0;
         fclose(statm);
     }
-    if (geteuid() == 0 && chroot(casedir) == 0 && chdir("/") == 0) {
-        if (setgroups(0, NULL) != 0 || setgid(65534) != 0 || setuid(65534) != 0) _exit(5);
+    if (!cx.unsafe) {
+        if (ck_sandbox_enter(casedir, shared->why, sizeof shared->why) != 0) _exit(5);
     } else if (chdir(casedir) != 0) {
+        snprintf(shared->why, sizeof shared->why, "chdir: %s", strerror(errno));
         _exit(5);
     }
     struct rlimit rl;
@@ -298,7 +351,6 @@ static void contain_child(const char *casedir, unsigned timeout, int out_fd, int
     rl.rlim_cur = rl.rlim_max = (rlim_t)EX_MAX_EVENTS * sizeof(sidx_event) + (16u << 20);
     setrlimit(RLIMIT_FSIZE, &rl);
     rl.rlim_cur = rl.rlim_max = 0;
-    setrlimit(RLIMIT_NPROC, &rl);
     setrlimit(RLIMIT_CORE, &rl);
     if (!EX_SANITIZED) {
         rl.rlim_cur = rl.rlim_max = (rlim_t)pages * (rlim_t)sysconf(_SC_PAGESIZE) + (rlim_t)cx.memory_mb * (1u << 20);
@@ -306,6 +358,14 @@ static void contain_child(const char *casedir, unsigned timeout, int out_fd, int
     }
     signal(SIGXCPU, SIG_DFL);
     signal(SIGXFSZ, SIG_DFL);
+    if (!cx.unsafe) { /* init of its PID namespace: SIGXCPU and SIGXFSZ act only through a handler */
+        sa.sa_handler = init_signal;
+        sa.sa_flags = 0;
+        sigaction(SIGXCPU, &sa, NULL);
+        sigaction(SIGXFSZ, &sa, NULL);
+    }
+    rl.rlim_cur = rl.rlim_max = 0;
+    setrlimit(RLIMIT_NPROC, &rl);
 }
 
 /* Keeps the first lines of the student's output, counts the rest. */
@@ -489,19 +549,56 @@ typedef enum run_status {
     RUN_ERROR
 } run_status;
 
-/* 1 if the process is running or ready to run (an endless loop), 0 if it
- * waits (sleep, a read): /proc/PID/stat's state after the command name. */
-static int running_state(pid_t pid)
+/* Adds the attempts the case's processes wrote to fd (watch.c's lines). */
+static void take_attempts(int fd, size_t case_)
 {
-    char path[64], buf[512];
-    snprintf(path, sizeof path, "/proc/%d/stat", (int)pid);
-    FILE *f = fopen(path, "r");
-    if (!f) return 0;
-    const size_t n = fread(buf, 1, sizeof buf - 1, f);
-    fclose(f);
+    char buf[8192];
+    const ssize_t n = pread(fd, buf, sizeof buf - 1, 0);
+    if (n <= 0) return;
     buf[n] = '\0';
-    const char *paren = strrchr(buf, ')');
-    return paren && paren[1] == ' ' && paren[2] == 'R';
+    for (char *line = buf, *next; *line; line = next) {
+        next = line + strcspn(line, "\n");
+        if (*next) *next++ = '\0';
+        char *kind = line, *result = strchr(kind, '\t'), *what = result ? strchr(result + 1, '\t') : NULL;
+        if (!what) continue;
+        *result++ = '\0';
+        *what++ = '\0';
+        if (!strcmp(kind, "memory")) { /* not an attempt outside: a failed allocation (watch.c) */
+            if (!cx.alloc_failed[0]) snprintf(cx.alloc_failed, sizeof cx.alloc_failed, "%.79s", what);
+            continue;
+        }
+        size_t k = 0;
+        while (k < cx.natt && (strcmp(cx.att[k].kind, kind) || strcmp(cx.att[k].what, what))) ++k;
+        if (k < cx.natt) {
+            ++cx.att[k].count;
+        } else if (cx.natt < EX_MAX_ATTEMPTS) {
+            struct attempt *a = &cx.att[cx.natt++];
+            snprintf(a->kind, sizeof a->kind, "%.11s", kind);
+            snprintf(a->result, sizeof a->result, "%.95s", result);
+            snprintf(a->what, sizeof a->what, "%.319s", what);
+            a->case_ = case_;
+            a->count = 1;
+        } else {
+            ++cx.more_att;
+        }
+    }
+}
+
+/* The attempts, before the verdict: each with the first case and what it got. */
+static void print_attempts(void)
+{
+    if (!cx.natt) return;
+    printf("your code tried to reach outside its directory%s:\n",
+           cx.unsafe ? " (NOT contained: what says \"done\" was done)" : " (the sandbox kept it in)");
+    for (size_t k = 0; k < cx.natt; ++k) {
+        const struct attempt *a = &cx.att[k];
+        char times[48] = "";
+        if (a->count > 1) snprintf(times, sizeof times, ", %lu times", a->count);
+        /* contained, a call that succeeded stayed inside: the sandbox's / is the case's directory */
+        printf("  %-8s %s  (case %zu%s: %s)\n", a->kind, a->what, a->case_, times,
+               strcmp(a->result, "ok") ? a->result : cx.unsafe ? "done" : "done inside its own directory");
+    }
+    if (cx.more_att) printf("  \u2026 and %lu more\n", cx.more_att);
 }
 
 static double now_s(void)
@@ -520,28 +617,38 @@ static double now_s(void)
  * run of several writes EX_CASE_END after each case. */
 static run_status run_student(size_t i, size_t last, unsigned timeout, ex_trace *out, int *sig, int *code, int *cpu)
 {
-    char casedir[sizeof cx.dir + 16], path[sizeof cx.dir + 16], cpath[sizeof cx.dir + 16];
+    char casedir[sizeof cx.dir + 16], path[sizeof cx.dir + 16], cpath[sizeof cx.dir + 16], wpath[sizeof cx.dir + 16];
     snprintf(casedir, sizeof casedir, "%s/case-XXXXXX", cx.dir);
     snprintf(path, sizeof path, "%s/ev-XXXXXX", cx.dir);
     snprintf(cpath, sizeof cpath, "%s/bt-XXXXXX", cx.dir);
+    snprintf(wpath, sizeof wpath, "%s/wa-XXXXXX", cx.dir);
     int pfd[2] = {-1, -1};
     if (!mkdtemp(casedir)) return RUN_ERROR;
     chmod(casedir, 0777); /* the child runs as nobody */
-    const int fd = mkstemp(path), cfd = mkstemp(cpath);
+    const int fd = mkstemp(path), cfd = mkstemp(cpath), wfd = mkstemp(wpath);
     if (fd >= 0) unlink(path);
     if (cfd >= 0) unlink(cpath);
-    if (fd < 0 || cfd < 0 || pipe(pfd) != 0) {
+    if (wfd >= 0) {
+        unlink(wpath);
+        fcntl(wfd, F_SETFL, O_APPEND); /* the case's processes write whole lines, one after the other */
+    }
+    if (fd < 0 || cfd < 0 || wfd < 0 || pipe(pfd) != 0) {
         if (fd >= 0) close(fd);
         if (cfd >= 0) close(cfd);
+        if (wfd >= 0) close(wfd);
         remove_tree(casedir);
         return RUN_ERROR;
     }
+    shared->have_status = 0;
+    shared->why[0] = '\0';
     fflush(stdout);
     fflush(stderr);
-    const pid_t pid = fork();
+    const pid_t pid = cx.unsafe ? fork() : ck_sandbox_fork(shared->why, sizeof shared->why);
     if (pid < 0) {
+        if (!cx.unsafe) fprintf(stderr, "sidx-check: cannot contain the case: %s\n", shared->why);
         close(fd);
         close(cfd);
+        close(wfd);
         close(pfd[0]);
         close(pfd[1]);
         remove_tree(casedir);
@@ -552,6 +659,7 @@ static run_status run_student(size_t i, size_t last, unsigned timeout, ex_trace 
         contain_child(casedir, timeout, pfd[1], cfd);
         child_out o = {fd, 0};
         sidx_hook h = {child_hook_fn, &o, 0};
+        ck_watch_fd = wfd;
         for (size_t c = i; c <= last; ++c) {
             o.n = 0;
             ex_driver_this.student(c, &h);
@@ -576,7 +684,6 @@ static run_status run_student(size_t i, size_t last, unsigned timeout, ex_trace 
     while (!reaped) {
         const double left = deadline - now_s();
         if (left <= 0) {
-            busy = running_state(pid);
             kill(-pid, SIGKILL);
             kill(pid, SIGKILL);
             killed_time = 1;
@@ -608,12 +715,33 @@ static run_status run_student(size_t i, size_t last, unsigned timeout, ex_trace 
             else poll(NULL, 0, 1); /* it has closed its output: it is exiting */
         }
     }
+    struct rusage ru;
+    memset(&ru, 0, sizeof ru);
     if (!reaped)
-        while (waitpid(pid, &st, 0) < 0 && errno == EINTR) {
+        while (wait4(pid, &st, 0, &ru) < 0 && errno == EINTR) {
         }
+    /* out of time: computing (an endless loop) if it used a tenth of the
+     * time on the CPU (on a busy machine a loop gets a small share), else
+     * waiting (sleep, a read: next to no CPU time) */
+    if (killed_time)
+        busy = (double)ru.ru_utime.tv_sec + (double)ru.ru_stime.tv_sec +
+                   1e-6 * (double)(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec) > 0.1 * timeout;
     kill(-pid, SIGKILL); /* whatever it left behind */
     close(pfd[0]);
     remove_tree(casedir);
+    cx.alloc_failed[0] = '\0';
+    take_attempts(wfd, i + 1);
+    close(wfd);
+    if (!killed_output && !killed_time && WIFEXITED(st) && WEXITSTATUS(st) == 5 && !shared->have_status &&
+        shared->why[0]) {
+        /* the child could not enter its directory or the sandbox */
+        close(fd);
+        close(cfd);
+        fprintf(stderr, "sidx-check: cannot contain the case: %s\n", shared->why[0] ? shared->why : "?");
+        errno = EPERM;
+        return RUN_ERROR;
+    }
+    if (shared->have_status) st = shared->status; /* a signal the sandbox's init stood for */
     struct stat sb;
     run_status rs = RUN_OK;
     if (fstat(fd, &sb) != 0) {
@@ -661,12 +789,15 @@ static run_status run_student(size_t i, size_t last, unsigned timeout, ex_trace 
         }
     } else if (WIFEXITED(st) && WEXITSTATUS(st) == 3) {
         rs = RUN_TOO_MANY;
+    } else if (WIFEXITED(st) && WEXITSTATUS(st) == 4) {
+        rs = RUN_OUTPUT; /* the events file refused a write: past RLIMIT_FSIZE */
     } else if (!WIFEXITED(st) || WEXITSTATUS(st) != 0 || !done) {
         *code = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
         rs = RUN_CRASH;
     }
     char oom = 0;
     if (rs == RUN_CRASH && !EX_SANITIZED && pread(cfd, &oom, 1, 0) == 1 && oom) rs = RUN_MEMORY;
+    if (rs == RUN_CRASH && cx.alloc_failed[0]) rs = RUN_MEMORY; /* a NULL from malloc, then written to */
     close(cfd);
     return rs;
 }
@@ -905,20 +1036,39 @@ static void usage(FILE *f)
             "  --source FILE   the student's file (to name a crash's FILE:LINE)\n"
             "  --memory MB     memory per case (default %lu MiB)\n"
             "  --summary FILE  write the verdict as one tab-separated line: result, case, cases, step,\n"
-            "                  case name, detail, hint, diagnosis\n"
+            "                  case name, detail, hint, diagnosis, containment and attempts outside\n"
             "  --rules         print the exercise's rule table, one rule a line, tab-separated: id,\n"
             "                  statement, hint, the cases that test it (1-based, blank-separated)\n"
-            "  --rules-out FILE  write that table to FILE, and check\n",
+            "  --rules-out FILE  write that table to FILE, and check\n"
+            "  --unsafe        run the code without the sandbox (the limits only)\n",
             EX_MEMORY_MB);
 }
 
 /* The verdict as one line of --summary FILE (for sidx-check --class). */
 static const char *summary_path;
 
+/* last: 1 ends the line, 0 a field, -1 neither */
 static void put_field(FILE *f, const char *s, int last)
 {
     for (; s && *s; ++s) fputc(*s == '\t' || *s == '\n' || *s == '\r' ? ' ' : *s, f);
-    fputc(last ? '\n' : '\t', f);
+    if (last >= 0) fputc(last ? '\n' : '\t', f);
+}
+
+/* The eighth field: the containment and the attempts outside, "" if
+ * contained and none: "NOT CONTAINED; write /tmp/x (refused: ...); ...". */
+static void put_attempts(FILE *f)
+{
+    if (cx.unsafe) fprintf(f, "NOT CONTAINED%s", cx.natt ? "; " : "");
+    for (size_t k = 0; k < cx.natt; ++k) {
+        char one[600];
+        snprintf(one, sizeof one, "%s %s (%s%s)%s", cx.att[k].kind, cx.att[k].what,
+                 strcmp(cx.att[k].result, "ok") ? "refused: " : cx.unsafe ? "done" : "kept inside",
+                 strcmp(cx.att[k].result, "ok") ? cx.att[k].result : "",
+                 k + 1 < cx.natt || cx.more_att ? "; " : "");
+        put_field(f, one, -1);
+    }
+    if (cx.more_att) fprintf(f, "and %lu more", cx.more_att);
+    fputc('\n', f);
 }
 
 static void write_summary(const char *result, size_t case_, size_t cases, size_t step, const char *name,
@@ -931,7 +1081,8 @@ static void write_summary(const char *result, size_t case_, size_t cases, size_t
     put_field(f, name, 0);
     put_field(f, detail, 0);
     put_field(f, hint, 0);
-    put_field(f, diagnosis, 1);
+    put_field(f, diagnosis, 0);
+    put_attempts(f);
     fclose(f);
 }
 
@@ -1102,7 +1253,7 @@ static int print_rules(const ex_driver *d, FILE *out)
 /* The detail of a run that did not return (the report's "your code ..."
  * line) and its --summary result. */
 static const char *failure_detail(run_status rs, int sig, int code, int cpu, unsigned timeout, const char *where,
-                                  int where_is_student, char *detail, size_t size)
+                                  int where_is_student, const char *alloc_failed, char *detail, size_t size)
 {
     if (rs == RUN_TIMEOUT && cpu) {
         snprintf(detail, size, "did not finish within %u s: it kept computing (an endless loop?)", timeout);
@@ -1123,8 +1274,9 @@ static const char *failure_detail(run_status rs, int sig, int code, int cpu, uns
         return "output";
     }
     if (rs == RUN_MEMORY) {
-        snprintf(detail, size, "ran out of memory (the limit is %lu MiB per case)%s%s%s%s", cx.memory_mb,
-                 sig ? ": " : "", sig ? strsignal(sig) : "", where[0] ? " at " : "", where);
+        snprintf(detail, size, "ran out of memory (the limit is %lu MiB per case%s%s%s)%s%s%s%s", cx.memory_mb,
+                 alloc_failed[0] ? "; " : "", alloc_failed, alloc_failed[0] ? " returned NULL" : "", sig ? ": " : "",
+                 sig ? strsignal(sig) : "", where[0] ? " at " : "", where);
         return "memory";
     }
     if (sig && where[0])
@@ -1434,6 +1586,9 @@ int main(int argc, char **argv)
             rules_only = 1;
         } else if (!strcmp(argv[i], "--rules-out") && i + 1 < argc) {
             rules_out = argv[++i];
+        } else if (!strcmp(argv[i], "--unsafe")) {
+            cx.unsafe = 1;
+            snprintf(cx.why, sizeof cx.why, "--unsafe");
         } else if (!strcmp(argv[i], "--source") && i + 1 < argc) {
             cx.source = argv[++i];
         } else if (!strcmp(argv[i], "--summary") && i + 1 < argc) {
@@ -1467,6 +1622,19 @@ int main(int argc, char **argv)
         return 2;
     }
     chmod(cx.dir, 0711); /* the child, as nobody, reaches its case directory only */
+    shared = mmap(NULL, sizeof *shared, PROT_READ | PROT_WRITE, MAP_SHARED | MAP_ANONYMOUS, -1, 0);
+    if (shared == MAP_FAILED) {
+        fprintf(stderr, "sidx-check %s: cannot map a shared page: %s\n", d->name, strerror(errno));
+        return 2;
+    }
+    /* The sandbox, tried once before any case: where it cannot be set up
+     * the verdict says so first */
+    if (!cx.unsafe && (ck_sandbox_probe(cx.why, sizeof cx.why) != 0 || ck_sandbox_init(cx.why, sizeof cx.why) != 0))
+        cx.unsafe = 1;
+    if (cx.unsafe)
+        printf("sidx-check %s: NOT CONTAINED: %s%s: your code runs with your own rights (it can read, write and "
+               "connect wherever you can); only the time, memory, output and process limits hold\n",
+               d->name, strcmp(cx.why, "--unsafe") ? "the sandbox cannot be set up here: " : "", cx.why);
     {
         void *warm[2]; /* loads the unwinder now: the crash handler runs where it cannot load it */
         (void)backtrace(warm, 2);
@@ -1518,6 +1686,7 @@ int main(int argc, char **argv)
     run_status first_rs = RUN_OK;
     int first_sig = 0, first_code = 0, first_cpu = 0, first_where_is_student = 0, first_recursion = 0;
     char first_where[sizeof cx.where] = "";
+    char first_alloc[sizeof cx.alloc_failed] = "";
     int traces_written = 0;
     for (size_t i = only ? (size_t)only - 1 : 0; i < (only ? (size_t)only : n);) {
         if (first != SIZE_MAX) { /* the rest, for the diagnosis */
@@ -1569,6 +1738,7 @@ int main(int argc, char **argv)
         first_recursion = cx.recursion;
         first_where_is_student = cx.where_is_student;
         snprintf(first_where, sizeof first_where, "%s", cx.where);
+        snprintf(first_alloc, sizeof first_alloc, "%s", cx.alloc_failed);
         ex_trace t = fref;
         fref = ref;
         ref = t;
@@ -1598,7 +1768,7 @@ int main(int argc, char **argv)
         const char *result = "fail";
         if (first_rs != RUN_OK) {
             result = failure_detail(first_rs, first_sig, first_code, first_cpu, timeout, first_where,
-                                    first_where_is_student, detail, sizeof detail);
+                                    first_where_is_student, first_alloc, detail, sizeof detail);
             const char *kind = failure_hint(first_rs, first_sig, first_cpu, first_recursion);
             /* a fault at a line: the rule of this case's that the pattern points to, else the case's own */
             const char *why = rule_hint && member[i * (nr ? nr : 1) + (size_t)best] ? rule_hint : NULL;
@@ -1632,6 +1802,7 @@ int main(int argc, char **argv)
             }
         }
         print_student_output();
+        print_attempts();
         if (first_rs != RUN_OK) {
             write_summary(result, i + 1, n, fstu.n, info.name, detail, hint, diagnosis);
             printf("sidx-check %s: case %zu of %zu, \"%s\":\n", d->name, i + 1, n, info.name);
@@ -1687,6 +1858,7 @@ int main(int argc, char **argv)
     }
     if (rc == 0) {
         print_student_output();
+        print_attempts();
         write_summary("pass", 0, n, 0, "", "", NULL, NULL);
     }
     remove_tree(cx.dir);
