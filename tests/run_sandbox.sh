@@ -47,13 +47,14 @@ bad() { echo "sandbox: FAIL: $*"; fail=1; }
 python3 -c '
 import socket, sys
 s = socket.socket(); s.bind(("127.0.0.1", 0)); s.listen(64)
+s.settimeout(300)  # stops by itself once nothing has connected for 5 minutes
 print(s.getsockname()[1], flush=True)
 while True:
     c, _ = s.accept(); c.close()
-' >"$T/port" &
+' >"$T/port" 2>/dev/null &
 LPID=$!
 n=0
-while [ ! -s "$T/port" ] && [ $n -lt 50 ]; do sleep 0.1; n=$((n + 1)); done
+while [ ! -s "$T/port" ] && [ $n -lt 300 ]; do sleep 0.1; n=$((n + 1)); done # 30 s: a loaded machine
 PORT=$(cat "$T/port")
 [ -n "$PORT" ] || { echo "sandbox: FAIL: no listener"; exit 1; }
 
