@@ -55,7 +55,7 @@ static const ex_rule rules[NRULES] = {
      "\"When should we stop splitting?\": an empty cell (n == 0) is SIDX_LEAF_EMPTY, checked before anything "
      "else: it also has n <= leaf size, but its reason is \"empty\""},
     {"few-inclusive", "SIDX_LEAF_FEW_PRIMS when n <= leaf_size (a node of exactly leaf_size triangles is a leaf)",
-     "few triangles (n <= leaf size, inclusive): a node of exactly leaf_size triangles is a leaf, "
+     "few triangles (n <= leaf size) is inclusive: a node of exactly leaf_size triangles is a leaf, "
      "SIDX_LEAF_FEW_PRIMS"},
     {"few-before-depth", "few triangles is checked before the depth limit",
      "the order of the checks: few triangles (n <= leaf size) comes before the depth limit; a node that has "
@@ -322,9 +322,9 @@ static const char *hint(size_t i, const sidx_event *ref, const sidx_event *stu)
     switch (r) {
     case SIDX_LEAF_EMPTY: return rules[R_EMPTY].hint;
     case SIDX_LEAF_FEW_PRIMS:
-        if (s == SIDX_LEAF_MAX_DEPTH || s == SIDX_LEAF_NO_SPLIT) return rules[R_FEW_DEPTH].hint;
+        if (s == SIDX_LEAF_MAX_DEPTH) return rules[R_FEW_DEPTH].hint;
         if (s == SIDX_LEAF_EMPTY) return rules[R_EMPTY].hint;
-        return rules[R_FEW].hint;
+        return n == k->leaf_size ? rules[R_FEW].hint : hint_order;
     case SIDX_LEAF_MAX_DEPTH:
         if (s == SIDX_LEAF_FEW_PRIMS) return n > k->leaf_size ? rules[R_FEW].hint : hint_order;
         return rules[R_DEPTH].hint;
