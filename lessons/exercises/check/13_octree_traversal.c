@@ -251,7 +251,9 @@ static void describe(size_t i, ex_case_info *out)
                        : r >= K_ZERO && r < K_DIAG                            ? " zero-dir"
                        : r == K_DIAG || r == K_DIAG2                          ? " ties-xyz"
                                                                               : "";
-    snprintf(ids[i], sizeof ids[i], "%s%s%s", WALK, kind, s == 1 ? " axes-only" : "");
+    const int beyond = r >= K_BEYOND && r < K_INSIDE ? 0 : hit_beyond_cell(accels[s], &rays[s][r]);
+    snprintf(ids[i], sizeof ids[i], "%s%s%s%s", WALK, kind, beyond ? " hit-beyond-goes-on" : "",
+             s == 1 ? " axes-only" : "");
 #undef WALK
     out->rules = ids[i];
 }

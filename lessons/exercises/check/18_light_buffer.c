@@ -83,7 +83,7 @@ static const ex_rule rules[NRULES] = {
                      "miss-unchanged"
 static lb_case cases[] = {
     {"hand: a cell with no cached occluder (the first shadow ray)", 0, 2, 0, 1, {{{0.5f, 0.5f, 0}, 1e-3f, 1}},
-     "list-order cache-update stop-on-hit", 0},
+     "list-order range-tmax cache-update stop-on-hit", 0},
     {"hand: the same occluder twice (the cache hits)", 0, 2, 0, 2,
      {{{0.5f, 0.5f, 0}, 1e-3f, 1}, {{0.75f, 0.25f, 0}, 1e-3f, 1}},
      "cache-first cache-hit-stays stop-on-hit", 0},
@@ -98,7 +98,7 @@ static lb_case cases[] = {
      {{{0.5f, 0, 1}, 0, 1}, {{0, 3, 5}, 1e-3f, 1}, {{0.5f, -0.5f, 6}, 1e-3f, 1}}, "range-tmax", 0},
     {"hand: rays starting on a surface (on occluder A and the floor; tmin = 0 and 1e-3)", 0, 2, 1, 4,
      {{{0.5f, 0.5f, 2}, 0, 1}, {{0.5f, 0.5f, 2}, 1e-3f, 1}, {{3.5f, -4, 0}, 0, 1}, {{-1.5f, -1.5f, 4}, 0, 1}},
-     "range-tmax list-order", 0},
+     "range-tmax list-order reach-stop", 0},
     {"hand: rays from above the occluders (nothing in reach)", 0, 4, 0, 3,
      {{{0.5f, 0.5f, 6}, 1e-3f, 1}, {{2.5f, 2.5f, 5}, 1e-3f, 1}, {{-1.5f, -1.5f, 7.5f}, 1e-3f, 1}},
      "reach-stop miss-unchanged", 0},
