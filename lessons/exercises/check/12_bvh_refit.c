@@ -246,8 +246,8 @@ static int format(const sidx_event *e, char *buf, size_t size)
         snprintf(buf, size, "node %d (leaf: first %u, count %u)  %c in [%g, %g]", e->cell[0], e->count,
                  ca & SIDX_BVH_COUNT_MASK, "xyz"[e->cell[2] % 3], (double)e->t_near, (double)e->t_far);
     else
-        snprintf(buf, size, "node %d (inner: children %d, %u)  %c in [%g, %g]", e->cell[0], e->cell[0] + 1, e->count,
-                 "xyz"[e->cell[2] % 3], (double)e->t_near, (double)e->t_far);
+        snprintf(buf, size, "node %d (inner: children %d, %u, split on %c)  %c in [%g, %g]", e->cell[0], e->cell[0] + 1,
+                 e->count, "xyzw"[(ca >> 30) & 3], "xyz"[e->cell[2] % 3], (double)e->t_near, (double)e->t_far);
     return 1;
 }
 

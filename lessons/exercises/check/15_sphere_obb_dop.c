@@ -436,9 +436,17 @@ static const char *hint(size_t i, const sidx_event *ref, const sidx_event *stu)
     return rules[c->rule].hint;
 }
 
+/* The NOTE after a miss: whether the outputs were written. */
+static int format(const sidx_event *e, char *buf, size_t size)
+{
+    if (e->type != SIDX_EV_NOTE) return 0;
+    snprintf(buf, size, "after the miss: %s", e->count ? "*t_near or *t_far written" : "*t_near, *t_far left as they were");
+    return 1;
+}
+
 const ex_driver ex_driver_this = {
     "15_sphere_obb_dop",
     "the sphere, OBB and 14-DOP ray tests: tangent rays, parallel slabs, flat volumes",
     "deck 000, \"Bounding Volumes\" (sphere, OBB, slabs)",
-    setup, num_cases, describe, reference, student, hint, NULL, NULL, rules, NRULES,
+    setup, num_cases, describe, reference, student, hint, NULL, format, rules, NRULES,
 };
