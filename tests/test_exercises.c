@@ -165,7 +165,7 @@ static void stubs_fail_cleanly(void **state)
 
 /* One planted mistake of tests/exercises/mistakes.txt; the file holds at
  * most MAX_MISTAKES of them. */
-#define MAX_MISTAKES 256
+#define MAX_MISTAKES 512
 typedef struct mistake {
     char name[64], slug[64], old[512], new_[512];
     int exit_;
