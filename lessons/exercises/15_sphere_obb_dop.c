@@ -8,7 +8,8 @@
  *
  * Write three ray tests.  Each returns 1 and writes *t_near, *t_far (the
  * part of the ray inside the volume, clipped to [tmin, tmax]) when that
- * part is not empty (t_near <= t_far, the bound included), else 0.
+ * part is not empty (t_near <= t_far, the bound included), else 0 and
+ * writes neither.
  *
  *   ray_sphere  |o + t·d − c|² = r², a quadratic in t (d need not be unit
  *               length): no real root is a miss, one root (a tangent ray)

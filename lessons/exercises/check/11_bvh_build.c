@@ -120,6 +120,7 @@ static uint32_t parse(const sidx_bvh_node *nd, uint32_t n, uint32_t i, uint32_t 
 
 #define UNDER_NO_TREE UINT32_MAX       /* the nodes do not make one tree */
 #define UNDER_NO_TILE (UINT32_MAX - 1) /* the leaves' ranges do not tile prims[] */
+#define UNDER_NO_ORDER (UINT32_MAX - 2) /* they do, but not in the order the nodes are made */
 
 /* under[i] for the n nodes (the markers above when it is not defined). */
 static void count_under(const sidx_bvh_node *nd, uint32_t n, uint32_t np, uint32_t *under)
@@ -135,8 +136,19 @@ static void count_under(const sidx_bvh_node *nd, uint32_t n, uint32_t np, uint32
         if (nd[i].left_or_first != next) next = UINT64_MAX;
         if (next != UINT64_MAX) next += nd[i].count_axis & SIDX_BVH_COUNT_MASK;
     }
-    if (next != np)
-        for (uint32_t i = 0; i < n; ++i) under[i] = UNDER_NO_TILE;
+    if (next == np) return;
+    /* Not in pre-order: do the ranges, taken by first, still tile prims[]?
+     * (then the children were made in another order) */
+    uint64_t at = 0;
+    for (int found = 1; found && at < np;) {
+        found = 0;
+        for (uint32_t i = 0; i < n && !found; ++i)
+            if ((nd[i].count_axis & SIDX_BVH_COUNT_MASK) && nd[i].left_or_first == at) {
+                at += nd[i].count_axis & SIDX_BVH_COUNT_MASK;
+                found = 1;
+            }
+    }
+    for (uint32_t i = 0; i < n; ++i) under[i] = at == np ? UNDER_NO_ORDER : UNDER_NO_TILE;
 }
 
 static void *dup(const void *p, size_t n)
@@ -204,6 +216,8 @@ static void teardown(void)
 
 static size_t num_cases(void) { return NSCENES * NLEAF; }
 
+static const char *case_rules(size_t i);
+
 static void describe(size_t i, ex_case_info *out)
 {
     const build_case *c = &cases[i];
@@ -212,6 +226,7 @@ static void describe(size_t i, ex_case_info *out)
              "%u triangles, leaf_size = %u, max_leaf = %u; the library's tree has %u nodes", c->mesh.num_triangles,
              c->leaf_size, MAX_LEAF, c->num_nodes);
     out->hint = NULL;
+    out->rules = case_rules(i);
 }
 
 static void note(const sidx_hook *h, int32_t node, int32_t c1, int32_t kind, uint32_t count, float lo, float hi)
@@ -276,39 +291,49 @@ static void student(size_t i, const sidx_hook *h)
     free(prims);
 }
 
-static const char *const hint_box =
-    "a node's box is the union of its triangles' boxes (boxes[prims[i]] for i in first .. first + count), "
-    "not of their centroids: bmin[] and bmax[] on all three axes";
-static const char *const hint_partition =
-    "\"Split in the middle\": partition prims[first .. first + count) in place at pos = 0.5f * (min + max) of the "
-    "CENTROID bounds on their axis of largest extent: centroid < pos stays on the left (++i), any other is "
-    "swapped with prims[--j]; the left child gets prims[first .. i), the right child the rest";
-static const char *const hint_leaf =
-    "a node becomes a leaf when it holds count <= leaf_size triangles (at or below the leaf size), and only "
-    "then (or for equal centroids): left_or_first = first, count_axis = count";
-static const char *const hint_equal_leaf =
-    "\"Edge Cases: primitives with same centroid\": no plane separates equal centroids; with count <= max_leaf "
-    "the node is a leaf";
-static const char *const hint_equal_split =
-    "\"Edge Cases: primitives with same centroid\": no plane separates them, so with count > max_leaf the range "
-    "is split in half as it stands: prims[first .. first + count/2) left, the rest right, axis 0";
-static const char *const hint_axis =
-    "the split axis is the one of largest extent of the centroid bounds (sidx_aabb_max_axis: ties go to x, "
-    "then y), stored as axis << 30 with a count of 0";
-static const char *const hint_range =
-    "\"Only need to store 2 integers per leaf node!\": a leaf stores left_or_first = first, its first index into "
-    "prims[], and count_axis = count, so that the leaves, in the order they are made, cover prims[0 .. n) one "
-    "after another";
-static const char *const hint_order =
-    "\"After re-indexing (sorting) based on leaf nodes\": the leaf's triangles are prims[first .. first + count) "
-    "as the partition leaves them: one walk from the front, a triangle going right swapped with prims[--j]";
-static const char *const hint_links =
-    "\"Recurse with each child node\": the node takes its slot before its children, the left child is the next "
-    "node (i + 1), and the inner node stores the index its right child's build returned in left_or_first";
-static const char *const hint_count =
-    "\"Recurse with each child node\": each node takes the slot nodes[*num_nodes] and counts it (++*num_nodes) "
-    "before its children are built; a leaf's count_axis is its count, an inner node's axis << 30 (a count of "
-    "0); return the index of the subtree's root";
+/* The hand-out's rules, in its order. */
+enum { R_LAYOUT, R_BOX, R_LEAF, R_EQ_LEAF, R_EQ_HALVE, R_AXIS, R_MIDDLE, R_WALK, R_RANGE, R_LINKS, NRULES };
+static const ex_rule rules[NRULES] = {
+    {"node-layout", "each node takes nodes[*num_nodes] and counts it before its children (depth-first pre-order); "
+     "count_axis is a leaf's count, or an inner node's axis << 30; the root's index is returned",
+     "\"Recurse with each child node\": each node takes the slot nodes[*num_nodes] and counts it (++*num_nodes) "
+     "before its children are built; a leaf's count_axis is its count, an inner node's axis << 30 (a count of "
+     "0); return the index of the subtree's root"},
+    {"box-union", "a node's box is the union of its triangles' boxes",
+     "a node's box is the union of its triangles' boxes (boxes[prims[i]] for i in first .. first + count), "
+     "not of their centroids: bmin[] and bmax[] on all three axes"},
+    {"leaf-inclusive", "a leaf when count <= leaf_size",
+     "a node becomes a leaf when it holds count <= leaf_size triangles (at or below the leaf size), and only "
+     "then (or for equal centroids): left_or_first = first, count_axis = count"},
+    {"equal-leaf", "every centroid equal (no extent on any axis) and count <= max_leaf: a leaf",
+     "\"Edge Cases: primitives with same centroid\": no plane separates equal centroids; with count <= max_leaf "
+     "the node is a leaf"},
+    {"equal-halve", "every centroid equal and count > max_leaf: prims[first .. first + count/2) to the left, as it "
+     "stands (axis 0)",
+     "\"Edge Cases: primitives with same centroid\": no plane separates them, so with count > max_leaf the range "
+     "is split in half as it stands: prims[first .. first + count/2) left, the rest right, axis 0"},
+    {"axis-largest", "the split axis is the centroid bounds' axis of largest extent (sidx_aabb_max_axis: a tie goes "
+     "to x, then y)",
+     "the split axis is the one of largest extent of the centroid bounds (sidx_aabb_max_axis: ties go to x, "
+     "then y), stored as axis << 30 with a count of 0"},
+    {"split-middle", "the split at pos = 0.5f * (min + max) of the centroid bounds; a centroid < pos goes left",
+     "\"Split in the middle\": partition prims[first .. first + count) in place at pos = 0.5f * (min + max) of the "
+     "CENTROID bounds on their axis of largest extent: centroid < pos stays on the left (++i), any other is "
+     "swapped with prims[--j]; the left child gets prims[first .. i), the right child the rest"},
+    {"partition-walk", "one walk from the front: i = first, j = first + count; < pos stays (++i), any other is "
+     "swapped with prims[--j]",
+     "\"After re-indexing (sorting) based on leaf nodes\": the leaf's triangles are prims[first .. first + count) "
+     "as the partition leaves them: one walk from the front, a triangle going right swapped with prims[--j]"},
+    {"leaf-range", "a leaf stores left_or_first = first and count_axis = count",
+     "\"Only need to store 2 integers per leaf node!\": a leaf stores left_or_first = first, its first index into "
+     "prims[], and count_axis = count, so that the leaves, in the order they are made, cover prims[0 .. n) one "
+     "after another"},
+    {"child-links", "the left child is built first (the node after its parent), then the right one, whose index "
+     "goes in left_or_first",
+     "\"Recurse with each child node\": the node takes its slot before its children, the left child is built first "
+     "and is the next node (i + 1), and the inner node stores the index its right child's build returned in "
+     "left_or_first"},
+};
 
 /* Whether node i of the library's tree holds triangles of one centroid. */
 static int equal_centroids(const build_case *c, uint32_t i, uint32_t first)
@@ -325,6 +350,36 @@ static uint32_t first_under(const build_case *c, uint32_t i)
     return c->nodes[i].left_or_first;
 }
 
+/* The rules case i tests, from the library's tree: always the layout, the
+ * boxes and the leaves' ranges; a leaf of exactly leaf_size triangles;
+ * a leaf or an inner node of equal centroids; an inner node split by a
+ * plane (its axis, the middle, the walk, the links). */
+static const char *case_rules(size_t i)
+{
+    static char ids[NSCENES * NLEAF][200];
+    const build_case *c = &cases[i];
+    if (ids[i][0]) return ids[i];
+    int has[NRULES] = {0};
+    has[R_LAYOUT] = has[R_BOX] = has[R_RANGE] = 1;
+    for (uint32_t k = 0; k < c->num_nodes; ++k) {
+        const int eq = equal_centroids(c, k, first_under(c, k));
+        if (sidx_bvh_is_leaf(&c->nodes[k])) {
+            has[R_LEAF] |= c->under[k] == c->leaf_size;
+            has[R_EQ_LEAF] |= eq && c->under[k] > c->leaf_size;
+        } else if (eq) {
+            has[R_EQ_HALVE] = has[R_LINKS] = 1;
+        } else {
+            has[R_AXIS] = has[R_MIDDLE] = has[R_WALK] = has[R_LINKS] = 1;
+        }
+    }
+    for (int r = 0; r < NRULES; ++r)
+        if (has[r]) {
+            const size_t len = strlen(ids[i]);
+            snprintf(ids[i] + len, sizeof ids[i] - len, "%s%s", len ? " " : "", rules[r].id);
+        }
+    return ids[i];
+}
+
 /* What differs decides: other triangles under a node (the parent's
  * partition), another box over the same ones, another kind of node (the
  * leaf rule or the equal-centroid rule, by what the library's node is),
@@ -332,33 +387,34 @@ static uint32_t first_under(const build_case *c, uint32_t i)
 static const char *hint(size_t i, const sidx_event *ref, const sidx_event *stu)
 {
     const build_case *c = &cases[i];
-    if (!ref || !stu) return hint_count;
-    if (ref->cell[2] == 6 || stu->cell[2] == 6 || ref->cell[0] != stu->cell[0]) return hint_count;
+    if (!ref || !stu) return rules[R_LAYOUT].hint;
+    if (ref->cell[2] == 6 || stu->cell[2] == 6 || ref->cell[0] != stu->cell[0]) return rules[R_LAYOUT].hint;
     const uint32_t node = (uint32_t)ref->cell[0];
-    if (node >= c->num_nodes) return hint_count;
+    if (node >= c->num_nodes) return rules[R_LAYOUT].hint;
     switch (ref->cell[2]) {
     case 0:
     case 1:
     case 2:
-        if (stu->count == UNDER_NO_TREE) return hint_count;
-        if (stu->count == UNDER_NO_TILE) return hint_range;
-        if (stu->count == ref->count) return hint_box;
+        if (stu->count == UNDER_NO_TREE) return rules[R_LAYOUT].hint;
+        if (stu->count == UNDER_NO_TILE) return rules[R_RANGE].hint;
+        if (stu->count == UNDER_NO_ORDER) return rules[R_LINKS].hint;
+        if (stu->count == ref->count) return rules[R_BOX].hint;
         /* other triangles: the parent's split put them there */
         if (c->parent[node] != UINT32_MAX && equal_centroids(c, c->parent[node], first_under(c, c->parent[node])))
-            return hint_equal_split;
-        return hint_partition;
+            return rules[R_EQ_HALVE].hint;
+        return rules[R_MIDDLE].hint;
     case 3: {
         const uint32_t sca = (uint32_t)stu->cell[1], rca = (uint32_t)ref->cell[1];
         const int sleaf = (sca & SIDX_BVH_COUNT_MASK) != 0, rleaf = (rca & SIDX_BVH_COUNT_MASK) != 0;
         const int eq = equal_centroids(c, node, first_under(c, node));
-        if (rleaf && sleaf) return hint_range;
-        if (rleaf) return c->under[node] <= c->leaf_size ? hint_leaf : hint_equal_leaf;
-        if (sleaf) return eq ? hint_equal_split : hint_leaf;
-        return eq ? hint_equal_split : hint_axis;
+        if (rleaf && sleaf) return rules[R_RANGE].hint;
+        if (rleaf) return c->under[node] <= c->leaf_size ? rules[R_LEAF].hint : rules[R_EQ_LEAF].hint;
+        if (sleaf) return eq ? rules[R_EQ_HALVE].hint : rules[R_LEAF].hint;
+        return eq ? rules[R_EQ_HALVE].hint : rules[R_AXIS].hint;
     }
-    case 4: return hint_order;
-    case 5: return hint_links;
-    default: return hint_count;
+    case 4: return rules[R_WALK].hint;
+    case 5: return rules[R_LINKS].hint;
+    default: return rules[R_LAYOUT].hint;
     }
 }
 
@@ -370,10 +426,11 @@ static int format(const sidx_event *e, char *buf, size_t size)
     case 0:
     case 1:
     case 2:
-        if (e->count >= UNDER_NO_TILE)
+        if (e->count >= UNDER_NO_ORDER)
             snprintf(buf, size, "node %d  %c in [%g, %g]  (%s)", e->cell[0], "xyz"[e->cell[2]], (double)e->t_near,
                      (double)e->t_far,
-                     e->count == UNDER_NO_TILE ? "the leaves' (first, count) do not tile prims[] in order"
+                     e->count == UNDER_NO_TILE    ? "the leaves' (first, count) do not tile prims[] in order"
+                     : e->count == UNDER_NO_ORDER ? "the leaves tile prims[], but not in the order the nodes are made"
                                                : "the nodes in pre-order do not make one tree");
         else
             snprintf(buf, size, "node %d  %c in [%g, %g]  (%u triangles under it)", e->cell[0], "xyz"[e->cell[2]],
@@ -400,5 +457,5 @@ const ex_driver ex_driver_this = {
     "the recursive BVH build: partition in the middle, leaves, equal centroids",
     "deck 001, \"BVH Partitioning\" (\"Split in the middle\"), \"Recurse with each child node\", \"Edge Cases\" "
     "(\"primitives with same centroid\")",
-    setup, num_cases, describe, reference, student, hint, teardown, format, NULL, 0,
+    setup, num_cases, describe, reference, student, hint, teardown, format, rules, NRULES,
 };

@@ -121,6 +121,13 @@ static void describe(size_t i, ex_case_info *out)
     snprintf(out->what, sizeof out->what, "%u triangles, %u nodes (%s)", c->mesh.num_triangles, c->num_nodes,
              c->num_nodes == 1 ? "the root is a leaf" : "compared from the last node to the root");
     out->hint = NULL;
+    /* one triangle: the root is a leaf, prims[] is {0}; no vertex moved:
+     * the old boxes are right */
+    static const char *const ids[2][2] = {
+        {"fields-kept leaf-vertices all-axes", "fields-kept leaf-vertices box-from-empty all-axes"},
+        {"fields-kept leaf-vertices leaf-through-prims inner-union all-axes",
+         "fields-kept leaf-vertices leaf-through-prims box-from-empty inner-union bottom-up all-axes"}};
+    out->rules = ids[i / NMOVES > 0][i % NMOVES > 0];
 }
 
 static void emit(const sidx_hook *h, const sidx_bvh_node *nodes, uint32_t n)
@@ -151,26 +158,84 @@ static void student(size_t i, const sidx_hook *h)
     free(nodes);
 }
 
-static const char *const hint_leaf =
-    "a leaf's box is the bounding box of its triangles' vertices at their new positions: every vertex k = 0, 1, 2 "
-    "of each triangle prims[first .. first + count), min and max on each axis";
-static const char *const hint_inner =
-    "\"Root node encompasses all primitives\": an inner node's box is the union of its two children's boxes "
-    "(i + 1 and left_or_first), refitted first: bottom-up (children follow their parent in the array, so a "
-    "backward pass sees both children before the node)";
-static const char *const hint_fields =
-    "the tree stays as it is: refit changes only bmin and bmax, keep left_or_first and count_axis";
+/* The hand-out's rules, in its order. */
+enum { R_FIELDS, R_VERTS, R_PRIMS, R_EMPTY, R_UNION, R_BOTTOM_UP, R_AXES, NRULES };
+static const ex_rule rules[NRULES] = {
+    {"fields-kept", "left_or_first and count_axis stay as they are; only bmin[] and bmax[] change",
+     "the tree stays as it is: refit changes only bmin and bmax, keep left_or_first and count_axis"},
+    {"leaf-vertices", "a leaf's box is the bounding box of all three vertices of each of its triangles, at their new "
+     "positions",
+     "a leaf's box is the bounding box of its triangles' vertices at their new positions: every vertex k = 0, 1, 2 "
+     "of each triangle prims[first .. first + count), min and max on each axis"},
+    {"leaf-through-prims", "a leaf's triangles are prims[first .. first + count), indices into the mesh",
+     "a leaf's box is the bounding box of its triangles' vertices at their new positions, and its triangles are "
+     "prims[first .. first + count): the mesh's triangle prims[first + j], not first + j"},
+    {"box-from-empty", "each box is computed afresh from its triangles or children (not grown from the old box, "
+     "nor from a zero box)",
+     "start each box empty (sidx_aabb_empty(), or its first vertex or child) - not from the node's old box (a "
+     "box must be able to shrink) and not from a zero box at the origin (the origin is not one of its points)"},
+    {"inner-union", "an inner node's box is the union of its two children's boxes, i + 1 and left_or_first",
+     "\"Root node encompasses all primitives\": an inner node's box is the union of its two children's boxes "
+     "(i + 1 and left_or_first) - both of them"},
+    {"bottom-up", "both children are refitted before their parent",
+     "\"Root node encompasses all primitives\": an inner node's box is the union of its two children's boxes "
+     "(i + 1 and left_or_first), refitted first: bottom-up (children follow their parent in the array, so a "
+     "backward pass sees both children before the node)"},
+    {"all-axes", "bmin[k] and bmax[k] on every axis k = 0, 1, 2 from the box's own axis",
+     "bmin[k] and bmax[k] hold the box on axis k (0 = x, 1 = y, 2 = z): min.x in bmin[0], min.y in bmin[1], "
+     "min.z in bmin[2], and the same for max"},
+};
 
-/* What differs decides: a node's index fields are the topology, a
- * leaf's box its triangles, an inner node's box its children. */
+/* Leaf node's extent on axis k over the first nv vertices of each of its
+ * triangles (at their new positions); direct: triangles first + j of the
+ * mesh, not through prims[]. */
+static void leaf_extent(const refit_case *c, const sidx_bvh_node *n, int k, int nv, int direct, float *lo, float *hi)
+{
+    sidx_aabb bb = sidx_aabb_empty();
+    for (uint32_t j = 0; j < sidx_bvh_count(n) && n->left_or_first + j < c->num_prims; ++j) {
+        const uint32_t t = direct ? n->left_or_first + j : c->prims[n->left_or_first + j];
+        for (int v = 0; v < nv; ++v) bb = sidx_aabb_grow(bb, sidx_mesh_vertex(&c->mesh, t, v));
+    }
+    *lo = sidx_v3_get(bb.min, k);
+    *hi = sidx_v3_get(bb.max, k);
+}
+
+/* What differs decides: a node's index fields are the topology; another
+ * axis's extent; a box grown from the origin or from the old box; the
+ * old box of an inner node (its stale children); a leaf's box smaller
+ * than its vertices' (a vertex left out) or another (other triangles);
+ * an inner node's box otherwise (its children). */
 static const char *hint(size_t i, const sidx_event *ref, const sidx_event *stu)
 {
-    if (!ref || !stu || ref->type != SIDX_EV_NOTE || stu->type != SIDX_EV_NOTE) return hint_inner;
-    if (ref->cell[0] != stu->cell[0] || ref->cell[2] != stu->cell[2]) return hint_inner;
-    if (ref->cell[1] != stu->cell[1] || ref->count != stu->count) return hint_fields;
+    const refit_case *c = &cases[i];
+    if (!ref || !stu || ref->type != SIDX_EV_NOTE || stu->type != SIDX_EV_NOTE) return rules[R_BOTTOM_UP].hint;
+    if (ref->cell[0] != stu->cell[0] || ref->cell[2] != stu->cell[2]) return rules[R_BOTTOM_UP].hint;
+    if (ref->cell[1] != stu->cell[1] || ref->count != stu->count) return rules[R_FIELDS].hint;
     const uint32_t node = (uint32_t)ref->cell[0];
-    if (node < cases[i].num_nodes && sidx_bvh_is_leaf(&cases[i].before[node])) return hint_leaf;
-    return hint_inner;
+    const int k = ref->cell[2];
+    if (node >= c->num_nodes || k < 0 || k > 2) return rules[R_BOTTOM_UP].hint;
+    const sidx_bvh_node *after = &c->after[node], *before = &c->before[node];
+    if (sidx_bvh_is_leaf(before)) {
+        float lo, hi;
+        for (int nv = 1; nv < 3; ++nv) {
+            leaf_extent(c, before, k, nv, 0, &lo, &hi);
+            if (stu->t_near == lo && stu->t_far == hi) return rules[R_VERTS].hint;
+        }
+        leaf_extent(c, before, k, 3, 1, &lo, &hi);
+        if (stu->t_near == lo && stu->t_far == hi) return rules[R_PRIMS].hint;
+    }
+    for (int j = 0; j < 3; ++j)
+        if (j != k && ((stu->t_near == after->bmin[j] && stu->t_near != after->bmin[k]) ||
+                       (stu->t_far == after->bmax[j] && stu->t_far != after->bmax[k])))
+            return rules[R_AXES].hint;
+    const float rlo = ref->t_near, rhi = ref->t_far, slo = stu->t_near, shi = stu->t_far;
+    const int grown = slo <= rlo && shi >= rhi;
+    if (grown && ((slo == 0.0f && rlo > 0.0f) || (shi == 0.0f && rhi < 0.0f))) return rules[R_EMPTY].hint;
+    const float olo = before->bmin[k] < rlo ? before->bmin[k] : rlo, ohi = before->bmax[k] > rhi ? before->bmax[k] : rhi;
+    if (grown && slo == olo && shi == ohi) return rules[R_EMPTY].hint;
+    if (sidx_bvh_is_leaf(before)) return rules[R_VERTS].hint;
+    if (slo == before->bmin[k] && shi == before->bmax[k]) return rules[R_BOTTOM_UP].hint;
+    return rules[R_UNION].hint;
 }
 
 static int format(const sidx_event *e, char *buf, size_t size)
@@ -181,8 +246,8 @@ static int format(const sidx_event *e, char *buf, size_t size)
         snprintf(buf, size, "node %d (leaf: first %u, count %u)  %c in [%g, %g]", e->cell[0], e->count,
                  ca & SIDX_BVH_COUNT_MASK, "xyz"[e->cell[2] % 3], (double)e->t_near, (double)e->t_far);
     else
-        snprintf(buf, size, "node %d (inner: children %d, %u)  %c in [%g, %g]", e->cell[0], e->cell[0] + 1, e->count,
-                 "xyz"[e->cell[2] % 3], (double)e->t_near, (double)e->t_far);
+        snprintf(buf, size, "node %d (inner: children %d, %u, split on %c)  %c in [%g, %g]", e->cell[0], e->cell[0] + 1,
+                 e->count, "xyzw"[(ca >> 30) & 3], "xyz"[e->cell[2] % 3], (double)e->t_near, (double)e->t_far);
     return 1;
 }
 
@@ -190,5 +255,5 @@ const ex_driver ex_driver_this = {
     "12_bvh_refit",
     "BVH refit: the vertices moved, every node's box recomputed bottom-up",
     "deck 001, \"Primitive vs. Spatial\" (\"Easier to update (animation)\") and \"Bounding Volume Hierarchy (BVH)\"",
-    setup, num_cases, describe, reference, student, hint, teardown, format, NULL, 0,
+    setup, num_cases, describe, reference, student, hint, teardown, format, rules, NRULES,
 };

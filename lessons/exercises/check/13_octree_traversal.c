@@ -241,19 +241,54 @@ static void describe(size_t i, ex_case_info *out)
     snprintf(out->name, sizeof out->name, "%s over %s, ray %d (%s)", accel_names[s], scene_names[s], r + 1,
              ray_kind[s][r]);
     ex_describe_walk(out, &rays[s][r], accel_names[s], view_knobs[s], s == 4 ? NULL : scene_names[s], &meshes[s]);
+    /* every walk: the general rules; the ray's kind and the quadtree add theirs */
+#define WALK "start-root depth entry-child crossings-in-order every-child child-interval leaf-tests stop-inclusive " \
+             "stop-returns"
+    static char ids[NSCENES * RAYS][240];
+    const char *kind = r >= K_BEYOND && r < K_INSIDE                   ? " hit-beyond-goes-on"
+                       : (r >= K_ON_MID && r < K_TMAX_MID) || r == K_ENTRY_TIE ? " start-tie"
+                       : (r >= K_TMAX_MID && r < K_ZERO) || r == K_EXIT_TIE    ? " end-tie"
+                       : r >= K_ZERO && r < K_DIAG                            ? " zero-dir"
+                       : r == K_DIAG || r == K_DIAG2                          ? " ties-xyz"
+                                                                              : "";
+    const int beyond = r >= K_BEYOND && r < K_INSIDE ? 0 : hit_beyond_cell(accels[s], &rays[s][r]);
+    snprintf(ids[i], sizeof ids[i], "%s%s%s%s", WALK, kind, beyond ? " hit-beyond-goes-on" : "",
+             s == 1 ? " axes-only" : "");
+#undef WALK
+    out->rules = ids[i];
 }
 
-/* The reference's events without its stack steps. */
+/* The reference's events without its stack steps; a cell entered right
+ * after its inner parent (the child holding the entry point) carries
+ * aux = 1, which the comparison ignores and the hint reads. */
+typedef struct ref_relay {
+    const sidx_hook *h;
+    const sidx_oct_node *nodes;
+    uint32_t num_nodes;
+    int after_inner;
+} ref_relay;
+
 static void no_stack_fn(const sidx_event *ev, void *user)
 {
+    ref_relay *r = user;
     if (ev->type == SIDX_EV_STACK_PUSH || ev->type == SIDX_EV_STACK_POP) return;
-    sidx_hook_emit(user, ev);
+    if (ev->type != SIDX_EV_NODE_ENTER) {
+        r->after_inner = 0;
+        sidx_hook_emit(r->h, ev);
+        return;
+    }
+    sidx_event e = *ev;
+    e.aux = (uint32_t)r->after_inner;
+    r->after_inner = e.node < r->num_nodes && r->nodes[e.node].n == SIDX_OCT_INNER;
+    sidx_hook_emit(r->h, &e);
 }
 
 static void reference(size_t i, const sidx_hook *h)
 {
     const int s = (int)(i / RAYS), r = (int)(i % RAYS);
-    const sidx_hook fh = {no_stack_fn, (void *)(uintptr_t)h, 0};
+    ref_relay rr = {h, NULL, 0, 0};
+    sidx_octree_nodes(accels[s], &rr.nodes, &rr.num_nodes, NULL);
+    const sidx_hook fh = {no_stack_fn, &rr, 0};
     sidx_query q;
     memset(&q, 0, sizeof q);
     q.hook = &fh;
@@ -261,46 +296,83 @@ static void reference(size_t i, const sidx_hook *h)
     sidx_accel_intersect(accels[s], &rays[s][r], &q, &hit);
 }
 
-static const char *const hint_order =
-    "children in the order the ray meets them: start in the child holding the entry point (bit k set = the "
-    "upper half: t_k <= t_near with d_k > 0, or t_k > t_near with d_k < 0), then flip bit k at each crossing "
-    "t_k strictly inside (t_near, t_far), in increasing t (k < axes: a quadtree never cuts z)";
-static const char *const hint_zero =
-    "a direction component +0 or -0 never crosses its mid-plane (t_k = +inf, whatever the sign of inv_dir): "
-    "the child is on the origin's side, the upper one when the origin lies on the plane";
-static const char *const hint_tie =
-    "crossings at the same t are taken x, then y, then z: each flips its bit and starts a child over a "
-    "zero-length interval [t, t], entered like any other";
-static const char *const hint_start_tie =
-    "a ray on the mid-plane at t_near (t_k == t_near) is already past it: it starts in the child it moves "
-    "into (upper for d_k > 0), and the plane is no crossing inside (t_near, t_far)";
-static const char *const hint_end_tie =
-    "a crossing at t_far (t_k == t_far) is none: only t_k strictly inside (t_near, t_far) starts a child";
-static const char *const hint_interval =
-    "the same child with another interval: child c0 runs over [t_near, t_1], each next one from the crossing "
-    "that started it to the next crossing, the last to t_far, with t_k = (mid_k - org[k]) * inv_dir[k] and "
-    "mid_k = 0.5f * (lo + hi) of the cell being split";
-static const char *const hint_depth = "the root has depth 0, a child its parent's depth + 1";
-static const char *const hint_stop =
-    "\"Traversal can be terminated as soon as surface intersection is found in the current node\": after a "
-    "leaf (empty or not), stop if best->t <= t_far: the next cell starts at t_far, nothing in it lies in front";
-static const char *const hint_cannot =
-    "a hit beyond the current cell (best->t > t_far) may be hidden by a triangle in a cell the ray meets "
-    "later: keep it as the best so far and go on";
-static const char *const hint_stop_nohit =
-    "only a hit stops the walk with 1: with no hit (best->prim == SIDX_NO_HIT) go on, and return 0 when "
-    "every cell along the ray is done";
-static const char *const hint_start =
-    "start at the root: sidx_ex_node_enter(ex, 0, 0, t_near, t_far), and report every cell you enter";
-static const char *const hint_leaf =
-    "a leaf tests each of its triangles refs[a .. a + n) against the best hit so far, "
-    "sidx_ex_test_triangle(ex, prim, best->t, &t), and reports a closer one with sidx_ex_hit_update";
-static const char *const hint_missing =
-    "a child left out: the ray meets the entry child and one more per mid-plane crossing inside (t_near, "
-    "t_far) (at most 4 in an octree, 3 in a quadtree), and each of them is entered, empty or not";
+/* The hand-out's rules, in its order. */
+enum { R_START, R_DEPTH, R_ENTRY, R_START_TIE, R_ZERO, R_ORDER, R_END_TIE, R_TIES, R_EVERY, R_INTERVAL, R_AXES,
+       R_LEAF, R_STOP, R_BEYOND, R_RETURN, NRULES };
+static const ex_rule rules[NRULES] = {
+    {"start-root", "every cell entered is reported, sidx_ex_node_enter(ex, node, depth, t_near, t_far), the root "
+     "first over the clipped [t_near, t_far]",
+     "start at the root: sidx_ex_node_enter(ex, 0, 0, t_near, t_far), and report every cell you enter"},
+    {"depth", "the root has depth 0, a child its parent's depth + 1",
+     "the root has depth 0, a child its parent's depth + 1"},
+    {"entry-child", "an inner node starts in the child holding the entry point, by its own mid-planes "
+     "(mid = 0.5f * (lo + hi) of its cell)",
+     "children in the order the ray meets them: start in the child holding the entry point (bit k set = the "
+     "upper half: t_k <= t_near with d_k > 0, or t_k > t_near with d_k < 0), with mid_k = 0.5f * (lo + hi) of the "
+     "cell being split, then flip bit k at each crossing t_k strictly inside (t_near, t_far), in increasing t"},
+    {"start-tie", "a ray on mid-plane k at t_near (t_k == t_near) starts past it, in the child it moves into",
+     "a ray on the mid-plane at t_near (t_k == t_near) is already past it: it starts in the child it moves "
+     "into (upper for d_k > 0), and the plane is no crossing inside (t_near, t_far)"},
+    {"zero-dir", "a ±0 direction component never crosses (t_k = +inf) and takes the origin's side (upper on the "
+     "plane)",
+     "a direction component +0 or -0 never crosses its mid-plane (t_k = +inf, whatever the sign of inv_dir): "
+     "the child is on the origin's side, the upper one when the origin lies on the plane"},
+    {"crossings-in-order", "each crossing strictly inside (t_near, t_far), in increasing t, flips bit k and starts "
+     "the next child; each child before any later one",
+     "children in the order the ray meets them: start in the child holding the entry point, then flip bit k at "
+     "each crossing t_k strictly inside (t_near, t_far), in increasing t, and enter each child (and its subtree) "
+     "before any later one"},
+    {"end-tie", "a crossing at t_far (t_k == t_far) is none",
+     "a crossing at t_far (t_k == t_far) is none: only t_k strictly inside (t_near, t_far) starts a child"},
+    {"ties-xyz", "crossings at the same t are taken x, then y, then z",
+     "crossings at the same t are taken x, then y, then z: each flips its bit and starts a child over a "
+     "zero-length interval [t, t], entered like any other"},
+    {"every-child", "every child the ray meets is entered, even over a zero-length interval (at most 4)",
+     "a child left out: the ray meets the entry child and one more per mid-plane crossing inside (t_near, "
+     "t_far) (at most 4 in an octree, 3 in a quadtree), and each of them is entered, empty or not, even over a "
+     "zero-length interval [t, t]"},
+    {"child-interval", "children c0 over [t_near, t_1], c1 over [t_1, t_2], ..., the last over [t_m, t_far]",
+     "the same child with another interval: child c0 runs over [t_near, t_1], each next one from the crossing "
+     "that started it to the next crossing, the last to t_far, with t_k = (mid_k - org[k]) * inv_dir[k] and "
+     "mid_k = 0.5f * (lo + hi) of the cell being split"},
+    {"axes-only", "only the first `axes` axes are cut: the quadtree never cuts z",
+     "cut only the first `axes` axes (k < axes): a quadtree never cuts z, its children are a + c with c = 0 .. 3 "
+     "(bit 2 never set)"},
+    {"leaf-tests", "a leaf tests each triangle, sidx_ex_test_triangle(ex, prim, best->t, &t), and reports a closer "
+     "hit with sidx_ex_hit_update",
+     "a leaf tests each of its triangles refs[a .. a + n) against the best hit so far, "
+     "sidx_ex_test_triangle(ex, prim, best->t, &t), and reports a closer one with sidx_ex_hit_update"},
+    {"stop-inclusive", "after a leaf, empty or not, the walk stops when best->t <= t_far",
+     "\"Traversal can be terminated as soon as surface intersection is found in the current node\": after a "
+     "leaf (empty or not), stop if best->t <= t_far: the next cell starts at t_far, nothing in it lies in front"},
+    {"hit-beyond-goes-on", "a hit beyond t_far does not stop the walk",
+     "a hit beyond the current cell (best->t > t_far) may be hidden by a triangle in a cell the ray meets "
+     "later: keep it as the best so far and go on"},
+    {"stop-returns", "a stop returns 1 with a hit, 0 without (tmax ended it); 0 when every cell is visited",
+     "only a hit stops the walk with 1: with no hit (best->prim == SIDX_NO_HIT) go on, and return 0 when "
+     "every cell along the ray is done"},
+};
+
 static const char *const hint_extra =
     "a cell the ray does not meet: it enters the entry child and one more child per crossing strictly inside "
     "(t_near, t_far), on the first `axes` axes only";
+
+/* Whether node stu is outside the four-child block of ref's parent in a
+ * quadtree (the student cut z). */
+static int quad_z_child(int s, uint32_t ref, uint32_t stu)
+{
+    const sidx_oct_node *nodes = NULL;
+    uint32_t nn = 0;
+    sidx_aabb root;
+    int axes = 3;
+    if (sidx_octree_info(accels[s], &root, &axes, NULL) != SIDX_OK || axes != 2 ||
+        sidx_octree_nodes(accels[s], &nodes, &nn, NULL) != SIDX_OK)
+        return 0;
+    for (uint32_t p = 0; p < nn; ++p)
+        if (nodes[p].n == SIDX_OCT_INNER && ref >= nodes[p].a && ref < nodes[p].a + 4)
+            return stu < nodes[p].a || stu >= nodes[p].a + 4;
+    return 0;
+}
 
 /* The hint follows what differs at the first divergence: a stop where the
  * reference goes on (or the reverse) is the termination rule; another
@@ -310,21 +382,29 @@ static const char *const hint_extra =
 static const char *hint(size_t i, const sidx_event *ref, const sidx_event *stu)
 {
     const int r = (int)(i % RAYS);
-    const ex_walk_hints walk = {hint_stop, hint_cannot, hint_stop_nohit, hint_start, hint_leaf};
+    const ex_walk_hints walk = {rules[R_STOP].hint, rules[R_BEYOND].hint, rules[R_RETURN].hint, rules[R_START].hint, rules[R_LEAF].hint};
     const char *w = ex_walk_hint(ref, stu, &walk);
     if (w) return w;
-    if (ref && ref->type == SIDX_EV_NODE_ENTER && stu && stu->type == SIDX_EV_TERMINATE) return hint_missing;
+    if (ref && ref->type == SIDX_EV_NODE_ENTER && stu && stu->type == SIDX_EV_TERMINATE) return rules[R_EVERY].hint;
     if (ref && ref->type == SIDX_EV_TERMINATE && stu && stu->type == SIDX_EV_NODE_ENTER)
-        return (r >= K_TMAX_MID && r < K_ZERO) || r == K_EXIT_TIE ? hint_end_tie : hint_extra;
+        return (r >= K_TMAX_MID && r < K_ZERO) || r == K_EXIT_TIE ? rules[R_END_TIE].hint : hint_extra;
     if (ref && stu && ref->type == SIDX_EV_NODE_ENTER && stu->type == SIDX_EV_NODE_ENTER) {
-        if (ref->node == stu->node) return ref->depth != stu->depth ? hint_depth : hint_interval;
-        if (r >= K_ZERO && r < K_DIAG) return hint_zero;
-        if (r == K_DIAG || r == K_DIAG2) return hint_tie;
-        if ((r >= K_ON_MID && r < K_TMAX_MID) || r == K_ENTRY_TIE) return hint_start_tie;
-        if ((r >= K_TMAX_MID && r < K_ZERO) || r == K_EXIT_TIE) return hint_end_tie;
-        return hint_order;
+        if (ref->node == stu->node) return ref->depth != stu->depth ? rules[R_DEPTH].hint : rules[R_INTERVAL].hint;
+        if (quad_z_child((int)(i / RAYS), ref->node, stu->node)) return rules[R_AXES].hint;
+        /* a zero-length child skipped: the student's next child starts
+         * where it starts but runs on */
+        if (ref->t_near == ref->t_far && stu->t_near == ref->t_near && stu->t_far > stu->t_near)
+            return rules[R_EVERY].hint;
+        if (r >= K_ZERO && r < K_DIAG) return rules[R_ZERO].hint;
+        if (r == K_DIAG || r == K_DIAG2) return rules[R_TIES].hint;
+        if ((r >= K_ON_MID && r < K_TMAX_MID) || r == K_ENTRY_TIE) return rules[R_START_TIE].hint;
+        if ((r >= K_TMAX_MID && r < K_ZERO) || r == K_EXIT_TIE) return rules[R_END_TIE].hint;
+        /* the first child of an inner node, entered at the parent's t_near
+         * too: another child holds the entry point (a later one: the order) */
+        if (ref->aux && stu->t_near == ref->t_near) return rules[R_ENTRY].hint;
+        return rules[R_ORDER].hint;
     }
-    return hint_order;
+    return rules[R_ORDER].hint;
 }
 
 /* Counts the student's NODE_ENTER events on the way to the runner's hook. */
@@ -386,5 +466,5 @@ const ex_driver ex_driver_this = {
     "octree traversal: front to back, the children in the order the ray meets them",
     "deck 000, \"Octrees and Quadtrees\" (\"simplest hierarchical grid\") with the front-to-back walk of "
     "\"kD-Tree Traversal\"; Revelles et al. 2000 for the child order",
-    setup, num_cases, describe, reference, student, hint, teardown, NULL, NULL, 0,
+    setup, num_cases, describe, reference, student, hint, teardown, NULL, rules, NRULES,
 };

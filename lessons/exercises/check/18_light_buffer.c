@@ -41,53 +41,74 @@ typedef struct lb_case {
     int eager;
     int npts;            /* 0: random points on the scene's triangles, filled in setup */
     lb_point pts[MAXPTS];
-    const char *hint;
+    const char *rules;   /* the ids of the rules it tests */
     int tie;             /* setup moves pts[0].tmin until reach equals a listed triangle's dist */
 } lb_case;
 
-static const char *const hint_first =
-    "\"Store last found occluder in directional structure\" - \"Test entry first for next shadow test\": when the "
-    "cell has a cached occluder (*last != SIDX_NO_HIT), test it before the list";
-static const char *const hint_update =
-    "\"Store last found occluder in directional structure\": a triangle of the list that blocks the ray becomes the "
-    "cell's cached occluder (*last = it); a cached one that still blocks stays, a miss changes nothing";
-static const char *const hint_range =
-    "the shadow ray ends at the light: test over [tmin, ray.tmax) - an occluder at or beyond tmax (at or behind the "
-    "light) does not shadow the point";
-static const char *const hint_stop =
-    "on a hit stop: one occluder is enough for a shadow (return 1 at the first hit, the cached one or the list's)";
-static const char *const hint_reach =
-    "the list is sorted by distance from the light: stop at the first triangle with dist > reach, nothing after it "
-    "can lie between the point and the light";
-static const char *const hint_walk =
-    "when the cached occluder misses (or there is none), walk the cell's list nearest to the light first, testing "
-    "every triangle up to reach";
-static const char *const hint_skip =
-    "the cached occluder was tested first: skip it in the list (tris[k] == the cached one)";
+/* The hand-out's rules, in its order. */
+enum { R_FIRST, R_CACHE_STAYS, R_ORDER, R_REACH, R_REACH_INCL, R_SKIP, R_RANGE, R_UPDATE, R_STOP, R_MISS, NRULES };
+static const ex_rule rules[NRULES] = {
+    {"cache-first", "a cell's cached occluder (*last != SIDX_NO_HIT) is tested first, before the list",
+     "\"Store last found occluder in directional structure\" - \"Test entry first for next shadow test\": when the "
+     "cell has a cached occluder (*last != SIDX_NO_HIT), test it before the list"},
+    {"cache-hit-stays", "the cached occluder blocks: return 1, the cache stays as it is",
+     "\"Store last found occluder in directional structure\": a triangle of the list that blocks the ray becomes the "
+     "cell's cached occluder (*last = it); a cached one that still blocks stays, a miss changes nothing"},
+    {"list-order", "the list is walked in its order, nearest to the light first",
+     "when the cached occluder misses (or there is none), walk the cell's list nearest to the light first, testing "
+     "every triangle up to reach"},
+    {"reach-stop", "the walk stops (return 0) at the first triangle with dist > reach",
+     "the list is sorted by distance from the light: stop at the first triangle with dist > reach, nothing after it "
+     "can lie between the point and the light"},
+    {"reach-inclusive", "a triangle with dist == reach is still tested (only dist > reach stops)",
+     "only dist > reach stops the walk: a triangle exactly at reach (dist == reach) may still touch the shadow "
+     "segment and is tested"},
+    {"skip-cached", "the cached triangle is skipped in the list (tested in 1)",
+     "the cached occluder was tested first: skip it in the list (tris[k] == the cached one)"},
+    {"range-tmax", "each triangle is tested over [tmin, ray.tmax): a hit at or beyond tmax does not shadow p",
+     "the shadow ray ends at the light: test over [tmin, ray.tmax) - an occluder at or beyond tmax (at or behind the "
+     "light) does not shadow the point"},
+    {"cache-update", "a list triangle that blocks becomes the cell's cached occluder (*last = it)",
+     "\"Store last found occluder in directional structure\": a triangle of the list that blocks the ray becomes the "
+     "cell's cached occluder (*last = it), so the next shadow ray of the cell tests it first"},
+    {"stop-on-hit", "on a hit return 1 at once (any occluder will do, the cached one or the list's)",
+     "on a hit stop: one occluder is enough for a shadow (return 1 at the first hit, the cached one or the list's)"},
+    {"miss-unchanged", "the list ran out or reached reach: return 0, *last unchanged",
+     "no occluder (the list ran out, or reach stopped it): return 0 and leave *last as it was - a miss says "
+     "nothing about the next ray of the cell"},
+};
 
+/* Many rays per cell over a scene: the cache, the list and the reach all in play. */
+#define RANDOM_RULES "cache-first cache-hit-stays list-order reach-stop skip-cached range-tmax cache-update stop-on-hit " \
+                     "miss-unchanged"
 static lb_case cases[] = {
-    {"hand: a cell with no cached occluder (the first shadow ray)", 0, 2, 0, 1, {{{0.5f, 0.5f, 0}, 1e-3f, 1}}, NULL, 0},
+    {"hand: a cell with no cached occluder (the first shadow ray)", 0, 2, 0, 1, {{{0.5f, 0.5f, 0}, 1e-3f, 1}},
+     "list-order range-tmax cache-update stop-on-hit", 0},
     {"hand: the same occluder twice (the cache hits)", 0, 2, 0, 2,
-     {{{0.5f, 0.5f, 0}, 1e-3f, 1}, {{0.75f, 0.25f, 0}, 1e-3f, 1}}, NULL, 0},
+     {{{0.5f, 0.5f, 0}, 1e-3f, 1}, {{0.75f, 0.25f, 0}, 1e-3f, 1}},
+     "cache-first cache-hit-stays stop-on-hit", 0},
     {"hand: a cached occluder that misses this ray, then another occluder in the same cell", 0, 2, 0, 5,
      {{{0.5f, 0.5f, 0}, 1e-3f, 1}, {{5.0f, 0.5f, 0}, 1e-3f, 1}, {{4.5f, 4.5f, 0}, 1e-3f, 1},
-      {{0.5f, 0.25f, 0}, 1e-3f, 1}, {{4.5f, 4.5f, 0}, 1e-3f, 1}}, NULL, 0},
+      {{0.5f, 0.25f, 0}, 1e-3f, 1}, {{4.5f, 4.5f, 0}, 1e-3f, 1}},
+     "cache-first skip-cached cache-update miss-unchanged", 0},
     {"hand: an occluder exactly at tmax (t = 0.5 = tmax), then inside", 0, 2, 0, 3,
-     {{{-3, -3, 0}, 1e-3f, 0.5f}, {{-3, -3, 0}, 1e-3f, 0.5000001f}, {{-3, -3, 0}, 1e-3f, 1}}, NULL, 0},
+     {{{-3, -3, 0}, 1e-3f, 0.5f}, {{-3, -3, 0}, 1e-3f, 0.5000001f}, {{-3, -3, 0}, 1e-3f, 1}},
+     "range-tmax", 0},
     {"hand: a triangle through the light (t = 1 = tmax)", 0, 2, 1, 3,
-     {{{0.5f, 0, 1}, 0, 1}, {{0, 3, 5}, 1e-3f, 1}, {{0.5f, -0.5f, 6}, 1e-3f, 1}}, NULL, 0},
+     {{{0.5f, 0, 1}, 0, 1}, {{0, 3, 5}, 1e-3f, 1}, {{0.5f, -0.5f, 6}, 1e-3f, 1}}, "range-tmax", 0},
     {"hand: rays starting on a surface (on occluder A and the floor; tmin = 0 and 1e-3)", 0, 2, 1, 4,
      {{{0.5f, 0.5f, 2}, 0, 1}, {{0.5f, 0.5f, 2}, 1e-3f, 1}, {{3.5f, -4, 0}, 0, 1}, {{-1.5f, -1.5f, 4}, 0, 1}},
-     NULL, 0},
+     "range-tmax list-order reach-stop", 0},
     {"hand: rays from above the occluders (nothing in reach)", 0, 4, 0, 3,
-     {{{0.5f, 0.5f, 6}, 1e-3f, 1}, {{2.5f, 2.5f, 5}, 1e-3f, 1}, {{-1.5f, -1.5f, 7.5f}, 1e-3f, 1}}, NULL, 0},
+     {{{0.5f, 0.5f, 6}, 1e-3f, 1}, {{2.5f, 2.5f, 5}, 1e-3f, 1}, {{-1.5f, -1.5f, 7.5f}, 1e-3f, 1}},
+     "reach-stop miss-unchanged", 0},
     {"hand: a triangle exactly at reach (dist == reach: it is still tested)", 0, 2, 0, 1, {{{3.5f, -4, 0}, 0, 1}},
-     NULL, 1},
-    {"cornell, light under the ceiling, res 4, lazy: points on the surfaces", 1, 4, 0, 0, {{{0, 0, 0}, 0, 0}}, NULL, 0},
-    {"cornell, res 2, eager: many rays per cell", 1, 2, 1, 0, {{{0, 0, 0}, 0, 0}}, NULL, 0},
-    {"cornell, res 16, lazy", 1, 16, 0, 0, {{{0, 0, 0}, 0, 0}}, NULL, 0},
-    {"soup:60, light inside the soup, res 2, lazy", 2, 2, 0, 0, {{{0, 0, 0}, 0, 0}}, NULL, 0},
-    {"soup:60, res 4, eager, tmin = 0 (rays start on their triangle)", 2, 4, 1, 0, {{{0, 0, 0}, 0, 0}}, NULL, 0},
+     "reach-inclusive", 1},
+    {"cornell, light under the ceiling, res 4, lazy: points on the surfaces", 1, 4, 0, 0, {{{0, 0, 0}, 0, 0}}, RANDOM_RULES, 0},
+    {"cornell, res 2, eager: many rays per cell", 1, 2, 1, 0, {{{0, 0, 0}, 0, 0}}, RANDOM_RULES, 0},
+    {"cornell, res 16, lazy", 1, 16, 0, 0, {{{0, 0, 0}, 0, 0}}, RANDOM_RULES, 0},
+    {"soup:60, light inside the soup, res 2, lazy", 2, 2, 0, 0, {{{0, 0, 0}, 0, 0}}, RANDOM_RULES, 0},
+    {"soup:60, res 4, eager, tmin = 0 (rays start on their triangle)", 2, 4, 1, 0, {{{0, 0, 0}, 0, 0}}, RANDOM_RULES, 0},
 };
 #define NCASES (sizeof cases / sizeof cases[0])
 static sidx_lightbuffer *lbs[NCASES];
@@ -180,12 +201,16 @@ static void describe(size_t i, ex_case_info *out)
                       (double)c->pts[k].tmin, (double)c->pts[k].tmax);
     if (c->npts > 4 && n > 0 && (size_t)n < sizeof out->what)
         snprintf(out->what + n, sizeof out->what - (size_t)n, " ...");
-    out->hint = c->hint ? c->hint : hint_first;
+    out->hint = rules[R_FIRST].hint;
+    out->rules = c->rules;
 }
 
 /* Events both sides emit alike: the cell, TERMINATE, the cache after the
- * ray.  PRIM_TEST carries aux = 1 when its triangle is the cell's cached
- * occluder at the ray's start (not compared; the hint reads it). */
+ * ray.  Not compared, for the hint: PRIM_TEST carries in aux bit 0 that its
+ * triangle is the cell's cached occluder at the ray's start, bit 1 that
+ * its dist equals the cell's reach; the cache's HIT_UPDATE carries in aux
+ * how the ray ended (0 lit, 1 a list triangle blocked it, 2 the cached
+ * one did). */
 static void emit(const sidx_hook *h, sidx_event e)
 {
     e.structure = "lightbuffer";
@@ -206,7 +231,7 @@ static void emit_cell(const sidx_hook *h, uint32_t ray, uint32_t id, int f, int 
     emit(h, e);
 }
 
-static void emit_end(const sidx_hook *h, int occluded, uint32_t cached)
+static void emit_end(const sidx_hook *h, int occluded, uint32_t cached, uint32_t how)
 {
     sidx_event e = sidx_event_blank(SIDX_EV_TERMINATE);
     e.reason = occluded ? SIDX_TERM_ANY_HIT : SIDX_TERM_STACK_EMPTY;
@@ -216,13 +241,25 @@ static void emit_end(const sidx_hook *h, int occluded, uint32_t cached)
     e = sidx_event_blank(SIDX_EV_HIT_UPDATE);
     e.prim = cached;
     e.t = 0.0f;
+    e.aux = how;
     emit(h, e);
+}
+
+/* aux of a PRIM_TEST of triangle prim in cell v, cached the cell's cached occluder. */
+static uint32_t test_aux(const sidx_lightbuffer_cell_view *v, uint32_t prim, uint32_t cached)
+{
+    uint32_t aux = prim == cached;
+    for (uint32_t k = 0; v && k < v->count; ++k)
+        if (v->tris[k] == prim && v->dist[k] == v->reach) aux |= 2;
+    return aux;
 }
 
 typedef struct relay {
     const sidx_hook *h;
     const uint32_t *last; /* the cache slots */
     uint32_t cell, cached;
+    const sidx_lightbuffer_cell_view *view; /* the ray's cell, or NULL */
+    uint32_t how;                           /* 1: a list triangle hit, 2: the cached one */
 } relay;
 
 static void ref_fn(const sidx_event *ev, void *user)
@@ -237,7 +274,8 @@ static void ref_fn(const sidx_event *ev, void *user)
         e.prim = ev->prim;
         e.result = ev->result ? 1 : 0;
         e.t = ev->result ? ev->t : INFINITY;
-        e.aux = ev->prim == r->cached;
+        e.aux = test_aux(r->view, ev->prim, r->cached);
+        if (ev->result) r->how = ev->prim == r->cached ? 2 : 1;
         emit(r->h, e);
     }
 }
@@ -247,15 +285,22 @@ static void reference(size_t i, const sidx_hook *h)
     const lb_case *c = &cases[i];
     sidx_lightbuffer_cache cache;
     if (sidx_lightbuffer_cache_init(lbs[i], &cache) != SIDX_OK) return;
-    relay r = {h, cache.last, 0, SIDX_NO_HIT};
+    relay r = {h, cache.last, 0, SIDX_NO_HIT, NULL, 0};
     const sidx_hook lib = {ref_fn, &r, SIDX_EVMASK(SIDX_EV_NODE_ENTER) | SIDX_EVMASK(SIDX_EV_PRIM_TEST)};
     for (int k = 0; k < c->npts; ++k) {
         const sidx_query q = {0, SIDX_TRAVERSE_DEFAULT, &lib, (uint32_t)k};
         int occ = 0;
+        sidx_ray ray;
+        sidx_lightbuffer_cell_view view;
+        r.view = sidx_lightbuffer_shadow_ray(lbs[i], c->pts[k].p, c->pts[k].tmin, c->pts[k].tmax, &ray) == SIDX_OK &&
+                         sidx_lightbuffer_cell_get(lbs[i], &ray, &view) == SIDX_OK
+                     ? &view
+                     : NULL;
+        r.how = 0;
         if (sidx_lightbuffer_occluded(lbs[i], c->pts[k].p, c->pts[k].tmin, c->pts[k].tmax, &cache, &q, &occ) !=
             SIDX_OK)
             break;
-        emit_end(h, occ, cache.last[r.cell]);
+        emit_end(h, occ, cache.last[r.cell], occ ? r.how : 0);
     }
     sidx_lightbuffer_cache_free(&cache);
 }
@@ -263,13 +308,14 @@ static void reference(size_t i, const sidx_hook *h)
 typedef struct stu_relay {
     const sidx_hook *h;
     uint32_t cached;
+    const sidx_lightbuffer_cell_view *view;
 } stu_relay;
 
 static void stu_fn(const sidx_event *ev, void *user)
 {
     const stu_relay *r = user;
     sidx_event e = *ev;
-    if (e.type == SIDX_EV_PRIM_TEST) e.aux = e.prim == r->cached;
+    if (e.type == SIDX_EV_PRIM_TEST) e.aux = test_aux(r->view, e.prim, r->cached);
     emit(r->h, e);
 }
 
@@ -288,7 +334,7 @@ static void student(size_t i, const sidx_hook *h)
             sidx_lightbuffer_cell_get(lbs[i], &ray, &cell) != SIDX_OK)
             break;
         emit_cell(h, (uint32_t)k, cell.id, cell.face, cell.i, cell.j, cell.count);
-        stu_relay r = {h, last[cell.id]};
+        stu_relay r = {h, last[cell.id], &cell};
         const sidx_hook sh = {stu_fn, &r, SIDX_EVMASK(SIDX_EV_PRIM_TEST)};
         sidx_ex ex;
         memset(&ex, 0, sizeof ex);
@@ -301,7 +347,7 @@ static void student(size_t i, const sidx_hook *h)
         uint32_t slot = last[cell.id];
         const int occ = lb_shadow_test(&cell, &slot, &ex);
         last[cell.id] = slot;
-        emit_end(h, occ, slot);
+        emit_end(h, occ, slot, 0);
     }
     free(last);
 }
@@ -310,20 +356,26 @@ static void student(size_t i, const sidx_hook *h)
 static const char *hint(size_t i, const sidx_event *ref, const sidx_event *stu)
 {
     (void)i;
-    if (!ref || !stu) return hint_stop;
-    if (ref->type == SIDX_EV_HIT_UPDATE || stu->type == SIDX_EV_HIT_UPDATE) return hint_update;
-    if (ref->type == SIDX_EV_PRIM_TEST && ref->aux && !(stu->type == SIDX_EV_PRIM_TEST && stu->prim == ref->prim))
-        return hint_first;
+    if (!ref || !stu) return rules[R_STOP].hint;
+    if (ref->type == SIDX_EV_HIT_UPDATE && stu->type == SIDX_EV_HIT_UPDATE) {
+        /* the cache after the ray: the verdicts agreed (TERMINATE came first) */
+        return ref->aux == 2 ? rules[R_CACHE_STAYS].hint : ref->aux == 1 ? rules[R_UPDATE].hint : rules[R_MISS].hint;
+    }
+    if (ref->type == SIDX_EV_HIT_UPDATE || stu->type == SIDX_EV_HIT_UPDATE) return rules[R_UPDATE].hint;
+    if (ref->type == SIDX_EV_PRIM_TEST && (ref->aux & 1) && !(stu->type == SIDX_EV_PRIM_TEST && stu->prim == ref->prim))
+        return rules[R_FIRST].hint;
     if (ref->type == SIDX_EV_PRIM_TEST && stu->type == SIDX_EV_PRIM_TEST) {
-        if (ref->prim == stu->prim) return hint_range;
-        if (stu->aux) return hint_skip;
-        return hint_walk;
+        if (ref->prim == stu->prim) return rules[R_RANGE].hint;
+        if (stu->aux & 1) return rules[R_SKIP].hint;
+        return rules[R_ORDER].hint;
     }
     if (ref->type == SIDX_EV_TERMINATE && stu->type == SIDX_EV_PRIM_TEST)
-        return ref->reason == SIDX_TERM_ANY_HIT ? hint_stop : hint_reach;
-    if (ref->type == SIDX_EV_PRIM_TEST && stu->type == SIDX_EV_TERMINATE)
-        return stu->reason == SIDX_TERM_ANY_HIT ? hint_stop : hint_walk;
-    return hint_stop;
+        return ref->reason == SIDX_TERM_ANY_HIT ? rules[R_STOP].hint : rules[R_REACH].hint;
+    if (ref->type == SIDX_EV_PRIM_TEST && stu->type == SIDX_EV_TERMINATE) {
+        if (stu->reason == SIDX_TERM_ANY_HIT) return rules[R_STOP].hint;
+        return ref->aux & 2 ? rules[R_REACH_INCL].hint : rules[R_ORDER].hint;
+    }
+    return rules[R_STOP].hint;
 }
 
 static int format(const sidx_event *e, char *buf, size_t size)
@@ -333,10 +385,10 @@ static int format(const sidx_event *e, char *buf, size_t size)
         snprintf(buf, size, "shadow ray %u: cell %u (face %s, i %d, j %d), %u triangles listed", e->ray_id, e->node,
                  faces[e->cell[0] >= 0 && e->cell[0] < 6 ? e->cell[0] : 0], e->cell[1], e->cell[2], e->count);
     else if (e->type == SIDX_EV_PRIM_TEST && e->result)
-        snprintf(buf, size, "triangle %u test%s: hit t=%g", e->prim, e->aux ? " (the cached occluder)" : "",
+        snprintf(buf, size, "triangle %u test%s: hit t=%g", e->prim, e->aux & 1 ? " (the cached occluder)" : "",
                  (double)e->t);
     else if (e->type == SIDX_EV_PRIM_TEST)
-        snprintf(buf, size, "triangle %u test%s: miss", e->prim, e->aux ? " (the cached occluder)" : "");
+        snprintf(buf, size, "triangle %u test%s: miss", e->prim, e->aux & 1 ? " (the cached occluder)" : "");
     else if (e->type == SIDX_EV_TERMINATE)
         snprintf(buf, size, "%s", e->reason == SIDX_TERM_ANY_HIT ? "in shadow (return 1)" : "lit (return 0)");
     else if (e->type == SIDX_EV_HIT_UPDATE && e->prim == SIDX_NO_HIT)
@@ -351,5 +403,5 @@ const ex_driver ex_driver_this = {
     "18_light_buffer",
     "the light buffer's cached occluder: test the cell's last occluder first, then its list",
     "deck 000, \"Directional Partitioning\" (\"Variation: Light buffer (for shadow rays)\")",
-    setup, num_cases, describe, reference, student, hint, teardown, format, NULL, 0,
+    setup, num_cases, describe, reference, student, hint, teardown, format, rules, NRULES,
 };

@@ -177,6 +177,11 @@ static void describe(size_t i, ex_case_info *out)
     snprintf(out->what, sizeof out->what, "%u nodes, %u leaves, %u triangle references in %u slots of lists",
              c->num_nodes, leaves, c->num_prims, c->num_lists);
     out->hint = NULL;
+    /* one triangle: the root is a leaf, no inner node to leave alone */
+    out->rules = s == 0 ? "array-order copy-block leaf-own-order first-running-sum count-kept boxes-kept return-count "
+                          "nothing-past"
+                        : "array-order copy-block leaf-own-order first-running-sum count-kept boxes-kept "
+                          "inner-untouched return-count nothing-past";
 }
 
 static void note(const sidx_hook *h, int32_t node, int32_t c1, int32_t kind, uint32_t count, float lo, float hi)
@@ -249,23 +254,34 @@ static void student(size_t i, const sidx_hook *h)
     free(lists);
 }
 
-static const char *const hint_first =
-    "\"After re-indexing (sorting) based on leaf nodes ... Only need to store 2 integers per leaf node!\": a "
-    "leaf's new first is where its block starts in prims, the number of triangles of the leaves before it in "
-    "the node array (a running sum of their counts)";
-static const char *const hint_inner =
-    "the inner nodes stay as they are: their left_or_first is the right child's index, not a first; only a "
-    "leaf (sidx_bvh_is_leaf) gets a new first";
-static const char *const hint_count = "a leaf keeps its count (count_axis): only its first changes";
-static const char *const hint_box = "re-indexing moves triangle references, not boxes: bmin and bmax stay";
-static const char *const hint_own_order =
-    "copy each leaf's triangles in the leaf's own order: prims[first + k] = lists[old first + k]";
-static const char *const hint_copy =
-    "walk the nodes in array order (the leaves' layout order) and copy each leaf's block, lists[old first .. "
-    "old first + count), to the next free slots of prims";
-static const char *const hint_past =
-    "write exactly one slot per triangle reference, prims[0 .. sum of the counts): nothing past the end";
-static const char *const hint_return = "return the number of entries written to prims: the sum of the leaves' counts";
+/* The hand-out's rules, in its order. */
+enum { R_ORDER, R_COPY, R_OWN, R_FIRST, R_COUNT, R_BOX, R_LEAF, R_RETURN, R_PAST, NRULES };
+static const ex_rule rules[NRULES] = {
+    {"array-order", "the nodes are walked in array order 0, 1, 2, ...: the leaves' layout order",
+     "walk the nodes in array order, 0, 1, 2, ... (the order the leaves are laid out, and the order a depth-first "
+     "traversal meets them): the first leaf of the array gets prims[0 ..]"},
+    {"copy-block", "each leaf's block lists[old first .. old first + count) goes to the next free slots of prims",
+     "walk the nodes in array order (the leaves' layout order) and copy each leaf's block, lists[old first .. "
+     "old first + count), to the next free slots of prims"},
+    {"leaf-own-order", "a leaf's triangles are copied in the leaf's own order",
+     "copy each leaf's triangles in the leaf's own order: prims[first + k] = lists[old first + k]"},
+    {"first-running-sum", "a leaf's new left_or_first is the number of triangles of the leaves before it",
+     "\"After re-indexing (sorting) based on leaf nodes ... Only need to store 2 integers per leaf node!\": a "
+     "leaf's new first is where its block starts in prims, the number of triangles of the leaves before it in "
+     "the node array (a running sum of their counts)"},
+    {"count-kept", "a leaf's count (count_axis) stays", "a leaf keeps its count (count_axis): only its first changes"},
+    {"boxes-kept", "every node's box (bmin, bmax) stays",
+     "re-indexing moves triangle references, not boxes: bmin and bmax stay"},
+    {"inner-untouched", "only leaves (sidx_bvh_is_leaf) change; an inner node's left_or_first stays the right "
+     "child's index",
+     "the inner nodes stay as they are: their left_or_first is the right child's index, not a first; only a "
+     "leaf (sidx_bvh_is_leaf, which masks count_axis: an inner node's count_axis holds its axis << 30, not 0) "
+     "gets a new first"},
+    {"return-count", "the return value is the number of entries written to prims, the sum of the leaves' counts",
+     "return the number of entries written to prims: the sum of the leaves' counts"},
+    {"nothing-past", "nothing is written past prims[sum of the counts - 1]",
+     "write exactly one slot per triangle reference, prims[0 .. sum of the counts): nothing past the end"},
+};
 
 /* What differs decides: a node's index fields are the first rule (or the
  * untouched inner nodes and counts), a box the untouched boxes, a slot
@@ -274,21 +290,27 @@ static const char *const hint_return = "return the number of entries written to 
 static const char *hint(size_t i, const sidx_event *ref, const sidx_event *stu)
 {
     const reindex_case *c = &cases[i];
-    if (!ref || !stu || ref->type != SIDX_EV_NOTE || stu->type != SIDX_EV_NOTE) return hint_copy;
+    if (!ref || !stu || ref->type != SIDX_EV_NOTE || stu->type != SIDX_EV_NOTE) return rules[R_COPY].hint;
     const int kind = ref->cell[2];
     const int32_t node = ref->cell[0];
     if (kind == 0) {
-        if (node >= 0 && (uint32_t)node < c->num_nodes && !sidx_bvh_is_leaf(&c->before[node])) return hint_inner;
-        return ref->cell[1] != stu->cell[1] ? hint_count : hint_first;
+        if (node >= 0 && (uint32_t)node < c->num_nodes && !sidx_bvh_is_leaf(&c->before[node])) return rules[R_LEAF].hint;
+        if (ref->cell[1] != stu->cell[1]) return rules[R_COUNT].hint;
+        /* the first of a walk from the other end: the leaves after it */
+        uint32_t after = 0;
+        for (uint32_t k = (uint32_t)node + 1; k < c->num_nodes; ++k)
+            if (sidx_bvh_is_leaf(&c->before[k])) after += sidx_bvh_count(&c->before[k]);
+        if (after != ref->count && stu->count == after) return rules[R_ORDER].hint;
+        return rules[R_FIRST].hint;
     }
-    if (kind >= 1 && kind <= 3) return hint_box;
+    if (kind >= 1 && kind <= 3) return rules[R_BOX].hint;
     if (kind == 4 && node >= 0 && (uint32_t)node < c->num_nodes) {
         const sidx_bvh_node *d = &c->after[node];
         for (uint32_t k = 0; k < sidx_bvh_count(d); ++k)
-            if (c->prims[d->left_or_first + k] == stu->count) return hint_own_order;
-        return hint_copy;
+            if (c->prims[d->left_or_first + k] == stu->count) return rules[R_OWN].hint;
+        return rules[R_COPY].hint;
     }
-    return kind == 5 ? hint_past : kind == 6 ? hint_return : hint_copy;
+    return kind == 5 ? rules[R_PAST].hint : kind == 6 ? rules[R_RETURN].hint : rules[R_COPY].hint;
 }
 
 static int format(const sidx_event *e, char *buf, size_t size)
@@ -329,5 +351,5 @@ const ex_driver ex_driver_this = {
     "BVH leaf re-indexing: each leaf's triangles contiguous, in the order the leaves are laid out",
     "deck 001, \"What About Ordering?\" and \"After re-indexing (sorting) based on leaf nodes\" (\"Only need to "
     "store 2 integers per leaf node!\")",
-    setup, num_cases, describe, reference, student, hint, teardown, format, NULL, 0,
+    setup, num_cases, describe, reference, student, hint, teardown, format, rules, NRULES,
 };
