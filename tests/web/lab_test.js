@@ -176,7 +176,8 @@ async function dragRay(p, fx0, fy0, fx1, fy1) {
 
 // A key pressed and released as the keyboard sends it (Input.dispatchKeyEvent).
 const KEYCODES = { ArrowLeft: ['ArrowLeft', 37], ArrowRight: ['ArrowRight', 39], Home: ['Home', 36], End: ['End', 35],
-                   Escape: ['Escape', 27], p: ['KeyP', 80], '?': ['Slash', 191, 8] };
+                   Escape: ['Escape', 27], p: ['KeyP', 80], '?': ['Slash', 191, 8], PageUp: ['PageUp', 33],
+                   PageDown: ['PageDown', 34] };
 async function press(p, key) {
     const [code, vk, mod] = KEYCODES[key];
     const base = { key, code, windowsVirtualKeyCode: vk, modifiers: mod || 0 };
@@ -718,6 +719,40 @@ async function main() {
             msgs.push(s.error);
             await p.eval(`sidxLab.openLink('#scene=kd-slide&accel=kdtree')`);
             console.log('        messages:\n          ' + msgs.map((t) => t.slice(0, 110)).join('\n          '));
+            return null;
+        });
+
+        await check('presets: each lesson\'s preset opens with its caption, its walks equal sidx-step; PageDown, PageUp', async () => {
+            const presets = await p.eval('sidxLab.presets()');
+            if (presets.length < 15) return `only ${presets.length} presets`;
+            const ex0 = p.exceptions.length;
+            let events = 0;
+            for (const pr of presets) {
+                const nn = (pr.n < 10 ? '0' : '') + pr.n;
+                const s = await p.eval(`sidxLab.openLink('#lesson=${nn}')`);
+                const q = Object.fromEntries(pr.link.split('&').map((kv) => kv.split('=')));
+                if (s.lesson !== pr.n || s.scene !== q.scene || s.accel !== q.accel || (s.accel2 || '') !== (q.accel2 || '') ||
+                    s.error || s.notes.length || s.caught.length || p.exceptions.length > ex0)
+                    return `lesson ${nn}: lesson ${s.lesson}, ${s.scene} ${s.accel} ${s.accel2}, error '${s.error}', notes ${JSON.stringify(s.notes)} ${s.caught}`;
+                const cap = await p.eval(`document.getElementById('caption').textContent`);
+                if (!cap.includes(pr.title) || !/lesson=\d\d/.test(await p.eval('location.hash'))) return `lesson ${nn}: the caption says '${cap}'`;
+                if (q.step !== undefined && s.step !== Number(q.step)) return `lesson ${nn}: at step ${s.step}, not ${q.step}`;
+                let why = await compareTrace(p, s);
+                if (why) return `lesson ${nn}: ${why}`;
+                if (q.accel2) {
+                    why = traceDiff(traceOnly(s.events2 || []), traceOnly(nativeTrace(q.accel2, s.scene, s.ray, knobArgs(s.knobs))));
+                    if (why) return `lesson ${nn}, ${q.accel2}: ${why}`;
+                }
+                events += s.events.length + (s.events2 || []).length;
+            }
+            await p.eval(`sidxLab.openLink('#lesson=${(presets[0].n < 10 ? '0' : '') + presets[0].n}')`);
+            await press(p, 'PageDown');
+            let s = await until(p, 'PageDown: the second preset', (x) => x.lesson === presets[1].n);
+            await press(p, 'PageUp');
+            s = await until(p, 'PageUp: the first preset', (x) => x.lesson === presets[0].n);
+            await shot(p, 'preset-' + presets[0].n);
+            console.log(`        ${presets.length} presets (lessons ${presets.map((x) => x.n).join(' ')}): ${events} events equal sidx-step's; PageDown, PageUp`);
+            await p.eval(`sidxLab.openLink('#scene=kd-slide&accel=kdtree')`);
             return null;
         });
 
