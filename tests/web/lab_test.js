@@ -722,6 +722,48 @@ async function main() {
             return null;
         });
 
+        await check('heat map in a worker: a 1024 x 1024 brute-force map refines coarse to fine, the page answers, cancel goes back', async () => {
+            const n = (await p.eval(`sidxLab.openLink('#scene=teapot&accel=brute&mode=3d')`)).count;
+            await p.eval(`sidxLab.openLink('#scene=teapot&accel=brute&mode=heat&heat=steps,1024'), 0`);
+            // the page answers while the worker counts: a key steps the walk, a trivial call comes back
+            const worst = [];
+            let s = null;
+            for (const key of ['Home', 'End', 'Home']) {
+                const t0 = Date.now();
+                await press(p, key);
+                const want = new RegExp('[#&]step=' + (key === 'Home' ? 0 : n) + '(&|$)');
+                while (!want.test(await p.eval('location.hash'))) {
+                    if (Date.now() - t0 > 5000) return `${key} was not answered in 5 s while the heat map counts`;
+                    await sleep(20);
+                }
+                worst.push(Date.now() - t0);
+            }
+            const t1 = Date.now();
+            while (!(s = await p.eval('sidxLab.state()')).heatPartial) {
+                if (Date.now() - t1 > WAIT_MS) return 'no coarse round of the heat map arrived';
+                await sleep(50);
+            }
+            if (!s.worker || !s.heatJob || !s.heatJob.shown || s.heat) return `the heat map is not counting in a worker with a progress bar: ${JSON.stringify({ w: s.worker, j: s.heatJob, h: s.heat })}`;
+            const bar = await p.eval(`getComputedStyle(document.getElementById('progress')).display`);
+            if (bar === 'none') return 'no progress bar while the heat map counts';
+            await shot(p, 'heat-progress');
+            const bc = await p.box('#b-cancel');
+            await p.click(bc.x + bc.w / 2, bc.y + bc.h / 2);
+            s = await until(p, 'cancel: back to 3D', (x) => x.mode === '3d' && !x.heatJob);
+            if (s.error || s.caught.length) return `after cancel: error '${s.error}' ${s.caught}`;
+            if (Math.max(...worst) > 500) return `the page took ${Math.max(...worst)} ms to answer a key while the heat map counts (over 500)`;
+            // a map the worker finishes equals the one the page counts in place
+            await p.eval(`sidxLab.openLink('#scene=kd-slide&accel=kdtree&mode=heat&heat=steps,64&cam=0.6,0.35,1')`);
+            s = await until(p, 'the 64 x 64 map from the worker', (x) => x.heat && x.heat.n === 64);
+            const inPlace = await p.eval(`(() => { const r = sidxLab._heatInPlace(64); return { max: r.max, total: r.total }; })()`);
+            if (s.heat.max !== inPlace.max || Math.abs(s.heat.mean * 64 * 64 - inPlace.total) > 1e-6)
+                return `the worker's map (max ${s.heat.max}, mean ${s.heat.mean}) is not the page's (${JSON.stringify(inPlace)})`;
+            console.log(`        keys answered in ${worst.join(', ')} ms while the 1024 x 1024 map counted; the coarse round ${s.heatPartial || 'seen'}; ` +
+                `cancel back to 3D; the worker's 64 x 64 map = the page's (max ${inPlace.max}, total ${inPlace.total})`);
+            await p.eval(`sidxLab.openLink('#scene=kd-slide&accel=kdtree&mode=2d')`);
+            return null;
+        });
+
         await check('presets: each lesson\'s preset opens with its caption, its walks equal sidx-step; PageDown, PageUp', async () => {
             const presets = await p.eval('sidxLab.presets()');
             if (presets.length < 15) return `only ${presets.length} presets`;
