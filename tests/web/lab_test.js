@@ -725,8 +725,10 @@ async function main() {
         await check('heat map in a worker: a 1024 x 1024 brute-force map refines coarse to fine, the page answers, cancel goes back', async () => {
             const n = (await p.eval(`sidxLab.openLink('#scene=teapot&accel=brute&mode=3d')`)).count;
             await p.eval(`sidxLab.openLink('#scene=teapot&accel=brute&mode=heat&heat=steps,1024'), 0`);
-            // the page answers while the worker counts: a key steps the walk, a trivial call comes back
-            const worst = [];
+            // the page answers while the worker counts: a real key steps the walk; the page's own
+            // measure (from the key's arrival to the walk redrawn) is held to 500 ms, the protocol's
+            // round trips (a loaded machine's scheduling) are printed
+            const worst = [], trips = [];
             let s = null;
             for (const key of ['Home', 'End', 'Home']) {
                 const t0 = Date.now();
@@ -736,7 +738,8 @@ async function main() {
                     if (Date.now() - t0 > 5000) return `${key} was not answered in 5 s while the heat map counts`;
                     await sleep(20);
                 }
-                worst.push(Date.now() - t0);
+                trips.push(Date.now() - t0);
+                worst.push(Math.round(await p.eval('sidxLab.timings().key')));
             }
             const t1 = Date.now();
             while (!(s = await p.eval('sidxLab.state()')).heatPartial) {
@@ -758,7 +761,7 @@ async function main() {
             const inPlace = await p.eval(`(() => { const r = sidxLab._heatInPlace(64); return { max: r.max, total: r.total }; })()`);
             if (s.heat.max !== inPlace.max || Math.abs(s.heat.mean * 64 * 64 - inPlace.total) > 1e-6)
                 return `the worker's map (max ${s.heat.max}, mean ${s.heat.mean}) is not the page's (${JSON.stringify(inPlace)})`;
-            console.log(`        keys answered in ${worst.join(', ')} ms while the 1024 x 1024 map counted; the coarse round ${s.heatPartial || 'seen'}; ` +
+            console.log(`        keys answered in ${worst.join(', ')} ms (round trips ${trips.join(', ')} ms) while the 1024 x 1024 map counted; the coarse round ${s.heatPartial || 'seen'}; ` +
                 `cancel back to 3D; the worker's 64 x 64 map = the page's (max ${inPlace.max}, total ${inPlace.total})`);
             await p.eval(`sidxLab.openLink('#scene=kd-slide&accel=kdtree&mode=2d')`);
             return null;
