@@ -786,8 +786,10 @@ async function main() {
             if (s.error || s.caught.length) return `after cancel: error '${s.error}' ${s.caught}`;
             if (Math.max(...worst) > 500) return `the page took ${Math.max(...worst)} ms to answer a key while the heat map counts (over 500)`;
             // a map the worker finishes equals the one the page counts in place
+            await p.eval('sidxLab._heatWorkerAlways(true)');
             await p.eval(`sidxLab.openLink('#scene=kd-slide&accel=kdtree&mode=heat&heat=steps,64&cam=0.6,0.35,1')`);
             s = await until(p, 'the 64 x 64 map from the worker', (x) => x.heat && x.heat.n === 64);
+            await p.eval('sidxLab._heatWorkerAlways(false)');
             const inPlace = await p.eval(`(() => { const r = sidxLab._heatInPlace(64); return { max: r.max, total: r.total }; })()`);
             if (s.heat.max !== inPlace.max || Math.abs(s.heat.mean * 64 * 64 - inPlace.total) > 1e-6)
                 return `the worker's map (max ${s.heat.max}, mean ${s.heat.mean}) is not the page's (${JSON.stringify(inPlace)})`;
