@@ -430,6 +430,9 @@ clean:
 # Debian's emscripten runs node with acorn from node-acorn
 # (/usr/share/nodejs), which a node not built by Debian does not search:
 # NODE_PATH names it.  The page is refused above WEB_MAX_BYTES.
+# $(WEB_DIR)/site/ is a folder ready to publish on a course page: the same
+# page as index.html (it loads nothing else; its links keep the state in
+# the address's hash, so they work wherever the folder is served).
 EMCC ?= emcc
 WEB_SIMD ?= 1
 WEB_DIR := $(BUILDDIR)/web$(if $(filter 0,$(WEB_SIMD)),-scalar)
@@ -447,11 +450,11 @@ WEB_MAX_BYTES := 3145728
 
 web:
 	@command -v $(EMCC) >/dev/null 2>&1 || { echo "web: emcc not found: install Debian's emscripten (apt-get install emscripten)"; exit 1; }
-	@$(MAKE) --no-print-directory $(WEB_DIR)/sidx-lab.html
+	@$(MAKE) --no-print-directory $(WEB_DIR)/sidx-lab.html $(WEB_DIR)/site/index.html
 
 # make test: the module where emscripten is installed, one line where not.
 web-if-emcc:
-	@if command -v $(EMCC) >/dev/null 2>&1; then $(MAKE) --no-print-directory $(WEB_DIR)/sidx-lab.html; \
+	@if command -v $(EMCC) >/dev/null 2>&1; then $(MAKE) --no-print-directory $(WEB_DIR)/sidx-lab.html $(WEB_DIR)/site/index.html; \
 	else echo "web: without emscripten (apt-get install emscripten): no build/web/sidx-lab.html, its tests skipped"; fi
 
 $(WEB_DIR)/obj/%.o: %.c
@@ -472,6 +475,10 @@ $(WEB_DIR)/sidx-lab.html: $(WEB_DIR)/sidx-lab.js viz/lab_page.html viz/page_comm
 	  echo "web: $@ would be $$size bytes, over the limit of $(WEB_MAX_BYTES)"; rm -f $@.tmp; exit 1; fi
 	mv $@.tmp $@
 	@echo "web: $@ ($$(wc -c < $@) bytes)"
+
+$(WEB_DIR)/site/index.html: $(WEB_DIR)/sidx-lab.html
+	@mkdir -p $(dir $@)
+	cp $< $@
 
 -include $(shell find $(WEB_DIR)/obj -name '*.d' 2>/dev/null)
 

@@ -16,7 +16,8 @@
 # less the SAH candidates, that the camera rays agree, that a trace's
 # events are sidx-step --json's for the same ray and their lines
 # sidx-step's (node labels too), that the page is one file under 3 MB
-# holding the module, and that the ray set exercised what it names.
+# holding the module, and that the ray set exercised what it names; then
+# random addresses and OBJ files through the module (tests/web/lab_fuzz.js).
 # Without node or without the module (make test builds it where emscripten
 # is installed) it says so in one line and passes.  Run from the repository root.
 
@@ -190,6 +191,14 @@ KNOBS="" WANT_LABELS=10 step_check "kd-slide, the slide's kd-tree" kd-slide kdtr
 WANT_LABELS= KNOBS='{"bins":8,"mailbox":false}' step_check "kd-slide, grid with knobs" kd-slide grid 0,4.2,0,1,0.15,0 --bins 8 --no-mailbox
 WANT_LABELS= KNOBS="" step_check "teapot, bvh8" teapot bvh8 6.3,1.5,2,-6,-0.2,-2
 WANT_LABELS= KNOBS='{"traversal":"naive"}' step_check "teapot, kdtree naive" teapot kdtree 6.3,1.5,2,-6,-0.2,-2 --traversal naive
+
+# 5. random addresses and OBJ files through the module (tests/web/lab_fuzz.js): every
+# answer JSON, every refusal with a message; LAB_FUZZ=N for more (by hand: 20000)
+if out=$(timeout "$LIMIT" node tests/web/lab_fuzz.js "$WEB/sidx-lab.js" "${LAB_FUZZ:-1000}" "${LAB_FUZZ_SEED:-1}" 2>&1); then
+    ok "$(echo "$out" | tail -1 | sed 's/^lab-fuzz: //')"
+else
+    bad "$(echo "$out" | tail -3)"
+fi
 
 if [ $fail -ne 0 ]; then
     echo "web-module: FAILED"

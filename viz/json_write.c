@@ -102,6 +102,16 @@ void viz_json_float(viz_json *b, float f)
         viz_json_put(b, isnan(f) ? "null" : f > 0 ? "1e999" : "-1e999");
 }
 
+/* The same for a double (a structure's SAH cost): %.6g of the double
+ * itself, so a finite value prints as it did before it was checked. */
+void viz_json_double(viz_json *b, double d)
+{
+    if (isfinite(d))
+        viz_json_printf(b, "%.6g", d);
+    else
+        viz_json_put(b, isnan(d) ? "null" : d > 0 ? "1e999" : "-1e999");
+}
+
 void viz_json_xyz(viz_json *b, sidx_vec3 p)
 {
     viz_json_float(b, p.x);

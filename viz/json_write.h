@@ -22,8 +22,10 @@ __attribute__((format(printf, 2, 3)))
 void viz_json_printf(viz_json *b, const char *fmt, ...);
 /* A JSON string; '<' as \u003c so no text can close a page's <script>. */
 void viz_json_string(viz_json *b, const char *s);
-/* %.6g; JSON has no inf or NaN: 1e999, -1e999, null. */
+/* %.6g; JSON has no inf or NaN: 1e999, -1e999 (which a JSON reader takes
+ * for +-infinity), null.  Every number either writes is valid JSON. */
 void viz_json_float(viz_json *b, float f);
+void viz_json_double(viz_json *b, double d);
 void viz_json_xyz(viz_json *b, sidx_vec3 p);     /* x,y,z */
 void viz_json_id(viz_json *b, uint32_t id);      /* UINT32_MAX as -1 */
 void viz_json_box(viz_json *b, sidx_aabb box);   /* ,minx,miny,minz,maxx,maxy,maxz (leading comma) */

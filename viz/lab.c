@@ -499,10 +499,14 @@ const char *sidx_lab_build_json(int slot)
     viz_json_string(b, sidx_accel_name(s->accel));
     viz_json_put(b, ",\"args\":");
     viz_json_string(b, s->args);
-    viz_json_printf(b, ",\"stats\":{\"nodes\":%u,\"leaves\":%u,\"max_depth\":%u,\"sah_cost\":%.6g,\"bytes\":%zu,"
-                       "\"prim_refs\":%llu,\"build_ms\":%.3f}",
-                    st.nodes, st.leaves, st.max_depth, st.sah_cost, st.bytes, (unsigned long long)st.prim_refs,
-                    s->build_ms);
+    /* sah_cost through viz_json_double: a scene of huge coordinates (+-3e38)
+     * overflows the surface areas and gives NaN, which printf writes as
+     * "-nan", no JSON at all */
+    viz_json_printf(b, ",\"stats\":{\"nodes\":%u,\"leaves\":%u,\"max_depth\":%u,\"sah_cost\":", st.nodes,
+                    st.leaves, st.max_depth);
+    viz_json_double(b, st.sah_cost);
+    viz_json_printf(b, ",\"bytes\":%zu,\"prim_refs\":%llu,\"build_ms\":%.3f}", st.bytes,
+                    (unsigned long long)st.prim_refs, s->build_ms);
     viz_json_put(b, ",\"build\":");
     const size_t cand_kept = put_build_events(b, s, 0);
     viz_json_printf(b, ",\"cand_total\":%zu,\"cand_kept\":%zu,\"labels\":{", s->cand_total, cand_kept);

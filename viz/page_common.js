@@ -300,7 +300,8 @@ function drawRay3d(c, cam, b, ray, r, col, hitRadius, hitCol) {
  * the first k build events b, on canvas cnv with its note; s.cand_kept of s.cand_total
  * candidate events are in the page. */
 function sahCurve(cnv, note, s, b, node, k) {
-  var sx = cnv.getContext('2d'), w = cnv.width, h = cnv.height, pts = [], split = null, i;
+  /* a canvas sized by fitCanvas draws in CSS pixels (cssW x cssH), its backing store at the screen's density */
+  var sx = cnv.getContext('2d'), w = cnv.cssW || cnv.width, h = cnv.cssH || cnv.height, pts = [], split = null, i;
   sx.fillStyle = '#2a2f39'; sx.fillRect(0, 0, w, h);
   $('sah-title').textContent = 'SAH cost over split position (node ' + node + ')';
   for (i = 0; i < k && i < b.length; ++i) {
@@ -406,9 +407,33 @@ function eventLines(k, n, text, part, into) {
   $(into || 'events').innerHTML = html.join('');
 }
 
+/* Sizes canvas cnv to w x h CSS pixels with a backing store of devicePixelRatio times as
+ * many (sharp on a HiDPI screen and under browser zoom) and returns its context scaled so
+ * that drawing is in CSS pixels; cnv.cssW, cnv.cssH keep the CSS size. */
+function fitCanvas(cnv, w, h) {
+  var d = window.devicePixelRatio || 1, bw = Math.max(1, Math.round(w * d)), bh = Math.max(1, Math.round(h * d));
+  if (cnv.width !== bw || cnv.height !== bh) { cnv.width = bw; cnv.height = bh; }
+  cnv.cssW = w; cnv.cssH = h;
+  var c = cnv.getContext('2d');
+  c.setTransform(bw / w, 0, 0, bh / h, 0, 0);
+  return c;
+}
+/* 1 where element t takes typed text (the stepper's keys leave it alone): a text or number
+ * field, a text area, an editable element.  A select, a checkbox, a button or the canvas
+ * do not: the keys step the walk whatever else has the focus. */
+function isTextEntry(t) {
+  if (!t || !t.tagName) return false;
+  if (t.isContentEditable || t.tagName === 'TEXTAREA') return true;
+  if (t.tagName !== 'INPUT') return false;
+  return ['text', 'number', 'search', 'email', 'url', 'tel', 'password', ''].indexOf(String(t.type || '').toLowerCase()) >= 0;
+}
+
 /* ---- the stepper's buttons and keys --------------------------------------------------- */
 /* p: the page's go(k), cur(), count(), play(), nextOfType(dir), setMode(m), level(dir) (the
- * 3D level up or down) and keys, its own further keys {key: function}. */
+ * 3D level up or down) and keys, its own further keys {key: function}, which come before
+ * the common ones.  The keys are taken in the capture phase, before a focused select or
+ * checkbox acts on them (an arrow key would change the select's choice): they reach the
+ * stepper whatever has the focus, except a text field being edited. */
 function bindStepper(p) {
   $('m-2d').onclick = function () { p.setMode('2d'); };
   $('m-build').onclick = function () { p.setMode('build'); };
@@ -425,10 +450,12 @@ function bindStepper(p) {
   $('b-lvup').onclick = function () { p.level(1); };
   $('b-lvdown').onclick = function () { p.level(-1); };
   $('events').onclick = function (e) { var d = e.target.closest('div[data-i]'); if (d) p.go(+d.dataset.i + 1); };
+  var spaceTaken = false;
   document.addEventListener('keydown', function (e) {
-    if (e.target && (e.target.tagName === 'INPUT' || e.target.tagName === 'SELECT')) return;
+    if (isTextEntry(e.target) || e.ctrlKey || e.metaKey || e.altKey) return;
     var k = e.key;
-    if (k === 'ArrowRight' || k === 'n') p.go(p.cur() + 1);
+    if (Object.prototype.hasOwnProperty.call(p.keys, k)) p.keys[k]();
+    else if (k === 'ArrowRight' || k === 'n') p.go(p.cur() + 1);
     else if (k === 'ArrowLeft' || k === 'p') p.go(p.cur() - 1);
     else if (k === 'Home') p.go(0);
     else if (k === 'End') p.go(p.count());
@@ -441,8 +468,14 @@ function bindStepper(p) {
     else if (k === '3') p.setMode('3d');
     else if (k === '+' || k === '=') p.level(1);
     else if (k === '-') p.level(-1);
-    else if (Object.prototype.hasOwnProperty.call(p.keys, k)) p.keys[k]();
     else return;
     e.preventDefault();
-  });
+    e.stopPropagation();
+    spaceTaken = k === ' ';
+  }, true);
+  /* a focused button or checkbox acts on Space when the key goes up: not after the stepper took it */
+  document.addEventListener('keyup', function (e) {
+    if (e.key === ' ' && spaceTaken && !isTextEntry(e.target)) { e.preventDefault(); e.stopPropagation(); }
+    if (e.key === ' ') spaceTaken = false;
+  }, true);
 }
