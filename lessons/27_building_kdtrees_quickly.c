@@ -30,7 +30,7 @@
  *      box.  One image from the street with a shadow ray per hit: how
  *      many buildings it built, and its hits against the eager city's.
  *
- * Read:  lib/kdtree_build.c, sidx__kd_lazy_expand; lib/lazy.c, lib/instance.c
+ * Read:  lib/kdtree_build.c, sidx__kd_lazy_expand; lib/instance.c, sidx_aggregate_build_meshes
  * Run:   build/lessons/27_building_kdtrees_quickly [SCENE]
  *        SCENE = a built-in scene name or .obj/.ply (default stadium:2048)
  */
@@ -315,8 +315,8 @@ int main(int argc, char **argv)
     sidx_accel_destroy(fresh);
 
     /* 3. lazy instances: a city seen from its street */
-    printf("\nLazy instances: a city of 100 distinct buildings, each an instance with its own BVH,\n"
-           "one %dx%d image from the street and a shadow ray per hit to the sun.\n", W, H);
+    printf("\n== 3. Lazy instances: a city of 100 distinct buildings, each an instance with its own\n"
+           "BVH; one %dx%d image from the street and a shadow ray per hit to the sun\n", W, H);
     sidx_city city;
     if (sidx_city_make(100, 8, &city, &err) != SIDX_OK) lesson_fail(&args, err.message);
     lesson_camera street;

@@ -106,9 +106,11 @@ typedef struct sidx_mesh_instance {
 } sidx_mesh_instance;
 
 /* Errors: those of sidx_aggregate_build, plus SIDX_ERR_INVALID_ARG for a
- * NULL or invalid mesh (sidx_mesh_validate), SIDX_ERR_UNKNOWN_ACCEL for a
- * name the registry lacks; eager (opt->lazy = 0): any error of building a
- * structure.  opt: lazy (0 = build all now, else lazily; the structures'
+ * NULL mesh, sidx_mesh_validate's error for an invalid one,
+ * SIDX_ERR_UNKNOWN_ACCEL for a name the registry lacks, the structure's
+ * error for options it rejects (tried on one triangle, so that a lazy
+ * build fails at a query only for want of memory); eager (opt->lazy = 0):
+ * any error of building a structure.  opt: lazy (0 = build all now, else lazily; the structures'
  * own lazy builds are their opt's), hook (build events), alloc (the
  * aggregate and every structure it builds); others ignored. */
 sidx_status sidx_aggregate_build_meshes(const sidx_mesh_instance *instances, uint32_t n, const sidx_build_options *opt,
