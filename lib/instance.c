@@ -649,8 +649,9 @@ static size_t own_bytes(const sidx_accel *a)
 {
     const agg_impl *g = a->impl;
     /* the tree's node slots as allocated (sidx__boxtree_bytes counts the used ones) */
+    const size_t mesh_inst = g->lazy ? sizeof *g->lazy + (size_t)g->num_src * (sizeof *g->src + sizeof *g->parts) : 0;
     return sizeof *a + sizeof *g + (size_t)g->n * sizeof *g->inst + sidx__boxtree_bytes(&g->tree) +
-           (g->node_slots - g->tree.num_nodes) * sizeof *g->tree.nodes;
+           (g->node_slots - g->tree.num_nodes) * sizeof *g->tree.nodes + mesh_inst;
 }
 
 static void agg_stats(const sidx_accel *a, sidx_accel_stats *s)

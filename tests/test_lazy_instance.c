@@ -343,6 +343,39 @@ static void out_of_memory_is_the_query_s_error(void **state)
     sidx_city_free(&c);
 }
 
+/* The eager and the lazy build of an aggregate without memory: the k-th
+ * allocation fails, for every k until the build succeeds; nothing leaks. */
+static void build_out_of_memory_leaks_nothing(void **state)
+{
+    (void)state;
+    sidx_city c;
+    assert_int_equal(sidx_city_make(3, 2, &c, NULL), SIDX_OK);
+    for (int lazy = 0; lazy < 2; ++lazy) {
+        long k = 0;
+        for (;; ++k) {
+            tk_failing f = {k, 0};
+            sidx_allocator al = tk_failing_allocator(&f);
+            sidx_build_options o;
+            memset(&o, 0, sizeof o);
+            o.lazy = (uint32_t)lazy;
+            o.alloc = &al;
+            sidx_accel *a = NULL;
+            const sidx_status s = sidx_aggregate_build_meshes(c.instances, 3, &o, &a, NULL);
+            if (s == SIDX_OK) {
+                sidx_accel_destroy(a);
+                assert_int_equal(f.live, 0);
+                break;
+            }
+            assert_int_equal(s, SIDX_ERR_NOMEM);
+            assert_null(a);
+            if (f.live != 0) fail_msg("lazy %d, allocation %ld failing: %ld not given back", lazy, k, f.live);
+            assert_true(k < 10000);
+        }
+        assert_true(k > (lazy ? 5 : 10)); /* eager: the three buildings' builds fail too */
+    }
+    sidx_city_free(&c);
+}
+
 /* ---- events ------------------------------------------------------------------------ */
 
 typedef struct evlog { int expand, builds, begin_after_expand; uint32_t node, count; } evlog;
@@ -481,7 +514,8 @@ int main(void)
     alarm(600); /* a wait on a part never published would hang: fail instead */
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(lazy_hits_equal_eager),      cmocka_unit_test(threads_race_into_one_instance),
-        cmocka_unit_test(out_of_memory_is_the_query_s_error), cmocka_unit_test(expansion_events),
+        cmocka_unit_test(out_of_memory_is_the_query_s_error), cmocka_unit_test(build_out_of_memory_leaks_nothing),
+        cmocka_unit_test(expansion_events),
         cmocka_unit_test(city_is_deterministic),      cmocka_unit_test(argument_errors),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
