@@ -11,10 +11,18 @@
  * renormalized, so the t of a hit is the same in both spaces) and the
  * child's own traversal runs with the best t so far as its bound.  Events
  * of the child flow to the same hook, bracketed by a NOTE naming the
- * instance. */
+ * instance.
+ *
+ * Mesh instances (sidx_aggregate_build_meshes): the aggregate builds each
+ * distinct (mesh, structure, options) itself — all at once, or lazily, the
+ * first time a ray enters an instance's world box, through lazy.c (claim,
+ * wait, publish, failure, counters).  Their top level holds one instance
+ * per leaf, so the box the top walk tests before reaching an instance is
+ * that instance's own, lazy or eager alike: the two walks are one. */
 #include <stdio.h>
 #include "sidx_internal.h"
 #include "boxtree.h"
+#include "lazy.h"
 #include "sidx/instance.h"
 
 #define SIDX_STRUCTURE_NAME "aggregate"
@@ -25,12 +33,24 @@
 #define AGG_FINISH (SIDX__QUERY_REFINE_T | SIDX_QUERY_UV | SIDX_QUERY_NORMAL)
 
 typedef struct agg_inst {
-    const sidx_accel *accel;
+    const sidx_accel *accel; /* NULL for a lazy mesh instance: its structure is part `part` of agg_impl.lazy */
     float m[12];            /* object to world */
     float inv[12];          /* world to object */
     uint32_t leaf_base;     /* first leaf instance id */
+    uint32_t part;          /* mesh instances: its structure's index in agg_impl.src; UINT32_MAX otherwise */
     int nested;             /* child is an aggregate */
 } agg_inst;
+
+/* A structure a mesh aggregate builds (sidx_mesh_instance): what to build
+ * and, for the BUILD_LAZY_EXPAND event, where its first instance stands. */
+typedef struct agg_src {
+    const sidx_mesh *mesh;
+    char name[32];           /* registry name (copied: the caller's string need not outlive the build) */
+    sidx_build_options opt;  /* hook and alloc replaced at build */
+    uint32_t uses;           /* instances placing it */
+    uint32_t first;          /* its first instance */
+    sidx_aabb box;           /* that instance's world box */
+} agg_src;
 
 typedef struct agg_impl {
     agg_inst *inst;
@@ -39,6 +59,12 @@ typedef struct agg_impl {
     sidx__boxtree tree;
     size_t node_slots;      /* nodes allocated for tree (>= tree.num_nodes) */
     sidx_aabb box;
+    /* mesh instances only: the structures to build, one lazy part each
+     * (eager: all built and published before the aggregate is returned) */
+    agg_src *src;
+    sidx__lazy_part *parts;
+    sidx__lazy *lazy;
+    uint32_t num_src;
 } agg_impl;
 
 static const sidx_mesh agg_no_mesh = {NULL, NULL, 0, 0};
@@ -120,6 +146,11 @@ static void agg_destroy(sidx_accel *a)
 {
     agg_impl *g = a->impl;
     if (!g) return;
+    if (g->lazy && g->lazy->parts)
+        for (uint32_t p = 0; p < g->num_src; ++p) sidx_accel_destroy(sidx__lazy_peek(g->lazy, p));
+    sidx__free(a, g->lazy);
+    sidx__free(a, g->parts);
+    sidx__free(a, g->src);
     sidx__boxtree_free(&g->tree);
     sidx__free(a, g->inst);
     sidx__free(a, g);
@@ -129,28 +160,17 @@ static void agg_destroy(sidx_accel *a)
 static void *agg_malloc(size_t size, void *user) { (void)user; return malloc(size); }
 static void agg_mfree(void *p, void *user) { (void)user; free(p); }
 
-sidx_status sidx_aggregate_build(const sidx_instance *instances, uint32_t n, const sidx_build_options *opt,
-                                 sidx_accel **out, sidx_error *err)
+/* The aggregate's shell: the allocator resolved, the structure, its impl,
+ * the instance array and a box per instance (freed by agg_finish). */
+static sidx_status agg_new(uint32_t n, const sidx_build_options *opt, sidx_accel **out, sidx_aabb **boxes,
+                           sidx_error *err)
 {
-    if (err) { err->status = SIDX_OK; err->message[0] = '\0'; }
-    if (!out) return sidx__fail(err, SIDX_ERR_INVALID_ARG, "aggregate: out is NULL");
-    *out = NULL;
-    if (n && !instances) return sidx__fail(err, SIDX_ERR_INVALID_ARG, "aggregate: instances is NULL");
     sidx_allocator al = {agg_malloc, agg_mfree, NULL};
     if (opt && opt->alloc) {
         if (!opt->alloc->alloc || !opt->alloc->free)
             return sidx__fail(err, SIDX_ERR_INVALID_ARG, "aggregate: allocator needs alloc and free");
         al = *opt->alloc;
     }
-    uint64_t leaves = 0;
-    for (uint32_t i = 0; i < n; ++i) {
-        if (!instances[i].accel) return sidx__fail(err, SIDX_ERR_INVALID_ARG, "aggregate: instance %u has no structure", i);
-        float inv[12];
-        if (!xf_invert(instances[i].xform, inv))
-            return sidx__fail(err, SIDX_ERR_INVALID_ARG, "aggregate: instance %u has a singular or non-finite transform", i);
-        leaves += sidx_aggregate_leaf_count(instances[i].accel);
-    }
-    if (leaves >= UINT32_MAX - 1) return sidx__fail(err, SIDX_ERR_LIMIT, "aggregate: too many leaf instances");
     sidx_accel *a = al.alloc(sizeof *a, al.user);
     if (!a) return sidx__fail(err, SIDX_ERR_NOMEM, "aggregate: out of memory");
     memset(a, 0, sizeof *a);
@@ -159,40 +179,36 @@ sidx_status sidx_aggregate_build(const sidx_instance *instances, uint32_t n, con
     a->mesh = &agg_no_mesh;
     a->alloc = al;
     if (opt) { a->opt = *opt; a->opt.hook = NULL; a->opt.alloc = NULL; }
-    const sidx_hook *hook = opt ? opt->hook : NULL;
     agg_impl *g = sidx__calloc(a, 1, sizeof *g);
-    sidx_aabb *boxes = NULL;
+    *boxes = NULL;
     if (g) {
         a->impl = g;
         g->inst = sidx__alloc(a, n, sizeof *g->inst);
-        boxes = sidx__alloc(a, n, sizeof *boxes);
+        *boxes = sidx__alloc(a, n, sizeof **boxes);
     }
-    if (!g || !g->inst || !boxes) {
-        sidx__free(a, boxes);
+    if (!g || !g->inst || !*boxes) {
+        sidx__free(a, *boxes);
+        *boxes = NULL;
         agg_destroy(a);
         al.free(a, al.user);
         return sidx__fail(err, SIDX_ERR_NOMEM, "aggregate: out of memory");
     }
     g->n = n;
     g->box = sidx_aabb_empty();
-    uint32_t base = 0;
-    const sidx_accel *last_child = NULL;
-    sidx_aabb last_box = sidx_aabb_empty();
-    for (uint32_t i = 0; i < n; ++i) {
-        agg_inst *in = &g->inst[i];
-        in->accel = instances[i].accel;
-        memcpy(in->m, instances[i].xform, sizeof in->m);
-        xf_invert(in->m, in->inv);
-        in->nested = sidx_accel_is_aggregate(in->accel);
-        in->leaf_base = base;
-        base += sidx_aggregate_leaf_count(in->accel);
-        if (in->accel != last_child) { last_child = in->accel; last_box = child_bounds(in->accel); }
-        boxes[i] = xf_box(in->m, last_box);
-        g->box = sidx_aabb_union(g->box, boxes[i]);
-    }
-    g->leaves = base;
+    *out = a;
+    return SIDX_OK;
+}
+
+/* The top level over the instances' world boxes (leaves of at most
+ * leaf_size instances) and the build events; frees boxes, and a on failure. */
+static sidx_status agg_finish(sidx_accel *a, sidx_aabb *boxes, uint32_t leaf_size, const sidx_hook *hook,
+                              sidx_error *err)
+{
+    agg_impl *g = a->impl;
+    const uint32_t n = g->n;
+    const sidx_allocator al = a->alloc;
     SIDX_EMIT(1, hook, SIDX_EV_BUILD_BEGIN, e_.count = n; e_.bounds = g->box);
-    const sidx_status s = sidx__boxtree_build(&g->tree, boxes, n, 2, &al);
+    const sidx_status s = sidx__boxtree_build(&g->tree, boxes, n, leaf_size, &al);
     sidx__free(a, boxes);
     if (s != SIDX_OK) {
         agg_destroy(a);
@@ -228,8 +244,226 @@ sidx_status sidx_aggregate_build(const sidx_instance *instances, uint32_t n, con
         }
     }
     SIDX_EMIT(1, hook, SIDX_EV_BUILD_END, e_.node = g->tree.num_nodes; e_.count = n; e_.depth = g->tree.depth);
-    *out = a;
     return SIDX_OK;
+}
+
+sidx_status sidx_aggregate_build(const sidx_instance *instances, uint32_t n, const sidx_build_options *opt,
+                                 sidx_accel **out, sidx_error *err)
+{
+    if (err) { err->status = SIDX_OK; err->message[0] = '\0'; }
+    if (!out) return sidx__fail(err, SIDX_ERR_INVALID_ARG, "aggregate: out is NULL");
+    *out = NULL;
+    if (n && !instances) return sidx__fail(err, SIDX_ERR_INVALID_ARG, "aggregate: instances is NULL");
+    uint64_t leaves = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+        if (!instances[i].accel) return sidx__fail(err, SIDX_ERR_INVALID_ARG, "aggregate: instance %u has no structure", i);
+        float inv[12];
+        if (!xf_invert(instances[i].xform, inv))
+            return sidx__fail(err, SIDX_ERR_INVALID_ARG, "aggregate: instance %u has a singular or non-finite transform", i);
+        leaves += sidx_aggregate_leaf_count(instances[i].accel);
+    }
+    if (leaves >= UINT32_MAX - 1) return sidx__fail(err, SIDX_ERR_LIMIT, "aggregate: too many leaf instances");
+    sidx_accel *a = NULL;
+    sidx_aabb *boxes = NULL;
+    sidx_status s = agg_new(n, opt, &a, &boxes, err);
+    if (s != SIDX_OK) return s;
+    agg_impl *g = a->impl;
+    uint32_t base = 0;
+    const sidx_accel *last_child = NULL;
+    sidx_aabb last_box = sidx_aabb_empty();
+    for (uint32_t i = 0; i < n; ++i) {
+        agg_inst *in = &g->inst[i];
+        in->accel = instances[i].accel;
+        memcpy(in->m, instances[i].xform, sizeof in->m);
+        xf_invert(in->m, in->inv);
+        in->nested = sidx_accel_is_aggregate(in->accel);
+        in->part = UINT32_MAX;
+        in->leaf_base = base;
+        base += sidx_aggregate_leaf_count(in->accel);
+        /* a lazy child: the queries must say when its expansion failed */
+        if (in->accel->lazy) a->lazy = 1;
+        if (in->accel != last_child) { last_child = in->accel; last_box = child_bounds(in->accel); }
+        boxes[i] = xf_box(in->m, last_box);
+        g->box = sidx_aabb_union(g->box, boxes[i]);
+    }
+    g->leaves = base;
+    s = agg_finish(a, boxes, 2, opt ? opt->hook : NULL, err);
+    if (s == SIDX_OK) *out = a;
+    return s;
+}
+
+/* ---- mesh instances -------------------------------------------------------------------- */
+
+/* The structure of src, built over its mesh with its options, the
+ * aggregate's allocator and the given hook.  NULL on failure (the build
+ * keeps nothing: sidx_accel_build). */
+static sidx_status src_build(const sidx_accel *a, const agg_src *src, const sidx_hook *hook, sidx_accel **c,
+                             sidx_error *err)
+{
+    sidx_build_options o = src->opt;
+    o.hook = hook;
+    o.alloc = &a->alloc;
+    return sidx_accel_build(src->name, src->mesh, &o, c, err);
+}
+
+static void src_made(const agg_src *src, const sidx_accel *c, sidx__lazy_made *made)
+{
+    sidx_accel_stats st;
+    sidx_accel_stats_get(c, &st);
+    made->refs = src->uses;
+    made->bytes = st.bytes;
+    made->depth = 0;
+}
+
+/* The expand function (lazy.h): part p is the structure of agg_src p,
+ * built on the query's thread, its events on the query's hook. */
+static void *agg_expand(void *owner, uint32_t p, const sidx_hook *hook, sidx__lazy_made *made)
+{
+    const sidx_accel *a = owner;
+    const agg_impl *g = a->impl;
+    const agg_src *src = &g->src[p];
+    SIDX_EMIT(1, hook, SIDX_EV_BUILD_LAZY_EXPAND, e_.structure = a->name; e_.node = src->first;
+              e_.parent = UINT32_MAX; e_.depth = 0; e_.count = src->mesh->num_triangles; e_.bounds = src->box);
+    sidx_accel *c = NULL;
+    if (src_build(a, src, hook, &c, NULL) == SIDX_OK) src_made(src, c, made);
+    return c;
+}
+
+/* Instances i and j build the same structure. */
+static int same_src(const sidx_mesh_instance *x, const sidx_mesh_instance *y)
+{
+    return x->mesh == y->mesh && x->opt == y->opt && !strcmp(x->accel ? x->accel : "bvh", y->accel ? y->accel : "bvh");
+}
+
+static size_t src_hash(const sidx_mesh_instance *x)
+{
+    uint64_t h = (uint64_t)(uintptr_t)x->mesh * 0x9E3779B97F4A7C15ull ^ (uint64_t)(uintptr_t)x->opt * 0xC2B2AE3D27D4EB4Full;
+    return (size_t)(h ^ (h >> 29));
+}
+
+/* The options each structure will be built with, checked now on one
+ * triangle, so that a lazy build fails at a query only for want of memory. */
+static sidx_status src_check(const sidx_accel *a, const agg_src *src, sidx_error *err)
+{
+    sidx_vec3 pos[3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+    uint32_t idx[3] = {0, 1, 2};
+    const sidx_mesh one = {pos, idx, 3, 1};
+    agg_src t = *src;
+    t.mesh = &one;
+    sidx_accel *c = NULL;
+    const sidx_status s = src_build(a, &t, NULL, &c, err);
+    sidx_accel_destroy(c);
+    return s;
+}
+
+sidx_status sidx_aggregate_build_meshes(const sidx_mesh_instance *instances, uint32_t n, const sidx_build_options *opt,
+                                        sidx_accel **out, sidx_error *err)
+{
+    if (err) { err->status = SIDX_OK; err->message[0] = '\0'; }
+    if (!out) return sidx__fail(err, SIDX_ERR_INVALID_ARG, "aggregate: out is NULL");
+    *out = NULL;
+    if (n && !instances) return sidx__fail(err, SIDX_ERR_INVALID_ARG, "aggregate: instances is NULL");
+    if (n >= UINT32_MAX - 1) return sidx__fail(err, SIDX_ERR_LIMIT, "aggregate: too many leaf instances");
+    for (uint32_t i = 0; i < n; ++i) {
+        const sidx_mesh_instance *x = &instances[i];
+        if (!x->mesh) return sidx__fail(err, SIDX_ERR_INVALID_ARG, "aggregate: instance %u has no mesh", i);
+        const char *name = x->accel ? x->accel : "bvh";
+        if (!sidx_accel_is_registered(name) || strlen(name) >= sizeof(((agg_src *)0)->name))
+            return sidx__fail(err, SIDX_ERR_UNKNOWN_ACCEL, "aggregate: instance %u: no structure named '%s'", i, name);
+        float inv[12];
+        if (!xf_invert(x->xform, inv))
+            return sidx__fail(err, SIDX_ERR_INVALID_ARG, "aggregate: instance %u has a singular or non-finite transform", i);
+    }
+    const int lazy = opt && opt->lazy;
+    sidx_accel *a = NULL;
+    sidx_aabb *boxes = NULL;
+    sidx_status s = agg_new(n, opt, &a, &boxes, err);
+    if (s != SIDX_OK) return s;
+    agg_impl *g = a->impl;
+    /* the distinct structures: an open-addressing table over (mesh, options, name) */
+    size_t cap = 16;
+    while (cap < 2u * (size_t)n) cap *= 2;
+    uint32_t *table = sidx__alloc(a, cap, sizeof *table);
+    g->src = sidx__alloc(a, n ? n : 1u, sizeof *g->src);
+    g->lazy = sidx__calloc(a, 1, sizeof *g->lazy);
+    if (!table || !g->src || !g->lazy) {
+        s = sidx__fail(err, SIDX_ERR_NOMEM, "aggregate: out of memory");
+        goto fail;
+    }
+    memset(table, 0xFF, cap * sizeof *table);
+    for (uint32_t i = 0; i < n; ++i) {
+        const sidx_mesh_instance *x = &instances[i];
+        agg_inst *in = &g->inst[i];
+        size_t h = src_hash(x) & (cap - 1);
+        while (table[h] != UINT32_MAX && !same_src(&instances[g->src[table[h]].first], x)) h = (h + 1) & (cap - 1);
+        memcpy(in->m, x->xform, sizeof in->m);
+        xf_invert(in->m, in->inv);
+        in->accel = NULL;
+        in->nested = 0;
+        in->leaf_base = i;
+        boxes[i] = xf_box(in->m, sidx_mesh_bounds(x->mesh));
+        g->box = sidx_aabb_union(g->box, boxes[i]);
+        if (table[h] == UINT32_MAX) {
+            agg_src *src = &g->src[g->num_src];
+            memset(src, 0, sizeof *src);
+            src->mesh = x->mesh;
+            strcpy(src->name, x->accel ? x->accel : "bvh");
+            if (x->opt) src->opt = *x->opt;
+            src->first = i;
+            src->box = boxes[i];
+            table[h] = g->num_src++;
+        }
+        in->part = table[h];
+        g->src[in->part].uses++;
+    }
+    g->leaves = n;
+    sidx__free(a, table);
+    table = NULL;
+    for (uint32_t p = 0; p < g->num_src; ++p) {
+        s = sidx_mesh_validate(g->src[p].mesh, err);
+        if (s == SIDX_OK && lazy) s = src_check(a, &g->src[p], err);
+        if (s != SIDX_OK) goto fail;
+    }
+    g->parts = sidx__calloc(a, g->num_src ? g->num_src : 1u, sizeof *g->parts);
+    if (!g->parts) {
+        s = sidx__fail(err, SIDX_ERR_NOMEM, "aggregate: out of memory");
+        goto fail;
+    }
+    sidx__lazy_init(g->lazy, g->parts, g->num_src, agg_expand, a);
+    for (uint32_t p = 0; p < g->num_src; ++p) {
+        const agg_src *src = &g->src[p];
+        if (lazy) {
+            sidx__lazy_defer(g->lazy, p, src->uses);
+            continue;
+        }
+        sidx_accel *c = NULL;
+        s = src_build(a, src, opt ? opt->hook : NULL, &c, err);
+        if (s != SIDX_OK) goto fail;
+        sidx__lazy_made made;
+        src_made(src, c, &made);
+        sidx__lazy_built_now(g->lazy, p, c, &made);
+    }
+    for (uint32_t i = 0; i < n; ++i) {
+        agg_inst *in = &g->inst[i];
+        /* eager: the walk reads the structure straight from the instance */
+        if (!lazy) in->accel = sidx__lazy_peek(g->lazy, in->part);
+    }
+    if (lazy) a->lazy = 1;
+    for (uint32_t p = 0; p < g->num_src && !lazy; ++p)
+        if (((const sidx_accel *)sidx__lazy_peek(g->lazy, p))->lazy) a->lazy = 1; /* lazy trees inside */
+    /* one instance per leaf: the box the top walk tests last is the instance's own */
+    s = agg_finish(a, boxes, 1, opt ? opt->hook : NULL, err);
+    if (s == SIDX_OK) *out = a;
+    return s;
+fail:
+    sidx__free(a, table);
+    sidx__free(a, boxes);
+    {
+        const sidx_allocator al = a->alloc;
+        agg_destroy(a);
+        al.free(a, al.user);
+    }
+    return s;
 }
 
 uint32_t sidx_aggregate_leaf_count(const sidx_accel *a)
@@ -257,7 +491,7 @@ sidx_status sidx_aggregate_leaf(const sidx_accel *a, uint32_t leaf_id, const sid
         xf_compose(acc, in->m, tmp);
         memcpy(acc, tmp, sizeof acc);
         if (!in->nested) {
-            *leaf = in->accel;
+            *leaf = in->accel ? in->accel : sidx__lazy_peek(g->lazy, in->part);
             memcpy(xform, acc, sizeof acc);
             return SIDX_OK;
         }
@@ -276,6 +510,7 @@ static SIDX_INLINE int agg_walk(const sidx_accel *a, const sidx_ray *r, const si
     const int robust = a->opt.box == SIDX_BOX_ROBUST;
     float best = any_hit ? r->tmax : hit->t;
     uint32_t best_inst = UINT32_MAX;
+    const sidx_accel *best_acc = NULL;
     sidx_hit best_hit = sidx_hit_none();
     sidx_ray best_local;
     memset(&best_local, 0, sizeof best_local);
@@ -321,13 +556,20 @@ static SIDX_INLINE int agg_walk(const sidx_accel *a, const sidx_ray *r, const si
         for (uint32_t k = 0; k < nd->count; ++k) {
             const uint32_t i = g->tree.items[nd->first + k];
             const agg_inst *in = &g->inst[i];
+            const sidx_accel *c = in->accel;
+            if (SIDX_UNLIKELY(!c)) {
+                /* a lazy instance: the ray has entered its box (the leaf's,
+                 * one instance per leaf); built now if it is the first */
+                c = sidx__lazy_get(g->lazy, in->part, q->hook);
+                if (!c) continue; /* no memory: the query reports it */
+            }
             sidx_ray lr;
             if (sidx_ray_init(&lr, xf_point(in->inv, r->org), xf_vector(in->inv, r->dir), r->tmin, best) != SIDX_OK)
                 continue; /* direction collapsed to 0 by rounding: nothing to see */
             SIDX_EMIT(traced, q->hook, SIDX_EV_NOTE, e_.ray_id = q->ray_id; e_.node = node; e_.count = i;
                       e_.aux = in->leaf_base; e_.text = "aggregate: ray enters instance (count = instance)");
             if (any_hit) {
-                if (in->accel->vt->occluded(in->accel, &lr, q)) {
+                if (c->vt->occluded(c, &lr, q)) {
                     SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = SIDX_TERM_ANY_HIT;
                               e_.count = visited);
                     return 1;
@@ -336,10 +578,11 @@ static SIDX_INLINE int agg_walk(const sidx_accel *a, const sidx_ray *r, const si
             }
             sidx_hit h = sidx_hit_none();
             h.t = best;
-            in->accel->vt->intersect(in->accel, &lr, q, &h);
+            c->vt->intersect(c, &lr, q, &h);
             if (h.prim == SIDX_NO_HIT || !(h.t < best)) continue;
             best = h.t;
             best_inst = i;
+            best_acc = c;
             best_hit = h;
             best_local = lr;
             SIDX_EMIT(traced, q->hook, SIDX_EV_HIT_UPDATE, e_.ray_id = q->ray_id; e_.prim = h.prim; e_.t = h.t;
@@ -363,7 +606,7 @@ static SIDX_INLINE int agg_walk(const sidx_accel *a, const sidx_ray *r, const si
     } else if (q->flags & AGG_FINISH) {
         /* finished on the child's mesh and the local ray (the same t along
          * the world ray), then the normal taken to world space */
-        sidx__hit_finish(in->accel->mesh, in->accel->opt.tri, &best_local, q->flags & AGG_FINISH, 0u, hit);
+        sidx__hit_finish(best_acc->mesh, best_acc->opt.tri, &best_local, q->flags & AGG_FINISH, 0u, hit);
         if (q->flags & SIDX_QUERY_NORMAL) hit->ng = xf_normal(in->inv, hit->ng);
     }
     return 1;
@@ -406,8 +649,9 @@ static size_t own_bytes(const sidx_accel *a)
 {
     const agg_impl *g = a->impl;
     /* the tree's node slots as allocated (sidx__boxtree_bytes counts the used ones) */
+    const size_t mesh_inst = g->lazy ? sizeof *g->lazy + (size_t)g->num_src * (sizeof *g->src + sizeof *g->parts) : 0;
     return sizeof *a + sizeof *g + (size_t)g->n * sizeof *g->inst + sidx__boxtree_bytes(&g->tree) +
-           (g->node_slots - g->tree.num_nodes) * sizeof *g->tree.nodes;
+           (g->node_slots - g->tree.num_nodes) * sizeof *g->tree.nodes + mesh_inst;
 }
 
 static void agg_stats(const sidx_accel *a, sidx_accel_stats *s)
@@ -418,6 +662,11 @@ static void agg_stats(const sidx_accel *a, sidx_accel_stats *s)
     for (uint32_t i = 0; i < g->tree.num_nodes; ++i) s->leaves += g->tree.nodes[i].count != SIDX_BT_INNER;
     s->max_depth = g->tree.depth;
     s->prim_refs = g->n;
+    if (g->lazy) { /* mesh instances: the structures no ray has reached, the instances waiting on them */
+        const sidx__lazy_counts c = sidx__lazy_counts_get(g->lazy);
+        s->unbuilt = c.unbuilt;
+        s->unbuilt_prims = c.unbuilt_refs;
+    }
     s->bytes = own_bytes(a); /* the children are shared: see sidx_aggregate_info_get */
     s->mean_leaf_prims = s->leaves ? (double)g->n / s->leaves : 0.0;
 }
@@ -430,6 +679,17 @@ sidx_status sidx_aggregate_info_get(const sidx_accel *a, sidx_aggregate_info *ou
     out->instances = g->n;
     out->leaf_instances = g->leaves;
     out->own_bytes = own_bytes(a);
+    if (g->lazy) {
+        /* mesh instances: the structures it builds, each counted once */
+        const sidx__lazy_counts c = sidx__lazy_counts_get(g->lazy);
+        out->distinct_children = g->num_src;
+        out->mesh_structures = g->num_src;
+        out->built_structures = c.built;
+        out->built_instances = (uint32_t)c.built_refs;
+        out->shared_bytes = (size_t)c.built_bytes;
+        for (uint32_t i = 0; i < g->n; ++i) out->world_triangles += g->src[g->inst[i].part].mesh->num_triangles;
+        return SIDX_OK;
+    }
     for (uint32_t i = 0; i < g->n; ++i) {
         const sidx_accel *c = g->inst[i].accel;
         if (sidx_accel_is_aggregate(c)) {

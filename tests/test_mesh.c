@@ -797,7 +797,7 @@ static void scenes_build_and_validate(void **state)
         sidx_mesh_free(&a);
         sidx_mesh_free(&b);
     }
-    assert_int_equal(count, 9);
+    assert_int_equal(count, 10);
 }
 
 static uint32_t tri_count(const char *name, uint32_t detail)

@@ -28,7 +28,17 @@
  * one edge); any other SCENE (file or built-in) is seen from outside its
  * box, as the test kit's primary rays, and "inside:FILE" (the mesh of FILE
  * seen from the middle of its box, a third of the way up, facing the
- * nearer of the two long walls: Sponza's atrium from inside). */
+ * nearer of the two long walls: Sponza's atrium from inside).
+ *
+ * "city:N[:D]" is an aggregate of lazy instances instead
+ * (sidx_aggregate_build_meshes): the N distinct buildings of
+ * sidx_city_make (detail D, default 36: >= 10k triangles each), each
+ * with its own BVH (--accel), all built at once (eager) or each the first
+ * time a ray enters its box (lazy), seen from the city's street-level
+ * camera, the frames looking around the street; shadow frames only, and
+ * the instances built after the first image and after N frames.  An
+ * instanced hit has no point for sidx_ray_spawn_to: its shadow ray starts
+ * at o + t d, 1e-3 off the surface along the normal. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -95,7 +105,16 @@ static void frame(const sidx_accel *a, const cam *c, uint32_t px, uint64_t seed,
             if (shadow) {
                 sidx_ray sr;
                 int blocked = 0;
-                if (sidx_ray_spawn_to(&h, c->light, &sr) != SIDX_OK) continue;
+                if (h.instance != SIDX_NO_HIT) {
+                    /* an instanced hit: no point to spawn from (sidx/spawn.h) */
+                    const sidx_vec3 p = sidx_v3_add(r.org, sidx_v3_scale(r.dir, h.t));
+                    sidx_vec3 n = unit(h.ng);
+                    if (sidx_v3_dot(n, r.dir) > 0.0f) n = sidx_v3_scale(n, -1.0f);
+                    const sidx_vec3 so = sidx_v3_add(p, sidx_v3_scale(n, 1e-3f));
+                    if (sidx_ray_init(&sr, so, sidx_v3_sub(c->light, so), 0.0f, 1.0f) != SIDX_OK) continue;
+                } else if (sidx_ray_spawn_to(&h, c->light, &sr) != SIDX_OK) {
+                    continue;
+                }
                 if (sidx_accel_occluded(a, &sr, NULL, &blocked) != SIDX_OK) out->nomem = 1;
                 out->hash = fnv(out->hash, &blocked, sizeof blocked);
                 out->bounces++;
@@ -180,6 +199,49 @@ static int run_once(const char *accel, const sidx_mesh *m, uint32_t lazy, const 
     return 1;
 }
 
+/* One city run: the aggregate of the city's instances (each a structure
+ * `accel`), built eager or lazy, then the shadow frames.  built_first /
+ * built_total: the instances whose structure is built. */
+static int run_city(const char *accel, const sidx_city *city, int lazy, const cam *c, uint32_t px, uint32_t frames,
+                    run_out *o)
+{
+    sidx_build_options bo, child;
+    memset(&bo, 0, sizeof bo);
+    memset(&child, 0, sizeof child);
+    bo.lazy = lazy ? 1u : 0u;
+    for (uint32_t i = 0; i < city->n; ++i) {
+        city->instances[i].accel = accel;
+        city->instances[i].opt = &child;
+    }
+    sidx_accel *a = NULL;
+    sidx_error err;
+    memset(o, 0, sizeof *o);
+    const double t0 = tk_thread_cpu_ms();
+    if (sidx_aggregate_build_meshes(city->instances, city->n, &bo, &a, &err) != SIDX_OK) {
+        fprintf(stderr, "sidx-bench lazy: building the city: %s\n", err.message);
+        return 0;
+    }
+    frame_out f = {0xcbf29ce484222325ull, 0, 0, 0};
+    frame(a, c, px, 1, 1, &f);
+    o->first_ms = tk_thread_cpu_ms() - t0;
+    sidx_aggregate_info in;
+    sidx_aggregate_info_get(a, &in);
+    o->built_first = in.built_instances;
+    for (uint32_t k = 1; k < frames; ++k) {
+        const cam ck = turned(c, k, frames);
+        frame(a, &ck, px, 1 + k, 1, &f);
+    }
+    o->total_ms = tk_thread_cpu_ms() - t0;
+    sidx_aggregate_info_get(a, &in);
+    o->built_total = in.built_instances;
+    o->hash = f.hash;
+    o->hits = f.hits;
+    o->bounces = f.bounces;
+    o->nomem = f.nomem;
+    sidx_accel_destroy(a);
+    return 1;
+}
+
 static int cmp_double(const void *a, const void *b)
 {
     const double x = *(const double *)a, y = *(const double *)b;
@@ -251,6 +313,65 @@ fail:
     return 0;
 }
 
+/* city:N[:D]: eager against lazy instances, shadow frames; one JSON line. */
+static int bench_city(const char *spec, const char *accel, uint32_t px, uint32_t frames, int rounds)
+{
+    char *end;
+    const unsigned long n = strtoul(spec + 5, &end, 10);
+    unsigned long d = 0;
+    if (*end == ':') d = strtoul(end + 1, &end, 10);
+    if (*end || n < 1 || n > 65536 || d > 256) {
+        fprintf(stderr, "sidx-bench lazy: '%s': city:N[:D] wants N in 1..65536 and D in 1..256\n", spec);
+        return BENCH_USAGE;
+    }
+    sidx_city city;
+    sidx_error err;
+    if (sidx_city_make((uint32_t)n, (uint32_t)d, &city, &err) != SIDX_OK) {
+        fprintf(stderr, "sidx-bench lazy: %s: %s\n", spec, err.message);
+        return BENCH_FAIL;
+    }
+    uint64_t tris = 0;
+    for (uint32_t i = 0; i < city.n; ++i) tris += city.meshes[i].num_triangles;
+    cam c;
+    memset(&c, 0, sizeof c);
+    c.fov = 0.9f;
+    c.eye = city.eye;
+    c.at = city.at;
+    c.light = city.light;
+    c.look_around = 1;
+    static double first[2][99], total[2][99];
+    run_out last[2];
+    memset(last, 0, sizeof last);
+    int same = 1, nomem = 0;
+    for (int r = 0; r < rounds; ++r) {
+        for (int k = 0; k < 2; ++k) {
+            const int is_lazy = (k + r) % 2;
+            run_out o;
+            if (!run_city(accel, &city, is_lazy, &c, px, frames, &o)) {
+                sidx_city_free(&city);
+                return BENCH_FAIL;
+            }
+            nomem |= o.nomem;
+            first[is_lazy][r] = o.first_ms;
+            total[is_lazy][r] = o.total_ms;
+            last[is_lazy] = o;
+        }
+        same &= last[0].hash == last[1].hash;
+    }
+    const double ef = median(first[0], rounds), lf = median(first[1], rounds);
+    const double et = median(total[0], rounds), lt = median(total[1], rounds);
+    printf("{\"scene\":\"%s\",\"accel\":\"%s\",\"instances\":%u,\"tris\":%llu,\"size\":%u,\"frames\":%u,"
+           "\"rounds\":%d,\"hits\":%zu,\"shadow_rays\":%zu,"
+           "\"shadow_eager_first_ms\":%.1f,\"shadow_lazy_first_ms\":%.1f,\"shadow_first_ratio\":%.3f,"
+           "\"shadow_eager_total_ms\":%.1f,\"shadow_lazy_total_ms\":%.1f,\"shadow_total_ratio\":%.3f,"
+           "\"instances_built_first\":%.0f,\"instances_built_total\":%.0f,\"hits_identical\":%s}\n",
+           spec, accel, city.n, (unsigned long long)tris, px, frames, rounds, last[1].hits, last[1].bounces, ef, lf,
+           lf / ef, et, lt, lt / et, last[1].built_first, last[1].built_total, same && !nomem ? "true" : "false");
+    fflush(stdout);
+    sidx_city_free(&city);
+    return same && !nomem ? BENCH_OK : BENCH_FAIL;
+}
+
 static void lazy_usage(FILE *f)
 {
     fprintf(f, "usage: sidx-bench lazy [--accel NAME] [--lazy-size N] [--size PX] [--frames N] [--rounds N]\n"
@@ -263,7 +384,9 @@ static void lazy_usage(FILE *f)
                "the fraction of primitives built after the first image and after N frames; whether the\n"
                "hits agree bit for bit.  SCENE: stadium, heightfield:D, inside:FILE (from the middle of\n"
                "the box facing a long wall: Sponza's atrium), or a mesh file / built-in scene (seen from\n"
-               "outside its box).  Default: stadium heightfield:1024.\n"
+               "outside its box), or city:N[:D]: N buildings of D detail (default 36: >= 10k triangles\n"
+               "each) as lazy instances against eager ones (an aggregate; shadow frames only; the\n"
+               "instances built).  Default: stadium heightfield:1024.\n"
                "  --accel NAME     a structure with lazy builds (default bvh)\n"
                "  --lazy-size N    opt.lazy (default 1: the library's default size)\n"
                "  --size PX        image side (default 512)\n"
@@ -328,6 +451,11 @@ int bench_cmd_lazy(int argc, char **argv)
         scenes[ns++] = "heightfield:1024";
     }
     for (int s = 0; s < ns; ++s) {
+        if (!strncmp(scenes[s], "city:", 5)) {
+            const int rc = bench_city(scenes[s], accel, px, frames, rounds);
+            if (rc != BENCH_OK) return rc;
+            continue;
+        }
         sidx_mesh m;
         cam c;
         if (!open_scene(scenes[s], &m, &c)) return BENCH_FAIL;

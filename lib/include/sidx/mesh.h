@@ -107,6 +107,8 @@ static inline sidx_vec3 sidx_mesh_vertex(const sidx_mesh *m, uint32_t tri, int k
  *                y in [0.5, 7.5]), each tilted about the vertical line through its centroid
  *                (z within ±0.05) so a ray in z = 0 meets it; viewed from +z; with "kdtree",
  *                sidx_scene_accel_build gives the slide's tree; detail ignored
+ *   "city"       detail = N buildings (default 1) of sidx_city_make (sidx/instance.h) at
+ *                building detail 8 (~530-1100 tris each), flattened into one mesh
  * Unknown names fail with SIDX_ERR_INVALID_ARG, a detail above the scene's
  * maximum (e.g. icosphere 10, menger 5, grid 4096) with SIDX_ERR_LIMIT. */
 sidx_status sidx_scene_make(const char *name, uint32_t detail, sidx_mesh *out, sidx_error *err);
