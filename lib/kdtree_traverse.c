@@ -415,15 +415,6 @@ static SIDX_INLINE void kd_finish(const sidx_accel *a, const sidx_ray *r, const 
 }
 
 #if KD_SIMD
-/* Row r: lane l's index in a leaf whose first reference sits in lane r of
- * its first block, l − r, its sign bit flipped (kd_test_leaf). */
-static _Alignas(16) const uint32_t kd_lane_index[4][4] = {
-    {0x80000000u, 0x80000001u, 0x80000002u, 0x80000003u},
-    {0x7FFFFFFFu, 0x80000000u, 0x80000001u, 0x80000002u},
-    {0x7FFFFFFEu, 0x7FFFFFFFu, 0x80000000u, 0x80000001u},
-    {0x7FFFFFFDu, 0x7FFFFFFEu, 0x7FFFFFFFu, 0x80000000u},
-};
-
 /* A block the SIMD kernel declined (some kept lane's edge function is
  * exactly 0): the scalar test, which redoes those in double, on the kept
  * lanes (bits of `lanes`) one by one; the smallest t wins, the lowest lane
@@ -481,18 +472,13 @@ static SIDX_INLINE int kd_test_leaf(const sidx_accel *a, const sidx_ray *r, cons
 #if KD_SIMD
     if (L->simd) {
         const tri4_block *block = blocks + (offset >> 2), *const end = blocks + ((offset + count + 3u) >> 2);
-        /* lane l of the k-th block is reference 4k + l − (offset mod 4) of
-         * the leaf, its own when that lies in [0, count): one unsigned
-         * compare (sign bits flipped for SSE2's signed one) */
-        const __m128i limit = _mm_set1_epi32((int)(count ^ 0x80000000u));
-        __m128i index = _mm_load_si128((const __m128i *)(const void *)kd_lane_index[offset & 3u]);
-        for (; block < end; ++block, index = _mm_add_epi32(index, _mm_set1_epi32(4))) {
-            const __m128 keep = _mm_castsi128_ps(_mm_cmplt_epi32(index, limit));
+        /* the leaf's own lanes only (tri4_own_lanes) */
+        tri4_own_lanes own = tri4_own_lanes_init(offset, count);
+        for (; block < end; ++block) {
             float t;
-            unsigned lane;
-            int h = tri4_test_lanes(block, &L->simd_ray, keep, L->best_t, &t, &lane);
-            if (SIDX_UNLIKELY(h < 0))
-                h = kd_block_scalar(a, r, block, (unsigned)_mm_movemask_ps(keep), L->best_t, &t, &lane);
+            unsigned lane, kept;
+            int h = tri4_test_own_lanes(block, &L->simd_ray, &own, L->best_t, &t, &lane, &kept);
+            if (SIDX_UNLIKELY(h < 0)) h = kd_block_scalar(a, r, block, kept, L->best_t, &t, &lane);
             if (h) {
                 if (any) return 1;
                 L->found = 1;

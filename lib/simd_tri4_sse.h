@@ -122,4 +122,41 @@ static SIDX_INLINE int tri4_test_lanes(const tri4_block *block, const tri4_ray *
     return tri4_kernel(v + ray->kx4, v + ray->ky4, v + ray->kz4, ray, best, t_out, lane_out, NULL, 1, keep);
 }
 
+/* A kd leaf's own lanes in the blocks it shares with its neighbours: its
+ * count references start in lane offset mod 4 of its first block, so lane
+ * l of the k-th block is reference 4k + l − (offset mod 4) of the leaf,
+ * its own when that lies in [0, count): one unsigned compare per block
+ * (sign bits flipped for SSE2's signed one).  Row r of the table: lane
+ * l's index l − r, its sign bit flipped. */
+static _Alignas(16) const uint32_t tri4_lane_index[4][4] = {
+    {0x80000000u, 0x80000001u, 0x80000002u, 0x80000003u},
+    {0x7FFFFFFFu, 0x80000000u, 0x80000001u, 0x80000002u},
+    {0x7FFFFFFEu, 0x7FFFFFFFu, 0x80000000u, 0x80000001u},
+    {0x7FFFFFFDu, 0x7FFFFFFEu, 0x7FFFFFFFu, 0x80000000u},
+};
+
+typedef struct tri4_own_lanes {
+    __m128i index, limit;
+} tri4_own_lanes;
+
+static SIDX_INLINE tri4_own_lanes tri4_own_lanes_init(uint32_t offset, uint32_t count)
+{
+    tri4_own_lanes o;
+    o.limit = _mm_set1_epi32((int)(count ^ 0x80000000u));
+    o.index = _mm_load_si128((const __m128i *)(const void *)tri4_lane_index[offset & 3u]);
+    return o;
+}
+
+/* The leaf's own references of the next block: tri4_test_lanes on them
+ * (*kept: their lanes as bits, for a scalar retest), then on to the next
+ * block. */
+static SIDX_INLINE int tri4_test_own_lanes(const tri4_block *block, const tri4_ray *ray, tri4_own_lanes *own,
+                                           float best, float *t_out, unsigned *lane_out, unsigned *kept)
+{
+    const __m128 keep = _mm_castsi128_ps(_mm_cmplt_epi32(own->index, own->limit));
+    own->index = _mm_add_epi32(own->index, _mm_set1_epi32(4));
+    *kept = (unsigned)_mm_movemask_ps(keep);
+    return tri4_test_lanes(block, ray, keep, best, t_out, lane_out);
+}
+
 #endif
