@@ -285,6 +285,66 @@ static void cover_points(const sidx_mesh *m, uint32_t p, sidx_vec3 *out)
         }
 }
 
+/* Is x (double) in node n's box, within tol? */
+static int in_box_d(const bvh_node *n, const double *x, double tol)
+{
+    for (int k = 0; k < 3; ++k)
+        if (x[k] < (double)n->bmin[k] - tol || x[k] > (double)n->bmax[k] + tol) return 0;
+    return 1;
+}
+
+/* The exact edges of the parts (bvh_spatial.c, "Robustness"): where an
+ * edge of triangle p crosses a plane of a leaf box listing it, the
+ * crossing, computed in double, lies in a leaf box listing p.  A
+ * reference box built from the float crossing without its widening
+ * misses it by an ulp (~1e-7 relative), far above the tolerance here
+ * (1e-11 relative: double rounding). */
+static void check_crossings(const bvh *b, const sidx_mesh *m)
+{
+    uint32_t *owner = malloc((b->num_prims + 1u) * sizeof *owner); /* leaf node of each reference */
+    uint32_t *start = calloc(m->num_triangles + 2u, sizeof *start), *slot = malloc((b->num_prims + 1u) * sizeof *slot);
+    assert_true(owner && start && slot);
+    for (uint32_t i = 0; i < b->num_nodes; ++i)
+        if (bvh_is_leaf(&b->nodes[i]))
+            for (uint32_t j = b->nodes[i].left_or_first; j < b->nodes[i].left_or_first + bvh_count(&b->nodes[i]); ++j)
+                owner[j] = i;
+    for (uint32_t j = 0; j < b->num_prims; ++j) start[b->prim_id[j] + 2u]++;
+    for (uint32_t p = 0; p < m->num_triangles; ++p) start[p + 2u] += start[p + 1u];
+    for (uint32_t j = 0; j < b->num_prims; ++j) slot[start[b->prim_id[j] + 1u]++] = j; /* start[p]..start[p+1] */
+    for (uint32_t p = 0; p < m->num_triangles; ++p) {
+        double v[3][3], mag = 0.0;
+        for (int i = 0; i < 3; ++i) {
+            const sidx_vec3 c = sidx_mesh_vertex(m, p, i);
+            v[i][0] = c.x; v[i][1] = c.y; v[i][2] = c.z;
+            for (int k = 0; k < 3; ++k) mag = fabs(v[i][k]) > mag ? fabs(v[i][k]) : mag;
+        }
+        const double tol = 1e-11 * mag;
+        for (uint32_t s = start[p]; s < start[p + 1u]; ++s) {
+            const bvh_node *n = &b->nodes[owner[slot[s]]];
+            for (int f = 0; f < 6; ++f) {
+                const int k = f % 3;
+                const double plane = f < 3 ? (double)n->bmin[k] : (double)n->bmax[k];
+                for (int e = 0; e < 3; ++e) {
+                    const double *a = v[e], *c = v[(e + 1) % 3];
+                    if (!((a[k] < plane && c[k] > plane) || (a[k] > plane && c[k] < plane))) continue;
+                    const double t = (plane - a[k]) / (c[k] - a[k]);
+                    double x[3];
+                    for (int j = 0; j < 3; ++j) x[j] = j == k ? plane : a[j] + (c[j] - a[j]) * t;
+                    int hit = 0;
+                    for (uint32_t s2 = start[p]; s2 < start[p + 1u] && !hit; ++s2)
+                        hit = in_box_d(&b->nodes[owner[slot[s2]]], x, tol);
+                    if (!hit)
+                        fail_msg("triangle %u: its edge %d crosses plane %d of leaf %u at (%.9g %.9g %.9g), in no leaf "
+                                 "box listing it", p, e, f, owner[slot[s]], x[0], x[1], x[2]);
+                }
+            }
+        }
+    }
+    free(owner);
+    free(start);
+    free(slot);
+}
+
 /* Walks the flat array from the root: pre-order (left child = index + 1,
  * subtree sizes add up), children inside parents, leaves covering [0, n)
  * exactly once in order, leaf boxes containing their triangles, the
@@ -370,6 +430,7 @@ static void check_structure(const sidx_accel *acc, const sidx_mesh *m)
                 fail_msg("%s: point %d of triangle %u is in no leaf box listing it", sidx_accel_name(acc), k, p);
     }
     free(covered);
+    if (refs) check_crossings(b, m);
     assert_int_equal(leaves, b->num_leaves);
     assert_int_equal(b->num_nodes, 2 * leaves - 1);
     assert_int_equal(max_depth, b->max_depth);
