@@ -48,7 +48,7 @@ static void usage(FILE *f)
                "\n"
                "  SCENE   scene for the comparison: built-in name or .obj/.ply (default: teapot;\n"
                "          the spatial splits' part: stadium)\n"
-               "The knobs below change the five builders' trees on SCENE (--bins: the binned one's\n"
+               "The knobs below change the builders' trees on SCENE (--bins: the binned one's\n"
                "bins); re-indexing and equal centroids keep the defaults.  The checks hold for the\n"
                "defaults.\n");
 }
