@@ -25,7 +25,7 @@
  *      stadium's long thin triangles — SAH cost, references duplicated,
  *      nodes entered and tests per ray.
  *
- * Read:  lib/bvh_build.c, find_sweep; lib/bvh_spatial.c
+ * Read:  lib/bvh_build.c, find_sweep; lib/bvh_spatial.c, split_ref
  * Run:   build/lessons/04_bvh_build_review [SCENE]
  *        SCENE = a built-in scene name or .obj/.ply for parts 3 and 4
  *        (default teapot for part 3, stadium for part 4)
