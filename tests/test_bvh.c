@@ -358,14 +358,15 @@ static void check_structure(const sidx_accel *acc, const sidx_mesh *m)
     const int refs = strcmp(sidx_accel_name(acc), "bvh-sbvh") == 0;
     if (refs) assert_true(b->num_prims >= m->num_triangles);
     else assert_int_equal(b->num_prims, m->num_triangles);
-    uint8_t *covered = refs ? calloc((size_t)m->num_triangles * COVER_POINTS + 1, 1) : NULL;
     if (m->num_triangles == 0) {
         assert_int_equal(b->num_nodes, 0);
         return;
     }
     assert_true(((uintptr_t)b->nodes & 63u) == 0);
     uint8_t *seen = calloc(m->num_triangles, 1);
+    uint8_t *covered = refs ? calloc((size_t)m->num_triangles * COVER_POINTS, 1) : NULL;
     assert_non_null(seen);
+    assert_true(!refs || covered);
     uint32_t stack[2 * BVH_DEPTH_LIMIT + 2], depth_of[2 * BVH_DEPTH_LIMIT + 2];
     uint32_t sp = 0, next = 0, next_prim = 0, leaves = 0, visited = 0, max_depth = 0;
     stack[sp] = 0;
