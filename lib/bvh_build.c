@@ -757,7 +757,8 @@ static sidx_status bvh_refit(sidx_accel *a, sidx_error *err)
  * (bvh_optimize.c), then the walks that fit it. */
 static sidx_status bvh_build(sidx_accel *a, sidx_error *err)
 {
-    const sidx_status s = build_tree(a, err);
+    /* bvh-sbvh: the spatial-split build (bvh_spatial.c), never lazy */
+    const sidx_status s = a->variant == BVH_SBVH ? sidx__bvh_build_sbvh(a, err) : build_tree(a, err);
     if (s == SIDX_OK && !a->lazy) sidx__bvh_optimize(a, a->impl);
     if (s == SIDX_OK) sidx__bvh_pick_walks(a->impl);
     return s;

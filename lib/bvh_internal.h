@@ -73,6 +73,7 @@ typedef enum bvh_builder {
     BVH_MEDIAN,     /* "bvh-median": equal counts on the largest centroid axis */
     BVH_MIDDLE,     /* "bvh-middle": middle of the centroid extent */
     BVH_OBB,        /* "bvh-obb":    binned SAH topology + PCA oriented boxes */
+    BVH_SBVH,       /* "bvh-sbvh":   binned SAH with spatial splits (bvh_spatial.c) */
     BVH_BUILDER_COUNT
 } bvh_builder;
 
@@ -216,6 +217,12 @@ sidx_status sidx__bvh_build_spatial(sidx_accel *a, uint32_t lazy_max, uint32_t l
  * any thread, once per record at a time; sidx__sbvh_lazy_release frees
  * the record's copy of its references once its subtree is built for good. */
 uint32_t sidx__sbvh_lazy_count(const sidx__sbvh_lazy *L);
+
+/* bvh_spatial.c: "bvh-sbvh", that tree as a binary BVH the walks of
+ * bvh_traverse.c read: SAH counts not rounded to blocks, nodes aligned,
+ * tris[] filled (one copy per reference), sah_cost set, build events on
+ * a->opt.hook.  prim_id[] holds references (num_prims >= triangles). */
+sidx_status sidx__bvh_build_sbvh(sidx_accel *a, sidx_error *err);
 sidx_status sidx__sbvh_lazy_build(const sidx_accel *a, sidx__sbvh_lazy *L, uint32_t r, bvh **out);
 void sidx__sbvh_lazy_release(const sidx_accel *a, sidx__sbvh_lazy *L, uint32_t r);
 void sidx__sbvh_lazy_free(const sidx_accel *a, sidx__sbvh_lazy *L);

@@ -17,7 +17,9 @@
  *   - the best binned spatial split          the same, N_L and N_R counting
  *                                             straddlers on both sides,
  *
- * with ⌈N⌉ = N rounded up to whole blocks of four (SB_BLOCK), and
+ * with ⌈N⌉ = N rounded up to whole blocks of four (SB_BLOCK) for the wide
+ * trees' leaves, and N itself for the binary "bvh-sbvh" (one triangle
+ * test at a time), and
  * trying spatial splits only where the object split's children overlap
  * by more than α of the root's area (the paper's α = 10⁻⁵), and never
  * adding more than SB_BUDGET · n references in all.
@@ -27,8 +29,11 @@
  * aligned nodes: the collapse in bvh_wide.c, its only reader, takes the
  * corners from the mesh), and the wide walks need no change: a hit on a
  * reference is a hit on its whole triangle, a true hit wherever it lies.
- * It is not registered as a binary BVH of its own: the binary BVHs keep
- * every triangle in exactly one leaf.
+ * Registered as the binary "bvh-sbvh" too (sidx__bvh_build_sbvh below):
+ * the same build with block 1, then tris[] filled from the references and
+ * the nodes aligned, so bvh_traverse.c's walks run on it unchanged; with a
+ * build hook it runs on one thread and reports its nodes, splits and
+ * leaves as bvh_build.c does.
  *
  * Robustness: a reference's box must contain the whole part of its
  * triangle inside it, or a ray could slip through the gap.  The part on
@@ -57,7 +62,6 @@
  * leaves, a smaller tree and faster rays than plain counts
  * (docs/performance.md, "Spatial splits"). */
 #define SB_BLOCK 4u
-#define SB_ROUND(n) (((n) + SB_BLOCK - 1u) / SB_BLOCK * SB_BLOCK)
 #define SB_BUDGET 1.0        /* spatial splits may add at most this many references per triangle, in all */
 
 typedef struct sref {
@@ -70,6 +74,9 @@ typedef struct sbuild {
     const sidx_mesh *mesh;  /* split_ref reads the triangles' corners here (no copy of them) */
     float c_trav, c_tri, min_overlap;
     uint32_t leaf_size, max_leaf, max_depth;
+    uint32_t block;         /* SAH counts rounded up to multiples of this: SB_BLOCK (wide), 1 (bvh-sbvh) */
+    const sidx_hook *hook;  /* build events (bvh-sbvh; NULL for the wide trees' silent build) */
+    uint32_t parent;        /* the node whose child build() makes next (its BUILD_NODE parent) */
     uint64_t budget;        /* references spatial splits may still add below the node being split */
     bvh_node *nodes;        /* pre-order, as bvh_build.c writes them */
     size_t num_nodes, cap_nodes;
@@ -154,6 +161,9 @@ static void split_ref(const sidx_mesh *m, const sref *r, int k, float p, sidx_aa
 
 /* ---- finding splits ------------------------------------------------------------ */
 
+/* n rounded up to whole leaf blocks (see SB_BLOCK). */
+static uint32_t sb_round(const sbuild *S, uint32_t n) { return (n + S->block - 1u) / S->block * S->block; }
+
 static float sah(const sbuild *S, float al, uint32_t nl, float ar, uint32_t nr, float inv_area)
 {
     return S->c_trav + S->c_tri * (al * (float)nl + ar * (float)nr) * inv_area;
@@ -218,7 +228,7 @@ static void sweep(const sbuild *S, const sbin *bins, uint32_t nb, uint32_t n, fl
         nl += bins[used[j - 1]].enter;
         if (nl == 0 || right_n[j] == 0 || nl >= n || right_n[j] >= n) continue;
         if ((uint64_t)nl + right_n[j] - n > S->budget) continue;
-        const float c = sah(S, sidx_aabb_area(acc), SB_ROUND(nl), right_area[j], SB_ROUND(right_n[j]), inv_area);
+        const float c = sah(S, sidx_aabb_area(acc), sb_round(S, nl), right_area[j], sb_round(S, right_n[j]), inv_area);
         if (c < best->cost) {
             const uint32_t p = used[j - 1] + 1u; /* the first plane with these two sides */
             best->kind = kind;
@@ -434,13 +444,19 @@ static void set_box(bvh_node *nd, sidx_aabb b)
     nd->bmax[0] = b.max.x; nd->bmax[1] = b.max.y; nd->bmax[2] = b.max.z;
 }
 
-static sidx_status make_leaf(sbuild *S, uint32_t idx, size_t off, uint32_t n)
+/* Events carry the registered name ("bvh-sbvh"). */
+#define SIDX_STRUCTURE_NAME (S->a->name)
+
+static sidx_status make_leaf(sbuild *S, uint32_t idx, size_t off, uint32_t n, uint32_t depth, int reason)
 {
     if (!sidx__grow(S->a, (void **)&S->out, &S->cap_out, S->num_out + n, sizeof *S->out)) return SIDX_ERR_NOMEM;
     bvh_node *nd = &S->nodes[idx];
     nd->left_or_first = (uint32_t)S->num_out;
     nd->count_axis = n;
     for (uint32_t i = 0; i < n; ++i) S->out[S->num_out + i] = S->pool[off + i].prim;
+    SIDX_EMIT(1, S->hook, SIDX_EV_BUILD_LEAF, e_.node = idx; e_.depth = depth; e_.count = n;
+              e_.cost = S->c_tri * (float)n; e_.reason = reason; e_.bounds = bvh_node_box(nd);
+              e_.prims = S->out + S->num_out);
     S->num_out += n;
     S->num_leaves++;
     return SIDX_OK;
@@ -491,10 +507,12 @@ static sidx_status children(sbuild *S, uint32_t idx, int axis, size_t off, uint3
     S->nodes[idx].count_axis = (uint32_t)axis << BVH_AXIS_SHIFT;
     S->top = off + nr + nl;
     const uint64_t bl = budget * nl / ((uint64_t)nl + nr);
+    S->parent = idx;
     sidx_status s = build(S, off + nr, nl, lb, depth + 1u, bl); /* the left child is idx + 1 */
     if (s == SIDX_OK) {
         S->nodes[idx].left_or_first = (uint32_t)S->num_nodes;
         S->top = off + nr;
+        S->parent = idx;
         s = build(S, off, nr, rb, depth + 1u, budget - bl);
     }
     S->top = off;
@@ -513,7 +531,9 @@ static sidx_status build(sbuild *S, size_t off, uint32_t n, sidx_aabb box, uint3
     if (!push_node(S, &idx)) return SIDX_ERR_NOMEM;
     set_box(&S->nodes[idx], box);
     if (depth > S->max_depth_seen) S->max_depth_seen = depth;
-    if (leaf) return make_leaf(S, idx, off, n);
+    SIDX_EMIT(1, S->hook, SIDX_EV_BUILD_NODE, e_.node = idx; e_.parent = S->parent; e_.depth = depth;
+              e_.bounds = box; e_.count = n);
+    if (leaf) return make_leaf(S, idx, off, n, depth, n <= S->leaf_size ? SIDX_LEAF_FEW_PRIMS : SIDX_LEAF_MAX_DEPTH);
     S->budget = budget; /* what the sweeps may spend here */
 
     const float area = sidx_aabb_area(box);
@@ -524,8 +544,9 @@ static sidx_status build(sbuild *S, size_t off, uint32_t n, sidx_aabb box, uint3
                             (best.kind == 0 || sidx_aabb_area(box_and(best.left, best.right)) > S->min_overlap);
     if (try_spatial) spatial_split(S, S->pool + off, n, box, inv_area, &best);
 
-    if (best.kind == 0 || (best.cost >= S->c_tri * (float)SB_ROUND(n) && n <= S->max_leaf)) {
-        if (best.kind != 0 || n <= S->max_leaf) return make_leaf(S, idx, off, n);
+    if (best.kind == 0 || (best.cost >= S->c_tri * (float)sb_round(S, n) && n <= S->max_leaf)) {
+        if (best.kind != 0 || n <= S->max_leaf)
+            return make_leaf(S, idx, off, n, depth, best.kind != 0 ? SIDX_LEAF_NO_GAIN : SIDX_LEAF_NO_SPLIT);
         /* no plane separates them (all centroids equal) and too many for
          * one leaf: halve in index order, as bvh_build.c does (the first
          * half is the left child: moved above the second) */
@@ -535,6 +556,8 @@ static sidx_status build(sbuild *S, size_t off, uint32_t n, sidx_aabb box, uint3
         memcpy(tmp, refs, (size_t)nl * sizeof *refs);
         memmove(refs, refs + nl, (size_t)nr * sizeof *refs);
         memcpy(refs + nr, tmp, (size_t)nl * sizeof *refs);
+        SIDX_EMIT(1, S->hook, SIDX_EV_BUILD_SPLIT, e_.node = idx; e_.depth = depth; e_.axis = -1; e_.pos = NAN;
+                  e_.cost = best.cost; e_.count = nl; e_.aux = nr);
         return children(S, idx, sidx_aabb_max_axis(box), off, nl, nr, depth, budget);
     }
 
@@ -575,11 +598,19 @@ static sidx_status build(sbuild *S, size_t off, uint32_t n, sidx_aabb box, uint3
         }
         const uint64_t added = (uint64_t)nl + nr - n;
         budget = added < budget ? budget - added : 0;
-        if (nl == 0 || nr == 0) return make_leaf(S, idx, off, n); /* rounding put all on one side: no progress */
+        if (nl == 0 || nr == 0) /* rounding put all on one side: no progress */
+            return make_leaf(S, idx, off, n, depth, SIDX_LEAF_NO_SPLIT);
         sref *dst = S->pool + off;
         memcpy(dst, R, (size_t)nr * sizeof *R);       /* below the top: no overlap */
         memmove(dst + nr, L, (size_t)nl * sizeof *L); /* may overlap when duplicates were added */
+        SIDX_EMIT(1, S->hook, SIDX_EV_NOTE, e_.node = idx; e_.depth = depth; e_.axis = k; e_.pos = best.pos;
+                  e_.count = nl + nr - n;
+                  e_.text = "spatial split: the plane cuts triangles, each cut one goes to both sides");
     }
+    /* pos: the spatial plane, or for an object split the bin boundary its centroids were sorted by */
+    SIDX_EMIT(1, S->hook, SIDX_EV_BUILD_SPLIT, e_.node = idx; e_.depth = depth; e_.axis = k;
+              e_.pos = best.kind == 2 ? best.pos : best.lo + (float)best.plane / best.scale; e_.cost = best.cost;
+              e_.count = nl; e_.aux = nr);
     return children(S, idx, k, off, nl, nr, depth, budget);
 }
 
@@ -739,6 +770,8 @@ static sidx_status defer(sbuild *S, size_t off, uint32_t n, sidx_aabb box, uint3
     t->build.leaf_size = S->leaf_size;
     t->build.max_leaf = S->max_leaf;
     t->build.max_depth = S->max_depth;
+    t->build.block = S->block;
+    t->build.parent = UINT32_MAX;
     P->count++; /* counted now, so the clean-up frees its arrays even if they cannot all be made */
     /* sized as the entry sizes the whole build's, so they rarely grow */
     if (!pool_reserve(&t->build, SB_POOL_RESERVE * (size_t)n) ||
@@ -961,9 +994,11 @@ void sidx__sbvh_lazy_release(const sidx_accel *a, sidx__sbvh_lazy *L, uint32_t r
 
 /* Builds the reference tree into a->impl (a bvh, freed by the bvh
  * vtable's destroy).  Reads a->opt: c_trav, c_tri, leaf_size, max_depth
- * as bvh_build.c does, and threads (see "several threads" above). */
-sidx_status sidx__bvh_build_spatial(sidx_accel *a, uint32_t lazy_max, uint32_t lazy_min, sidx__sbvh_lazy **lazy,
-                                    sidx_error *err)
+ * as bvh_build.c does, and threads (see "several threads" above; one
+ * thread when a hook takes the events, so that they come in build order
+ * with final node ids).  block: see SB_BLOCK. */
+static sidx_status build_spatial(sidx_accel *a, uint32_t block, const sidx_hook *hook, uint32_t lazy_max,
+                                 uint32_t lazy_min, sidx__sbvh_lazy **lazy, sidx_error *err)
 {
     if (lazy) *lazy = NULL;
     const sidx_mesh *m = a->mesh;
@@ -981,11 +1016,14 @@ sidx_status sidx__bvh_build_spatial(sidx_accel *a, uint32_t lazy_max, uint32_t l
     S.leaf_size = pp.leaf_size;
     S.max_leaf = pp.max_leaf;
     S.max_depth = pp.max_depth;
+    S.block = block;
+    S.hook = hook && hook->fn ? hook : NULL;
+    S.parent = UINT32_MAX;
     const unsigned threads = a->opt.threads > SIDX_POOL_MAX_THREADS ? SIDX_POOL_MAX_THREADS : a->opt.threads;
     stasks P;
     memset(&P, 0, sizeof P);
     /* a lazy top is built on the calling thread (it is small) */
-    const int parallel = threads > 1 && n >= SB_PAR_MIN && !(lazy && lazy_max);
+    const int parallel = threads > 1 && n >= SB_PAR_MIN && !(lazy && lazy_max) && !S.hook;
     if (parallel) {
         if (pthread_mutex_init(&P.lock.mu, NULL) != 0)
             return sidx__fail(err, SIDX_ERR_NOMEM, "%s: cannot create a mutex", a->name);
@@ -1081,4 +1119,58 @@ fail:
     }
     if (s == SIDX_ERR_NOMEM) return sidx__fail(err, s, "%s: out of memory", a->name);
     return s;
+}
+
+sidx_status sidx__bvh_build_spatial(sidx_accel *a, uint32_t lazy_max, uint32_t lazy_min, sidx__sbvh_lazy **lazy,
+                                    sidx_error *err)
+{
+    return build_spatial(a, SB_BLOCK, NULL, lazy_max, lazy_min, lazy, err);
+}
+
+/* "bvh-sbvh": the same tree for a binary walk.  Its leaves test one
+ * triangle at a time, so the SAH counts references one by one (block 1);
+ * then the walk's layout (bvh_internal.h): nodes 64-byte aligned and
+ * tris[] filled from the references, a triangle's corners copied once per
+ * leaf that holds it.  A hit on a reference is a hit on its whole
+ * triangle (the leaf tests the triangle, not the part in its box), so the
+ * closest hit is exact and a duplicate found again at the same t changes
+ * nothing.  Not lazy (opt.lazy is ignored): an expansion would need the
+ * references' clipped boxes kept for every unbuilt node. */
+#undef SIDX_STRUCTURE_NAME
+#define SIDX_STRUCTURE_NAME (a->name)
+sidx_status sidx__bvh_build_sbvh(sidx_accel *a, sidx_error *err)
+{
+    const sidx_hook *hook = a->opt.hook;
+    const sidx_mesh *m = a->mesh;
+    SIDX_EMIT(1, hook, SIDX_EV_BUILD_BEGIN, e_.count = m->num_triangles;
+              e_.bounds = sidx_mesh_bounds(m));
+    sidx_status s = build_spatial(a, 1u, hook, 0, 0, NULL, err);
+    if (s != SIDX_OK) return s;
+    bvh *b = a->impl;
+    if (b->num_nodes > 0) {
+        void *mem = sidx__alloc(a, (size_t)b->num_nodes + 2u, sizeof *b->nodes);
+        b->tris = sidx__alloc(a, b->num_prims, sizeof *b->tris);
+        if (!mem || !b->tris) {
+            sidx__free(a, mem);
+            sidx__free(a, b->nodes_mem);
+            sidx__free(a, b->prim_id);
+            sidx__free(a, b->tris);
+            sidx__free(a, b);
+            a->impl = NULL;
+            return sidx__fail(err, SIDX_ERR_NOMEM, "%s: out of memory", a->name);
+        }
+        bvh_node *nodes = (bvh_node *)(void *)(((uintptr_t)mem + 63u) & ~(uintptr_t)63u);
+        memcpy(nodes, b->nodes, (size_t)b->num_nodes * sizeof *nodes);
+        sidx__free(a, b->nodes_mem);
+        b->nodes_mem = mem;
+        b->nodes = nodes;
+        for (uint32_t i = 0; i < b->num_prims; ++i)
+            for (int k = 0; k < 3; ++k) b->tris[i].v[k] = sidx_mesh_vertex(m, b->prim_id[i], k);
+        const bvh_par_params pp = bvh_params(a);
+        b->sah_cost = sidx__bvh_tree_sah(b, pp.c_trav, pp.c_tri);
+    }
+    a->fills_uv = a->fills_ng = 1; /* from the leaves' triangle copies (bvh_traverse.c) */
+    SIDX_EMIT(1, hook, SIDX_EV_BUILD_END, e_.node = b->num_nodes; e_.count = b->num_prims;
+              e_.depth = b->max_depth);
+    return SIDX_OK;
 }

@@ -25,7 +25,8 @@ DEF=lib/accel_registry.def
 # The structures a lesson needs (all must be registered).
 needs() {
     case $1 in
-    03_*|04_*|05_*) echo "bvh bvh-sweep bvh-everyb bvh-median bvh-middle" ;;
+    03_*|05_*) echo "bvh bvh-sweep bvh-everyb bvh-median bvh-middle" ;;
+    04_*) echo "bvh bvh-sweep bvh-everyb bvh-median bvh-middle bvh-sbvh" ;;
     06_*) echo "bvh kdtree grid octree" ;;
     07_*|21_*) echo "grid grid-nomailbox" ;;
     08_*) echo "grid grid2 grid-irregular kdtree" ;;
@@ -55,7 +56,8 @@ expect() {
                                sphere_fits_round_object=1" ;;
     03_bvh_partitioning) echo "candidate_costs_reproduced=1 slide_candidates_match=1 sah_cost_lower=1 sah_tree_cost_lower=1
                                sah_fewer_tests_per_ray=1" ;;
-    04_bvh_build_review) echo "same_hits=1 reindexed_contiguous=1 sweep_cost_lowest=1 binned_fewer_root_candidates=1" ;;
+    04_bvh_build_review) echo "same_hits=1 reindexed_contiguous=1 sweep_cost_lowest=1 binned_fewer_root_candidates=1
+                               spatial_same_hits=1 spatial_sah_lower=1 spatial_fewer_entered=1 spatial_duplicates=1" ;;
     05_bvh_traversal) echo "same_hit=1 ordered_visits_fewer=1 ordered_fewer_on_average=1" ;;
     06_object_vs_space) echo "same_hits=1 bvh_boxes_overlap=1 kd_cells_disjoint=1 kd_stops_at_first_hit=1
                               review_same_hits=1 review_bvh_refs_once=1 review_spatial_duplicates=1

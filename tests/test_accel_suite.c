@@ -741,7 +741,7 @@ static void test_other_triangle_tests(void **state)
 
 /* ---- the reference itself ------------------------------------------------------------ */
 
-/* u, v and the normal that bvh (and bvh-obb), bvh4, bvh8 and kdtree keep
+/* u, v and the normal that bvh (and bvh-obb, bvh-sbvh), bvh4, bvh8 and kdtree keep
  * from their own traversal (from their copies of the triangles) are the
  * bits the core would compute from the mesh: the same triangle test re-run
  * on the hit triangle just past t, and (p1 - p0) x (p2 - p0) — and brute
@@ -780,7 +780,7 @@ static void test_uv_normal_match_the_mesh(void **state)
 {
     (void)state;
     static const char *const scenes[] = {"teapot", "icosphere", "soup", "cornell"};
-    static const char *const accels[] = {"bvh", "bvh-obb", "bvh4", "bvh8", "kdtree", "kdtree-binned"};
+    static const char *const accels[] = {"bvh", "bvh-obb", "bvh-sbvh", "bvh4", "bvh8", "kdtree", "kdtree-binned"};
     static const uint32_t flag_sets[] = {SIDX_QUERY_UV | SIDX_QUERY_NORMAL, SIDX_QUERY_UV, SIDX_QUERY_NORMAL};
     static const tk_ray_kind kinds[] = {TK_RAYS_PRIMARY, TK_RAYS_DIFFUSE, TK_RAYS_GRAZING};
     const size_t n = tk_tiny_tests() ? 20 : tk_fast_tests() ? 60 : 250;

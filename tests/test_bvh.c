@@ -27,7 +27,8 @@
 #include "sidx/sidx.h"
 #include "bvh_internal.h"
 
-static const char *const builders[] = {"bvh", "bvh-sweep", "bvh-everyb", "bvh-median", "bvh-middle", "bvh-obb"};
+static const char *const builders[] = {"bvh",        "bvh-sweep", "bvh-everyb", "bvh-median",
+                                       "bvh-middle", "bvh-obb",   "bvh-sbvh"};
 #define NBUILDERS (sizeof builders / sizeof builders[0])
 static const char *const scenes[] = {"icosphere", "teapot", "soup", "menger", "stadium", "cornell"};
 #define NSCENES (sizeof scenes / sizeof scenes[0])
@@ -259,22 +260,113 @@ static int box_inside(const bvh_node *outer, const bvh_node *inner)
     return 1;
 }
 
+/* Points of triangle p (its corners, edge and inner points on a grid of
+ * barycentric steps of 1/COVER_STEPS), which some leaf box listing p must
+ * contain: with spatial splits a leaf holds a part of p, and its box
+ * bounds only that part, but together they must cover all of p. */
+#define COVER_STEPS 6
+#define COVER_POINTS ((COVER_STEPS + 1) * (COVER_STEPS + 2) / 2)
+static void cover_points(const sidx_mesh *m, uint32_t p, sidx_vec3 *out)
+{
+    const sidx_vec3 a = sidx_mesh_vertex(m, p, 0), b = sidx_mesh_vertex(m, p, 1), c = sidx_mesh_vertex(m, p, 2);
+    /* clamped to the triangle's box: rounding may put a computed point an ulp outside
+     * (a corner at 1.4e-8, a point at 1.5e-8), where no reference need reach */
+    const sidx_vec3 lo = sidx_v3_min(a, sidx_v3_min(b, c)), hi = sidx_v3_max(a, sidx_v3_max(b, c));
+    int k = 0;
+    for (int i = 0; i <= COVER_STEPS; ++i)
+        for (int j = 0; i + j <= COVER_STEPS; ++j) {
+            const float u = (float)i / COVER_STEPS, v = (float)j / COVER_STEPS;
+            const sidx_vec3 x = i == 0 && j == 0 ? a
+                                : i == COVER_STEPS ? b
+                                : j == COVER_STEPS ? c
+                                                   : sidx_v3_add(a, sidx_v3_add(sidx_v3_scale(sidx_v3_sub(b, a), u),
+                                                                                sidx_v3_scale(sidx_v3_sub(c, a), v)));
+            out[k++] = sidx_v3_min(hi, sidx_v3_max(lo, x));
+        }
+}
+
+/* Is x (double) in node n's box, within tol? */
+static int in_box_d(const bvh_node *n, const double *x, double tol)
+{
+    for (int k = 0; k < 3; ++k)
+        if (x[k] < (double)n->bmin[k] - tol || x[k] > (double)n->bmax[k] + tol) return 0;
+    return 1;
+}
+
+/* The exact edges of the parts (bvh_spatial.c, "Robustness"): where an
+ * edge of triangle p crosses a plane of a leaf box listing it, the
+ * crossing, computed in double, lies in a leaf box listing p.  A
+ * reference box built from the float crossing without its widening
+ * misses it by an ulp (~1e-7 relative), far above the tolerance here
+ * (1e-11 relative: double rounding). */
+static void check_crossings(const bvh *b, const sidx_mesh *m)
+{
+    uint32_t *owner = malloc((b->num_prims + 1u) * sizeof *owner); /* leaf node of each reference */
+    uint32_t *start = calloc(m->num_triangles + 2u, sizeof *start), *slot = malloc((b->num_prims + 1u) * sizeof *slot);
+    assert_true(owner && start && slot);
+    for (uint32_t i = 0; i < b->num_nodes; ++i)
+        if (bvh_is_leaf(&b->nodes[i]))
+            for (uint32_t j = b->nodes[i].left_or_first; j < b->nodes[i].left_or_first + bvh_count(&b->nodes[i]); ++j)
+                owner[j] = i;
+    for (uint32_t j = 0; j < b->num_prims; ++j) start[b->prim_id[j] + 2u]++;
+    for (uint32_t p = 0; p < m->num_triangles; ++p) start[p + 2u] += start[p + 1u];
+    for (uint32_t j = 0; j < b->num_prims; ++j) slot[start[b->prim_id[j] + 1u]++] = j; /* start[p]..start[p+1] */
+    for (uint32_t p = 0; p < m->num_triangles; ++p) {
+        double v[3][3], mag = 0.0;
+        for (int i = 0; i < 3; ++i) {
+            const sidx_vec3 c = sidx_mesh_vertex(m, p, i);
+            v[i][0] = c.x; v[i][1] = c.y; v[i][2] = c.z;
+            for (int k = 0; k < 3; ++k) mag = fabs(v[i][k]) > mag ? fabs(v[i][k]) : mag;
+        }
+        const double tol = 1e-11 * mag;
+        for (uint32_t s = start[p]; s < start[p + 1u]; ++s) {
+            const bvh_node *n = &b->nodes[owner[slot[s]]];
+            for (int f = 0; f < 6; ++f) {
+                const int k = f % 3;
+                const double plane = f < 3 ? (double)n->bmin[k] : (double)n->bmax[k];
+                for (int e = 0; e < 3; ++e) {
+                    const double *a = v[e], *c = v[(e + 1) % 3];
+                    if (!((a[k] < plane && c[k] > plane) || (a[k] > plane && c[k] < plane))) continue;
+                    const double t = (plane - a[k]) / (c[k] - a[k]);
+                    double x[3];
+                    for (int j = 0; j < 3; ++j) x[j] = j == k ? plane : a[j] + (c[j] - a[j]) * t;
+                    int hit = 0;
+                    for (uint32_t s2 = start[p]; s2 < start[p + 1u] && !hit; ++s2)
+                        hit = in_box_d(&b->nodes[owner[slot[s2]]], x, tol);
+                    if (!hit)
+                        fail_msg("triangle %u: its edge %d crosses plane %d of leaf %u at (%.9g %.9g %.9g), in no leaf "
+                                 "box listing it", p, e, f, owner[slot[s]], x[0], x[1], x[2]);
+                }
+            }
+        }
+    }
+    free(owner);
+    free(start);
+    free(slot);
+}
+
 /* Walks the flat array from the root: pre-order (left child = index + 1,
  * subtree sizes add up), children inside parents, leaves covering [0, n)
  * exactly once in order, leaf boxes containing their triangles, the
- * triangle copies equal to the mesh, depth within the limit. */
+ * triangle copies equal to the mesh, depth within the limit.  bvh-sbvh
+ * lists references: every triangle at least once, and the boxes of the
+ * leaves that list it cover it (cover_points). */
 static void check_structure(const sidx_accel *acc, const sidx_mesh *m)
 {
     const bvh *b = acc->impl;
     assert_non_null(b);
-    assert_int_equal(b->num_prims, m->num_triangles);
+    const int refs = strcmp(sidx_accel_name(acc), "bvh-sbvh") == 0;
+    if (refs) assert_true(b->num_prims >= m->num_triangles);
+    else assert_int_equal(b->num_prims, m->num_triangles);
     if (m->num_triangles == 0) {
         assert_int_equal(b->num_nodes, 0);
         return;
     }
     assert_true(((uintptr_t)b->nodes & 63u) == 0);
     uint8_t *seen = calloc(m->num_triangles, 1);
+    uint8_t *covered = refs ? calloc((size_t)m->num_triangles * COVER_POINTS, 1) : NULL;
     assert_non_null(seen);
+    assert_true(!refs || covered);
     uint32_t stack[2 * BVH_DEPTH_LIMIT + 2], depth_of[2 * BVH_DEPTH_LIMIT + 2];
     uint32_t sp = 0, next = 0, next_prim = 0, leaves = 0, visited = 0, max_depth = 0;
     stack[sp] = 0;
@@ -294,17 +386,28 @@ static void check_structure(const sidx_accel *acc, const sidx_mesh *m)
             ++leaves;
             assert_int_equal(n->left_or_first, next_prim); /* leaves in order, contiguous */
             next_prim += bvh_count(n);
-            assert_true(next_prim <= m->num_triangles);
+            assert_true(next_prim <= b->num_prims);
             for (uint32_t j = n->left_or_first; j < n->left_or_first + bvh_count(n); ++j) {
                 const uint32_t p = b->prim_id[j];
                 assert_true(p < m->num_triangles);
-                assert_int_equal(seen[p], 0);
+                if (!refs) assert_int_equal(seen[p], 0);
                 seen[p] = 1;
                 for (int k = 0; k < 3; ++k) {
                     const sidx_vec3 v = sidx_mesh_vertex(m, p, k);
                     assert_memory_equal(&b->tris[j].v[k], &v, sizeof v);
+                    if (refs) continue;
                     assert_true(v.x >= n->bmin[0] && v.y >= n->bmin[1] && v.z >= n->bmin[2]);
                     assert_true(v.x <= n->bmax[0] && v.y <= n->bmax[1] && v.z <= n->bmax[2]);
+                }
+                if (refs) {
+                    sidx_vec3 pts[COVER_POINTS];
+                    cover_points(m, p, pts);
+                    for (int k = 0; k < COVER_POINTS; ++k) {
+                        const sidx_vec3 v = pts[k];
+                        if (v.x >= n->bmin[0] && v.y >= n->bmin[1] && v.z >= n->bmin[2] && v.x <= n->bmax[0] &&
+                            v.y <= n->bmax[1] && v.z <= n->bmax[2])
+                            covered[(size_t)p * COVER_POINTS + (size_t)k] = 1;
+                    }
                 }
             }
         } else {
@@ -320,7 +423,15 @@ static void check_structure(const sidx_accel *acc, const sidx_mesh *m)
         }
     }
     assert_int_equal(visited, b->num_nodes);
-    assert_int_equal(next_prim, m->num_triangles);
+    assert_int_equal(next_prim, b->num_prims);
+    for (uint32_t p = 0; p < m->num_triangles; ++p) {
+        assert_int_equal(seen[p], 1);
+        for (int k = 0; refs && k < COVER_POINTS; ++k)
+            if (!covered[(size_t)p * COVER_POINTS + (size_t)k])
+                fail_msg("%s: point %d of triangle %u is in no leaf box listing it", sidx_accel_name(acc), k, p);
+    }
+    free(covered);
+    if (refs) check_crossings(b, m);
     assert_int_equal(leaves, b->num_leaves);
     assert_int_equal(b->num_nodes, 2 * leaves - 1);
     assert_int_equal(max_depth, b->max_depth);
@@ -329,7 +440,7 @@ static void check_structure(const sidx_accel *acc, const sidx_mesh *m)
     assert_int_equal(st.nodes, b->num_nodes);
     assert_int_equal(st.leaves, leaves);
     assert_int_equal(st.max_depth, max_depth);
-    assert_true(st.prim_refs == m->num_triangles);
+    assert_true(st.prim_refs == b->num_prims);
     assert_true(st.sah_cost > 0.0 && st.bytes > 0);
     free(seen);
 }
@@ -573,7 +684,8 @@ static void test_build_events(void **state)
         memset(&r, 0, sizeof r);
         a = build(builders[bi], &m, &o);
         assert_int_equal(((const bvh *)a->impl)->num_nodes, 3);
-        assert_true(r.n >= 9 && r.n <= MAX_EVENTS);
+        /* bvh-sbvh costs its planes on bins without BUILD_CANDIDATE events: 8 */
+        assert_true(r.n >= (strcmp(builders[bi], "bvh-sbvh") ? 9 : 8) && r.n <= MAX_EVENTS);
         sidx_accel_destroy(a);
     }
     /* with a huge traversal cost no split pays: one NO_GAIN leaf */
@@ -586,6 +698,111 @@ static void test_build_events(void **state)
         if (r.ev[i].type == SIDX_EV_BUILD_LEAF) saw_no_gain = r.ev[i].reason == SIDX_LEAF_NO_GAIN;
     assert_true(saw_no_gain);
     sidx_accel_destroy(a);
+    sidx_mesh_free(&m);
+}
+
+/* bvh-sbvh's build events: on the two triangles the exact sequence, and on
+ * the stadium (long thin triangles, spatial splits) node ids in pre-order
+ * equal to the final indices, parents, a NOTE before every spatial split
+ * whose count is the references it added, and leaves listing exactly the
+ * tree's prim_id[] — the same tree as an untraced build. */
+typedef struct sbvh_log {
+    uint32_t next_node, nodes, leaves, splits, spatial, added, note_node, bad;
+    uint32_t *leaf_prims;
+    size_t nprims;
+    const bvh *ref;
+} sbvh_log;
+static void sbvh_fn(const sidx_event *ev, void *user)
+{
+    sbvh_log *l = user;
+    switch (ev->type) {
+    case SIDX_EV_BUILD_NODE:
+        l->bad += ev->node != l->next_node++;
+        l->bad += ev->node == 0 ? ev->parent != UINT32_MAX : ev->parent >= ev->node;
+        l->nodes++;
+        break;
+    case SIDX_EV_NOTE:
+        l->spatial++;
+        l->added += ev->count;
+        l->note_node = ev->node;
+        break;
+    case SIDX_EV_BUILD_SPLIT:
+        l->splits++;
+        if (l->note_node == ev->node) l->note_node = UINT32_MAX;
+        break;
+    case SIDX_EV_BUILD_LEAF:
+        l->leaves++;
+        for (uint32_t i = 0; i < ev->count; ++i) l->leaf_prims[l->nprims++] = ev->prims[i];
+        break;
+    default: break;
+    }
+}
+
+static void test_sbvh_build_events(void **state)
+{
+    (void)state;
+    sidx_mesh m = two_tris();
+    rec r;
+    memset(&r, 0, sizeof r);
+    const sidx_hook hook = {rec_fn, &r, 0};
+    sidx_build_options o;
+    memset(&o, 0, sizeof o);
+    o.hook = &hook;
+    o.leaf_size = 1;
+    sidx_accel *a = build("bvh-sbvh", &m, &o);
+    const uint32_t X = UINT32_MAX;
+    assert_int_equal(r.n, 8);
+    expect(&r, 0, SIDX_EV_BUILD_BEGIN, X);
+    assert_int_equal(r.ev[0].count, 2);
+    expect(&r, 1, SIDX_EV_BUILD_NODE, 0);
+    assert_int_equal(r.ev[1].parent, X);
+    expect(&r, 2, SIDX_EV_BUILD_SPLIT, 0);
+    assert_int_equal(r.ev[2].axis, 2);
+    assert_int_equal(r.ev[2].count, 1);
+    assert_int_equal(r.ev[2].aux, 1);
+    expect(&r, 3, SIDX_EV_BUILD_NODE, 1);
+    assert_int_equal(r.ev[3].parent, 0);
+    assert_int_equal(r.ev[3].depth, 1);
+    expect(&r, 4, SIDX_EV_BUILD_LEAF, 1);
+    assert_int_equal(r.ev[4].reason, SIDX_LEAF_FEW_PRIMS);
+    expect(&r, 5, SIDX_EV_BUILD_NODE, 2);
+    expect(&r, 6, SIDX_EV_BUILD_LEAF, 2);
+    expect(&r, 7, SIDX_EV_BUILD_END, 3);
+    assert_int_equal(r.ev[7].count, 2);
+    for (int i = 0; i < r.n; ++i) assert_string_equal(r.ev[i].structure, "bvh-sbvh");
+    sidx_accel_destroy(a);
+    sidx_mesh_free(&m);
+
+    m = scene("stadium");
+    sidx_accel *plain = build("bvh-sbvh", &m, NULL);
+    const bvh *pb = plain->impl;
+    assert_true(pb->num_prims > m.num_triangles); /* the stadium makes spatial splits */
+    sbvh_log l;
+    memset(&l, 0, sizeof l);
+    l.note_node = UINT32_MAX;
+    l.leaf_prims = malloc(pb->num_prims * sizeof *l.leaf_prims);
+    assert_non_null(l.leaf_prims);
+    const sidx_hook h2 = {sbvh_fn, &l, 0};
+    o.hook = &h2;
+    o.leaf_size = 0;
+    a = build("bvh-sbvh", &m, &o);
+    const bvh *b = a->impl;
+    assert_int_equal(l.bad, 0);
+    assert_int_equal(l.note_node, UINT32_MAX); /* every NOTE followed by its node's split */
+    assert_int_equal(l.nodes, b->num_nodes);
+    assert_int_equal(l.leaves, b->num_leaves);
+    assert_int_equal(l.splits, b->num_nodes - b->num_leaves);
+    assert_true(l.spatial > 0);
+    assert_int_equal(l.added, b->num_prims - m.num_triangles);
+    assert_int_equal(l.nprims, b->num_prims);
+    assert_memory_equal(l.leaf_prims, b->prim_id, b->num_prims * sizeof *b->prim_id);
+    /* traced or not, the same tree */
+    assert_int_equal(b->num_nodes, pb->num_nodes);
+    assert_memory_equal(b->nodes, pb->nodes, b->num_nodes * sizeof *b->nodes);
+    assert_memory_equal(b->prim_id, pb->prim_id, b->num_prims * sizeof *b->prim_id);
+    free(l.leaf_prims);
+    sidx_accel_destroy(a);
+    sidx_accel_destroy(plain);
     sidx_mesh_free(&m);
 }
 
@@ -787,6 +1004,7 @@ int main(void)
         cmocka_unit_test(test_degenerate_and_empty),
         cmocka_unit_test(test_refit_matches_rebuild),
         cmocka_unit_test(test_build_events),
+        cmocka_unit_test(test_sbvh_build_events),
         cmocka_unit_test(test_stack_traversal_events),
         cmocka_unit_test(test_recursive_traversal_events),
         cmocka_unit_test(test_event_ids_consistent),

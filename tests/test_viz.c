@@ -713,11 +713,13 @@ static void dot_real_structure(void **state) { (void)state; skip_without_graphvi
 /* Object partitioning puts every triangle in exactly one leaf; space
  * partitioning in at least one (straddlers are referenced from every cell
  * they overlap). */
-/* The binary BVHs; bvh4 and bvh8 collapse a tree with spatial splits
- * (bvh_spatial.c), where a triangle may be in several leaves. */
+/* The binary BVHs; bvh-sbvh is the tree with spatial splits
+ * (bvh_spatial.c) that bvh4 and bvh8 collapse, where a triangle may be in
+ * several leaves. */
 static int is_object_partitioning(const char *name)
 {
-    return strncmp(name, "bvh", 3) == 0 && strcmp(name, "bvh4") != 0 && strcmp(name, "bvh8") != 0;
+    return strncmp(name, "bvh", 3) == 0 && strcmp(name, "bvh4") != 0 && strcmp(name, "bvh8") != 0 &&
+           strcmp(name, "bvh-sbvh") != 0;
 }
 
 /* Every leaf of every tree structure lists its primitives, and the lists are
@@ -726,9 +728,9 @@ static int is_object_partitioning(const char *name)
 static void leaf_prims_from_real_builds(void **state)
 {
     (void)state;
-    static const char *const names[] = {"bvh",      "bvh-sweep", "bvh-median", "bvh-middle", "bvh-obb", "bvh4",
-                                        "bvh8",     "kdtree",    "kdtree-binned", "octree",  "quadtree", "bsp",
-                                        "grid2",    "rayclass"};
+    static const char *const names[] = {"bvh",      "bvh-sweep", "bvh-median",    "bvh-middle", "bvh-obb",
+                                        "bvh-sbvh", "bvh4",      "bvh8",          "kdtree",     "kdtree-binned",
+                                        "octree",   "quadtree",  "bsp",           "grid2",      "rayclass"};
     static const char *const scenes[] = {"flat2d", "icosphere"};
     int structures = 0, subset_checks = 0;
     for (size_t si = 0; si < sizeof scenes / sizeof scenes[0]; ++si) {

@@ -58,7 +58,7 @@ typedef struct sidx_build_options {
                                      that improves the binary tree after the build (bvh_optimize.c);
                                      0 = off.  A budget large enough gives the same tree every time;
                                      one that cuts the pass short depends on the machine's speed */
-    uint32_t lazy;                /* bvh family but bvh-obb, bvh4 and bvh8 (not with no_spatial_splits),
+    uint32_t lazy;                /* bvh family but bvh-obb and bvh-sbvh, bvh4 and bvh8 (not with no_spatial_splits),
                                      and the kd-tree family but a tree of given splits: build the top of
                                      the tree now and leave each subtree of at most this many primitives
                                      (kd-tree: references; wide BVHs: more than 8) as an unbuilt node
@@ -152,7 +152,11 @@ sidx_status sidx_accel_intersect_n(const sidx_accel *a, const sidx_ray *rays, si
 
 sidx_status sidx_accel_stats_get(const sidx_accel *a, sidx_accel_stats *s);
 /* After moving vertices of the mesh in place: update bounds bottom-up.
- * SIDX_ERR_UNSUPPORTED for structures that must be rebuilt instead. */
+ * SIDX_ERR_UNSUPPORTED for structures that must be rebuilt instead.
+ * bvh-sbvh: each leaf is then bounded by its whole triangles (the part of
+ * a cut triangle a reference stood for has no meaning once the triangle
+ * moved), so hits stay exact but the spatial splits' gain is lost until
+ * the tree is rebuilt. */
 sidx_status sidx_accel_refit(sidx_accel *a, sidx_error *err);
 void sidx_accel_destroy(sidx_accel *a);            /* NULL is fine */
 

@@ -49,7 +49,10 @@ static inline sidx_aabb sidx_bvh_box(const sidx_bvh_node *n)
 sidx_status sidx_bvh_nodes(const sidx_accel *a, const sidx_bvh_node **nodes, uint32_t *count, sidx_error *err);
 
 /* The leaves' triangle indices, indexed by the leaves' first: *prims
- * points at *count entries.  Same errors as above. */
+ * points at *count entries.  Same errors as above.  In "bvh-sbvh" (spatial
+ * splits) a triangle cut by a split plane is in several leaves, so *count
+ * may exceed the mesh's triangles and an index may occur more than once;
+ * every other binary BVH lists each triangle exactly once. */
 sidx_status sidx_bvh_prims(const sidx_accel *a, const uint32_t **prims, uint32_t *count, sidx_error *err);
 
 #ifdef __cplusplus
