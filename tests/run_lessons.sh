@@ -16,6 +16,13 @@
 # cost comparisons, ...), so a check fails when the property stops
 # holding, not when the wording changes.  A lesson whose structures are
 # not registered in lib/accel_registry.def is reported as skipped.
+# Then the output excerpts of docs/tutorial.md are compared with these
+# runs (docs/make_tutorial.sh refreshes a copy from the saved outputs): an
+# excerpt that no longer reads as its lesson prints fails.  Decimal
+# numbers, ratios (3.3x) and every number on a line that gives a time (ns,
+# us, ms, "% of the time") are left out of the comparison, since timings and what is
+# computed from them change from run to run; text and whole numbers
+# (counts) must match.
 # Run from the repository root.  Exit status 1 if anything failed.
 
 BUILD=${BUILD:-build}
@@ -174,7 +181,9 @@ fi
 
 passed=0 failed=0 skipped=0
 out=${TMPDIR:-/tmp}/sidx_lesson.$$
-trap 'rm -f "$out"' EXIT INT TERM
+outs=${TMPDIR:-/tmp}/sidx_lesson_outs.$$
+mkdir -p "$outs" || exit 1
+trap 'rm -f "$out"; rm -rf "$outs"' EXIT INT TERM
 
 for prog in "$DIR"/*; do
     [ -f "$prog" ] && [ -x "$prog" ] || continue
@@ -201,8 +210,9 @@ for prog in "$DIR"/*; do
         [ $rc -eq 1 ] && grep -q "^$name: " "$out" || why="$why a missing scene file did not exit 1 with a message;"
     fi
     start=$(date +%s)
-    "$prog" >"$out" 2>&1
+    "$prog" >"$outs/$name.out" 2>"$outs/$name.err"
     rc=$?
+    cat "$outs/$name.out" "$outs/$name.err" >"$out"
     secs=$(( $(date +%s) - start ))
     [ $rc -eq 0 ] || why="$why exit code $rc;"
     for want in $(expect "$name"); do
@@ -265,6 +275,34 @@ if [ -x "$tour" ] && registered kdtree; then
         passed=$((passed + 1))
     else
         echo "FAIL sidx-tour:$why"
+        failed=$((failed + 1))
+    fi
+fi
+
+# the tutorial's excerpts against the runs above (only when every lesson ran:
+# make_tutorial.sh would run the missing ones itself)
+doc=docs/tutorial.md
+if [ -f "$doc" ] && [ $skipped -eq 0 ] && [ $((passed + failed)) -gt 1 ]; then
+    cp "$doc" "$outs/tutorial.md"
+    # times and ratios vary from run to run; counts and text do not
+    norm() {
+        awk '{ if ($0 ~ /[0-9.]+ ?(ns|us|ms)([^A-Za-z]|$)|% of the time/) gsub(/[0-9]+(\.[0-9]+)?/, "#")
+               gsub(/[0-9]+(\.[0-9]+)?x/, "#x"); gsub(/[0-9]*\.[0-9]+/, "#"); gsub(/[ \t]+/, " "); print }' "$1"
+    }
+    if LESSON_OUTPUTS=$outs sh docs/make_tutorial.sh "$BUILD" "$outs/tutorial.md" >"$out" 2>&1; then
+        norm "$doc" >"$outs/doc.norm"
+        norm "$outs/tutorial.md" >"$outs/run.norm"
+        if diff "$outs/doc.norm" "$outs/run.norm" >"$out"; then
+            echo "PASS $doc excerpts"
+            passed=$((passed + 1))
+        else
+            echo "FAIL $doc excerpts: they differ from the lessons' output (refresh with make docs):"
+            head -20 "$out" | sed 's/^/     | /'
+            failed=$((failed + 1))
+        fi
+    else
+        echo "FAIL $doc excerpts: docs/make_tutorial.sh fails:"
+        tail -5 "$out" | sed 's/^/     | /'
         failed=$((failed + 1))
     fi
 fi
