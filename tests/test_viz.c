@@ -331,13 +331,21 @@ static void dot_synthetic_parses_back(void **state)
         agclose(g);
     }
 
-    /* cut below depth 1: root, its two children and one summary under 2 */
-    opt.max_depth = 1;
+    /* --depth 2 draws two levels: root, its two children and one summary under 2 */
+    opt.max_depth = 2;
     assert_int_equal(sidx_dot_write_events(b.ev, b.n, NULL, 0, &opt, path, &err), SIDX_OK);
     g = read_graph(path);
     assert_int_equal(agnnodes(g), 4);
     assert_int_equal(agnedges(g), 3);
     assert_non_null(strstr(node_attr(g, "cut2", "label"), "+2 nodes, 3 prims"));
+    assert_non_null(strstr(agget(g, "label"), "2 levels drawn"));
+    agclose(g);
+    /* --depth 1: the root alone, its subtree summarised */
+    opt.max_depth = 1;
+    assert_int_equal(sidx_dot_write_events(b.ev, b.n, NULL, 0, &opt, path, &err), SIDX_OK);
+    g = read_graph(path);
+    assert_int_equal(agnnodes(g), 2);
+    assert_int_equal(agnedges(g), 1);
     agclose(g);
 
     /* with the ray: order numbers, pruned node grey, hit leaf outlined */
@@ -352,6 +360,29 @@ static void dot_synthetic_parses_back(void **state)
     assert_string_equal(node_attr(g, "n1", "fillcolor"), "#d0d0d0");
     assert_string_not_equal(node_attr(g, "n4", "fillcolor"), "#d0d0d0");
     agclose(g);
+
+    /* a space partition's walk: the hit is found in leaf 3 (the triangle reaches past its
+     * cell), the walk goes on into leaf 4, skips the triangle there (mailbox) and stops in
+     * that cell: leaf 4 is outlined, where the walk ends, and leaf 3 is not */
+    {
+        evbuf k = r;
+        k.n--; /* drop RAY_END: the walk into leaf 4 goes on */
+        sidx_event *e = add(&k, SIDX_EV_MAILBOX_HIT);
+        e->prim = 6;
+        e = add(&k, SIDX_EV_TERMINATE);
+        e->reason = SIDX_TERM_HIT_IN_CELL;
+        e->t = 0.75f;
+        e = add(&k, SIDX_EV_RAY_END);
+        e->prim = 6;
+        e->t = 0.75f;
+        assert_int_equal(sidx_dot_write_events(b.ev, b.n, k.ev, k.n, &opt, path, &err), SIDX_OK);
+        g = read_graph(path);
+        assert_non_null(strstr(node_attr(g, "n4", "label"), "HIT prim 6"));
+        assert_string_equal(node_attr(g, "n4", "peripheries"), "2");
+        assert_null(strstr(node_attr(g, "n3", "label"), "HIT"));
+        assert_string_not_equal(node_attr(g, "n3", "peripheries"), "2");
+        agclose(g);
+    }
 
     /* bad extension, brute has no tree */
     assert_int_equal(sidx_dot_write_events(b.ev, b.n, NULL, 0, &opt, "/tmp/x.unknown", &err), SIDX_ERR_INVALID_ARG);
