@@ -74,7 +74,7 @@ expect() {
     10_kdtree_traversal) echo "same_hit=1 stack_trace_consistent=1 cannot_terminate_seen=1 split_cases_shown=1" ;;
     11_kd_node_layout) echo "decoded_matches=1 children_side_by_side=1" ;;
     12_octree_bsp) echo "same_hits=1 kd_deck_constants_fewer_tris_than_octree=1 kd_default_c_trav_fatter_leaves=1
-                         painter_order_back_to_front=1" ;;
+                         bsp_planes_cut_the_board=1 painter_order_back_to_front=1" ;;
     13_worst_case) echo "worst_cases_linear=1" ;;
     # No time is checked: speed-ups cannot be promised on a shared or
     # single-core CI machine; the checks are on hits and counted work.
