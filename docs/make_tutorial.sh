@@ -29,7 +29,13 @@
 # line "...".  START and END are plain text, not patterns, so a marker
 # keeps working when the numbers around them change; a START or END that
 # is no longer found fails the run (exit 1) and leaves the tutorial as it
-# was.  Run from the repository root.
+# was.  A run: marker met before the previous block's <!-- end --> fails
+# the run too: the missing end would swallow the text up to the next one.
+#
+# LESSON_OUTPUTS=DIR takes a lesson's output from DIR/LESSON.out instead
+# of running it, for a marker with no ARGS (tests/run_lessons.sh saves
+# the outputs of its runs there and compares the excerpts this refreshes
+# with the tutorial's).  Run from the repository root.
 set -u
 
 BUILD=${1:-build}
@@ -90,6 +96,11 @@ while IFS= read -r line || [ -n "$line" ]; do
     lineno=$((lineno + 1))
     if [ "$in_block" = 1 ]; then
         case $line in
+        "<!-- run: "*)
+            echo "make_tutorial: $DOC:$lineno: a run: marker before the previous block's <!-- end -->" >&2
+            status=1
+            break
+            ;;
         "<!-- end -->")
             printf '%s\n' "$line" >>"$out"
             in_block=0
@@ -125,6 +136,9 @@ while IFS= read -r line || [ -n "$line" ]; do
     fi
     # one run per distinct command line
     key=$(printf '%s' "$cmd" | cksum | tr ' ' '_')
+    if [ ! -f "$tmp/$key.out" ] && [ -z "$args" ] && [ -f "${LESSON_OUTPUTS:-/nonexistent}/$prog.out" ]; then
+        cp "$LESSON_OUTPUTS/$prog.out" "$tmp/$key.out"
+    fi
     if [ ! -f "$tmp/$key.out" ]; then
         echo "make_tutorial: running $prog $args" >&2
         # shellcheck disable=SC2086 # ARGS are words, as on a command line

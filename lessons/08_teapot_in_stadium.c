@@ -13,8 +13,9 @@
  * wide in the middle of a stadium 1600 units across — in a uniform grid,
  * a two-level (nested) grid, an irregular grid and a kd-tree (and a BVH
  * for reference), whichever of them this build has.  For camera rays
- * looking at the teapot: a picture of triangle tests per pixel for each
- * structure, in the spirit of the slide's coloured figures (darker
+ * looking at the teapot from outside its grid cells, the stands behind
+ * it: what each ray meets first (teapot, floor, stands), then a picture of
+ * triangle tests per pixel for each structure, in the spirit of the slide's coloured figures (darker
  * character = more tests), then per structure the build, memory, cells or
  * nodes visited and triangles tested per ray, and time per ray.  The
  * first pixel row that reaches the teapot is also traced for the uniform
@@ -56,6 +57,11 @@ static double now_s(void)
 #define H 16
 #define NS 5
 
+/* What a camera ray of the stadium meets first: 'T' the teapot (within 3
+ * units of the origin), '.' the floor, '#' the stands, ' ' nothing; on
+ * another scene '#' for a hit. */
+static char seen[H][W];
+
 typedef struct {
     const char *name, *what;
     int present;
@@ -83,17 +89,23 @@ int main(int argc, char **argv)
     sidx_error err = {0};
     const sidx_aabb box = sidx_mesh_bounds(&mesh);
     /* The camera looks at the object nearest the origin: for the stadium,
-     * the teapot (about 1 unit, at the origin); for another scene, the
-     * middle of its box. */
-    sidx_vec3 look = sidx_v3(0.0f, 0.3f, 0.0f);
-    float dist = 2.2f, half = 0.75f;
+     * the teapot (about 1 unit wide, at the origin), from 90 units away and
+     * 10 up: out of the teapot's grid cells (~42 units), the picture 36
+     * units wide at the teapot so that it takes a pixel or two, the far
+     * stands across the top, and the floor in front, whose lowest rows
+     * land short of the teapot's cells.  `look` is a row's height above the
+     * teapot so that the row below the middle passes through it.  For
+     * another scene: the middle of its box. */
+    sidx_vec3 look = sidx_v3(0.0f, 1.25f, 0.0f);
+    sidx_vec3 eye = sidx_v3(0.0f, 10.0f, 90.0f);
+    float half = 18.0f; /* half the picture's width at `look` */
     if (args.scene_given) {
         look = sidx_aabb_centroid(box);
-        const float e = sidx_v3_length(sidx_aabb_extent(box));
-        dist = 1.2f * e;
+        const float e = sidx_v3_length(sidx_aabb_extent(box)), dist = 1.2f * e;
+        eye = sidx_v3(look.x + 0.3f * dist, look.y + 0.35f * dist, look.z + dist);
         half = 0.5f * e;
     }
-    const sidx_vec3 eye = sidx_v3(look.x + 0.3f * dist, look.y + 0.35f * dist, look.z + dist);
+    const float dist = sidx_v3_length(sidx_v3_sub(eye, look));
     const sidx_vec3 fwd = sidx_v3_scale(sidx_v3_sub(look, eye), 1.0f / sidx_v3_length(sidx_v3_sub(look, eye)));
     sidx_vec3 right = sidx_v3_cross(fwd, sidx_v3(0, 1, 0));
     right = sidx_v3_scale(right, 1.0f / sidx_v3_length(right));
@@ -139,6 +151,14 @@ int main(int argc, char **argv)
                 sidx_accel_intersect(a, &rays[y][x], &q, &h);
                 e->tests[y][x] = (uint32_t)c.n[SIDX_EV_PRIM_TEST];
                 e->t[y][x] = h.t;
+                if (s == 0) {
+                    const sidx_vec3 p = sidx_v3_add(eye, sidx_v3_scale(rays[y][x].dir, h.t));
+                    seen[y][x] = h.prim == SIDX_NO_HIT     ? ' '
+                                 : args.scene_given        ? '#'
+                                 : sidx_v3_length(p) < 3.0f ? 'T'
+                                 : p.y < 0.5f              ? '.'
+                                                           : '#';
+                }
                 visits += c.n[SIDX_EV_NODE_ENTER];
                 tris += c.n[SIDX_EV_PRIM_TEST];
             }
@@ -179,7 +199,17 @@ int main(int argc, char **argv)
     sidx_mesh_free(&mesh);
     if (failed) return 1;
 
-    /* pictures, two side by side */
+    /* what the camera sees, then the pictures, two side by side */
+    int n_teapot = 0, n_stands = 0, n_floor = 0;
+    printf("\n== What each camera ray meets first: 'T' the teapot, '.' the floor, '#' the stands, ' ' nothing\n\n");
+    for (int y = 0; y < H; ++y) {
+        printf("  |%.*s|\n", W, seen[y]);
+        for (int x = 0; x < W; ++x) {
+            n_teapot += seen[y][x] == 'T';
+            n_floor += seen[y][x] == '.';
+            n_stands += seen[y][x] == '#';
+        }
+    }
     static const char ramp[] = " .:-=+*#%@";
     printf("\n== Triangle tests per pixel: ' ' 0, '.' 1, ':' 2-3, '-' 4-7, '=' 8-15, '+' 16-31, '*' 32-63,\n"
            "   '#' 64-127, '%%' 128-255, '@' 256 or more\n");
@@ -244,6 +274,20 @@ int main(int argc, char **argv)
                "  empty stadium in a step or two and still meets small cells at the teapot.\n",
                es[2].tris, es[0].tris, es[2].visits, es[1].visits, es[2].st.res[0], es[2].st.res[1],
                es[2].st.res[2]);
+    /* the picture shows the stadium around the teapot, and the grid's costs differ across it */
+    int levels = 0;
+    {
+        int used[10] = {0};
+        for (int y = 0; y < H; ++y)
+            for (int x = 0; x < W; ++x) {
+                int lvl = 0;
+                while (lvl < 9 && es[0].tests[y][x] >= (1u << lvl)) ++lvl;
+                levels += !used[lvl];
+                used[lvl] = 1;
+            }
+    }
+    lesson_check("teapot_floor_stands_seen", n_teapot > 0 && n_floor > 0 && n_stands > 0);
+    lesson_check("grid_map_varies", levels >= 3);
     lesson_check("same_hits", same);
     lesson_check("uniform_grid_worst", worst && n_present > 1);
     lesson_check("adaptive_beats_uniform", adaptive && n_present > 1);

@@ -23,7 +23,9 @@
  *      triangle test costs 1; C_trav = 1 puts a node step on that scale),
  *      and with sidx's default C_trav = 16, which prices a node step for
  *      its SIMD leaf tests and so stops early with fat leaves;
- *   3. a BSP tree over the board, and the painter's algorithm: the pieces
+ *   3. a BSP tree over the board, its shapes stood up as walls on their
+ *      segments (as Doom's map: planes perpendicular to the board, which
+ *      cut it into convex regions), and the painter's algorithm: the pieces
  *      enumerated back to front from an eye on the board (first lines
  *      through the printer), then checked: along every one of many rays
  *      from the eye, a piece drawn later is never behind a piece drawn
@@ -101,6 +103,47 @@ static int hit_piece(const sidx_ray *r, const piece *p, float *t)
             return 1;
     }
     return 0;
+}
+
+/* The board as Doom's BSP sees it: each shape's segment in the plane
+ * z = 0 (where its tilted triangle crosses it, the spine) stood up as a
+ * wall, a quad of two triangles from z = -0.5 to 0.5.  The walls' planes
+ * are perpendicular to the board, so a plane through one wall is the 2D
+ * BSP's line through its segment and cuts the walls it crosses (deck 000
+ * "BSP Trees": split space with the polygons' own planes).  The tilted
+ * triangles themselves lie nearly in the board's plane: their planes would
+ * cut almost nothing.  Returns 0 if out of memory. */
+static int board_walls(const sidx_mesh *board, sidx_mesh *out, sidx_error *err)
+{
+    const uint32_t n = board->num_triangles;
+    float *xyz = malloc((size_t)n * 4 * 3 * sizeof *xyz);
+    uint32_t *idx = malloc((size_t)n * 6 * sizeof *idx), nv = 0, nt = 0;
+    if (!xyz || !idx) {
+        free(xyz), free(idx);
+        return 0;
+    }
+    for (uint32_t i = 0; i < n; ++i) {
+        sidx_vec3 v[3], end[2];
+        int ends = 0;
+        for (int k = 0; k < 3; ++k) v[k] = board->positions[board->indices[3 * i + k]];
+        for (int k = 0; k < 3 && ends < 2; ++k) { /* where the edges cross z = 0 */
+            const sidx_vec3 a = v[k], b = v[(k + 1) % 3];
+            if ((a.z <= 0.0f) == (b.z <= 0.0f) && a.z != 0.0f) continue;
+            const float f = a.z == b.z ? 0.0f : a.z / (a.z - b.z);
+            end[ends++] = sidx_v3(a.x + f * (b.x - a.x), a.y + f * (b.y - a.y), 0.0f);
+        }
+        if (ends < 2 || (end[0].x == end[1].x && end[0].y == end[1].y)) continue;
+        const float c[4][3] = {{end[0].x, end[0].y, -0.5f}, {end[1].x, end[1].y, -0.5f},
+                               {end[1].x, end[1].y, 0.5f}, {end[0].x, end[0].y, 0.5f}};
+        memcpy(xyz + 3 * nv, c, sizeof c);
+        const uint32_t q[6] = {nv, nv + 1, nv + 2, nv, nv + 2, nv + 3};
+        memcpy(idx + 3 * nt, q, sizeof q);
+        nv += 4;
+        nt += 2;
+    }
+    const int ok = sidx_mesh_from_arrays(out, xyz, nv, idx, nt, err) == SIDX_OK;
+    free(xyz), free(idx);
+    return ok;
 }
 
 static int same_hits(const sidx_accel *a, const sidx_accel *ref, const sidx_mesh *m, int flat, uint32_t seed)
@@ -242,11 +285,17 @@ int main(int argc, char **argv)
 
     /* ---- 3. BSP and the painter ---- */
     printf("\n== 3. A BSP tree over the board, and the painter's order from an eye on it\n");
-    sidx_accel *bsp = NULL;
+    sidx_accel *bsp = NULL, *wall_ref = NULL;
+    sidx_mesh walls = {0};
     sidx_recorder_clear(&rec);
-    if (ok && sidx_accel_build("bsp", &board, &opt, &bsp, &err) != SIDX_OK) { ok = 0; fprintf(stderr, "12_octree_bsp: %s\n", err.message); }
-    int painter_ok = 0;
+    if (ok && !board_walls(&board, &walls, &err)) { ok = 0; fprintf(stderr, "12_octree_bsp: the board's walls: %s\n", err.message[0] ? err.message : "out of memory"); }
+    if (ok && (sidx_accel_build("bsp", &walls, &opt, &bsp, &err) != SIDX_OK ||
+               sidx_accel_build("brute", &walls, NULL, &wall_ref, &err) != SIDX_OK)) { ok = 0; fprintf(stderr, "12_octree_bsp: %s\n", err.message); }
+    int painter_ok = 0, planes_cut = 0;
     if (ok) {
+        printf("  The board's %u shapes as walls standing on their segments (two triangles each, planes\n"
+               "  perpendicular to the board, as Doom's BSP cuts the map with the lines of its walls):\n",
+               board.num_triangles);
         sidx_bsp_info bi;
         sidx_bsp_info_get(bsp, &bi);
         printf("  %u triangles -> %u pieces (%u cut by a plane); %u nodes, %u on a triangle's own plane,\n"
@@ -256,7 +305,19 @@ int main(int argc, char **argv)
         int shown = 0;
         for (size_t i = 0; i < rec.count && shown < 3; ++i)
             if (rec.events[i].type == SIDX_EV_BUILD_SPLIT) { sidx_hook_emit(&ph, &rec.events[i]); ++shown; }
-        same &= same_hits(bsp, ref, &board, 1, 31u);
+        same &= same_hits(bsp, wall_ref, &walls, 1, 31u);
+        /* the planes cut the board: every splitting plane stands on it (normal in the board's
+         * plane) and some walls are cut in pieces */
+        int standing = 1;
+        for (uint32_t k = 0; k < bi.nodes; ++k) {
+            sidx_bsp_node_view nv;
+            if (sidx_bsp_node_get(bsp, k, &nv) != SIDX_OK) { standing = 0; break; }
+            if (nv.child[0] != UINT32_MAX && fabs(nv.n[2]) > 1e-6) standing = 0;
+        }
+        planes_cut = standing && bi.splits > 0 && bi.leaves >= board.num_triangles;
+        printf("  every plane perpendicular to the board: %s; they cut it into %u convex regions (the\n"
+               "  leaves) and cut %u walls where a plane crosses them\n",
+               standing ? "yes" : "NO", bi.leaves, bi.splits);
 
         const sidx_vec3 eye = sidx_v3(5.3f, 5.1f, 0.0f);
         printf("\n  Back to front from the eye (%g, %g, 0): the order sidx_bsp_paint hands the pieces out\n", eye.x,
@@ -270,8 +331,8 @@ int main(int argc, char **argv)
             sidx_vec3 c = sidx_v3(0, 0, 0);
             for (uint32_t k = 0; k < ps.p[i].n; ++k) c = sidx_v3_add(c, ps.p[i].v[k]);
             c = sidx_v3_scale(c, 1.0f / (float)ps.p[i].n);
-            printf("    paint %2zu: triangle %3u (%u-gon) around (%.2f, %.2f), %.2f from the eye\n", i + 1, ps.p[i].tri,
-                   ps.p[i].n, c.x, c.y, sidx_v3_length(sidx_v3_sub(c, eye)));
+            printf("    paint %2zu: wall %2u, triangle %3u (%u-gon) around (%.2f, %.2f), %.2f from the eye\n", i + 1,
+                   ps.p[i].tri / 2, ps.p[i].tri, ps.p[i].n, c.x, c.y, sidx_v3_length(sidx_v3_sub(c, eye)));
         }
         printf("    ... %zu pieces painted, %llu nodes walked\n", ps.n, (unsigned long long)pc.n[SIDX_EV_NODE_ENTER]);
         /* the check: along rays from the eye, the painting order must fall as t grows */
@@ -305,8 +366,10 @@ int main(int argc, char **argv)
                "  draw time, only a walk that visits the far side of every plane first.\n");
         painter_ok = rays_multi > 0 && violations == 0 && !ps.too_many_verts;
         free(ps.p);
-        sidx_accel_destroy(bsp);
     }
+    sidx_accel_destroy(bsp);
+    sidx_accel_destroy(wall_ref);
+    sidx_mesh_free(&walls);
     sidx_recorder_free(&rec);
     sidx_accel_destroy(ref);
     sidx_mesh_free(&board);
@@ -315,6 +378,7 @@ int main(int argc, char **argv)
     lesson_check("same_hits", same);
     lesson_check("kd_deck_constants_fewer_tris_than_octree", kd_adapts);
     lesson_check("kd_default_c_trav_fatter_leaves", kd_default_fatter);
+    lesson_check("bsp_planes_cut_the_board", planes_cut);
     lesson_check("painter_order_back_to_front", painter_ok);
     return 0;
 }

@@ -130,6 +130,23 @@ while [ $i -lt $n ]; do
     done <"$T/e$i.check"
 done
 
+# ---- code fences: every block closed where it should be ------------------------
+# A block that is never closed turns the rest of the page into code (the
+# next headings included).  As Markdown reads them: a line opening with
+# ``` opens a block, a bare ``` closes it; an opening fence with a
+# language (```sh), a run:/end marker of docs/make_tutorial.sh or a
+# heading met inside a block means the block before was left open.
+for d in $docs; do
+    awk -v f="$d" '
+        /^```/ && !open { open = FNR; next }
+        /^```[ \t]*$/ && open { open = 0; next }
+        open && (/^```/ || /^<!-- (run: |end -->)/ || /^##+ /) {
+            printf "%s:%d: the code block opened at line %d is not closed before: %s\n", f, FNR, open, $0
+            open = 0; bad = 1 }
+        END { if (open) { printf "%s: the code block opened at line %d is never closed\n", f, open; bad = 1 }
+              exit bad }' "$d" >"$T/fences" || while IFS= read -r l; do bad "$l"; done <"$T/fences"
+done
+
 # ---- README length, lessons' Read: lines --------------------------------------
 lines=$(wc -l <README.md)
 [ "$lines" -le $README_MAX ] || bad "README.md has $lines lines, at most $README_MAX (move details to docs/)"

@@ -331,13 +331,21 @@ static void dot_synthetic_parses_back(void **state)
         agclose(g);
     }
 
-    /* cut below depth 1: root, its two children and one summary under 2 */
-    opt.max_depth = 1;
+    /* --depth 2 draws two levels: root, its two children and one summary under 2 */
+    opt.max_depth = 2;
     assert_int_equal(sidx_dot_write_events(b.ev, b.n, NULL, 0, &opt, path, &err), SIDX_OK);
     g = read_graph(path);
     assert_int_equal(agnnodes(g), 4);
     assert_int_equal(agnedges(g), 3);
     assert_non_null(strstr(node_attr(g, "cut2", "label"), "+2 nodes, 3 prims"));
+    assert_non_null(strstr(agget(g, "label"), "2 levels drawn"));
+    agclose(g);
+    /* --depth 1: the root alone, its subtree summarised */
+    opt.max_depth = 1;
+    assert_int_equal(sidx_dot_write_events(b.ev, b.n, NULL, 0, &opt, path, &err), SIDX_OK);
+    g = read_graph(path);
+    assert_int_equal(agnnodes(g), 2);
+    assert_int_equal(agnedges(g), 1);
     agclose(g);
 
     /* with the ray: order numbers, pruned node grey, hit leaf outlined */
@@ -352,6 +360,29 @@ static void dot_synthetic_parses_back(void **state)
     assert_string_equal(node_attr(g, "n1", "fillcolor"), "#d0d0d0");
     assert_string_not_equal(node_attr(g, "n4", "fillcolor"), "#d0d0d0");
     agclose(g);
+
+    /* a space partition's walk: the hit is found in leaf 3 (the triangle reaches past its
+     * cell), the walk goes on into leaf 4, skips the triangle there (mailbox) and stops in
+     * that cell: leaf 4 is outlined, where the walk ends, and leaf 3 is not */
+    {
+        evbuf k = r;
+        k.n--; /* drop RAY_END: the walk into leaf 4 goes on */
+        sidx_event *e = add(&k, SIDX_EV_MAILBOX_HIT);
+        e->prim = 6;
+        e = add(&k, SIDX_EV_TERMINATE);
+        e->reason = SIDX_TERM_HIT_IN_CELL;
+        e->t = 0.75f;
+        e = add(&k, SIDX_EV_RAY_END);
+        e->prim = 6;
+        e->t = 0.75f;
+        assert_int_equal(sidx_dot_write_events(b.ev, b.n, k.ev, k.n, &opt, path, &err), SIDX_OK);
+        g = read_graph(path);
+        assert_non_null(strstr(node_attr(g, "n4", "label"), "HIT prim 6"));
+        assert_string_equal(node_attr(g, "n4", "peripheries"), "2");
+        assert_null(strstr(node_attr(g, "n3", "label"), "HIT"));
+        assert_string_not_equal(node_attr(g, "n3", "peripheries"), "2");
+        agclose(g);
+    }
 
     /* bad extension, brute has no tree */
     assert_int_equal(sidx_dot_write_events(b.ev, b.n, NULL, 0, &opt, "/tmp/x.unknown", &err), SIDX_ERR_INVALID_ARG);
@@ -1572,6 +1603,49 @@ static void build_knobs_fill_options(void **state)
 /* Without a terminal: --panel adds the Current / Stack columns (deck 000,
  * kD-Tree Traversal), --step K prints K steps, --break TYPE stops on the
  * first TYPE event (exit 1 if there is none, 2 for no such type). */
+/* --panel lines fit 100 columns on deep trees with long stacks (the teapot's) and on the
+ * slide's scene with its t_split lines: long events wrap, long stacks keep their top entries
+ * and count the rest; no word of the event is lost. */
+static void step_panel_fits_100_columns(void **state)
+{
+    (void)state;
+    static const char *const runs[][2] = {
+        {"kdtree", "kd-slide --ray 10,5.5,0,-1,-0.15,0"},
+        {"kdtree", "kd-slide --ray 0,4.2,0,1,0.15,0"},
+        {"kdtree", "teapot --ray 0.3,1.5,5,0,0,-1"},
+        {"bvh", "teapot --ray 0.3,1.5,5,0,0,-1"},
+        {"octree", "teapot --ray 0.3,1.5,5,0,0,-1"},
+        {"kdtree", "flat2d --ray -0.28,5.78,0,1,0.225,0"},
+    };
+    for (size_t i = 0; i < sizeof runs / sizeof runs[0]; ++i) {
+        if (!sidx_accel_is_registered(runs[i][0])) continue;
+        char cmd[1024];
+        snprintf(cmd, sizeof cmd, "%s/sidx-step --accel %s %s --panel --all </dev/null", bin_dir, runs[i][0],
+                 runs[i][1]);
+        char *out = run_capture(cmd);
+        size_t longest = 0, words = 0;
+        for (const char *p = out; *p;) {
+            const char *e = strchr(p, '\n');
+            const size_t n = e ? (size_t)(e - p) : strlen(p);
+            if (n > longest) longest = n;
+            p += n + (e != NULL);
+        }
+        if (longest > 100) fail_msg("sidx-step --accel %s %s --panel: a line of %zu columns", runs[i][0], runs[i][1], longest);
+        /* the kd-tree's case text is all there, though wrapped */
+        for (const char *p = out; (p = strstr(p, "t_split=")) != NULL; ++p) words++;
+        if (!strcmp(runs[i][0], "kdtree") && words == 0) fail_msg("%s: no t_split in:\n%s", runs[i][1], out);
+        free(out);
+    }
+    if (sidx_accel_is_registered("kdtree")) {
+        char cmd[1024];
+        snprintf(cmd, sizeof cmd, "%s/sidx-step --accel kdtree kd-slide --ray 10,5.5,0,-1,-0.15,0 --panel </dev/null",
+                 bin_dir);
+        char *out = run_capture(cmd);
+        assert_non_null(strstr(out, "both: near then far"));
+        free(out);
+    }
+}
+
 static void step_panel_step_break(void **state)
 {
     (void)state;
@@ -1582,9 +1656,11 @@ static void step_panel_step_break(void **state)
     char *out = run_capture(cmd);
     /* the two pushes, then both on the stack (top first) while leaf 7 is visited;
      * both popped and dropped (they start beyond the hit at t = 2): nothing current */
-    assert_non_null(strstr(out, "push node 2  t=[6, 8]  (stack 0 -> 1)                                     | 1 [2, 8]             | 2 [6, 8]\n"));
-    assert_non_null(strstr(out, "node 7 enter  depth 3  t=[2, 2]                                     | 7 leaf [2, 2]        | 6 [4, 4]  2 [6, 8]\n"));
-    assert_non_null(strstr(out, "pop node 2  t=[6, 8]  (stack 1 -> 0)  dropped: t_near beyond the best hit |                      |\n"));
+    assert_non_null(strstr(out, "push node 2  t=[6, 8]  (stack 0 -> 1)                  | 1 [2, 8]             | 2 [6, 8]\n"));
+    assert_non_null(strstr(out, "node 7 enter  depth 3  t=[2, 2]                  | 7 leaf [2, 2]        | 6 [4, 4]  2 [6, 8]\n"));
+    /* an event too long for its column goes on below it, the panel beside its first line */
+    assert_non_null(strstr(out, "pop node 2  t=[6, 8]  (stack 1 -> 0)                   |                      |\n"
+                                "    dropped: t_near beyond the best hit                  |                      |\n"));
     free(out);
 
     snprintf(cmd, sizeof cmd, "%s/sidx-step %s --step 4 </dev/null", bin_dir, base);
@@ -1636,30 +1712,45 @@ static void step_kdtree_says_why(void **state)
     (void)state;
     if (!sidx_accel_is_registered("kdtree")) skip();
     char cmd[1024];
-    snprintf(cmd, sizeof cmd, "%s/sidx-step --accel kdtree teapot --ray 0,0.5,5,0,0,-1 --panel </dev/null", bin_dir);
+    /* the lines as they are (--panel wraps them into its column) */
+    snprintf(cmd, sizeof cmd, "%s/sidx-step --accel kdtree teapot --ray 0,0.5,5,0,0,-1 </dev/null", bin_dir);
     char *out = run_capture(cmd);
     assert_non_null(strstr(out, "  push node 2  t=[3, 7]  (stack 0 -> 1)  the ray lies in the split plane: both "
-                                "children are near "));
+                                "children are near\n"));
     const char *hit = strstr(out, "closest hit -> prim 459 t=3.1284");
     assert_non_null(hit);
     assert_non_null(strstr(hit, "  pop node 2  t=[3, 7]  (stack 1 -> 0)  the ray lies in the split plane: both "
-                                "children are near, so a hit in the other does not end the walk | 2 [3, 7]"));
+                                "children are near, so a hit in the other does not end the walk\n"));
+    assert_non_null(strstr(out, "pop node 447  t=[3.35164, 3.97861]  (stack 4 -> 3)  dropped: t_near beyond the best "
+                                "hit"));
     size_t dropped = 0;
+    for (const char *d = out; (d = strstr(d, "dropped: t_near beyond the best hit")) != NULL; ++d) dropped++;
+    free(out);
+    snprintf(cmd, sizeof cmd, "%s/sidx-step --accel kdtree teapot --ray 0,0.5,5,0,0,-1 --panel </dev/null", bin_dir);
+    out = run_capture(cmd);
+    /* the popped node is current */
+    hit = strstr(out, "closest hit -> prim 459 t=3.1284");
+    assert_non_null(hit);
+    const char *pop = strstr(hit, "  pop node 2  t=[3, 7]  (stack 1 -> 0)");
+    assert_non_null(pop);
+    const char *eol = strchr(pop, '\n'), *cur = strstr(pop, "| 2 [3, 7]");
+    assert_true(cur && eol && cur < eol);
+    /* a pop's first line: its Current column is empty exactly when the pop is dropped (as many
+     * as the plain lines say "dropped") */
+    size_t blank = 0;
     for (const char *line = out; *line; line = strchr(line, '\n') + 1) {
         const char *end = strchr(line, '\n');
         assert_non_null(end);
-        const char *d = strstr(line, "dropped: t_near beyond the best hit");
-        if (d && d < end) {
-            const char *bar = strstr(d, " | ");
-            assert_true(bar && bar < end);
-            for (const char *c = bar + 3; *c != '|'; ++c)
-                if (*c != ' ') fail_msg("a dropped node shown as current: %.*s", (int)(end - line), line);
-            ++dropped;
-        }
+        const char *pop = strstr(line, "  pop node ");
+        if (!pop || pop > end) continue;
+        const char *bar = strstr(pop, " | ");
+        assert_true(bar && bar < end);
+        int empty = 1;
+        for (const char *c = bar + 3; *c != '|'; ++c) empty &= *c == ' ';
+        blank += (size_t)empty;
     }
     assert_true(dropped >= 3);
-    assert_non_null(strstr(out, "pop node 447  t=[3.35164, 3.97861]  (stack 4 -> 3)  dropped: t_near beyond the best "
-                                "hit"));
+    assert_int_equal(blank, dropped);
     free(out);
 }
 
@@ -1673,9 +1764,15 @@ static void kd_slide_programs_show_labels(void **state)
     snprintf(cmd, sizeof cmd, "%s/sidx-step --accel kdtree kd-slide --ray 0,4.2,0,1,0.15,0 --panel </dev/null",
              bin_dir);
     char *out = run_capture(cmd);
-    assert_non_null(strstr(out, "  node 0 enter  depth 0  t=[1, 9.5]  x=4 at t_split=4: both: near then far  [A]"));
+    /* the columns name the nodes */
+    assert_non_null(strstr(out, "| A [1, 9.5]           |\n"));
     assert_non_null(strstr(out, "| B [1, 4]             | C [4, 9.5]\n"));
     assert_non_null(strstr(out, "| L4 leaf [4, 5.33333] | L5 [5.33333, 7.5]  L3 [7.5, 9.5]\n"));
+    free(out);
+    /* without them, the lines do */
+    snprintf(cmd, sizeof cmd, "%s/sidx-step --accel kdtree kd-slide --ray 0,4.2,0,1,0.15,0 </dev/null", bin_dir);
+    out = run_capture(cmd);
+    assert_non_null(strstr(out, "  node 0 enter  depth 0  t=[1, 9.5]  x=4 at t_split=4: both: near then far  [A]"));
     assert_non_null(strstr(out, "terminate: hit_in_cell  visited 8  best t=8.33333  [L3]"));
     free(out);
     /* the build: the note, and the leaves' reason */
@@ -1731,6 +1828,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(step_matches_expected),
         cmocka_unit_test(build_knobs_fill_options),
         cmocka_unit_test(step_panel_step_break),
+        cmocka_unit_test(step_panel_fits_100_columns),
         cmocka_unit_test(kd_slide_programs_show_labels),
         cmocka_unit_test(step_kdtree_says_why),
     };

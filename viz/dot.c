@@ -527,7 +527,9 @@ sidx_status sidx_dot_write_events(const sidx_event *build, size_t nbuild, const 
     c.t = &t;
     c.with_ray = with_ray;
     c.labels = o.labels;
-    c.cut_level = o.max_depth ? o.max_depth : SIDX_DOT_DEFAULT_DEPTH;
+    /* max_depth levels are drawn, depths 0 .. max_depth - 1; nodes at depth cut_level or more
+     * are not opened */
+    c.cut_level = (o.max_depth ? o.max_depth : SIDX_DOT_DEFAULT_DEPTH) - 1u;
     c.max_width = o.max_width ? o.max_width : SIDX_DOT_DEFAULT_WIDTH;
     c.max_nodes = o.max_nodes ? o.max_nodes : SIDX_DOT_DEFAULT_NODES;
     if (c.max_width < 2) c.max_width = 2; /* one drawn child and its "… more" box */
@@ -599,8 +601,8 @@ sidx_status sidx_dot_write_events(const sidx_event *build, size_t nbuild, const 
         if ((c.folds || c.closed) && n < sizeof title)
             n += (size_t)snprintf(title + n, sizeof title - n, "; %u nodes not drawn", c.folded_nodes + c.closed_nodes);
         if (c.summaries && n < sizeof title)
-            snprintf(title + n, sizeof title - n, "\\ncut below depth %u: %u subtrees summarised (%u nodes)",
-                     c.cut_level, c.summaries, c.cut_nodes);
+            snprintf(title + n, sizeof title - n, "\\n%u levels drawn: %u deeper subtrees summarised (%u nodes)",
+                     c.cut_level + 1u, c.summaries, c.cut_nodes);
     }
     set(c.g, "label", title);
     if (o.progress && !text) {

@@ -65,7 +65,9 @@ static void usage(FILE *f)
             "                     an event name (stack_push, node_enter, prim_test, ...), the\n"
             "                     part of it after or before '_' if unique (push, pop, enter,\n"
             "                     box, prim, hit, mailbox, terminate), or leaf (a leaf entered)\n"
-            "  --panel            add the Current / Stack columns to the printed lines\n"
+            "  --panel            add the Current / Stack columns to the printed lines, which\n"
+            "                     fit 100 columns: a long event wraps under itself, a deep\n"
+            "                     stack shows its top entries and counts the others\n"
             "  --all              do not wait between steps\n"
             "  --json             JSON Lines (one object per event) instead of text\n"
             "  --list             list the registered structures\n"
@@ -90,6 +92,7 @@ typedef struct steps {
     uint32_t *leaves;      /* sorted ids of the leaves (BUILD_LEAF) */
     size_t nleaves;
     int json, bounds, panel;
+    int columns;           /* --panel printed: the columns name the nodes, the lines carry no label */
     int width;             /* of the event column beside the panel: the longest traversal line */
     const sidx_accel *accel; /* its node labels name the nodes (sidx_accel_node_label) */
 } steps;
@@ -185,7 +188,8 @@ static char *step_text(const steps *s, size_t i, char *buf, size_t size)
         return out;
     }
     if ((size_t)n >= size) n = (int)size - 1;
-    const char *label = !s->json && names_node(ev) ? sidx_accel_node_label(s->accel, ev->node) : NULL;
+    const char *label = !s->json && !(s->columns && i >= s->nbuild) && names_node(ev)
+                            ? sidx_accel_node_label(s->accel, ev->node) : NULL;
     if (label) {
         const int k = snprintf(out + n, size - (size_t)n, "  [%s]", label);
         if (k > 0) n = (size_t)(n + k) < size ? n + k : (int)size - 1;
@@ -282,17 +286,91 @@ static void panel_text(const steps *s, const replay *r, char *cur, size_t csize,
 
 /* ---- without a terminal: print steps [0, end) -------------------------------------------- */
 
+/* --panel lines fit a terminal of PANEL_COLS columns: the event in a column of at most
+ * PANEL_EVENT_COLS, wider when the stack stays narrow (a longer event wraps at its spaces onto
+ * lines of its own, the panel beside its first line), the current node in PANEL_CUR_COLS, and the stack with as many entries from
+ * the top as fit, the others counted ("+3 more"). */
+#define PANEL_COLS 100
+#define PANEL_EVENT_COLS 41
+#define PANEL_CUR_COLS 20
+
+/* The length of the head of text printed on one line of cols columns: the whole text if it
+ * fits, else up to the last gap between two fields in the line's second half, else up to the
+ * last space, else cols. */
+static size_t wrap_at(const char *text, size_t cols)
+{
+    const size_t n = strlen(text);
+    if (n <= cols) return n;
+    for (size_t k = cols; k > cols / 2; --k) /* between two fields (they are two spaces apart) */
+        if (text[k] == ' ' && text[k - 1] == ' ') return k - 1;
+    for (size_t k = cols; k > 0; --k)
+        if (text[k] == ' ') return k;
+    return cols;
+}
+
+/* The stack entries (top first, separated by two spaces in stk) that fit in cols columns, and
+ * "+k more" for the rest. */
+static void fit_stack(const char *stk, int cols, char *out, size_t size)
+{
+    size_t total = 0, kept = 0, len = 0;
+    for (const char *p = stk; *p; ++total) { /* entries: "name [a, b]", split at "  " */
+        const char *q = strstr(p, "  ");
+        const size_t w = q ? (size_t)(q - p) : strlen(p);
+        /* the entry, a separator, and room for " +NN more" if entries follow */
+        const size_t need = len + (len ? 2 : 0) + w + (q ? 9 : 0);
+        if (kept == total && need <= (size_t)cols) {
+            len += (len ? 2 : 0) + w;
+            kept++;
+        }
+        p = q ? q + 2 : p + w;
+    }
+    if (len >= size) len = size - 1;
+    memcpy(out, stk, len);
+    out[len] = '\0';
+    if (kept < total)
+        snprintf(out + len, size - len, "%s+%zu more", len ? "  " : "", total - kept);
+}
+
 static void print_steps(const steps *s, size_t end)
 {
-    char buf[512], cur[96], stk[1024];
+    char buf[512], cur[96], stk[1024], fit[1024];
     replay r = {0};
     const int panel = s->panel && !s->json && has_panel(s);
+    /* the event column as wide as the widest stack leaves room for, at least PANEL_EVENT_COLS */
+    int ecols = PANEL_EVENT_COLS;
+    if (panel) {
+        size_t widest = 0;
+        for (size_t i = s->nbuild; i < end; ++i) {
+            replay_event(&r, s->ev[i]);
+            panel_text(s, &r, cur, sizeof cur, stk, sizeof stk);
+            if (strlen(stk) > widest) widest = strlen(stk);
+        }
+        r.n = 0;
+        r.has_cur = 0;
+        if ((int)widest < PANEL_COLS - PANEL_CUR_COLS - 6 - ecols) ecols = PANEL_COLS - PANEL_CUR_COLS - 6 - (int)widest;
+    }
+    if (s->width < ecols) ecols = s->width;
     for (size_t i = 0; i < end; ++i) {
         char *line = step_text(s, i, buf, sizeof buf);
         if (panel && i >= s->nbuild) {
             replay_event(&r, s->ev[i]);
             panel_text(s, &r, cur, sizeof cur, stk, sizeof stk);
-            printf("%-*s | %-20s |%s%s\n", s->width, line, cur, stk[0] ? " " : "", stk);
+            const int ccols = (int)strlen(cur) > PANEL_CUR_COLS ? (int)strlen(cur) : PANEL_CUR_COLS;
+            fit_stack(stk, PANEL_COLS - ecols - ccols - 6, fit, sizeof fit); /* " | ", " | " */
+            /* the event's own indentation, kept on its continuation lines (plus two) */
+            size_t indent = strspn(line, " ");
+            if (indent + 20 > (size_t)ecols) indent = ecols > 22 ? (size_t)ecols - 22 : 0;
+            const char *p = line;
+            size_t k = wrap_at(p, (size_t)ecols);
+            printf("%-*.*s | %-*s |%s%s\n", ecols, (int)k, p, PANEL_CUR_COLS, cur, fit[0] ? " " : "", fit);
+            for (p += k; *p == ' ' || *p; ) {
+                while (*p == ' ') ++p;
+                if (!*p) break;
+                k = wrap_at(p, (size_t)ecols - indent - 2);
+                printf("%*s%-*.*s |%*s|\n", (int)indent + 2, "", ecols - (int)indent - 2, (int)k, p,
+                       PANEL_CUR_COLS + 2, "");
+                p += k;
+            }
         } else {
             printf("%s\n", line);
         }
@@ -930,6 +1008,7 @@ int main(int argc, char **argv)
     s.bounds = bounds;
     s.panel = panel;
     s.accel = acc;
+    s.columns = panel && !json && has_panel(&s);
     if (s.n == 0) goto done;
     for (size_t i = s.nbuild; i < s.n; ++i) {
         char buf[512], *line = step_text(&s, i, buf, sizeof buf);

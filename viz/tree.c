@@ -336,6 +336,12 @@ void sidx_viz_tree_apply_ray(sidx_viz_tree *t, const sidx_event *ev, size_t n)
             t->hit_prim = e->prim;
             t->hit_t = e->t;
             break;
+        case SIDX_EV_TERMINATE:
+            /* A space partition finds a hit in one leaf (a triangle reaching past its cell) and
+             * stops in the leaf whose cell holds it ("hit in cell", deck 000 "kD-Tree
+             * Traversal"): the walk ends there, so that leaf is the one outlined. */
+            if (e->reason == SIDX_TERM_HIT_IN_CELL && current != SIDX_VIZ_NONE) hit_node = current;
+            break;
         case SIDX_EV_RAY_END:
             t->hit_prim = e->prim;
             t->hit_t = e->t;

@@ -105,7 +105,8 @@ void sidx_viz_tree_subtree(const sidx_viz_tree *t, uint32_t i, uint32_t *nodes, 
 #define SIDX_DOT_UNLIMITED UINT32_MAX
 
 typedef struct sidx_dot_options {
-    uint32_t max_depth;            /* deeper subtrees become one summary node; 0 =
+    uint32_t max_depth;            /* levels drawn (depths 0 .. max_depth - 1); deeper subtrees
+                                      become one summary node each; 0 =
                                       SIDX_DOT_DEFAULT_DEPTH; SIDX_DOT_ALL_DEPTHS = no cut */
     uint32_t max_width;            /* bottom boxes (drawn leaves, folds, summaries), about the
                                       drawing's width in boxes: nodes open best first (visited by
