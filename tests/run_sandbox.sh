@@ -152,17 +152,17 @@ contained() {
         [ ! -e "$f" ] || bad "$id: the hostile code wrote $f"
     done
     # ../../REL lands in the case's own directory, the sandbox's /: one write succeeds there
-    grep -q "write    ../../$REL  (case 1, 20 times: done inside its own directory)" "$R/hostile.txt" ||
+    grep -q "write    ../../$REL  (case 1, [0-9][0-9]* times: done inside its own directory)" "$R/hostile.txt" ||
         bad "$id: the write to ../../ is not reported as kept inside"
     grep -q "escape: wrote 1 read 0 connected 0 forks 0 signalled 0" "$R/hostile.txt" ||
         { bad "$id: the hostile code got out:"; grep "escape:" "$R/hostile.txt" | head -3; }
-    grep -q "write    $T/out/escape-tmp.txt  (case 1, 20 times: No such file or directory)" "$R/hostile.txt" ||
+    grep -q "write    $T/out/escape-tmp.txt  (case 1, [0-9][0-9]* times: No such file or directory)" "$R/hostile.txt" ||
         bad "$id: the write to /tmp is not reported as refused"
-    grep -q "connect  127.0.0.1:$PORT  (case 1, 20 times: Network is unreachable)" "$R/hostile.txt" ||
+    grep -q "connect  127.0.0.1:$PORT  (case 1, [0-9][0-9]* times: Network is unreachable)" "$R/hostile.txt" ||
         bad "$id: the connection is not reported as refused"
-    grep -q "process  fork  (case 1, 20 times: Resource temporarily unavailable)" "$R/hostile.txt" ||
+    grep -q "process  fork  (case 1, [0-9][0-9]* times: Resource temporarily unavailable)" "$R/hostile.txt" ||
         bad "$id: the fork loop is not reported as stopped"
-    grep -q "signal   signal 0 to every process (kill -1)  (case 1, 20 times: No such process)" "$R/hostile.txt" ||
+    grep -q "signal   signal 0 to every process (kill -1)  (case 1, [0-9][0-9]* times: No such process)" "$R/hostile.txt" ||
         bad "$id: kill(-1) is not reported as reaching nothing"
     grep "^| hostile |" "$R/summary.md" | grep -qF "| pass (escape attempt) |" || bad "$id: the summary's table does not mark the attempt"
     grep -q "NOT CONTAINED" "$R/summary.md" "$R/hostile.txt" && bad "$id: contained, but the report says NOT CONTAINED"
