@@ -123,7 +123,7 @@ static int board_walls(const sidx_mesh *board, sidx_mesh *out, sidx_error *err)
         return 0;
     }
     for (uint32_t i = 0; i < n; ++i) {
-        sidx_vec3 v[3], end[2];
+        sidx_vec3 v[3], end[2] = {{0, 0, 0}, {0, 0, 0}};
         int ends = 0;
         for (int k = 0; k < 3; ++k) v[k] = board->positions[board->indices[3 * i + k]];
         for (int k = 0; k < 3 && ends < 2; ++k) { /* where the edges cross z = 0 */

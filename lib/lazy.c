@@ -72,6 +72,8 @@ void *sidx__lazy_claim(sidx__lazy *L, uint32_t index, const sidx_hook *hook)
             /* publish: the pointer, then the state with release */
             p->built = part;
             __atomic_store_n(&p->state, SIDX__LAZY_BUILT, __ATOMIC_RELEASE);
+            /* part is the expansion's own memory; &made only receives its counts */
+            /* cppcheck-suppress returnDanglingLifetime */
             return part;
         }
         /* busy: another thread is building it; wait */

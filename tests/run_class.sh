@@ -164,6 +164,11 @@ line=$(grep -n 'volatile int \*)0' "$C/s26-crash/03_ray_box.c" | cut -d: -f1)
 grep -q "at $C/s26-crash/03_ray_box.c:$line, in ray_box()" "$R/s26-crash.txt" ||
     bad "the crash does not name s26-crash/03_ray_box.c:$line"
 grep -q "crash at 03_ray_box.c:$line" "$R/summary.md" || bad "summary.md does not name the crash's line"
+# a failing case as a page, linked from the summary; none for a pass
+[ -s "$R/s13-miss-inverted--03_ray_box.html" ] || bad "no page for s13-miss-inverted's failing case"
+grep -q "(\[report\](s13-miss-inverted.txt), \[page\](s13-miss-inverted--03_ray_box.html))" "$R/summary.md" ||
+    bad "summary.md does not link s13-miss-inverted's page"
+[ ! -e "$R/s01-good--03_ray_box.html" ] || bad "a page for a submission that passes"
 # a capped output: the first lines, the rest counted, the verdict last
 grep -q 'more lines of your output not shown' "$R/s24-spam.txt" || bad "the endless printf's output is not counted"
 [ "$(grep -c '^  | spam' "$R/s24-spam.txt")" -eq 20 ] || bad "the endless printf shows other than 20 lines"

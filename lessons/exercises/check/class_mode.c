@@ -196,7 +196,15 @@ int ck_class_mode(const char *dir, const char *out_arg, long jobs, char **pass, 
                 char file[PATH_MAX];
                 snprintf(file, sizeof file, "%s/%s/%s.c", dir, students[j->student], ck_exercises[j->ex].name);
                 printf("$ sidx-check %s %s\n", ck_exercises[j->ex].name, file);
-                const int rc = check_one(j->ex, file, pass, npass, j->summary);
+                /* a failing case also as a page, STUDENT--NAME.html (written
+                 * only when the check fails; the summary links it) */
+                char page[2 * PATH_MAX + 64], *args[48];
+                int na = 0;
+                for (int k = 0; k < npass && na < 44; ++k) args[na++] = pass[k];
+                snprintf(page, sizeof page, "%s/%s--%s.html", out, students[j->student], ck_exercises[j->ex].name);
+                args[na++] = "--html";
+                args[na++] = page;
+                const int rc = check_one(j->ex, file, args, na, j->summary);
                 fflush(stdout);
                 _exit(rc);
             }
@@ -377,6 +385,13 @@ int ck_class_mode(const char *dir, const char *out_arg, long jobs, char **pass, 
         }
         fprintf(md, " ([report](");
         md_text(md, rep);
+        char page[2 * PATH_MAX + 64];
+        snprintf(page, sizeof page, "%s/%s--%s.html", out, students[j->student], ck_exercises[j->ex].name);
+        if (access(page, R_OK) == 0) {
+            fprintf(md, "), [page](");
+            md_text(md, students[j->student]);
+            fprintf(md, "--%s.html", ck_exercises[j->ex].name);
+        }
         fprintf(md, "))\n");
     }
     fclose(md);

@@ -14,6 +14,7 @@
  * divergence, 2 the student's code crashed or ran out of time (or the
  * checker could not run). */
 #define _GNU_SOURCE /* REG_RIP, dl_iterate_phdr */
+#include <dirent.h>
 #include <errno.h>
 #include <execinfo.h>
 #include <fcntl.h>
@@ -608,6 +609,38 @@ static double now_s(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
+/* The CPU seconds so far of every process in process group pgrp (a
+ * case's processes: the sandbox's first one and the student's below it),
+ * from /proc/PID/stat: utime and stime, fields 14 and 15, in clock ticks;
+ * 0 where /proc cannot be read. */
+static double group_cpu_seconds(pid_t pgrp)
+{
+    DIR *d = opendir("/proc");
+    if (!d) return 0;
+    const double tick = (double)sysconf(_SC_CLK_TCK);
+    double total = 0;
+    struct dirent *e;
+    while ((e = readdir(d))) {
+        if (e->d_name[0] < '1' || e->d_name[0] > '9') continue;
+        char path[64], line[1024];
+        snprintf(path, sizeof path, "/proc/%.20s/stat", e->d_name);
+        FILE *f = fopen(path, "r");
+        if (!f) continue;
+        const size_t n = fread(line, 1, sizeof line - 1, f);
+        fclose(f);
+        line[n] = '\0';
+        /* after the command's closing parenthesis: state ppid pgrp ... */
+        const char *p = strrchr(line, ')');
+        long group = 0;
+        unsigned long long ut = 0, stt = 0;
+        if (p && sscanf(p + 1, " %*c %*d %ld %*d %*d %*d %*u %*u %*u %*u %*u %llu %llu", &group, &ut, &stt) == 3 &&
+            group == (long)pgrp && tick > 0)
+            total += (double)(ut + stt) / tick;
+    }
+    closedir(d);
+    return total;
+}
+
 /* *cpu: the time-out was spent computing (an endless loop), not waiting. */
 /* The mark the child writes after each case of a run of several (its
  * node: the case's index): no event type of the library has this value. */
@@ -680,10 +713,15 @@ static run_status run_student(size_t i, size_t last, unsigned timeout, ex_trace 
     const double deadline = now_s() + (cx.wall_cap > 0 && cx.wall_cap < timeout ? cx.wall_cap : timeout);
     size_t bytes = 0;
     int killed_output = 0, killed_time = 0, open_ = 1, st = 0, reaped = 0, busy = 0;
+    double group_cpu = 0;
     char buf[65536];
     while (!reaped) {
         const double left = deadline - now_s();
         if (left <= 0) {
+            /* before the kill: the student's process is a grandchild (the
+             * sandbox's first process stands between), whose CPU time no
+             * wait of ours would count once the group is killed */
+            group_cpu = group_cpu_seconds(pid);
             kill(-pid, SIGKILL);
             kill(pid, SIGKILL);
             killed_time = 1;
@@ -720,12 +758,13 @@ static run_status run_student(size_t i, size_t last, unsigned timeout, ex_trace 
     if (!reaped)
         while (wait4(pid, &st, 0, &ru) < 0 && errno == EINTR) {
         }
-    /* out of time: computing (an endless loop) if it used a tenth of the
-     * time on the CPU (on a busy machine a loop gets a small share), else
-     * waiting (sleep, a read: next to no CPU time) */
+    /* out of time: computing (an endless loop) if it used a fiftieth of
+     * the time on the CPU (on a busy machine, a class checked two at a
+     * time beside other work, a loop may get a tenth of a core), else
+     * waiting (sleep, a read: a millisecond or two) */
     if (killed_time)
-        busy = (double)ru.ru_utime.tv_sec + (double)ru.ru_stime.tv_sec +
-                   1e-6 * (double)(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec) > 0.1 * timeout;
+        busy = group_cpu + (double)ru.ru_utime.tv_sec + (double)ru.ru_stime.tv_sec +
+                   1e-6 * (double)(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec) > 0.02 * timeout;
     kill(-pid, SIGKILL); /* whatever it left behind */
     close(pfd[0]);
     remove_tree(casedir);
