@@ -44,17 +44,6 @@
 #include <cmocka.h>
 #include "common/testkit.h"
 
-#if defined(__SANITIZE_ADDRESS__)
-#define UNDER_ASAN 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define UNDER_ASAN 1
-#endif
-#endif
-#ifndef UNDER_ASAN
-#define UNDER_ASAN 0
-#endif
-
 static char checker[PATH_MAX + 32];
 
 static int find_checker(void)
@@ -779,12 +768,12 @@ static void diagnosis_and_differs(void **state)
     unlink(summary);
     /* a leaf never reached: the node's own range is split again and again */
     rc = check_planted("11_bvh_build", "    if (nl == 0) {\n", "    if (nl == 0 && count == 0) {\n", "", &out);
-    if (rc != 2 || (!UNDER_ASAN && !strstr(out, "does the recursion reach its base case?"))) print_message("%s", out);
+    if (rc != 2 || (!TK_UNDER_ASAN && !strstr(out, "does the recursion reach its base case?"))) print_message("%s", out);
     assert_int_equal(rc, 2);
     /* Under AddressSanitizer the student's code is instrumented too, and
      * this mistake's first out-of-bounds write ends it before the stack
      * overflows: the report is ASan's, with no recursion to tell of. */
-    if (!UNDER_ASAN) {
+    if (!TK_UNDER_ASAN) {
         assert_non_null(strstr(out, "crashed: signal 11"));
         assert_non_null(strstr(out, "endless recursion (the stack overflowed)"));
     }

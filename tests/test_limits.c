@@ -32,17 +32,6 @@
 #include <unistd.h>
 #include "common/testkit.h"
 
-#if defined(__SANITIZE_ADDRESS__)
-#define UNDER_ASAN 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define UNDER_ASAN 1
-#endif
-#endif
-#ifndef UNDER_ASAN
-#define UNDER_ASAN 0
-#endif
-
 /* Every tree's depth cap (BVH_DEPTH_LIMIT, KD_MAX_DEPTH, BSP_MAX_DEPTH are
  * 64; octree 24, grid2 6, irregular grid 16, rayclass 24). */
 #define DEPTH_CAP 64u
@@ -304,7 +293,7 @@ static sidx_status parse_bad(const bad_file *f, sidx_error *err)
 static void test_loaders_refuse_huge_counts_without_allocating(void **state)
 {
     (void)state;
-    const int limit_memory = !UNDER_ASAN && !tk_fast_tests();
+    const int limit_memory = !TK_UNDER_ASAN && !tk_fast_tests();
     for (size_t i = 0; i < sizeof huge_headers / sizeof huge_headers[0]; ++i) {
         const bad_file *f = &huge_headers[i];
         sidx_error err = {SIDX_OK, ""};

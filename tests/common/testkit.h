@@ -37,6 +37,19 @@ sidx_vec3 tk_rng_in_box(tk_rng *r, sidx_aabb b); /* uniform point of b (z drawn 
 
 typedef struct tk_rayrec { float o[3], d[3], tmin, tmax; } tk_rayrec; /* 32 bytes on disk */
 typedef struct tk_hitrec { float t; int32_t prim; float u, v; } tk_hitrec; /* 16 bytes on disk */
+/* TK_UNDER_ASAN: 1 in a build with AddressSanitizer (gcc or clang), where
+ * some checks read ASan's own report instead of the program's message. */
+#if defined(__SANITIZE_ADDRESS__)
+#define TK_UNDER_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define TK_UNDER_ASAN 1
+#endif
+#endif
+#ifndef TK_UNDER_ASAN
+#define TK_UNDER_ASAN 0
+#endif
+
 #define TK_RAY_BYTES 32u
 #define TK_HIT_BYTES 16u
 
