@@ -155,11 +155,19 @@ typedef struct kd_fast_stack {
     const kd_tree *tree[KD_MAX_DEPTH + 2];
 } kd_fast_stack;
 
-static SIDX_INLINE void kd_slide_push(kd_slide_stack *s, unsigned *size, kd_slide_entry e, const kd_at *at,
+static SIDX_INLINE void kd_slide_push(kd_slide_stack *s, unsigned *size, const kd_slide_entry *e, const kd_at *at,
                                       const int fetch)
 {
     if (fetch == KD_FETCH_LAZY) s->tree[*size] = at->tree;
-    s->entry[(*size)++] = e;
+    s->entry[(*size)++] = *e;
+}
+
+/* The naive walk's order: the left child first whatever the ray's direction. */
+static SIDX_INLINE void kd_slide_swap(kd_slide_entry *x, kd_slide_entry *y)
+{
+    const kd_slide_entry t = *x;
+    *x = *y;
+    *y = t;
 }
 
 static SIDX_INLINE kd_slide_entry kd_slide_pop(const kd_slide_stack *s, unsigned *size, kd_at *at, const int fetch)
@@ -245,7 +253,6 @@ static SIDX_INLINE int kd_walk_slide(const sidx_accel *a, const sidx_ray *r, con
     kd_leaves leaves;
     uint32_t mbox[KD_MAILBOX];
     kd_leaves_init(&leaves, a, r, mbox, best_t, traced);
-
     kd_slide_stack stack;
     unsigned stack_size = 0;
     uint32_t node = 0, depth = 0, visited = 0;
@@ -260,8 +267,7 @@ static SIDX_INLINE int kd_walk_slide(const sidx_accel *a, const sidx_ray *r, con
             /* "Near and far depend on direction of ray!" */
             const uint32_t left = kd_child(n), negative = r->sign[axis];
             const uint32_t near_child = left + negative, far_child = left + 1u - negative;
-            /* "Three cases" ("kD-Tree Traversal Operation"), each bound
-             * widened by 2γ₃ (edge cases above) */
+            /* "Three cases" ("kD-Tree Traversal Operation"), bounds widened by 2γ₃ (edge cases above) */
             const int split_case = t_split < t_near - fabsf(t_near) * KD_TS_EPS  ? SIDX_SPLIT_FAR_ONLY
                                    : t_split > t_far + fabsf(t_far) * KD_TS_EPS ? SIDX_SPLIT_NEAR_ONLY
                                                                                 : SIDX_SPLIT_BOTH;
@@ -275,46 +281,37 @@ static SIDX_INLINE int kd_walk_slide(const sidx_accel *a, const sidx_ray *r, con
             } else if (split_case == SIDX_SPLIT_NEAR_ONLY) {
                 node = near_child; /* the plane lies beyond the cell: near child only */
             } else {
-                /* both: push (far_child, t_split, t_far), go on with
-                 * (near_child, t_near, t_split); t_split clamped into the
-                 * interval (NaN keeps the whole interval on both sides) */
+                /* both: push (far_child, t_split, t_far), go on with (near_child, t_near, t_split);
+                 * t_split clamped into the interval (NaN keeps the whole interval on both sides) */
                 const int in_plane = t_split != t_split; /* both children are near */
                 if (in_plane) may_stop = 0;
                 kd_slide_entry far_entry = {far_child, depth, t_split > t_near ? t_split : t_near, t_far, in_plane};
                 kd_slide_entry near_entry = {near_child, depth, t_near, t_split < t_far ? t_split : t_far, in_plane};
-                if (naive && negative) { /* naive: the left child first */
-                    const kd_slide_entry left_entry = far_entry;
-                    far_entry = near_entry;
-                    near_entry = left_entry;
-                }
-                kd_slide_push(&stack, &stack_size, far_entry, &at, fetch);
+                if (naive && negative) kd_slide_swap(&far_entry, &near_entry); /* naive: the left child first */
+                kd_slide_push(&stack, &stack_size, &far_entry, &at, fetch);
                 /* result SIDX_STACK_IN_PLANE: the ray lies in the split plane (docs/events.md) */
                 SIDX_EMIT(traced, q->hook, SIDX_EV_STACK_PUSH, e_.ray_id = q->ray_id;
                           e_.node = kd_event_id(&at, far_entry.node, fetch); e_.depth = stack_size;
                           e_.t_near = far_entry.t_near; e_.t_far = far_entry.t_far;
                           e_.result = in_plane ? SIDX_STACK_IN_PLANE : -1);
-                node = near_entry.node;
-                t_near = near_entry.t_near;
-                t_far = near_entry.t_far;
+                node = near_entry.node, t_near = near_entry.t_near, t_far = near_entry.t_far;
             }
             continue;
         }
 
         SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id; e_.node = kd_event_id(&at, node, fetch);
                   e_.depth = depth; e_.t_near = t_near; e_.t_far = t_far);
-        /* A leaf: test its triangles.  "Traversal can be terminated as soon
-         * as surface intersection is found in the current node": stop if
-         * the best hit lies in this cell; a hit beyond it is kept but the
-         * walk goes on ("CANNOT terminate !!!", Traversal (10)).  An empty
-         * leaf: nothing to test, on to the next cell (edge cases above). */
+        /* A leaf: test its triangles (kd_test_leaf).  "Traversal can be terminated as soon as
+         * surface intersection is found in the current node": stop if the best hit lies in this
+         * cell; a hit beyond it is kept but the walk goes on ("CANNOT terminate !!!", Traversal
+         * (10)).  An empty leaf: nothing to test, on to the next cell (edge cases above). */
         if (kd_count(n) != 0) {
-            if (kd_test_leaf(a, r, q, &leaves, mbox, at.tree->blocks, n, kd_event_id(&at, node, fetch), visited,
-                             traced, any))
-                return 1;
+            const uint32_t id = kd_event_id(&at, node, fetch);
+            if (kd_test_leaf(a, r, q, &leaves, mbox, at.tree->blocks, n, id, visited, traced, any)) return 1;
             if (leaves.found && may_stop && leaves.best_t < t_far - fabsf(t_far) * KD_TS_EPS) {
                 SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id;
                           e_.reason = SIDX_TERM_HIT_IN_CELL; e_.t = leaves.best_t; e_.count = visited;
-                          e_.node = kd_event_id(&at, node, fetch); e_.t_near = t_near; e_.t_far = t_far);
+                          e_.node = id; e_.t_near = t_near; e_.t_far = t_far);
                 kd_finish(a, r, q, &leaves, hit);
                 return 1;
             }
@@ -335,14 +332,10 @@ static SIDX_INLINE int kd_walk_slide(const sidx_accel *a, const sidx_ray *r, con
             SIDX_EMIT(traced, q->hook, SIDX_EV_STACK_POP, e_.ray_id = q->ray_id;
                       e_.node = kd_event_id(&at, next.node, fetch); e_.depth = stack_size + 1u;
                       e_.t_near = next.t_near; e_.t_far = next.t_far;
-                      e_.result = !enter        ? SIDX_STACK_DROPPED
-                                  : next.in_plane ? SIDX_STACK_IN_PLANE
-                                                  : SIDX_STACK_ENTERED);
+                      e_.result = !enter ? SIDX_STACK_DROPPED
+                                  : next.in_plane ? SIDX_STACK_IN_PLANE : SIDX_STACK_ENTERED);
             if (enter) {
-                node = next.node;
-                depth = next.depth;
-                t_near = next.t_near;
-                t_far = next.t_far;
+                node = next.node, depth = next.depth, t_near = next.t_near, t_far = next.t_far;
                 break;
             }
         }
