@@ -27,6 +27,10 @@
  *                  Used for every other query: it is what the measurements
  *                  chose; it reads less like the slide.
  *
+ * Each is written once and compiled twice: for a built tree and for a
+ * lazy one, the copies differing only in how they read a node (kd_fetch,
+ * below), so the walks carry no trace of lazy building.
+ *
  * The rules for rounding, ±0 directions, rays inside a split plane and
  * empty leaves are written once, above kd_walk_slide; the fast walk keeps
  * every one of them.  Leaves, events and entry points come last.
@@ -142,6 +146,14 @@ static SIDX_INLINE uint32_t kd_event_id(const kd_at *at, uint32_t node, const in
     return fetch == KD_FETCH_LAZY ? kd_id(at->tree, node) : node;
 }
 
+/* The naive walk's order: the left child first whatever the ray's direction. */
+static SIDX_INLINE void kd_slide_swap(kd_slide_entry *x, kd_slide_entry *y)
+{
+    const kd_slide_entry t = *x;
+    *x = *y;
+    *y = t;
+}
+
 /* The walks' stacks.  Beside each entry a lazy walk keeps the tree its
  * node is in, restored when the entry is taken; an eager walk never
  * touches those. */
@@ -155,19 +167,12 @@ typedef struct kd_fast_stack {
     const kd_tree *tree[KD_MAX_DEPTH + 2];
 } kd_fast_stack;
 
+/* "push (far child, t_split, t_max) onto stack", and pop it again. */
 static SIDX_INLINE void kd_slide_push(kd_slide_stack *s, unsigned *size, const kd_slide_entry *e, const kd_at *at,
                                       const int fetch)
 {
     if (fetch == KD_FETCH_LAZY) s->tree[*size] = at->tree;
     s->entry[(*size)++] = *e;
-}
-
-/* The naive walk's order: the left child first whatever the ray's direction. */
-static SIDX_INLINE void kd_slide_swap(kd_slide_entry *x, kd_slide_entry *y)
-{
-    const kd_slide_entry t = *x;
-    *x = *y;
-    *y = t;
 }
 
 static SIDX_INLINE kd_slide_entry kd_slide_pop(const kd_slide_stack *s, unsigned *size, kd_at *at, const int fetch)
