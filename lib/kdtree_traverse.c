@@ -252,9 +252,9 @@ static SIDX_INLINE int kd_walk_slide(const sidx_accel *a, const sidx_ray *r, con
     const float origin[3] = {r->org.x, r->org.y, r->org.z};
     const float inv_dir[3] = {r->inv_dir.x, r->inv_dir.y, r->inv_dir.z};
     const float best_t = any ? r->tmax : hit->t; /* the closest hit so far bounds every test */
+    kd_at at = kd_at_root(a, traced ? q->hook : NULL);
     float t_near, t_far;
     if (!kd_enter_root(a, r, q, best_t, &t_near, &t_far, traced, fetch)) return 0;
-    kd_at at = kd_at_root(a, traced ? q->hook : NULL);
     kd_leaves leaves;
     uint32_t mbox[KD_MAILBOX];
     kd_leaves_init(&leaves, a, r, mbox, best_t, traced);
@@ -366,9 +366,9 @@ static SIDX_INLINE int kd_walk_fast(const sidx_accel *a, const sidx_ray *r, cons
     const float inv_dir[3] = {r->inv_dir.x, r->inv_dir.y, r->inv_dir.z};
     const uint32_t negative[3] = {r->sign[0], r->sign[1], r->sign[2]};
     const float best_t = any ? r->tmax : hit->t; /* the closest hit so far bounds every test */
+    kd_at at = kd_at_root(a, NULL);
     float t_near, t_far;
     if (!kd_enter_root(a, r, q, best_t, &t_near, &t_far, 0, fetch)) return 0;
-    kd_at at = kd_at_root(a, NULL);
     kd_leaves leaves;
     uint32_t mbox[KD_MAILBOX];
     kd_leaves_init(&leaves, a, r, mbox, best_t, 0);
