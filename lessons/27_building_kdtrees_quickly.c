@@ -30,7 +30,8 @@
  *      box.  One image from the street with a shadow ray per hit: how
  *      many buildings it built, and its hits against the eager city's.
  *
- * Read:  lib/kdtree_build.c, sidx__kd_lazy_expand; lib/instance.c, sidx_aggregate_build_meshes
+ * Read:  lib/kdtree_build.c, kd_expand; lib/lazy.c, sidx__lazy_claim;
+ *        lib/instance.c, sidx_aggregate_build_meshes
  * Run:   build/lessons/27_building_kdtrees_quickly [SCENE]
  *        SCENE = a built-in scene name or .obj/.ply (default stadium:2048)
  */

@@ -24,7 +24,6 @@
  * a triangle that straddles a plane is clipped to each child cell
  * (Sutherland–Hodgman on the triangle polygon) and its candidate planes in
  * the child come from the clipped box, not from the triangle's full box. */
-#include <sched.h>
 #include <stdio.h>
 #include "kdtree_internal.h"
 
@@ -188,8 +187,6 @@ static sidx_status lazy_defer(kd_builder *b, uint32_t idx, uint32_t parent, uint
     rec->input = input;
     if (cnt) memcpy(rec->cnt, cnt, sizeof rec->cnt);
     b->nodes[idx] = kd_make_unbuilt(r);
-    L->unbuilt++;
-    L->unbuilt_refs += n;
     return SIDX_OK;
 }
 
@@ -901,8 +898,9 @@ static void kd_free(const sidx_accel *a, kd_tree *kd)
     if (L) {
         for (uint32_t r = 0; r < L->num_recs; ++r) {
             sidx__free(a, L->recs[r].input);
-            kd_free(a, L->recs[r].sub);
+            if (L->parts) kd_free(a, sidx__lazy_peek(&L->life, r));
         }
+        sidx__free(a, L->parts);
         sidx__free(a, L->recs);
         sidx__free(a, L->tris);
         sidx__free(a, L);
@@ -940,6 +938,8 @@ sidx_status sidx__kd_make_blocks(const sidx_accel *a, kd_tree *kd, const sidx_me
     }
     return SIDX_OK;
 }
+
+static void *kd_expand(void *owner, uint32_t r, const sidx_hook *hook, sidx__lazy_made *made);
 
 static sidx_status kd_build(sidx_accel *a, kd_given *given, sidx_error *err)
 {
@@ -1058,16 +1058,19 @@ static sidx_status kd_build(sidx_accel *a, kd_given *given, sidx_error *err)
     kd->c_tri = b.c_tri;
     kd->empty_bonus = bonus;
     if (kd->lazy) {
+        /* one part of lazy.c per unbuilt node, each waiting for a ray */
         kd_lazy *L = kd->lazy;
+        L->parts = sidx__calloc(a, L->num_recs ? L->num_recs : 1u, sizeof *L->parts);
+        if (!L->parts) {
+            kd_free(a, kd);
+            return sidx__fail(err, SIDX_ERR_NOMEM, "%s: out of memory", a->name);
+        }
+        sidx__lazy_init(&L->life, L->parts, L->num_recs, kd_expand, a);
+        for (uint32_t r = 0; r < L->num_recs; ++r) sidx__lazy_defer(&L->life, r, L->recs[r].count);
         L->leaf_size = b.leaf_size;
         L->max_depth = b.max_depth;
         L->bins = b.bins;
         L->next_id = kd->num_nodes;
-        L->built_nodes = kd->num_nodes;
-        L->built_leaves = b.leaves;
-        L->empty_leaves = b.empty_leaves;
-        L->max_depth_seen = b.depth;
-        L->built_refs = kd->num_refs;
         kd->sah_cost = 0.0; /* the SAH of a tree not yet whole: not given (sidx_accel_stats) */
         a->lazy = 1;
     }
@@ -1135,18 +1138,25 @@ void sidx__kd_stats(const sidx_accel *a, sidx_accel_stats *s)
     s->sah_cost = kd->sah_cost;
     const kd_lazy *L = kd->lazy;
     if (L) {
-        s->nodes = __atomic_load_n(&L->built_nodes, __ATOMIC_RELAXED);
-        s->leaves = __atomic_load_n(&L->built_leaves, __ATOMIC_RELAXED);
-        s->empty_leaves = __atomic_load_n(&L->empty_leaves, __ATOMIC_RELAXED);
-        s->max_depth = __atomic_load_n(&L->max_depth_seen, __ATOMIC_RELAXED);
-        s->prim_refs = __atomic_load_n(&L->built_refs, __ATOMIC_RELAXED);
-        s->unbuilt = __atomic_load_n(&L->unbuilt, __ATOMIC_RELAXED);
-        s->unbuilt_prims = __atomic_load_n(&L->unbuilt_refs, __ATOMIC_RELAXED);
+        /* the top tree and the subtrees built so far (each replaces the
+         * unbuilt node it was counted as); lazy.c's counters for the rest */
+        const sidx__lazy_counts c = sidx__lazy_counts_get(&L->life);
+        for (uint32_t r = 0; r < L->num_recs; ++r) {
+            const kd_tree *sub = sidx__lazy_peek(&L->life, r);
+            if (!sub) continue;
+            s->nodes += sub->num_nodes - 1u;
+            s->leaves += sub->leaves;
+            s->empty_leaves += sub->empty_leaves;
+            s->prim_refs += sub->num_refs;
+        }
+        if (c.max_depth > s->max_depth) s->max_depth = c.max_depth;
+        s->unbuilt = c.unbuilt;
+        s->unbuilt_prims = c.unbuilt_refs;
         const uint32_t built_full = s->leaves - s->empty_leaves;
         s->mean_leaf_prims = built_full ? (double)s->prim_refs / (double)built_full : 0.0;
-        /* the subtrees built, the records, the triangle copies and the unbuilt nodes' inputs */
-        s->bytes += __atomic_load_n(&L->built_bytes, __ATOMIC_RELAXED) + sizeof *L +
-                    (size_t)L->num_recs * sizeof *L->recs + (size_t)a->mesh->num_triangles * sizeof *L->tris +
+        /* the subtrees built, the records and parts, the triangle copies and the unbuilt nodes' inputs */
+        s->bytes += c.built_bytes + sizeof *L + (size_t)L->num_recs * (sizeof *L->recs + sizeof *L->parts) +
+                    (size_t)a->mesh->num_triangles * sizeof *L->tris +
                     (size_t)s->unbuilt_prims * (a->variant == KD_VARIANT_SAH ? 6u * sizeof(kd_event) : sizeof(kd_ref));
     }
 }
@@ -1226,19 +1236,18 @@ static kd_tree *expand_once(const sidx_accel *a, const kd_tree *kd, const kd_laz
     return sub;
 }
 
-static void atomic_max_u32(uint32_t *p, uint32_t v)
+/* The expand function of the tree's parts (lazy.h): part r is the subtree
+ * of record r, its event ids taken once its size is known; for a query
+ * with a build hook the same build once more with those ids, for the
+ * events (kd_lazy).  lazy.c calls it on the one thread that claimed the
+ * part and publishes what it returns; NULL (out of memory) keeps nothing
+ * and leaves the record's input as it was, for a later try. */
+static void *kd_expand(void *owner, uint32_t r, const sidx_hook *hook, sidx__lazy_made *made)
 {
-    uint32_t cur = __atomic_load_n(p, __ATOMIC_RELAXED);
-    while (cur < v && !__atomic_compare_exchange_n(p, &cur, v, 1, __ATOMIC_RELAXED, __ATOMIC_RELAXED)) {
-    }
-}
-
-/* The subtree of rec, its event ids taken once its size is known; for a
- * query with a build hook the same build once more with those ids, for
- * the events (kd_lazy). */
-static kd_tree *expand_build(const sidx_accel *a, kd_tree *kd, kd_lazy_rec *rec, const sidx_hook *hook)
-{
+    const sidx_accel *a = owner;
+    kd_tree *kd = a->impl;
     kd_lazy *L = kd->lazy;
+    kd_lazy_rec *rec = &L->recs[r];
     kd_tree *sub = expand_once(a, kd, rec, NULL, 0);
     if (!sub) return NULL;
     const uint32_t id_base = __atomic_fetch_add(&L->next_id, sub->num_nodes - 1u, __ATOMIC_RELAXED);
@@ -1247,42 +1256,13 @@ static kd_tree *expand_build(const sidx_accel *a, kd_tree *kd, kd_lazy_rec *rec,
               e_.parent = rec->parent; e_.depth = rec->depth; e_.count = rec->count; e_.bounds = rec->cell);
     if (hook && hook->fn && (hook->mask == 0 || (hook->mask & (SIDX_EVMASK_BUILD & ~SIDX_EVMASK(SIDX_EV_BUILD_LAZY_EXPAND)))))
         kd_free(a, expand_once(a, kd, rec, hook, id_base)); /* events only; without memory they stop short */
-    sidx__free(a, rec->input);
+    sidx__free(a, rec->input); /* built: no later expansion reads it */
     rec->input = NULL;
-    __atomic_fetch_add(&L->built_nodes, sub->num_nodes - 1u, __ATOMIC_RELAXED); /* the node itself was counted */
-    __atomic_fetch_add(&L->built_leaves, sub->leaves, __ATOMIC_RELAXED);
-    __atomic_fetch_add(&L->empty_leaves, sub->empty_leaves, __ATOMIC_RELAXED);
-    __atomic_fetch_add(&L->built_refs, (uint64_t)sub->num_refs, __ATOMIC_RELAXED);
-    __atomic_fetch_add(&L->built_bytes,
-                       (uint64_t)(sizeof *sub + (size_t)sub->num_nodes * sizeof(kd_node) +
-                                  (size_t)sub->num_refs * sizeof(uint32_t) + (size_t)sub->num_blocks * sizeof(tri4_block)),
-                       __ATOMIC_RELAXED);
-    __atomic_fetch_sub(&L->unbuilt, 1u, __ATOMIC_RELAXED);
-    __atomic_fetch_sub(&L->unbuilt_refs, (uint64_t)rec->count, __ATOMIC_RELAXED);
-    atomic_max_u32(&L->max_depth_seen, sub->max_depth);
+    made->refs = rec->count;
+    made->bytes = sizeof *sub + (size_t)sub->num_nodes * sizeof(kd_node) + (size_t)sub->num_refs * sizeof(uint32_t) +
+                  (size_t)sub->num_blocks * sizeof(tri4_block);
+    made->depth = sub->max_depth;
     return sub;
-}
-
-const kd_tree *sidx__kd_lazy_expand(const sidx_accel *a, uint32_t r, const sidx_hook *hook)
-{
-    kd_tree *kd = a->impl;
-    kd_lazy_rec *rec = &kd->lazy->recs[r];
-    for (unsigned spins = 0;; ++spins) {
-        uint32_t st = __atomic_load_n(&rec->state, __ATOMIC_ACQUIRE);
-        if (st == KD_LAZY_BUILT) return __atomic_load_n(&rec->sub, __ATOMIC_ACQUIRE);
-        if (st == KD_LAZY_UNBUILT) {
-            if (!__atomic_compare_exchange_n(&rec->state, &st, KD_LAZY_BUSY, 0, __ATOMIC_ACQ_REL, __ATOMIC_ACQUIRE))
-                continue;
-            kd_tree *sub = expand_build(a, kd, rec, hook);
-            if (sub) __atomic_store_n(&rec->sub, sub, __ATOMIC_RELEASE);
-            __atomic_store_n(&rec->state, sub ? KD_LAZY_BUILT : KD_LAZY_UNBUILT, __ATOMIC_RELEASE);
-            if (!sub) sidx__lazy_note_failure();
-            return sub;
-        }
-        /* BUSY: another thread is building it; wait (kd_lazy) */
-        if (spins < 64) SIDX_SPIN_PAUSE();
-        else sched_yield();
-    }
 }
 
 /* ==== the read-only view (sidx/kdtree.h) =================================== */

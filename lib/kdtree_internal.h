@@ -45,6 +45,7 @@
 #include "sidx_internal.h"
 #include "sidx/kdtree.h"
 #include "tri4.h" /* tri4_block, tri4_test */
+#include "lazy.h"
 
 /* Low 2 bits of kd_node.bits: the split axis, or 3 for a leaf. */
 #define KD_LEAF_FLAG 3u
@@ -142,31 +143,23 @@ static inline uint32_t kd_id(const kd_tree *t, uint32_t node) { return node ? t-
  * event lists for the SAH builder, its clipped reference boxes for the
  * others).
  *
- * The first ray to enter the node builds its subtree with the same
- * recursion and parameters on that input, into arrays of its own (a kd_tree
+ * Each record is one part of lazy.c (lazy.h), which owns its life: claim,
+ * wait, publish, failure and the counters.  The part's expand function
+ * (kdtree_build.c) builds the subtree with the same recursion and
+ * parameters on the record's input, into arrays of its own (a kd_tree
  * whose node 0 is the unbuilt node's subtree root): the eager tree's
  * subtree, node for node, split for split, leaf for leaf, with the leaf
  * references in the same order.  A kd-tree's subtree size is known only
  * once it is built (straddling triangles are duplicated), so it cannot be
- * given slots in the top tree's arrays beforehand as the BVH's can.
+ * given slots in the top tree's arrays beforehand.  Neither the top tree's
+ * nodes nor a published subtree are ever written again.
  *
  * The walk: an unbuilt node is a leaf to the eager walk's tests; the lazy
- * copies of the walks (a `lazy` template flag) see its mark, take the
- * record's subtree (an acquire load; sidx__kd_lazy_expand when it is
- * NULL) and go on at its node 0 with the subtree's nodes and blocks; each
- * stack entry remembers the subtree it belongs to.  Nothing else changes,
- * so the eager copies compile to the same code.
- *
- * Publication: the expanding thread writes the subtree's arrays, then the
- * record's `sub` (release), then its state (release).  Neither the top
- * tree's nodes nor a published subtree are ever written again, so no
- * walk reads a word while it is written and no lock is taken on built
- * paths.  One thread expands a node (compare-and-swap of its state from
- * UNBUILT to BUSY); another that arrives meanwhile waits for it (spinning,
- * then yielding), as the BVH's do (bvh_internal.h).  Out of memory: the
- * partial subtree is freed, nothing is published, the state returns to
- * UNBUILT and the walk skips the node, the query returning SIDX_ERR_NOMEM
- * (sidx__lazy_note_failure); a later ray tries again.
+ * copies of the walks read their nodes through a fetch that, meeting the
+ * mark, takes the subtree from sidx__lazy_get and goes on at its node 0
+ * (kdtree_traverse.c, kd_fetch).  Out of memory: nothing is published, the
+ * walk passes the node over as an empty leaf and the query returns
+ * SIDX_ERR_NOMEM (lazy.c); a later ray tries again.
  *
  * Event ids: an untraced expansion needs none, and takes its range
  * (id_base) from lazy->next_id once the subtree's size is known.  A query
@@ -174,27 +167,23 @@ static inline uint32_t kd_id(const kd_tree *t, uint32_t node) { return node ? t-
  * ids, for its events alone (kdtree_build.c, expand_build), so the ids of
  * a fully expanded tree are 0 .. the eager tree's node count − 1. */
 #define KD_LAZY_COUNT 0xFFFFFFFFu
-enum { KD_LAZY_UNBUILT = 0, KD_LAZY_BUSY = 1, KD_LAZY_BUILT = 2 };
 
 typedef struct kd_lazy_rec {
-    uint32_t state;                 /* KD_LAZY_*, atomic */
     uint32_t node, parent, depth;   /* the unbuilt node's id, its parent's and its depth */
     uint32_t count, bad;            /* its references; the look-ahead count on its path */
     sidx_aabb cell;
     void *input;                    /* SAH: 3 sorted event lists, cnt[k] long; else count kd_refs */
     size_t cnt[3];
-    kd_tree *sub;                   /* the built subtree; atomic, NULL until published */
 } kd_lazy_rec;
 
 typedef struct kd_lazy {
+    sidx__lazy life;                /* part r: the subtree of recs[r] (lazy.h) */
+    sidx__lazy_part *parts;         /* num_recs, for life */
     kd_lazy_rec *recs;
     uint32_t num_recs;
     kd_tri *tris;                   /* the build's triangle copies, kept for the expansions' clipping */
     uint32_t leaf_size, max_depth, bins; /* the build's resolved parameters */
     uint32_t next_id;               /* the next free event id; atomic */
-    /* what is built so far; atomic (expansions add, stats read) */
-    uint32_t built_nodes, built_leaves, empty_leaves, max_depth_seen, unbuilt;
-    uint64_t built_refs, unbuilt_refs, built_bytes;
 } kd_lazy;
 
 static inline kd_node kd_make_unbuilt(uint32_t rec)
@@ -205,20 +194,6 @@ static inline kd_node kd_make_unbuilt(uint32_t rec)
     return n;
 }
 static inline int kd_is_unbuilt(const kd_node *n) { return kd_is_leaf(n) && n->u.count == KD_LAZY_COUNT; }
-
-/* Builds the subtree of lazy record r, or waits for the thread building
- * it; returns it, or NULL when the memory for it could not be had.  Build
- * events go to hook (the query's; NULL = none). */
-const kd_tree *sidx__kd_lazy_expand(const sidx_accel *a, uint32_t r, const sidx_hook *hook);
-
-/* The subtree behind the unbuilt node n, as a walk of a lazy tree reads it. */
-static SIDX_INLINE const kd_tree *kd_lazy_sub(const sidx_accel *a, const kd_node *n, const sidx_hook *hook)
-{
-    const kd_tree *kd = a->impl;
-    const kd_tree *sub = __atomic_load_n(&kd->lazy->recs[kd_offset(n)].sub, __ATOMIC_ACQUIRE);
-    if (SIDX_LIKELY(sub != NULL)) return sub;
-    return sidx__kd_lazy_expand(a, kd_offset(n), hook);
-}
 
 /* Registry variants (a->variant). */
 enum {

@@ -27,6 +27,10 @@
  *                  Used for every other query: it is what the measurements
  *                  chose; it reads less like the slide.
  *
+ * Each is written once and compiled twice: for a built tree and for a
+ * lazy one, the copies differing only in how they read a node (kd_fetch,
+ * below), so the walks carry no trace of lazy building.
+ *
  * The rules for rounding, ±0 directions, rays inside a split plane and
  * empty leaves are written once, above kd_walk_slide; the fast walk keeps
  * every one of them.  Leaves, events and entry points come last.
@@ -76,14 +80,129 @@ typedef struct kd_leaves {
 } kd_leaves;
 
 static SIDX_INLINE int kd_enter_root(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, float best_t,
-                                     float *t_near, float *t_far, const int traced, const int lazy);
+                                     float *t_near, float *t_far, const int traced, const int fetch);
 static SIDX_INLINE void kd_leaves_init(kd_leaves *L, const sidx_accel *a, const sidx_ray *r, uint32_t *mbox,
                                        float best_t, const int traced);
 static SIDX_INLINE int kd_test_leaf(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, kd_leaves *L,
-                                    uint32_t *mbox, const tri4_block *sub_blocks, const kd_node *leaf, uint32_t node,
+                                    uint32_t *mbox, const tri4_block *blocks, const kd_node *leaf, uint32_t node,
                                     uint32_t visited, const int traced, const int any);
 static SIDX_INLINE void kd_finish(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, const kd_leaves *L,
                                   sidx_hit *hit);
+
+/* ==== reading nodes: the one difference of the lazy copies =================== */
+
+/* How a walk reads its nodes, a compile-time constant of each copy (the
+ * entry points at the end): KD_FETCH_TREE reads the tree's array;
+ * KD_FETCH_LAZY, for a lazy tree (kd_lazy, kdtree_internal.h), may meet an
+ * unbuilt node and then goes on in that node's subtree, which has arrays of
+ * its own.  Everything a lazy copy does besides is in the helpers below,
+ * so the walks are written once and their eager copies compile to the
+ * code they had before lazy trees. */
+enum { KD_FETCH_TREE = 0, KD_FETCH_LAZY = 1 };
+
+/* Where a walk reads: the tree its node indices address (the whole tree,
+ * or the subtree a lazy walk has entered), its nodes, and for a lazy walk
+ * the parts of lazy.c and the hook its expansions report to. */
+typedef struct kd_at {
+    const kd_tree *tree;
+    const kd_node *nodes;  /* tree->nodes */
+    sidx__lazy *life;      /* KD_FETCH_LAZY: the unbuilt nodes' subtrees */
+    const sidx_hook *hook; /* KD_FETCH_LAZY: build events of an expansion (traced queries) */
+} kd_at;
+
+static SIDX_INLINE kd_at kd_at_root(const sidx_accel *a, const sidx_hook *hook)
+{
+    const kd_tree *kd = a->impl;
+    const kd_at at = {kd, kd->nodes, kd->lazy ? &kd->lazy->life : NULL, hook};
+    return at;
+}
+
+/* Stands in for an unbuilt node whose subtree could not be built for want
+ * of memory: the walk passes it over as an empty leaf, and the query
+ * returns SIDX_ERR_NOMEM (lazy.c). */
+static const kd_node kd_unbuildable = {{.count = 0u}, KD_LEAF_FLAG};
+
+/* Node *node of the tree the walk is in.  A lazy walk that meets an
+ * unbuilt node takes its subtree from lazy.c (sidx__lazy_get: one acquire
+ * load when built; else built now, or waited for) and reads the subtree's
+ * node 0, its root, in its stead. */
+static SIDX_INLINE const kd_node *kd_fetch(kd_at *at, uint32_t *node, const int fetch)
+{
+    const kd_node *n = &at->nodes[*node];
+    if (fetch == KD_FETCH_LAZY && SIDX_UNLIKELY(kd_is_unbuilt(n))) {
+        const kd_tree *sub = sidx__lazy_get(at->life, kd_offset(n), at->hook);
+        if (!sub) return &kd_unbuildable;
+        at->tree = sub;
+        at->nodes = sub->nodes;
+        *node = 0;
+        return sub->nodes;
+    }
+    return n;
+}
+
+/* A node's id in the events: its index, or in a lazy tree kd_id's. */
+static SIDX_INLINE uint32_t kd_event_id(const kd_at *at, uint32_t node, const int fetch)
+{
+    return fetch == KD_FETCH_LAZY ? kd_id(at->tree, node) : node;
+}
+
+/* The naive walk's order: the left child first whatever the ray's direction. */
+static SIDX_INLINE void kd_slide_swap(kd_slide_entry *x, kd_slide_entry *y)
+{
+    const kd_slide_entry t = *x;
+    *x = *y;
+    *y = t;
+}
+
+/* The walks' stacks.  Beside each entry a lazy walk keeps the tree its
+ * node is in, restored when the entry is taken; an eager walk never
+ * touches those. */
+typedef struct kd_slide_stack {
+    kd_slide_entry entry[KD_MAX_DEPTH + 2];
+    const kd_tree *tree[KD_MAX_DEPTH + 2];
+} kd_slide_stack;
+
+typedef struct kd_fast_stack {
+    kd_stack_entry entry[KD_MAX_DEPTH + 2];
+    const kd_tree *tree[KD_MAX_DEPTH + 2];
+} kd_fast_stack;
+
+/* "push (far child, t_split, t_max) onto stack", and pop it again. */
+static SIDX_INLINE void kd_slide_push(kd_slide_stack *s, unsigned *size, const kd_slide_entry *e, const kd_at *at,
+                                      const int fetch)
+{
+    if (fetch == KD_FETCH_LAZY) s->tree[*size] = at->tree;
+    s->entry[(*size)++] = *e;
+}
+
+static SIDX_INLINE kd_slide_entry kd_slide_pop(const kd_slide_stack *s, unsigned *size, kd_at *at, const int fetch)
+{
+    --*size;
+    if (fetch == KD_FETCH_LAZY) {
+        at->tree = s->tree[*size];
+        at->nodes = at->tree->nodes;
+    }
+    return s->entry[*size];
+}
+
+/* The fast walk writes its top entry at every step and keeps it only in
+ * the "both" case; it goes back to an entry's tree once it enters it. */
+static SIDX_INLINE void kd_fast_put(kd_fast_stack *s, unsigned top, uint32_t node, float t_near, float t_far,
+                                    const kd_at *at, const int fetch)
+{
+    s->entry[top].node = node;
+    s->entry[top].t_near = t_near;
+    s->entry[top].t_far = t_far;
+    if (fetch == KD_FETCH_LAZY) s->tree[top] = at->tree;
+}
+
+static SIDX_INLINE void kd_fast_enter(const kd_fast_stack *s, unsigned top, kd_at *at, const int fetch)
+{
+    if (fetch == KD_FETCH_LAZY) {
+        at->tree = s->tree[top];
+        at->nodes = at->tree->nodes;
+    }
+}
 
 /* ==== the slide walk ========================================================= */
 
@@ -118,50 +237,34 @@ static SIDX_INLINE void kd_finish(const sidx_accel *a, const sidx_ray *r, const 
  *     the slide walk enters it and goes straight on to the next cell (no
  *     stop test there, as the fast walk makes none), so both stop alike. */
 
-/* The deck's loop, one node per iteration.  Returns 1 when something was
- * hit; for closest-hit queries `hit` then carries the best hit.
+/* The deck's loop ("kD-Tree Traversal: Inner Loop"), one node per
+ * iteration; pbrt-v4's KdTreeAggregate::Intersect is the same loop.
+ * Returns 1 when something was hit; for closest-hit queries `hit` then
+ * carries the best hit.  A leaf's triangles are tested by one call,
+ * kd_test_leaf (SIMD blocks, mailbox), as tinybvh keeps its leaf test.
  * naive: SIDX_TRAVERSE_NAIVE, the deck's naive variant — the left child
  * first whatever the ray's direction, every overlapped cell visited, no
- * early termination.
- * lazy: a lazy tree (kd_lazy, kdtree_internal.h): an unbuilt node is
- * built (or waited for) and the walk goes on in its subtree, `cur`; an
- * unbuilt node that cannot be built for want of memory is passed over as
- * an empty leaf (the query reports it).  Event node ids are kd_id's. */
+ * early termination.  fetch: how nodes are read (kd_fetch; a lazy tree's
+ * walk builds the subtrees it enters). */
 static SIDX_INLINE int kd_walk_slide(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit,
-                                     const int traced, const int any, const int naive, const int lazy)
+                                     const int traced, const int any, const int naive, const int fetch)
 {
-    const kd_tree *kd = a->impl;
-    const kd_tree *cur = kd;                  /* lazy: the subtree the walk is in */
-    const kd_node *nodes = kd->nodes;
-    const kd_tree *subs[KD_MAX_DEPTH + 2];    /* lazy: the subtree of each stack entry */
-    static const kd_node unbuildable = {{.count = 0u}, KD_LEAF_FLAG}; /* an empty leaf in its stead */
     const float origin[3] = {r->org.x, r->org.y, r->org.z};
     const float inv_dir[3] = {r->inv_dir.x, r->inv_dir.y, r->inv_dir.z};
     const float best_t = any ? r->tmax : hit->t; /* the closest hit so far bounds every test */
+    kd_at at = kd_at_root(a, traced ? q->hook : NULL);
     float t_near, t_far;
-    if (!kd_enter_root(a, r, q, best_t, &t_near, &t_far, traced, lazy)) return 0;
+    if (!kd_enter_root(a, r, q, best_t, &t_near, &t_far, traced, fetch)) return 0;
     kd_leaves leaves;
     uint32_t mbox[KD_MAILBOX];
     kd_leaves_init(&leaves, a, r, mbox, best_t, traced);
-
-    kd_slide_entry stack[KD_MAX_DEPTH + 2];
+    kd_slide_stack stack;
     unsigned stack_size = 0;
     uint32_t node = 0, depth = 0, visited = 0;
     int may_stop = !naive; /* early termination allowed (off once the ray runs inside a plane) */
 
-    for (;;) {
-        const kd_node *n = lazy ? &nodes[node] : &kd->nodes[node];
-        if (lazy && SIDX_UNLIKELY(kd_is_unbuilt(n))) {
-            const kd_tree *sub = kd_lazy_sub(a, n, traced ? q->hook : NULL);
-            if (sub) {
-                cur = sub;
-                nodes = sub->nodes;
-                node = 0;
-                n = nodes;
-            } else {
-                n = &unbuildable;
-            }
-        }
+    for (;;) { /* "Given (node, t_near, t_far)" */
+        const kd_node *n = kd_fetch(&at, &node, fetch);
         ++visited;
         if (!kd_is_leaf(n)) {
             const uint32_t axis = kd_axis(n);
@@ -169,64 +272,51 @@ static SIDX_INLINE int kd_walk_slide(const sidx_accel *a, const sidx_ray *r, con
             /* "Near and far depend on direction of ray!" */
             const uint32_t left = kd_child(n), negative = r->sign[axis];
             const uint32_t near_child = left + negative, far_child = left + 1u - negative;
-            /* "Three cases" ("kD-Tree Traversal Operation"), each bound
-             * widened by 2γ₃ (edge cases above) */
+            /* "Three cases" ("kD-Tree Traversal Operation"), bounds widened by 2γ₃ (edge cases above) */
             const int split_case = t_split < t_near - fabsf(t_near) * KD_TS_EPS  ? SIDX_SPLIT_FAR_ONLY
                                    : t_split > t_far + fabsf(t_far) * KD_TS_EPS ? SIDX_SPLIT_NEAR_ONLY
                                                                                 : SIDX_SPLIT_BOTH;
             /* the node's plane, t_split and the case taken (docs/events.md) */
             SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id;
-                      e_.node = lazy ? kd_id(cur, node) : node; e_.depth = depth; e_.t_near = t_near; e_.t_far = t_far;
+                      e_.node = kd_event_id(&at, node, fetch); e_.depth = depth; e_.t_near = t_near; e_.t_far = t_far;
                       e_.axis = (int32_t)axis; e_.pos = n->u.split; e_.t = t_split; e_.result = split_case);
             ++depth;
             if (split_case == SIDX_SPLIT_FAR_ONLY) {
-                /* the plane lies before the cell: far child only */
-                node = far_child;
+                node = far_child; /* the plane lies before the cell: far child only */
             } else if (split_case == SIDX_SPLIT_NEAR_ONLY) {
-                /* the plane lies beyond the cell: near child only */
-                node = near_child;
+                node = near_child; /* the plane lies beyond the cell: near child only */
             } else {
-                /* both: push (far_child, t_split, t_far), go on with
-                 * (near_child, t_near, t_split); t_split clamped into the
-                 * interval (NaN keeps the whole interval on both sides) */
+                /* both: push (far_child, t_split, t_far), go on with (near_child, t_near, t_split);
+                 * t_split clamped into the interval (NaN keeps the whole interval on both sides) */
                 const int in_plane = t_split != t_split; /* both children are near */
                 if (in_plane) may_stop = 0;
                 kd_slide_entry far_entry = {far_child, depth, t_split > t_near ? t_split : t_near, t_far, in_plane};
                 kd_slide_entry near_entry = {near_child, depth, t_near, t_split < t_far ? t_split : t_far, in_plane};
-                if (naive && negative) { /* naive: the left child first */
-                    const kd_slide_entry left_entry = far_entry;
-                    far_entry = near_entry;
-                    near_entry = left_entry;
-                }
-                if (lazy) subs[stack_size] = cur;
-                stack[stack_size++] = far_entry;
+                if (naive && negative) kd_slide_swap(&far_entry, &near_entry); /* naive: the left child first */
+                kd_slide_push(&stack, &stack_size, &far_entry, &at, fetch);
                 /* result SIDX_STACK_IN_PLANE: the ray lies in the split plane (docs/events.md) */
                 SIDX_EMIT(traced, q->hook, SIDX_EV_STACK_PUSH, e_.ray_id = q->ray_id;
-                          e_.node = lazy ? kd_id(cur, far_entry.node) : far_entry.node;
-                          e_.depth = stack_size; e_.t_near = far_entry.t_near; e_.t_far = far_entry.t_far;
+                          e_.node = kd_event_id(&at, far_entry.node, fetch); e_.depth = stack_size;
+                          e_.t_near = far_entry.t_near; e_.t_far = far_entry.t_far;
                           e_.result = in_plane ? SIDX_STACK_IN_PLANE : -1);
-                node = near_entry.node;
-                t_near = near_entry.t_near;
-                t_far = near_entry.t_far;
+                node = near_entry.node, t_near = near_entry.t_near, t_far = near_entry.t_far;
             }
             continue;
         }
 
-        SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id; e_.node = lazy ? kd_id(cur, node) : node;
+        SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id; e_.node = kd_event_id(&at, node, fetch);
                   e_.depth = depth; e_.t_near = t_near; e_.t_far = t_far);
-        /* A leaf: test its triangles.  "Traversal can be terminated as soon
-         * as surface intersection is found in the current node": stop if
-         * the best hit lies in this cell; a hit beyond it is kept but the
-         * walk goes on ("CANNOT terminate !!!", Traversal (10)).  An empty
-         * leaf: nothing to test, on to the next cell (edge cases above). */
+        /* A leaf: test its triangles (kd_test_leaf).  "Traversal can be terminated as soon as
+         * surface intersection is found in the current node": stop if the best hit lies in this
+         * cell; a hit beyond it is kept but the walk goes on ("CANNOT terminate !!!", Traversal
+         * (10)).  An empty leaf: nothing to test, on to the next cell (edge cases above). */
         if (kd_count(n) != 0) {
-            if (kd_test_leaf(a, r, q, &leaves, mbox, lazy ? cur->blocks : NULL, n, lazy ? kd_id(cur, node) : node,
-                             visited, traced, any))
-                return 1;
+            const uint32_t id = kd_event_id(&at, node, fetch);
+            if (kd_test_leaf(a, r, q, &leaves, mbox, at.tree->blocks, n, id, visited, traced, any)) return 1;
             if (leaves.found && may_stop && leaves.best_t < t_far - fabsf(t_far) * KD_TS_EPS) {
                 SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id;
                           e_.reason = SIDX_TERM_HIT_IN_CELL; e_.t = leaves.best_t; e_.count = visited;
-                          e_.node = lazy ? kd_id(cur, node) : node; e_.t_near = t_near; e_.t_far = t_far);
+                          e_.node = id; e_.t_near = t_near; e_.t_far = t_far);
                 kd_finish(a, r, q, &leaves, hit);
                 return 1;
             }
@@ -241,24 +331,16 @@ static SIDX_INLINE int kd_walk_slide(const sidx_accel *a, const sidx_ray *r, con
                 if (leaves.found && !any) kd_finish(a, r, q, &leaves, hit);
                 return leaves.found;
             }
-            const kd_slide_entry next = stack[--stack_size];
+            const kd_slide_entry next = kd_slide_pop(&stack, &stack_size, &at, fetch);
             const int enter = naive || next.t_near <= leaves.best_t + fabsf(leaves.best_t) * KD_TS_EPS;
             /* result: dropped, entered, or entered with the ray in its parent's split plane */
             SIDX_EMIT(traced, q->hook, SIDX_EV_STACK_POP, e_.ray_id = q->ray_id;
-                      e_.node = lazy ? kd_id(subs[stack_size], next.node) : next.node;
-                      e_.depth = stack_size + 1u; e_.t_near = next.t_near; e_.t_far = next.t_far;
-                      e_.result = !enter        ? SIDX_STACK_DROPPED
-                                  : next.in_plane ? SIDX_STACK_IN_PLANE
-                                                  : SIDX_STACK_ENTERED);
+                      e_.node = kd_event_id(&at, next.node, fetch); e_.depth = stack_size + 1u;
+                      e_.t_near = next.t_near; e_.t_far = next.t_far;
+                      e_.result = !enter ? SIDX_STACK_DROPPED
+                                  : next.in_plane ? SIDX_STACK_IN_PLANE : SIDX_STACK_ENTERED);
             if (enter) {
-                node = next.node;
-                depth = next.depth;
-                t_near = next.t_near;
-                t_far = next.t_far;
-                if (lazy) {
-                    cur = subs[stack_size];
-                    nodes = cur->nodes;
-                }
+                node = next.node, depth = next.depth, t_near = next.t_near, t_far = next.t_far;
                 break;
             }
         }
@@ -275,33 +357,30 @@ static SIDX_INLINE int kd_walk_slide(const sidx_accel *a, const sidx_ray *r, con
  * children of a node share 16 bytes, usually one cache line, and one of
  * them is the next load anyway: peeking at both lets the walk skip empty
  * leaves (the SAH's "big empty cells") instead of entering each and
- * popping right back.  Untraced: no events.  lazy: as in kd_walk_slide
+ * popping right back.  Untraced: no events.  fetch: as in kd_walk_slide
  * (an unbuilt node is never empty, so the walk enters it). */
 static SIDX_INLINE int kd_walk_fast(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit,
-                                    const int any, const int lazy)
+                                    const int any, const int fetch)
 {
-    const kd_tree *kd = a->impl;
-    const kd_node *nodes = kd->nodes;
-    const kd_tree *cur = kd;               /* lazy: the subtree the walk is in */
-    const kd_tree *subs[KD_MAX_DEPTH + 2]; /* lazy: the subtree of each stack entry */
     const float origin[3] = {r->org.x, r->org.y, r->org.z};
     const float inv_dir[3] = {r->inv_dir.x, r->inv_dir.y, r->inv_dir.z};
     const uint32_t negative[3] = {r->sign[0], r->sign[1], r->sign[2]};
     const float best_t = any ? r->tmax : hit->t; /* the closest hit so far bounds every test */
+    kd_at at = kd_at_root(a, NULL);
     float t_near, t_far;
-    if (!kd_enter_root(a, r, q, best_t, &t_near, &t_far, 0, lazy)) return 0;
+    if (!kd_enter_root(a, r, q, best_t, &t_near, &t_far, 0, fetch)) return 0;
     kd_leaves leaves;
     uint32_t mbox[KD_MAILBOX];
     kd_leaves_init(&leaves, a, r, mbox, best_t, 0);
 
-    kd_stack_entry stack[KD_MAX_DEPTH + 2];
+    kd_fast_stack stack;
     unsigned stack_size = 0;
     int may_stop = 1;
     uint32_t node = 0;
     const uint64_t empty = kd_word_empty();
 
     for (;;) {
-        const kd_node *n = &nodes[node];
+        const kd_node *n = kd_fetch(&at, &node, fetch);
         while (!kd_is_leaf(n)) {
             const uint32_t axis = kd_axis(n);
             const float t_split = (n->u.split - origin[axis]) * inv_dir[axis];
@@ -312,31 +391,20 @@ static SIDX_INLINE int kd_walk_fast(const sidx_accel *a, const sidx_ray *r, cons
             /* NaN compares false both ways: "both", whole interval on each side */
             const float far_t_near = t_split > t_near ? t_split : t_near;
             const float near_t_far = t_split < t_far ? t_split : t_far;
-            const uint64_t near_word = kd_word(&nodes[near_child]), far_word = kd_word(&nodes[far_child]);
+            const uint64_t near_word = kd_word(&at.nodes[near_child]), far_word = kd_word(&at.nodes[far_child]);
             const int enter_near = !far_only & (near_word != empty);
             const int enter_far = !near_only & (far_word != empty);
-            stack[stack_size].node = far_child;
-            stack[stack_size].t_near = far_t_near;
-            stack[stack_size].t_far = t_far;
-            if (lazy) subs[stack_size] = cur;
+            kd_fast_put(&stack, stack_size, far_child, far_t_near, t_far, &at, fetch);
             stack_size += (unsigned)(enter_near & enter_far);
             if (SIDX_UNLIKELY(t_split != t_split)) may_stop = 0; /* ray inside the plane: intervals overlap */
             if (SIDX_UNLIKELY(!(enter_near | enter_far))) goto pop;
             node = enter_near ? near_child : far_child;
             t_near = enter_near ? t_near : far_t_near;
             t_far = enter_near ? near_t_far : t_far;
-            n = &nodes[node];
+            n = kd_fetch(&at, &node, fetch);
         }
 
-        if (lazy && SIDX_UNLIKELY(kd_is_unbuilt(n))) {
-            const kd_tree *sub = kd_lazy_sub(a, n, NULL);
-            if (!sub) goto pop; /* passed over; the query reports it */
-            cur = sub;
-            nodes = sub->nodes;
-            node = 0;
-            continue;
-        }
-        if (kd_test_leaf(a, r, q, &leaves, mbox, lazy ? cur->blocks : NULL, n, node, 0, 0, any)) return 1;
+        if (kd_test_leaf(a, r, q, &leaves, mbox, at.tree->blocks, n, node, 0, 0, any)) return 1;
         if (leaves.found && may_stop && leaves.best_t < t_far - fabsf(t_far) * KD_TS_EPS) {
             kd_finish(a, r, q, &leaves, hit);
             return 1;
@@ -348,14 +416,11 @@ static SIDX_INLINE int kd_walk_fast(const sidx_accel *a, const sidx_ray *r, cons
                 return leaves.found;
             }
             --stack_size;
-            node = stack[stack_size].node;
-            t_near = stack[stack_size].t_near;
-            t_far = stack[stack_size].t_far;
+            node = stack.entry[stack_size].node;
+            t_near = stack.entry[stack_size].t_near;
+            t_far = stack.entry[stack_size].t_far;
             if (t_near <= leaves.best_t + fabsf(leaves.best_t) * KD_TS_EPS) {
-                if (lazy) {
-                    cur = subs[stack_size];
-                    nodes = cur->nodes;
-                }
+                kd_fast_enter(&stack, stack_size, &at, fetch);
                 break;
             }
         }
@@ -462,11 +527,9 @@ static SIDX_NOINLINE int kd_block_scalar(const sidx_accel *a, const sidx_ray *r,
  * inside a block costs nothing, and gives the same answer (the same t,
  * not below the best it set). */
 static SIDX_INLINE int kd_test_leaf(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, kd_leaves *L,
-                                    uint32_t *mbox, const tri4_block *sub_blocks, const kd_node *leaf, uint32_t node,
+                                    uint32_t *mbox, const tri4_block *blocks, const kd_node *leaf, uint32_t node,
                                     uint32_t visited, const int traced, const int any)
 {
-    const kd_tree *kd = a->impl; /* its blocks unless the leaf is in a lazy tree's subtree (sub_blocks) */
-    const tri4_block *const blocks = sub_blocks ? sub_blocks : kd->blocks;
     const uint32_t count = kd_count(leaf), offset = kd_offset(leaf);
     (void)visited;
 #if KD_SIMD
@@ -525,10 +588,10 @@ static SIDX_INLINE int kd_test_leaf(const sidx_accel *a, const sidx_ray *r, cons
 
 /* The ray's interval in the root cell (the scene box), or 0 if it misses. */
 static SIDX_INLINE int kd_enter_root(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, float best_t,
-                                     float *t_near, float *t_far, const int traced, const int lazy)
+                                     float *t_near, float *t_far, const int traced, const int fetch)
 {
     const kd_tree *kd = a->impl;
-    if ((!lazy && kd->num_refs == 0) || /* a lazy tree holds triangles (kdtree_build.c) */
+    if ((fetch == KD_FETCH_TREE && kd->num_refs == 0) || /* a lazy tree holds triangles (kdtree_build.c) */
         !sidx__box_test(a->opt.box == SIDX_BOX_ROBUST, r, &kd->bounds, r->tmin, best_t, t_near, t_far)) {
         SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = SIDX_TERM_MISS_ROOT;
                   e_.count = 0);
@@ -543,37 +606,37 @@ static SIDX_INLINE int kd_enter_root(const sidx_accel *a, const sidx_ray *r, con
  * walk; a traced query, or one asking for the naive walk (which re-enters
  * from the root, as the deck's first version does), takes the slide's.
  * Each comes as an eager copy and as a copy for lazy trees (kd_lazy). */
-#define KD_ENTRY_POINTS(sfx, lazy)                                                                              \
+#define KD_ENTRY_POINTS(sfx, fetch)                                                                              \
     static void kd_isect_fast##sfx(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit) \
     {                                                                                                          \
-        (void)kd_walk_fast(a, r, q, hit, 0, lazy);                                                             \
+        (void)kd_walk_fast(a, r, q, hit, 0, fetch);                                                             \
     }                                                                                                          \
     static void kd_isect_slide_traced##sfx(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,        \
                                            sidx_hit *hit)                                                      \
     {                                                                                                          \
-        (void)kd_walk_slide(a, r, q, hit, 1, 0, 0, lazy);                                                      \
+        (void)kd_walk_slide(a, r, q, hit, 1, 0, 0, fetch);                                                      \
     }                                                                                                          \
     static void kd_isect_naive##sfx(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)\
     {                                                                                                          \
-        (void)kd_walk_slide(a, r, q, hit, 0, 0, 1, lazy);                                                      \
+        (void)kd_walk_slide(a, r, q, hit, 0, 0, 1, fetch);                                                      \
     }                                                                                                          \
     static void kd_isect_naive_traced##sfx(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,        \
                                            sidx_hit *hit)                                                      \
     {                                                                                                          \
-        (void)kd_walk_slide(a, r, q, hit, 1, 0, 1, lazy);                                                      \
+        (void)kd_walk_slide(a, r, q, hit, 1, 0, 1, fetch);                                                      \
     }                                                                                                          \
     static int kd_occl_fast##sfx(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)                  \
     {                                                                                                          \
         sidx_hit dummy = sidx_hit_none();                                                                      \
-        return kd_walk_fast(a, r, q, &dummy, 1, lazy);                                                         \
+        return kd_walk_fast(a, r, q, &dummy, 1, fetch);                                                         \
     }                                                                                                          \
     static int kd_occl_slide_traced##sfx(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)          \
     {                                                                                                          \
         sidx_hit dummy = sidx_hit_none();                                                                      \
-        return kd_walk_slide(a, r, q, &dummy, 1, 1, 0, lazy);                                                  \
+        return kd_walk_slide(a, r, q, &dummy, 1, 1, 0, fetch);                                                  \
     }
-KD_ENTRY_POINTS(, 0)
-KD_ENTRY_POINTS(_lazy, 1)
+KD_ENTRY_POINTS(, KD_FETCH_TREE)
+KD_ENTRY_POINTS(_lazy, KD_FETCH_LAZY)
 
 /* The walk tables (sidx_internal.h): [0] every traversal but the naive
  * one, [1] the naive one, [2] and [3] the same for lazy trees; any-hit
