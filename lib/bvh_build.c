@@ -713,7 +713,9 @@ static void bvh_stats(const sidx_accel *a, sidx_accel_stats *s)
         s->unbuilt = __atomic_load_n(&L->unbuilt, __ATOMIC_RELAXED);
         s->unbuilt_prims = __atomic_load_n(&L->unbuilt_prims, __ATOMIC_RELAXED);
     }
-    s->prim_refs = b->num_prims;
+    /* lazy: the references of the built leaves, as the wide BVH and the
+     * kd-tree count them; the rest are in unbuilt_prims */
+    s->prim_refs = b->num_prims - s->unbuilt_prims;
     s->bytes = sizeof *b + ((size_t)b->num_nodes + 2u) * sizeof *b->nodes +
                (size_t)b->num_prims * (sizeof *b->prim_id + sizeof *b->tris) +
                (b->obbs ? (size_t)b->num_nodes * sizeof *b->obbs : 0);

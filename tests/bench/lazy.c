@@ -164,7 +164,10 @@ static double built_fraction(const sidx_accel *a)
 {
     sidx_accel_stats s;
     sidx_accel_stats_get(a, &s);
-    return s.prim_refs ? 1.0 - (double)s.unbuilt_prims / (double)s.prim_refs : 1.0;
+    /* prim_refs: the references in built leaves; unbuilt_prims: those the
+     * unbuilt subtrees hold, as deferred (sidx/accel.h) */
+    const double all = (double)s.prim_refs + (double)s.unbuilt_prims;
+    return all > 0.0 ? (double)s.prim_refs / all : 1.0;
 }
 
 static int run_once(const char *accel, const sidx_mesh *m, uint32_t lazy, const cam *c, uint32_t px, uint32_t frames,
