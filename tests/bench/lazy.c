@@ -154,7 +154,7 @@ static cam turned(const cam *c, uint32_t k, uint32_t n)
 }
 
 typedef struct run_out {
-    double first_ms, total_ms, built_first, built_total;
+    double build_ms, first_ms, total_ms, built_first, built_total;
     uint64_t hash;
     size_t hits, bounces;
     int nomem;
@@ -184,6 +184,7 @@ static int run_once(const char *accel, const sidx_mesh *m, uint32_t lazy, const 
         fprintf(stderr, "sidx-bench lazy: building %s: %s\n", accel, err.message);
         return 0;
     }
+    o->build_ms = tk_thread_cpu_ms() - t0;
     frame_out f = {0xcbf29ce484222325ull, 0, 0, 0};
     frame(a, c, px, 1, shadow, &f);
     o->first_ms = tk_thread_cpu_ms() - t0;
@@ -243,6 +244,33 @@ static int run_city(const char *accel, const sidx_city *city, int lazy, const ca
     o->nomem = f.nomem;
     sidx_accel_destroy(a);
     return 1;
+}
+
+/* The floor of any build, lazy or not: one pass over the n triangles for
+ * their boxes and centroids (what sidx__prim_boxes does first in every
+ * build), into arrays of the bench's own; thread CPU ms, or -1 when
+ * memory runs out. */
+static double box_pass_ms(const sidx_mesh *m)
+{
+    sidx_aabb *box = malloc((size_t)m->num_triangles * sizeof *box);
+    sidx_vec3 *cen = malloc((size_t)m->num_triangles * sizeof *cen);
+    double ms = -1.0;
+    if (box && cen) {
+        const double t0 = tk_thread_cpu_ms();
+        for (uint32_t i = 0; i < m->num_triangles; ++i) {
+            sidx_aabb b = sidx_aabb_empty();
+            for (int k = 0; k < 3; ++k) b = sidx_aabb_grow(b, sidx_mesh_vertex(m, i, k));
+            box[i] = b;
+            cen[i] = sidx_aabb_centroid(b);
+        }
+        ms = tk_thread_cpu_ms() - t0;
+        /* read them back, so that the pass is not optimised away */
+        volatile float sink = box[m->num_triangles / 2].min.x + cen[m->num_triangles / 3].y;
+        (void)sink;
+    }
+    free(box);
+    free(cen);
+    return ms;
 }
 
 static int cmp_double(const void *a, const void *b)
@@ -463,11 +491,12 @@ int bench_cmd_lazy(int argc, char **argv)
         cam c;
         if (!open_scene(scenes[s], &m, &c)) return BENCH_FAIL;
         /* [kind][eager, lazy][round]: kind 0 bounce, 1 shadow */
-        static double first[2][2][99], total[2][2][99];
+        static double first[2][2][99], total[2][2][99], built[2][99], boxes[99];
         run_out last[2][2];
         memset(last, 0, sizeof last);
         int same = 1, nomem = 0;
-        for (int r = 0; r < rounds; ++r)
+        for (int r = 0; r < rounds; ++r) {
+            boxes[r] = box_pass_ms(&m);
             for (int kind = 0; kind < 2; ++kind) {
                 /* interleaved, the order swapped each round */
                 for (int k = 0; k < 2; ++k) {
@@ -479,11 +508,13 @@ int bench_cmd_lazy(int argc, char **argv)
                     }
                     nomem |= o.nomem;
                     first[kind][is_lazy][r] = o.first_ms;
+                    if (kind == 1) built[is_lazy][r] = o.build_ms;
                     total[kind][is_lazy][r] = o.total_ms;
                     last[kind][is_lazy] = o;
                 }
                 same &= last[kind][0].hash == last[kind][1].hash;
             }
+        }
         double mf[2][2], mt[2][2];
         for (int kind = 0; kind < 2; ++kind)
             for (int z = 0; z < 2; ++z) {
@@ -491,6 +522,8 @@ int bench_cmd_lazy(int argc, char **argv)
                 mt[kind][z] = median(total[kind][z], rounds);
             }
         const run_out *lb = &last[0][1], *ls = &last[1][1];
+        /* the build alone (the shadow runs'): the lazy one is its eager top */
+        const double eb = median(built[0], rounds), lzb = median(built[1], rounds), bp = median(boxes, rounds);
         printf("{\"scene\":\"%s\",\"accel\":\"%s\",\"tris\":%u,\"size\":%u,\"frames\":%u,\"rounds\":%d,"
                "\"hits\":%zu,\"bounces\":%zu,\"shadow_rays\":%zu,"
                "\"eager_first_ms\":%.1f,\"lazy_first_ms\":%.1f,\"first_ratio\":%.3f,"
@@ -498,11 +531,12 @@ int bench_cmd_lazy(int argc, char **argv)
                "\"built_first\":%.4f,\"built_total\":%.4f,"
                "\"shadow_eager_first_ms\":%.1f,\"shadow_lazy_first_ms\":%.1f,\"shadow_first_ratio\":%.3f,"
                "\"shadow_eager_total_ms\":%.1f,\"shadow_lazy_total_ms\":%.1f,\"shadow_total_ratio\":%.3f,"
-               "\"shadow_built_first\":%.4f,\"shadow_built_total\":%.4f,\"hits_identical\":%s}\n",
+               "\"shadow_built_first\":%.4f,\"shadow_built_total\":%.4f,"
+               "\"eager_build_ms\":%.1f,\"lazy_build_ms\":%.1f,\"box_pass_ms\":%.1f,\"hits_identical\":%s}\n",
                scenes[s], accel, m.num_triangles, px, frames, rounds, lb->hits, lb->bounces, ls->bounces, mf[0][0],
                mf[0][1], mf[0][1] / mf[0][0], mt[0][0], mt[0][1], mt[0][1] / mt[0][0], lb->built_first, lb->built_total,
                mf[1][0], mf[1][1], mf[1][1] / mf[1][0], mt[1][0], mt[1][1], mt[1][1] / mt[1][0], ls->built_first,
-               ls->built_total, same && !nomem ? "true" : "false");
+               ls->built_total, eb, lzb, bp, same && !nomem ? "true" : "false");
         fflush(stdout);
         sidx_mesh_free(&m);
         if (!same || nomem) return BENCH_FAIL;
