@@ -17,10 +17,13 @@
  * (the same build, then N frames from viewpoints spread around the scene,
  * the first one the camera's), the total.
  * Printed per scene: the medians over the rounds, their ratios lazy / eager,
- * the fraction of the primitives whose subtrees are built after the first
- * image and after N frames, and whether every hit of the lazy runs equals
- * the eager run's bit for bit (an FNV hash over t, prim, u, v, normal, and
- * each shadow ray's answer).
+ * the fraction built after the first image and after N frames (the
+ * primitive references in built leaves over those plus the ones the
+ * unbuilt subtrees hold: sidx_accel_stats), the build alone (eager, and
+ * the lazy build's eager top), one pass over the triangles' boxes and
+ * centroids (the floor of any build, lazy or not), and whether every hit
+ * of the lazy runs equals the eager run's bit for bit (an FNV hash over t,
+ * prim, u, v, normal, and each shadow ray's answer).
  *
  * Scenes: "stadium" (built-in stadium, detail 16384: the teapot among
  * ~100k triangles of stands, seen from beside the teapot) and
@@ -412,12 +415,14 @@ static void lazy_usage(FILE *f)
                "kinds of frame: one diffuse bounce per hit (first_ratio, total_ratio) and one shadow ray\n"
                "per hit to a point light, what an interactive viewer shows first (shadow_first_ratio,\n"
                "shadow_total_ratio); on one thread in thread CPU time, medians over interleaved rounds;\n"
-               "the fraction of primitives built after the first image and after N frames; whether the\n"
-               "hits agree bit for bit.  SCENE: stadium, heightfield:D, inside:FILE (from the middle of\n"
-               "the box facing a long wall: Sponza's atrium), or a mesh file / built-in scene (seen from\n"
-               "outside its box), or city:N[:D]: N buildings of D detail (default 36: >= 10k triangles\n"
-               "each) as lazy instances against eager ones (an aggregate; shadow frames only; the\n"
-               "instances built).  Default: stadium heightfield:1024.\n"
+               "the fraction of primitive references built after the first image and after N frames; the\n"
+               "build alone (eager_build_ms, lazy_build_ms: the lazy top) and one pass over the triangles'\n"
+               "boxes (box_pass_ms: the floor of any build); whether the hits agree bit for bit.\n"
+               "SCENE: stadium, heightfield:D, inside:FILE (from the middle of the box facing a long\n"
+               "wall: Sponza's atrium), or a mesh file / built-in scene (seen from outside its box), or\n"
+               "city:N[:D]: N buildings of D detail (default 36: >= 10k triangles each) as lazy\n"
+               "instances against eager ones (an aggregate; shadow frames only; the instances built).\n"
+               "Default: stadium heightfield:1024.\n"
                "  --accel NAME     a structure with lazy builds (default bvh)\n"
                "  --lazy-size N    opt.lazy (default 1: the library's default size)\n"
                "  --size PX        image side (default 512)\n"
