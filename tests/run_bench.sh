@@ -108,6 +108,13 @@ for accel in bvh bvh8 kdtree; do
         fail "lazy $accel exits $?: $(tail -3 "$TMP/lazyf.txt")"
     fi
 done
+# --lazy-only: one line per round with the lazy figures, no ratio
+if "$BENCH" lazy --lazy-only --accel kdtree --size 16 --frames 2 --rounds 2 heightfield:24 >"$TMP/lazyo.txt" 2>&1; then
+    [ "$(grep -c '"shadow_lazy_first_ms":' "$TMP/lazyo.txt")" = 2 ] || fail "lazy --lazy-only: not 2 rounds: $(cat "$TMP/lazyo.txt")"
+    grep -q '_ratio' "$TMP/lazyo.txt" && fail "lazy --lazy-only prints a ratio: $(cat "$TMP/lazyo.txt")"
+else
+    fail "lazy --lazy-only exits $?: $(tail -3 "$TMP/lazyo.txt")"
+fi
 
 [ $failed = 0 ] && echo "bench: trace, run and scale time a cold pass and warm passes (--passes); lazy times both first images"
 exit $failed

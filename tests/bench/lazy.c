@@ -409,7 +409,7 @@ static int bench_city(const char *spec, const char *accel, uint32_t px, uint32_t
 static void lazy_usage(FILE *f)
 {
     fprintf(f, "usage: sidx-bench lazy [--accel NAME] [--lazy-size N] [--size PX] [--frames N] [--rounds N]\n"
-               "                       [SCENE ...]\n"
+               "                       [--lazy-only] [SCENE ...]\n"
                "Time to the first image (the build and one PX x PX primary frame) and the total over N\n"
                "frames from viewpoints around the scene, lazy build (opt.lazy) against eager, for two\n"
                "kinds of frame: one diffuse bounce per hit (first_ratio, total_ratio) and one shadow ray\n"
@@ -428,6 +428,8 @@ static void lazy_usage(FILE *f)
                "  --size PX        image side (default 512)\n"
                "  --frames N       frames of the second measure (default 16)\n"
                "  --rounds N       rounds (default 3)\n"
+               "  --lazy-only      the lazy build's shadow runs only, each round's line, no ratio:\n"
+               "                   what a profiler should see of the lazy first image\n"
                "Prints one JSON line per scene.  Exit status: 0 ok, 1 failure, 2 usage.\n");
 }
 
@@ -435,7 +437,7 @@ int bench_cmd_lazy(int argc, char **argv)
 {
     const char *accel = "bvh";
     uint32_t lazy = 1, px = 512, frames = 16;
-    int rounds = 3;
+    int rounds = 3, lazy_only = 0;
     const char *scenes[16];
     int ns = 0;
     for (int i = 1; i < argc; ++i) {
@@ -443,6 +445,10 @@ int bench_cmd_lazy(int argc, char **argv)
         if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
             lazy_usage(stdout);
             return BENCH_OK;
+        }
+        if (!strcmp(a, "--lazy-only")) {
+            lazy_only = 1;
+            continue;
         }
         if (!strcmp(a, "--accel") || !strcmp(a, "--lazy-size") || !strcmp(a, "--size") || !strcmp(a, "--frames") ||
             !strcmp(a, "--rounds")) {
@@ -487,6 +493,10 @@ int bench_cmd_lazy(int argc, char **argv)
         scenes[ns++] = "heightfield:1024";
     }
     for (int s = 0; s < ns; ++s) {
+        if (!strncmp(scenes[s], "city:", 5) && lazy_only) {
+            fprintf(stderr, "sidx-bench lazy: --lazy-only takes no city\n");
+            return BENCH_USAGE;
+        }
         if (!strncmp(scenes[s], "city:", 5)) {
             const int rc = bench_city(scenes[s], accel, px, frames, rounds);
             if (rc != BENCH_OK) return rc;
@@ -495,6 +505,23 @@ int bench_cmd_lazy(int argc, char **argv)
         sidx_mesh m;
         cam c;
         if (!open_scene(scenes[s], &m, &c)) return BENCH_FAIL;
+        if (lazy_only) { /* for a profiler: the lazy shadow runs alone, no ratio */
+            for (int r = 0; r < rounds; ++r) {
+                run_out o;
+                if (!run_once(accel, &m, lazy, &c, px, frames, 1, &o)) {
+                    sidx_mesh_free(&m);
+                    return BENCH_FAIL;
+                }
+                printf("{\"scene\":\"%s\",\"accel\":\"%s\",\"tris\":%u,\"size\":%u,\"frames\":%u,\"round\":%d,"
+                       "\"shadow_lazy_build_ms\":%.1f,\"shadow_lazy_first_ms\":%.1f,\"shadow_lazy_total_ms\":%.1f,"
+                       "\"shadow_built_first\":%.4f,\"shadow_built_total\":%.4f}\n",
+                       scenes[s], accel, m.num_triangles, px, frames, r, o.build_ms, o.first_ms, o.total_ms,
+                       o.built_first, o.built_total);
+                fflush(stdout);
+            }
+            sidx_mesh_free(&m);
+            continue;
+        }
         /* [kind][eager, lazy][round]: kind 0 bounce, 1 shadow */
         static double first[2][2][99], total[2][2][99], built[2][99], boxes[99];
         run_out last[2][2];
