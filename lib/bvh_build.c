@@ -112,6 +112,23 @@ static float range_cost(const builder *B, uint32_t first, uint32_t nl, uint32_t 
 
 /* bin_of (bvh_internal.h) maps a centroid to its bin. */
 
+/* Up to this many bins per axis, the three axes are binned in one pass
+ * over the node's triangles (their boxes and centroids gathered once, not
+ * three times: the pass is memory bound on large nodes, the top of a lazy
+ * tree above all); more bins, one pass per axis.  The bins, and so every
+ * decision and event, are the same either way (unions and counts). */
+#define BIN_ONE_PASS_MAX 64u
+
+/* bin_three_axes: the bins of all three axes in one pass over the node's
+ * triangles (nb <= BIN_ONE_PASS_MAX).  With SSE2 (every x86-64) the three
+ * bin coordinates in one set of 4-lane instructions, else the reference;
+ * the same bins either way. */
+#if defined(__SSE2__)
+#include "simd_bin3_sse.h"
+#else
+#include "simd_bin3_scalar.h"
+#endif
+
 static SIDX_NOINLINE int find_binned(builder *B, uint32_t node, uint32_t first, uint32_t count, sidx_aabb cb,
                                      float inv_area, bvh_split *best)
 {
@@ -119,33 +136,43 @@ static SIDX_NOINLINE int find_binned(builder *B, uint32_t node, uint32_t first, 
     int found = 0;
     uint32_t best_plane = 0;
     best->cost = INFINITY;
+    sidx_aabb box3[3][BIN_ONE_PASS_MAX];
+    uint32_t cnt3[3][BIN_ONE_PASS_MAX];
+    const int one_pass = nb <= BIN_ONE_PASS_MAX;
+    if (one_pass) bin_three_axes(B, first, count, cb, box3, cnt3);
     for (int axis = 0; axis < 3; ++axis) {
         const float cmin = sidx_v3_get(cb.min, axis), ext = sidx_v3_get(cb.max, axis) - cmin;
         if (!(ext > 0.0f)) continue; /* a flat axis has no plane between centroids */
-        const float scale = (float)nb / ext;
-        for (uint32_t k = 0; k < nb; ++k) {
-            B->bin_box[k] = sidx_aabb_empty();
-            B->bin_count[k] = 0;
-        }
-        for (uint32_t i = 0; i < count; ++i) {
-            const uint32_t id = B->idx[first + i];
-            const uint32_t k = bin_of(sidx_v3_get(B->cent[id], axis), cmin, scale, nb);
-            B->bin_count[k]++;
-            B->bin_box[k] = sidx_aabb_union(B->bin_box[k], B->pbox[id]);
+        const sidx_aabb *bin_box = box3[axis];
+        const uint32_t *bin_count = cnt3[axis];
+        if (!one_pass) {
+            const float scale = (float)nb / ext;
+            for (uint32_t k = 0; k < nb; ++k) {
+                B->bin_box[k] = sidx_aabb_empty();
+                B->bin_count[k] = 0;
+            }
+            for (uint32_t i = 0; i < count; ++i) {
+                const uint32_t id = B->idx[first + i];
+                const uint32_t k = bin_of(sidx_v3_get(B->cent[id], axis), cmin, scale, nb);
+                B->bin_count[k]++;
+                B->bin_box[k] = sidx_aabb_union(B->bin_box[k], B->pbox[id]);
+            }
+            bin_box = B->bin_box;
+            bin_count = B->bin_count;
         }
         /* Suffix areas right to left, then one left-to-right pass over the
          * nb − 1 planes between bins: "add bins to partitions instead of
          * triangles". */
         sidx_aabb acc = sidx_aabb_empty();
         for (uint32_t p = nb - 1; p >= 1; --p) {
-            acc = sidx_aabb_union(acc, B->bin_box[p]);
+            acc = sidx_aabb_union(acc, bin_box[p]);
             B->right_area[p] = sidx_aabb_area(acc);
         }
         acc = sidx_aabb_empty();
         uint32_t nl = 0;
         for (uint32_t p = 1; p < nb; ++p) {
-            acc = sidx_aabb_union(acc, B->bin_box[p - 1]);
-            nl += B->bin_count[p - 1];
+            acc = sidx_aabb_union(acc, bin_box[p - 1]);
+            nl += bin_count[p - 1];
             if (nl == 0 || nl == count) continue; /* one side empty: not a split */
             const float cost = sah(B, sidx_aabb_area(acc), nl, B->right_area[p], count - nl, inv_area);
             const float pos = cmin + ext * (float)p / (float)nb;
@@ -547,7 +574,17 @@ static sidx_status build_tree(sidx_accel *a, sidx_error *err)
         b->lazy->cent = cent;
         pbox = NULL;
         cent = NULL;
-        fill_tris(m, b);
+        /* The triangle copies of the leaves built here only: an expansion
+         * writes its own range's after reordering it (expand_build), so
+         * copying the unbuilt ranges now would be done twice, and would
+         * touch every page of tris[] before a ray needs it.  The records
+         * are in pre-order, so their ranges come in increasing order. */
+        for (uint32_t r = 0, i = 0; r <= b->lazy->num_recs; ++r) {
+            const uint32_t end = r < b->lazy->num_recs ? b->lazy->recs[r].first : n;
+            for (; i < end; ++i)
+                for (int k = 0; k < 3; ++k) b->tris[i].v[k] = sidx_mesh_vertex(m, b->prim_id[i], k);
+            if (r < b->lazy->num_recs) i = end + b->lazy->recs[r].count;
+        }
         B->nodes = NULL; /* b's own */
         a->lazy = 1;
         goto done;
@@ -713,7 +750,9 @@ static void bvh_stats(const sidx_accel *a, sidx_accel_stats *s)
         s->unbuilt = __atomic_load_n(&L->unbuilt, __ATOMIC_RELAXED);
         s->unbuilt_prims = __atomic_load_n(&L->unbuilt_prims, __ATOMIC_RELAXED);
     }
-    s->prim_refs = b->num_prims;
+    /* lazy: the references of the built leaves, as the wide BVH and the
+     * kd-tree count them; the rest are in unbuilt_prims */
+    s->prim_refs = b->num_prims - s->unbuilt_prims;
     s->bytes = sizeof *b + ((size_t)b->num_nodes + 2u) * sizeof *b->nodes +
                (size_t)b->num_prims * (sizeof *b->prim_id + sizeof *b->tris) +
                (b->obbs ? (size_t)b->num_nodes * sizeof *b->obbs : 0);

@@ -94,6 +94,27 @@ if "$BENCH" lazy --accel bvh --size 24 --frames 2 --rounds 1 heightfield:24 >"$T
 else
     fail "lazy exits $?: $(tail -3 "$TMP/lazy.txt")"
 fi
+# the fraction built lies in [0, 1] for every structure, duplicated
+# references (kd-tree, spatial splits) included; some part stays unbuilt
+for accel in bvh bvh8 kdtree; do
+    if "$BENCH" lazy --accel $accel --lazy-size 64 --size 16 --frames 2 --rounds 1 heightfield:24 >"$TMP/lazyf.txt" 2>&1; then
+        for key in built_first built_total shadow_built_first shadow_built_total; do
+            awk -v f="$(num $key "$TMP/lazyf.txt")" 'BEGIN { exit !(f != "" && f + 0 >= 0 && f + 0 <= 1) }' ||
+                fail "lazy $accel: \"$key\" outside [0, 1]: $(cat "$TMP/lazyf.txt")"
+        done
+        awk -v f="$(num shadow_built_first "$TMP/lazyf.txt")" 'BEGIN { exit !(f + 0 < 1) }' ||
+            fail "lazy $accel: the first shadow image built everything: $(cat "$TMP/lazyf.txt")"
+    else
+        fail "lazy $accel exits $?: $(tail -3 "$TMP/lazyf.txt")"
+    fi
+done
+# --lazy-only: one line per round with the lazy figures, no ratio
+if "$BENCH" lazy --lazy-only --accel kdtree --size 16 --frames 2 --rounds 2 heightfield:24 >"$TMP/lazyo.txt" 2>&1; then
+    [ "$(grep -c '"shadow_lazy_first_ms":' "$TMP/lazyo.txt")" = 2 ] || fail "lazy --lazy-only: not 2 rounds: $(cat "$TMP/lazyo.txt")"
+    grep -q '_ratio' "$TMP/lazyo.txt" && fail "lazy --lazy-only prints a ratio: $(cat "$TMP/lazyo.txt")"
+else
+    fail "lazy --lazy-only exits $?: $(tail -3 "$TMP/lazyo.txt")"
+fi
 
 [ $failed = 0 ] && echo "bench: trace, run and scale time a cold pass and warm passes (--passes); lazy times both first images"
 exit $failed

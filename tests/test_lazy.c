@@ -447,6 +447,22 @@ static void shoot_from_box(const sidx_accel *lazy, sidx_aabb box, sidx_vec3 d, s
     assert_int_equal(sidx_accel_intersect(lazy, &r, &q, &h), SIDX_OK);
 }
 
+/* Before any ray: prim_refs counts the references in built leaves only,
+ * unbuilt_prims those of the unbuilt subtrees, so that the fraction built
+ * P / (P + U) lies in [0, 1].  The expansions only add references (kd-tree
+ * and spatial splits duplicate), so P + U is at most the eager tree's
+ * count, and P is below it while something is unbuilt. */
+static unsigned refs_split_case(const char *label, const char *name, uint32_t lazy_size, const sidx_accel_stats *s0,
+                                const sidx_accel_stats *se)
+{
+    if (s0->prim_refs + s0->unbuilt_prims <= se->prim_refs && !(s0->unbuilt && s0->prim_refs >= se->prim_refs))
+        return 0;
+    print_message("%s, %s lazy %u: before any ray %llu references built + %llu unbuilt, eager %llu\n", label, name,
+                  (unsigned)lazy_size, (unsigned long long)s0->prim_refs, (unsigned long long)s0->unbuilt_prims,
+                  (unsigned long long)se->prim_refs);
+    return 1;
+}
+
 static unsigned same_tree_case(const char *label, const char *name, const sidx_mesh *m, uint32_t lazy_size)
 {
     /* node ids stay below 2·triangles + 2 (the BVH's slots) and below the
@@ -468,6 +484,8 @@ static unsigned same_tree_case(const char *label, const char *name, const sidx_m
         print_message("%s, %s lazy %u: nothing left unbuilt\n", label, name, (unsigned)lazy_size);
         failures++;
     }
+    sidx_accel_stats_get(eager, &se);
+    failures += refs_split_case(label, name, lazy_size, &sl, &se);
     /* Enter every unbuilt node: a ray from its box's centre starts inside
      * it and inside every box above it, and the naive walk enters every
      * box it starts in, even after a hit at t = 0 (the centre of a flat
@@ -557,6 +575,8 @@ static unsigned same_refs_case(const char *label, const char *name, const sidx_m
         print_message("%s, %s lazy %u: nothing left unbuilt\n", label, name, (unsigned)lazy_size);
         failures++;
     }
+    sidx_accel_stats_get(eager, &se);
+    failures += refs_split_case(label, name, lazy_size, &s0, &se);
     /* Enter every unbuilt child: rays from the centre of every node that
      * is not a leaf, in a few directions (a wide walk stops at a hit at
      * t = 0 on a triangle through the centre, so one may not be enough). */

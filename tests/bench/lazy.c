@@ -17,10 +17,13 @@
  * (the same build, then N frames from viewpoints spread around the scene,
  * the first one the camera's), the total.
  * Printed per scene: the medians over the rounds, their ratios lazy / eager,
- * the fraction of the primitives whose subtrees are built after the first
- * image and after N frames, and whether every hit of the lazy runs equals
- * the eager run's bit for bit (an FNV hash over t, prim, u, v, normal, and
- * each shadow ray's answer).
+ * the fraction built after the first image and after N frames (the
+ * primitive references in built leaves over those plus the ones the
+ * unbuilt subtrees hold: sidx_accel_stats), the build alone (eager, and
+ * the lazy build's eager top), one pass over the triangles' boxes and
+ * centroids (the floor of any build, lazy or not), and whether every hit
+ * of the lazy runs equals the eager run's bit for bit (an FNV hash over t,
+ * prim, u, v, normal, and each shadow ray's answer).
  *
  * Scenes: "stadium" (built-in stadium, detail 16384: the teapot among
  * ~100k triangles of stands, seen from beside the teapot) and
@@ -154,7 +157,7 @@ static cam turned(const cam *c, uint32_t k, uint32_t n)
 }
 
 typedef struct run_out {
-    double first_ms, total_ms, built_first, built_total;
+    double build_ms, first_ms, total_ms, built_first, built_total;
     uint64_t hash;
     size_t hits, bounces;
     int nomem;
@@ -164,7 +167,10 @@ static double built_fraction(const sidx_accel *a)
 {
     sidx_accel_stats s;
     sidx_accel_stats_get(a, &s);
-    return s.prim_refs ? 1.0 - (double)s.unbuilt_prims / (double)s.prim_refs : 1.0;
+    /* prim_refs: the references in built leaves; unbuilt_prims: those the
+     * unbuilt subtrees hold, as deferred (sidx/accel.h) */
+    const double all = (double)s.prim_refs + (double)s.unbuilt_prims;
+    return all > 0.0 ? (double)s.prim_refs / all : 1.0;
 }
 
 static int run_once(const char *accel, const sidx_mesh *m, uint32_t lazy, const cam *c, uint32_t px, uint32_t frames,
@@ -181,6 +187,7 @@ static int run_once(const char *accel, const sidx_mesh *m, uint32_t lazy, const 
         fprintf(stderr, "sidx-bench lazy: building %s: %s\n", accel, err.message);
         return 0;
     }
+    o->build_ms = tk_thread_cpu_ms() - t0;
     frame_out f = {0xcbf29ce484222325ull, 0, 0, 0};
     frame(a, c, px, 1, shadow, &f);
     o->first_ms = tk_thread_cpu_ms() - t0;
@@ -240,6 +247,33 @@ static int run_city(const char *accel, const sidx_city *city, int lazy, const ca
     o->nomem = f.nomem;
     sidx_accel_destroy(a);
     return 1;
+}
+
+/* The floor of any build, lazy or not: one pass over the n triangles for
+ * their boxes and centroids (what sidx__prim_boxes does first in every
+ * build), into arrays of the bench's own; thread CPU ms, or -1 when
+ * memory runs out. */
+static double box_pass_ms(const sidx_mesh *m)
+{
+    sidx_aabb *box = malloc((size_t)m->num_triangles * sizeof *box);
+    sidx_vec3 *cen = malloc((size_t)m->num_triangles * sizeof *cen);
+    double ms = -1.0;
+    if (box && cen) {
+        const double t0 = tk_thread_cpu_ms();
+        for (uint32_t i = 0; i < m->num_triangles; ++i) {
+            sidx_aabb b = sidx_aabb_empty();
+            for (int k = 0; k < 3; ++k) b = sidx_aabb_grow(b, sidx_mesh_vertex(m, i, k));
+            box[i] = b;
+            cen[i] = sidx_aabb_centroid(b);
+        }
+        ms = tk_thread_cpu_ms() - t0;
+        /* read them back, so that the pass is not optimised away */
+        volatile float sink = box[m->num_triangles / 2].min.x + cen[m->num_triangles / 3].y;
+        (void)sink;
+    }
+    free(box);
+    free(cen);
+    return ms;
 }
 
 static int cmp_double(const void *a, const void *b)
@@ -375,23 +409,27 @@ static int bench_city(const char *spec, const char *accel, uint32_t px, uint32_t
 static void lazy_usage(FILE *f)
 {
     fprintf(f, "usage: sidx-bench lazy [--accel NAME] [--lazy-size N] [--size PX] [--frames N] [--rounds N]\n"
-               "                       [SCENE ...]\n"
+               "                       [--lazy-only] [SCENE ...]\n"
                "Time to the first image (the build and one PX x PX primary frame) and the total over N\n"
                "frames from viewpoints around the scene, lazy build (opt.lazy) against eager, for two\n"
                "kinds of frame: one diffuse bounce per hit (first_ratio, total_ratio) and one shadow ray\n"
                "per hit to a point light, what an interactive viewer shows first (shadow_first_ratio,\n"
                "shadow_total_ratio); on one thread in thread CPU time, medians over interleaved rounds;\n"
-               "the fraction of primitives built after the first image and after N frames; whether the\n"
-               "hits agree bit for bit.  SCENE: stadium, heightfield:D, inside:FILE (from the middle of\n"
-               "the box facing a long wall: Sponza's atrium), or a mesh file / built-in scene (seen from\n"
-               "outside its box), or city:N[:D]: N buildings of D detail (default 36: >= 10k triangles\n"
-               "each) as lazy instances against eager ones (an aggregate; shadow frames only; the\n"
-               "instances built).  Default: stadium heightfield:1024.\n"
+               "the fraction of primitive references built after the first image and after N frames; the\n"
+               "build alone (eager_build_ms, lazy_build_ms: the lazy top) and one pass over the triangles'\n"
+               "boxes (box_pass_ms: the floor of any build); whether the hits agree bit for bit.\n"
+               "SCENE: stadium, heightfield:D, inside:FILE (from the middle of the box facing a long\n"
+               "wall: Sponza's atrium), or a mesh file / built-in scene (seen from outside its box), or\n"
+               "city:N[:D]: N buildings of D detail (default 36: >= 10k triangles each) as lazy\n"
+               "instances against eager ones (an aggregate; shadow frames only; the instances built).\n"
+               "Default: stadium heightfield:1024.\n"
                "  --accel NAME     a structure with lazy builds (default bvh)\n"
                "  --lazy-size N    opt.lazy (default 1: the library's default size)\n"
                "  --size PX        image side (default 512)\n"
                "  --frames N       frames of the second measure (default 16)\n"
                "  --rounds N       rounds (default 3)\n"
+               "  --lazy-only      the lazy build's shadow runs only, each round's line, no ratio:\n"
+               "                   what a profiler should see of the lazy first image\n"
                "Prints one JSON line per scene.  Exit status: 0 ok, 1 failure, 2 usage.\n");
 }
 
@@ -399,7 +437,7 @@ int bench_cmd_lazy(int argc, char **argv)
 {
     const char *accel = "bvh";
     uint32_t lazy = 1, px = 512, frames = 16;
-    int rounds = 3;
+    int rounds = 3, lazy_only = 0;
     const char *scenes[16];
     int ns = 0;
     for (int i = 1; i < argc; ++i) {
@@ -407,6 +445,10 @@ int bench_cmd_lazy(int argc, char **argv)
         if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
             lazy_usage(stdout);
             return BENCH_OK;
+        }
+        if (!strcmp(a, "--lazy-only")) {
+            lazy_only = 1;
+            continue;
         }
         if (!strcmp(a, "--accel") || !strcmp(a, "--lazy-size") || !strcmp(a, "--size") || !strcmp(a, "--frames") ||
             !strcmp(a, "--rounds")) {
@@ -451,6 +493,10 @@ int bench_cmd_lazy(int argc, char **argv)
         scenes[ns++] = "heightfield:1024";
     }
     for (int s = 0; s < ns; ++s) {
+        if (!strncmp(scenes[s], "city:", 5) && lazy_only) {
+            fprintf(stderr, "sidx-bench lazy: --lazy-only takes no city\n");
+            return BENCH_USAGE;
+        }
         if (!strncmp(scenes[s], "city:", 5)) {
             const int rc = bench_city(scenes[s], accel, px, frames, rounds);
             if (rc != BENCH_OK) return rc;
@@ -459,12 +505,30 @@ int bench_cmd_lazy(int argc, char **argv)
         sidx_mesh m;
         cam c;
         if (!open_scene(scenes[s], &m, &c)) return BENCH_FAIL;
+        if (lazy_only) { /* for a profiler: the lazy shadow runs alone, no ratio */
+            for (int r = 0; r < rounds; ++r) {
+                run_out o;
+                if (!run_once(accel, &m, lazy, &c, px, frames, 1, &o)) {
+                    sidx_mesh_free(&m);
+                    return BENCH_FAIL;
+                }
+                printf("{\"scene\":\"%s\",\"accel\":\"%s\",\"tris\":%u,\"size\":%u,\"frames\":%u,\"round\":%d,"
+                       "\"shadow_lazy_build_ms\":%.1f,\"shadow_lazy_first_ms\":%.1f,\"shadow_lazy_total_ms\":%.1f,"
+                       "\"shadow_built_first\":%.4f,\"shadow_built_total\":%.4f}\n",
+                       scenes[s], accel, m.num_triangles, px, frames, r, o.build_ms, o.first_ms, o.total_ms,
+                       o.built_first, o.built_total);
+                fflush(stdout);
+            }
+            sidx_mesh_free(&m);
+            continue;
+        }
         /* [kind][eager, lazy][round]: kind 0 bounce, 1 shadow */
-        static double first[2][2][99], total[2][2][99];
+        static double first[2][2][99], total[2][2][99], built[2][99], boxes[99];
         run_out last[2][2];
         memset(last, 0, sizeof last);
         int same = 1, nomem = 0;
-        for (int r = 0; r < rounds; ++r)
+        for (int r = 0; r < rounds; ++r) {
+            boxes[r] = box_pass_ms(&m);
             for (int kind = 0; kind < 2; ++kind) {
                 /* interleaved, the order swapped each round */
                 for (int k = 0; k < 2; ++k) {
@@ -476,11 +540,13 @@ int bench_cmd_lazy(int argc, char **argv)
                     }
                     nomem |= o.nomem;
                     first[kind][is_lazy][r] = o.first_ms;
+                    if (kind == 1) built[is_lazy][r] = o.build_ms;
                     total[kind][is_lazy][r] = o.total_ms;
                     last[kind][is_lazy] = o;
                 }
                 same &= last[kind][0].hash == last[kind][1].hash;
             }
+        }
         double mf[2][2], mt[2][2];
         for (int kind = 0; kind < 2; ++kind)
             for (int z = 0; z < 2; ++z) {
@@ -488,6 +554,8 @@ int bench_cmd_lazy(int argc, char **argv)
                 mt[kind][z] = median(total[kind][z], rounds);
             }
         const run_out *lb = &last[0][1], *ls = &last[1][1];
+        /* the build alone (the shadow runs'): the lazy one is its eager top */
+        const double eb = median(built[0], rounds), lzb = median(built[1], rounds), bp = median(boxes, rounds);
         printf("{\"scene\":\"%s\",\"accel\":\"%s\",\"tris\":%u,\"size\":%u,\"frames\":%u,\"rounds\":%d,"
                "\"hits\":%zu,\"bounces\":%zu,\"shadow_rays\":%zu,"
                "\"eager_first_ms\":%.1f,\"lazy_first_ms\":%.1f,\"first_ratio\":%.3f,"
@@ -495,11 +563,12 @@ int bench_cmd_lazy(int argc, char **argv)
                "\"built_first\":%.4f,\"built_total\":%.4f,"
                "\"shadow_eager_first_ms\":%.1f,\"shadow_lazy_first_ms\":%.1f,\"shadow_first_ratio\":%.3f,"
                "\"shadow_eager_total_ms\":%.1f,\"shadow_lazy_total_ms\":%.1f,\"shadow_total_ratio\":%.3f,"
-               "\"shadow_built_first\":%.4f,\"shadow_built_total\":%.4f,\"hits_identical\":%s}\n",
+               "\"shadow_built_first\":%.4f,\"shadow_built_total\":%.4f,"
+               "\"eager_build_ms\":%.1f,\"lazy_build_ms\":%.1f,\"box_pass_ms\":%.1f,\"hits_identical\":%s}\n",
                scenes[s], accel, m.num_triangles, px, frames, rounds, lb->hits, lb->bounces, ls->bounces, mf[0][0],
                mf[0][1], mf[0][1] / mf[0][0], mt[0][0], mt[0][1], mt[0][1] / mt[0][0], lb->built_first, lb->built_total,
                mf[1][0], mf[1][1], mf[1][1] / mf[1][0], mt[1][0], mt[1][1], mt[1][1] / mt[1][0], ls->built_first,
-               ls->built_total, same && !nomem ? "true" : "false");
+               ls->built_total, eb, lzb, bp, same && !nomem ? "true" : "false");
         fflush(stdout);
         sidx_mesh_free(&m);
         if (!same || nomem) return BENCH_FAIL;

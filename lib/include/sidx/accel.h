@@ -120,7 +120,8 @@ typedef struct sidx_accel_stats {
     uint32_t empty_leaves;
     uint32_t res[3];              /* grids: resolution; 0 otherwise */
     /* lazy builds (opt.lazy): the subtrees no ray has entered yet and the primitive references they
-     * hold; nodes, leaves and max_depth count what is built so far.  0 for eager builds */
+     * hold; nodes, leaves, max_depth and prim_refs count what is built so far, so that
+     * prim_refs / (prim_refs + unbuilt_prims) is the fraction built.  0 for eager builds */
     uint32_t unbuilt;
     uint64_t unbuilt_prims;
 } sidx_accel_stats;
