@@ -257,8 +257,9 @@ static SIDX_INLINE int recursive_walk(const sidx_accel *a, const sidx_ray *r, co
  * attrs: the query asks for u, v and/or the normal (closest hit only).  A
  * copy of its own, so the walk for plain queries carries no u, v and no
  * triangle index ("no u/v or normals unless asked"). */
-static SIDX_INLINE int stack_walk(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit,
-                                  const int traced, const int anyhit, const int obb, const int attrs, const int lazy)
+static SIDX_INLINE int stack_walk_with(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit,
+                                       const int traced, const int anyhit, const int obb, const int attrs,
+                                       const int lazy, const bvh_stream_prep *prep, uint32_t prep_i)
 {
     const bvh *b = a->impl;
     const bvh_node *nodes = b->nodes;
@@ -268,7 +269,8 @@ static SIDX_INLINE int stack_walk(const sidx_accel *a, const sidx_ray *r, const 
     /* the best hit so far: its original id, or with attrs its copy's index */
     uint32_t prim = SIDX_NO_HIT, visited = 0;
     bvh_ray br;
-    bvh_ray_setup(&br, r);
+    if (prep) bvh_ray_setup_prep(&br, r, prep, prep_i); /* the stream entry's: the same values */
+    else bvh_ray_setup(&br, r);
     if (b->num_nodes == 0) {
         SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = SIDX_TERM_MISS_ROOT;
                   e_.count = 0);
@@ -377,6 +379,13 @@ static SIDX_INLINE int stack_walk(const sidx_accel *a, const sidx_ray *r, const 
             }
         }
     }
+}
+
+/* One ray, its set-up done here (every single-ray query). */
+static SIDX_INLINE int stack_walk(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit,
+                                  const int traced, const int anyhit, const int obb, const int attrs, const int lazy)
+{
+    return stack_walk_with(a, r, q, hit, traced, anyhit, obb, attrs, lazy, NULL, 0);
 }
 
 /* ---- walk tables and entry points (sidx_internal.h §1) --------------------- */
@@ -490,4 +499,30 @@ void sidx__bvh_intersect(const sidx_accel *a, const sidx_ray *r, const sidx_quer
 int sidx__bvh_occluded(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
 {
     return sidx__walk_occluded(walks_for(a, q), a, r, q);
+}
+
+/* ---- the stream walk (bvh_stream.c) ----------------------------------------
+ * A chunk of rays through the plain stack walk, inlined in the loop: one
+ * frame and one set of the tree's constants for the chunk, each ray's
+ * offsets as bvh_stream.c prepared them. */
+static SIDX_INLINE void stream_walk(const sidx_accel *a, const sidx_query *q, const bvh_stream_chunk *c,
+                                    const int anyhit, const int attrs)
+{
+    for (uint32_t i = 0; i < c->count; ++i) {
+        const uint32_t j = c->idx[i];
+        if (anyhit) c->occluded[j] = stack_walk_with(a, &c->rays[j], q, NULL, 0, 1, 0, 0, 0, c->prep, i);
+        else (void)stack_walk_with(a, &c->rays[j], q, &c->hits[j], 0, 0, 0, attrs, 0, c->prep, i);
+    }
+}
+void sidx__bvh_stream_isect(const sidx_accel *a, const sidx_query *q, const bvh_stream_chunk *c)
+{
+    stream_walk(a, q, c, 0, 0);
+}
+void sidx__bvh_stream_isect_attrs(const sidx_accel *a, const sidx_query *q, const bvh_stream_chunk *c)
+{
+    stream_walk(a, q, c, 0, 1);
+}
+void sidx__bvh_stream_occl(const sidx_accel *a, const sidx_query *q, const bvh_stream_chunk *c)
+{
+    stream_walk(a, q, c, 1, 0);
 }

@@ -229,8 +229,9 @@ WNOINL int WFN(occl_other_)(const sidx_accel *a, const sidx_ray *r, const sidx_q
 /* lazy = 1: the copy for lazy trees (bvh_wide.c, "lazy builds"), where a
  * child may be an unbuilt subtree (WIDE_LAZY_BIT); every other copy has
  * lazy = 0 and no trace of that code. */
-WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit, const int anyhit,
-                    const int traced, const int simd_tri, const int keep_uv, const int lazy)
+WINL int WFN(walk_with_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit, const int anyhit,
+                         const int traced, const int simd_tri, const int keep_uv, const int lazy,
+                         const bvh_stream_prep *prep, uint32_t prep_i)
 {
     const wide_bvh *w = a->impl;
     const float *nodes = w->nodes;
@@ -253,7 +254,8 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
      * the pop test): a rounded entry an ulp beyond a hit must not drop a
      * box holding a triangle an ulp nearer (bvh_slab says more). */
     const float scale = a->opt.box == SIDX_BOX_ROBUST ? SIDX_ROBUST_TFAR_SCALE : 1.0f;
-    WFN(ray_consts_init_)(&consts, r, scale);
+    if (prep) WFN(ray_consts_prep_)(&consts, r, prep, prep_i); /* the stream entry's: the same values */
+    else WFN(ray_consts_init_)(&consts, r, scale);
     int tri_ready = 0;
     (void)tri_ready;
     float best_s = best * scale; /* the widened bound boxes are clipped to (see bvh_slab) */
@@ -491,6 +493,13 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
     }
 }
 
+/* One ray, its set-up done here (every single-ray query). */
+WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit, const int anyhit,
+                    const int traced, const int simd_tri, const int keep_uv, const int lazy)
+{
+    return WFN(walk_with_)(a, r, q, hit, anyhit, traced, simd_tri, keep_uv, lazy, NULL, 0);
+}
+
 /* Each instantiation is its own (not inlined) function, so the untraced
  * walks get the same code, registers and stack frame whether or not the
  * library is built with hooks: the hooks then cost one test per ray here
@@ -570,6 +579,35 @@ const wide_kernels WFN(sidx__wide_kernels_) = {
     WFN(lazy_occl_simd_),    WFN(lazy_occl_other_)};
 #undef isect_simd_uv_
 #undef lazy_isect_simd_uv_
+
+/* ---- the stream walks (bvh_stream.c) -------------------------------------------
+ * A chunk of rays through the untraced eager walk, inlined in the loop:
+ * one frame and one set of the tree's constants for the chunk, each ray's
+ * constants from what bvh_stream.c prepared (ray_consts_prep_). */
+WINL void WFN(stream_)(const sidx_accel *a, const sidx_query *q, const bvh_stream_chunk *c, const int anyhit,
+                       const int simd_tri, const int keep_uv)
+{
+    for (uint32_t i = 0; i < c->count; ++i) {
+        const uint32_t j = c->idx[i];
+        if (anyhit) c->occluded[j] = WFN(walk_with_)(a, &c->rays[j], q, NULL, 1, 0, simd_tri, 0, 0, c->prep, i);
+        else (void)WFN(walk_with_)(a, &c->rays[j], q, &c->hits[j], 0, 0, simd_tri, keep_uv, 0, c->prep, i);
+    }
+}
+#define WSTREAM(name_, anyhit_, simd_tri_, keep_uv_)                                                           \
+    static __attribute__((noinline)) WALK_TARGET void WFN(name_)(const sidx_accel *a, const sidx_query *q,    \
+                                                                 const bvh_stream_chunk *c)                  \
+    {                                                                                                           \
+        WFN(stream_)(a, q, c, anyhit_, simd_tri_, keep_uv_);                                                    \
+    }
+WSTREAM(stream_isect_simd_, 0, 1, 0)
+WSTREAM(stream_isect_simd_uv_, 0, 1, WALK_TRI4)
+WSTREAM(stream_isect_other_, 0, 0, 0)
+WSTREAM(stream_occl_simd_, 1, 1, 0)
+WSTREAM(stream_occl_other_, 1, 0, 0)
+#undef WSTREAM
+const wide_stream_kernels WFN(sidx__wide_stream_) = {WFN(stream_isect_simd_), WFN(stream_isect_simd_uv_),
+                                                     WFN(stream_isect_other_), WFN(stream_occl_simd_),
+                                                     WFN(stream_occl_other_)};
 
 #undef WJOIN_
 #undef WJOIN
