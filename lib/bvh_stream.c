@@ -195,15 +195,7 @@ int sidx__bvh_stream(const sidx_accel *a, const sidx_ray *rays, size_t n, const 
         else
 #endif
             stream_prep_scalar(rays, c.idx, c.count, plan.lo, plan.hi, plan.scale, &prep);
-        if (!anyhit)
-            for (uint32_t i = 0; i < c.count; ++i) { /* as sidx_accel_intersect hands a hit to the walk */
-                sidx_hit *h = &hits[c.idx[i]];
-                *h = sidx_hit_none();
-                h->t = rays[c.idx[i]].tmax;
-            }
         plan.walk(a, q, &c);
-        if (!anyhit)
-            for (uint32_t i = 0; i < c.count; ++i) sidx__finish_hit(a, &rays[c.idx[i]], q, &hits[c.idx[i]]);
     }
     if (order) a->alloc.free(order, a->alloc.user);
     return 1;

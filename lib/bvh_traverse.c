@@ -502,27 +502,33 @@ int sidx__bvh_occluded(const sidx_accel *a, const sidx_ray *r, const sidx_query 
 }
 
 /* ---- the stream walk (bvh_stream.c) ----------------------------------------
- * A chunk of rays through the plain stack walk, inlined in the loop: one
- * frame and one set of the tree's constants for the chunk, each ray's
- * offsets as bvh_stream.c prepared them. */
-static SIDX_INLINE void stream_walk(const sidx_accel *a, const sidx_query *q, const bvh_stream_chunk *c,
-                                    const int anyhit, const int attrs)
-{
-    for (uint32_t i = 0; i < c->count; ++i) {
-        const uint32_t j = c->idx[i];
-        if (anyhit) c->occluded[j] = stack_walk_with(a, &c->rays[j], q, NULL, 0, 1, 0, 0, 0, c->prep, i);
-        else (void)stack_walk_with(a, &c->rays[j], q, &c->hits[j], 0, 0, 0, attrs, 0, c->prep, i);
+ * A chunk of rays, one after another, each through the plain stack walk
+ * with the offsets bvh_stream.c prepared: no entry checks, no choice of
+ * walk, per ray.  The walk stays a function of its own (one_*), as the
+ * single-ray copies do (see above). */
+#define STREAM_WALK(name_, anyhit_, attrs_)                                                                    \
+    static SIDX_NOINLINE int one_##name_(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,          \
+                                         sidx_hit *hit, const bvh_stream_prep *prep, uint32_t i)               \
+    {                                                                                                           \
+        if (anyhit_) return stack_walk_with(a, r, q, NULL, 0, 1, 0, 0, 0, prep, i);                            \
+        *hit = sidx_hit_none(); /* as sidx_accel_intersect hands it to the walk, and finishes it */             \
+        hit->t = r->tmax;                                                                                       \
+        (void)stack_walk_with(a, r, q, hit, 0, 0, 0, attrs_, 0, prep, i);                                       \
+        sidx__finish_hit(a, r, q, hit);                                                                         \
+        return 0;                                                                                               \
+    }                                                                                                           \
+    void name_(const sidx_accel *a, const sidx_query *q, const bvh_stream_chunk *c)                            \
+    {                                                                                                           \
+        const sidx_ray *rays = c->rays;                                                                         \
+        const uint32_t *idx = c->idx;                                                                           \
+        const bvh_stream_prep *prep = c->prep;                                                                  \
+        for (uint32_t i = 0, n = c->count; i < n; ++i) {                                                        \
+            const uint32_t j = idx[i];                                                                          \
+            if (anyhit_) c->occluded[j] = one_##name_(a, &rays[j], q, NULL, prep, i);                           \
+            else (void)one_##name_(a, &rays[j], q, &c->hits[j], prep, i);                                       \
+        }                                                                                                       \
     }
-}
-void sidx__bvh_stream_isect(const sidx_accel *a, const sidx_query *q, const bvh_stream_chunk *c)
-{
-    stream_walk(a, q, c, 0, 0);
-}
-void sidx__bvh_stream_isect_attrs(const sidx_accel *a, const sidx_query *q, const bvh_stream_chunk *c)
-{
-    stream_walk(a, q, c, 0, 1);
-}
-void sidx__bvh_stream_occl(const sidx_accel *a, const sidx_query *q, const bvh_stream_chunk *c)
-{
-    stream_walk(a, q, c, 1, 0);
-}
+STREAM_WALK(sidx__bvh_stream_isect, 0, 0)
+STREAM_WALK(sidx__bvh_stream_isect_attrs, 0, 1)
+STREAM_WALK(sidx__bvh_stream_occl, 1, 0)
+#undef STREAM_WALK

@@ -581,23 +581,36 @@ const wide_kernels WFN(sidx__wide_kernels_) = {
 #undef lazy_isect_simd_uv_
 
 /* ---- the stream walks (bvh_stream.c) -------------------------------------------
- * A chunk of rays through the untraced eager walk, inlined in the loop:
- * one frame and one set of the tree's constants for the chunk, each ray's
- * constants from what bvh_stream.c prepared (ray_consts_prep_). */
-WINL void WFN(stream_)(const sidx_accel *a, const sidx_query *q, const bvh_stream_chunk *c, const int anyhit,
-                       const int simd_tri, const int keep_uv)
-{
-    for (uint32_t i = 0; i < c->count; ++i) {
-        const uint32_t j = c->idx[i];
-        if (anyhit) c->occluded[j] = WFN(walk_with_)(a, &c->rays[j], q, NULL, 1, 0, simd_tri, 0, 0, c->prep, i);
-        else (void)WFN(walk_with_)(a, &c->rays[j], q, &c->hits[j], 0, 0, simd_tri, keep_uv, 0, c->prep, i);
-    }
-}
+ * A chunk of rays, one after another, each through the untraced eager
+ * walk with its constants from what bvh_stream.c prepared
+ * (ray_consts_prep_): no entry checks, no choice of walk, no hit set-up
+ * per ray.  The walk stays a function of its own (one_*), called from the
+ * loop: inlined into the loop it gets its registers allocated worse and
+ * runs slower than the single-ray walk (docs/performance.md, "The stream
+ * entry"). */
 #define WSTREAM(name_, anyhit_, simd_tri_, keep_uv_)                                                           \
+    static __attribute__((noinline)) WALK_TARGET int WFN(one_##name_)(const sidx_accel *a, const sidx_ray *r,  \
+                                                                      const sidx_query *q, sidx_hit *hit,      \
+                                                                      const bvh_stream_prep *prep, uint32_t i) \
+    {                                                                                                           \
+        if (anyhit_) return WFN(walk_with_)(a, r, q, NULL, 1, 0, simd_tri_, 0, 0, prep, i);                     \
+        *hit = sidx_hit_none(); /* as sidx_accel_intersect hands it to the walk, and finishes it */             \
+        hit->t = r->tmax;                                                                                       \
+        (void)WFN(walk_with_)(a, r, q, hit, 0, 0, simd_tri_, keep_uv_, 0, prep, i);                             \
+        sidx__finish_hit(a, r, q, hit);                                                                         \
+        return 0;                                                                                               \
+    }                                                                                                           \
     static __attribute__((noinline)) WALK_TARGET void WFN(name_)(const sidx_accel *a, const sidx_query *q,    \
                                                                  const bvh_stream_chunk *c)                  \
     {                                                                                                           \
-        WFN(stream_)(a, q, c, anyhit_, simd_tri_, keep_uv_);                                                    \
+        const sidx_ray *rays = c->rays;                                                                         \
+        const uint32_t *idx = c->idx;                                                                           \
+        const bvh_stream_prep *prep = c->prep;                                                                  \
+        for (uint32_t i = 0, n = c->count; i < n; ++i) {                                                        \
+            const uint32_t j = idx[i];                                                                          \
+            if (anyhit_) c->occluded[j] = WFN(one_##name_)(a, &rays[j], q, NULL, prep, i);                      \
+            else (void)WFN(one_##name_)(a, &rays[j], q, &c->hits[j], prep, i);                                  \
+        }                                                                                                       \
     }
 WSTREAM(stream_isect_simd_, 0, 1, 0)
 WSTREAM(stream_isect_simd_uv_, 0, 1, WALK_TRI4)

@@ -107,6 +107,7 @@ int main(int argc, char **argv)
     if (!strcmp(cmd, "scale")) return bench_cmd_scale(argc - 1, argv + 1);
     if (!strcmp(cmd, "extras")) return bench_cmd_extras(argc - 1, argv + 1);
     if (!strcmp(cmd, "lazy")) return bench_cmd_lazy(argc - 1, argv + 1);
+    if (!strcmp(cmd, "stream")) return bench_cmd_stream(argc - 1, argv + 1);
     if (!strcmp(cmd, "list")) return cmd_list();
     fprintf(stderr, "sidx-bench: unknown command '%s'\n", cmd);
     usage(stderr);
