@@ -360,46 +360,23 @@ static inline uint32_t bin_of(float c, float cmin, float scale, uint32_t nb)
 
 /* ---- the stream entry (bvh_stream.c) ---------------------------------------
  * sidx_accel_intersect_n / _occluded_n on a bvh-family tree, bvh4 or bvh8
- * walk their rays BVH_STREAM_CHUNK at a time: bvh_stream.c prepares a
- * chunk 8 rays at a time (the plane offsets of each axis from the ray's
- * sign, and for the wide walks 1/d times the t_far factor), then one call
- * of the structure's stream walk runs the chunk's rays one after another
- * through the single-ray walk, inlined, so the walk's frame and the
- * structure's constants are set up once per chunk, not once per ray.  The
- * arithmetic is the single-ray set-up's, so hits are the same bits. */
-#define BVH_STREAM_CHUNK 64u
-typedef struct bvh_stream_prep {
-    float far[3][BVH_STREAM_CHUNK];        /* wide walks: inv_dir[k] times the t_far factor */
-    uint32_t near_off[3][BVH_STREAM_CHUNK]; /* where the walk reads the near / far plane of axis k: */
-    uint32_t far_off[3][BVH_STREAM_CHUNK];  /* bytes (bvh_ray) or floats (wide node) */
-} bvh_stream_prep;
-/* A chunk: ray i of it is rays[idx[i]], its answer goes to hits[idx[i]]
- * (closest hit: arrives as sidx_hit_none() with t = tmax) or
- * occluded[idx[i]] (any hit). */
-typedef struct bvh_stream_chunk {
+ * (untraced, eager): bvh_stream.c picks the structure's stream walk once
+ * per call, and one call of it runs the buffer's rays one after another,
+ * each through the single-ray walk with no entry checks and no choice of
+ * walk per ray.  Ray i of the walk is rays[idx[i]] (rays[i] when idx is
+ * NULL); its answer goes to hits[] (closest hit: set up and finished as
+ * sidx_accel_intersect does) or occluded[] (any hit) at the same place. */
+typedef struct bvh_stream_rays {
     const sidx_ray *rays;
     const uint32_t *idx;
     uint32_t count;
-    const bvh_stream_prep *prep;
     sidx_hit *hits;
     int *occluded;
-} bvh_stream_chunk;
-typedef void (*bvh_stream_fn)(const sidx_accel *a, const sidx_query *q, const bvh_stream_chunk *c);
-/* bvh_traverse.c: the stack walk over a chunk (AABB, eager trees). */
-void sidx__bvh_stream_isect(const sidx_accel *a, const sidx_query *q, const bvh_stream_chunk *c);
-void sidx__bvh_stream_isect_attrs(const sidx_accel *a, const sidx_query *q, const bvh_stream_chunk *c);
-void sidx__bvh_stream_occl(const sidx_accel *a, const sidx_query *q, const bvh_stream_chunk *c);
-
-/* bvh_ray_setup with the offsets prepared for ray i of a chunk: the same values. */
-static SIDX_INLINE void bvh_ray_setup_prep(bvh_ray *br, const sidx_ray *r, const bvh_stream_prep *p, uint32_t i)
-{
-    const float *o = sidx_v3_array(&r->org), *inv = sidx_v3_array(&r->inv_dir);
-    for (int k = 0; k < 3; ++k) {
-        br->org[k] = o[k];
-        br->inv[k] = inv[k];
-        br->near_off[k] = p->near_off[k][i];
-        br->far_off[k] = p->far_off[k][i];
-    }
-}
+} bvh_stream_rays;
+typedef void (*bvh_stream_fn)(const sidx_accel *a, const sidx_query *q, const bvh_stream_rays *c);
+/* bvh_traverse.c: the stack walk over a buffer (AABB, eager trees). */
+void sidx__bvh_stream_isect(const sidx_accel *a, const sidx_query *q, const bvh_stream_rays *c);
+void sidx__bvh_stream_isect_attrs(const sidx_accel *a, const sidx_query *q, const bvh_stream_rays *c);
+void sidx__bvh_stream_occl(const sidx_accel *a, const sidx_query *q, const bvh_stream_rays *c);
 
 #endif

@@ -3,32 +3,29 @@
  * bvh4 or bvh8, untraced.
  *
  * A single query pays, per ray, for what does not depend on the ray: the
- * entry checks, the choice of walk, the walk's frame, the tree's
- * constants (docs/performance.md, "The entry path").  A buffer pays for
- * them once per call, or once per chunk of BVH_STREAM_CHUNK rays:
+ * entry checks, the choice of walk (structure, query kind, triangle test,
+ * instruction set) and two calls through function pointers.  A buffer
+ * pays for them once: the walk is picked here, and one call of the
+ * structure's stream walk (bvh_traverse.c, bvh_wide_walk.h) runs every
+ * ray through the single-ray walk — the same code, so the same hits, bit
+ * for bit — and sets up and finishes each hit beside it.
  *
- *   1. once per call: the checks, the walk (box kind, query kind,
- *      triangle test, instruction set) and the plane offsets of the two
- *      signs of each axis;
- *   2. per chunk: the rays' set-up, 8 at a time in SIMD (simd_stream_*.h):
- *      each axis's near / far plane offset chosen by the ray's sign, and
- *      for the wide walks 1/d times the robust test's t_far factor;
- *   3. one call of the structure's stream walk for the chunk
- *      (bvh_traverse.c, bvh_wide_walk.h): the single-ray walk inlined in
- *      a loop over the chunk's rays, reading the prepared values instead
- *      of computing them — the same values, so the same hits, bit for bit;
- *   4. the final hits finished as a single query finishes them.
+ * What does not pay, measured (docs/performance.md, "The stream entry"):
+ * the walk inlined into the loop over rays (its registers allocated
+ * worse), and the rays' set-up (plane offsets from the signs, far
+ * factors) done 8 rays at a time in SIMD ahead of the walks: the walk is
+ * bound by the latency of its node loads, the set-up it does itself runs
+ * in their shadow, and a separate pass only adds its instructions.
  *
- * Reordering (SIDX_QUERY_REORDER): incoherent rays — random origins and
- * directions — walk different paths one after another, each fetching
- * nodes the previous one did not use.  Sorted by direction octant, then
- * by a Morton code of the origin (the order of Pharr and Humphreys'
- * Morton-coded LBVH builds, applied to rays as Garanzha and Loop 2010 sort
- * them), neighbours in the walk order start near each other and go the
- * same way, so they share nodes in cache; hits still go to their input
- * place.  The sort costs a few passes over the buffer, so it pays only
- * where the walk misses the cache (measured per ray kind:
- * docs/performance.md, "The stream entry").
+ * Reordering (SIDX_QUERY_REORDER): rays walked sorted by direction octant,
+ * then by a Morton code of the origin (the ray sorting of Garanzha and
+ * Loop 2010, "Fast ray sorting and breadth-first packet traversal for GPU
+ * ray tracing"), so that neighbours in the walk order start near each
+ * other and go the same way and share nodes in cache; answers still go to
+ * their input place.  The keys are computed 8 rays at a time
+ * (simd_stream_avx2.h; simd_stream_scalar.h the reference).  The sort and
+ * the scattered reads and writes it causes cost more than the cache gains
+ * on the scenes measured, so it is off unless asked.
  *
  * A traced query, a lazy tree, bvh-obb and the naive / ordered walks go
  * ray by ray through sidx_accel_intersect / _occluded (accel.c): the
@@ -42,9 +39,7 @@
 /* Below this many rays a sort has nothing to gather. */
 #define STREAM_REORDER_MIN 64u
 
-/* 1 when the CPU has AVX2 for the preparation.  A wide tree built with its
- * scalar kernels (SIDX_SIMD=scalar: how the tests reach the portable
- * copies) prepares its rays with the scalar code too. */
+/* 1 when the CPU has AVX2 for the sort keys. */
 static int cpu_avx2(void)
 {
 #ifdef SIDX_WIDE_X86
@@ -55,13 +50,13 @@ static int cpu_avx2(void)
 #endif
 }
 
-/* What a call walks with: the stream walk and the plane offsets of each
- * axis for a positive (lo) and a negative (hi) direction. */
+/* What a call walks with. */
 typedef struct stream_plan {
     bvh_stream_fn walk;
-    uint32_t lo[3], hi[3];
-    float scale;
-    int avx2; /* prepare 8 rays at a time with AVX2 */
+    /* sort keys 8 rays at a time with AVX2 where the CPU has it; 0 for a
+     * wide tree built with its scalar kernels (SIDX_SIMD=scalar, how the
+     * tests reach the portable copies): the scalar keys then too */
+    int avx2;
 } stream_plan;
 
 static const wide_stream_kernels *wide_stream_for(const wide_bvh *w)
@@ -81,17 +76,11 @@ static const wide_stream_kernels *wide_stream_for(const wide_bvh *w)
 static int plan_for(const sidx_accel *a, const sidx_query *q, int anyhit, stream_plan *p)
 {
     if (a->lazy || SIDX_QUERY_TRACED(q)) return 0;
-    p->scale = a->opt.box == SIDX_BOX_ROBUST ? SIDX_ROBUST_TFAR_SCALE : 1.0f;
-    p->avx2 = cpu_avx2();
+    p->avx2 = 1;
     if (a->vt == &sidx__bvh_vtable) {
         const bvh *b = a->impl;
         if (b->obbs || b->lazy || q->traversal == SIDX_TRAVERSE_NAIVE || q->traversal == SIDX_TRAVERSE_ORDERED)
             return 0;
-        /* bvh_ray's byte offsets: bmin at 0, bmax at 16 (bvh_ray_setup) */
-        for (uint32_t k = 0; k < 3; ++k) {
-            p->lo[k] = 4u * k;
-            p->hi[k] = 16u + 4u * k;
-        }
         p->walk = anyhit ? sidx__bvh_stream_occl
                   : (q->flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL)) ? sidx__bvh_stream_isect_attrs
                                                                       : sidx__bvh_stream_isect;
@@ -100,11 +89,6 @@ static int plan_for(const sidx_accel *a, const sidx_query *q, int anyhit, stream
     if (sidx__is_wide(a)) {
         const wide_bvh *w = a->impl;
         if (w->lazy) return 0;
-        /* a wide node's float offsets: lo_x, lo_y, lo_z, hi_x, ... rows of W */
-        for (uint32_t k = 0; k < 3; ++k) {
-            p->lo[k] = k * w->width;
-            p->hi[k] = (3u + k) * w->width;
-        }
         const wide_stream_kernels *k = wide_stream_for(w);
         if (w->isa == WIDE_ISA_SCALAR) p->avx2 = 0;
         /* the choice wide_intersect's walk table makes (bvh_wide.c, set_kernels) */
@@ -147,7 +131,7 @@ static uint32_t *reorder(const sidx_accel *a, const sidx_ray *rays, size_t n, in
         if (!(lo[k] <= hi[k])) lo[k] = 0.0f; /* no finite origin on this axis */
     }
 #ifdef SIDX_WIDE_X86
-    if (avx2) stream_keys_avx2(rays, n, lo, scale, key);
+    if (avx2 && cpu_avx2()) stream_keys_avx2(rays, n, lo, scale, key);
     else
 #endif
         stream_keys_scalar(rays, n, lo, scale, key);
@@ -175,28 +159,11 @@ static uint32_t *reorder(const sidx_accel *a, const sidx_ray *rays, size_t n, in
 int sidx__bvh_stream(const sidx_accel *a, const sidx_ray *rays, size_t n, const sidx_query *q, sidx_hit *hits,
                      int *occluded)
 {
-    const int anyhit = hits == NULL;
     stream_plan plan;
-    if (n > UINT32_MAX || !plan_for(a, q, anyhit, &plan)) return 0;
+    if (n > UINT32_MAX || !plan_for(a, q, hits == NULL, &plan)) return 0;
     uint32_t *order = (q->flags & SIDX_QUERY_REORDER) && n >= STREAM_REORDER_MIN ? reorder(a, rays, n, plan.avx2) : NULL;
-    bvh_stream_prep prep;
-    uint32_t seq[BVH_STREAM_CHUNK];
-    bvh_stream_chunk c = {rays, NULL, 0, &prep, hits, occluded};
-    for (size_t base = 0; base < n; base += BVH_STREAM_CHUNK) {
-        c.count = (uint32_t)(n - base < BVH_STREAM_CHUNK ? n - base : BVH_STREAM_CHUNK);
-        if (order) {
-            c.idx = order + base;
-        } else {
-            for (uint32_t i = 0; i < c.count; ++i) seq[i] = (uint32_t)base + i;
-            c.idx = seq;
-        }
-#ifdef SIDX_WIDE_X86
-        if (plan.avx2) stream_prep_avx2(rays, c.idx, c.count, plan.lo, plan.hi, plan.scale, &prep);
-        else
-#endif
-            stream_prep_scalar(rays, c.idx, c.count, plan.lo, plan.hi, plan.scale, &prep);
-        plan.walk(a, q, &c);
-    }
+    const bvh_stream_rays c = {rays, order, (uint32_t)n, hits, occluded};
+    plan.walk(a, q, &c);
     if (order) a->alloc.free(order, a->alloc.user);
     return 1;
 }

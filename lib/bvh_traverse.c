@@ -257,9 +257,8 @@ static SIDX_INLINE int recursive_walk(const sidx_accel *a, const sidx_ray *r, co
  * attrs: the query asks for u, v and/or the normal (closest hit only).  A
  * copy of its own, so the walk for plain queries carries no u, v and no
  * triangle index ("no u/v or normals unless asked"). */
-static SIDX_INLINE int stack_walk_with(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit,
-                                       const int traced, const int anyhit, const int obb, const int attrs,
-                                       const int lazy, const bvh_stream_prep *prep, uint32_t prep_i)
+static SIDX_INLINE int stack_walk(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit,
+                                  const int traced, const int anyhit, const int obb, const int attrs, const int lazy)
 {
     const bvh *b = a->impl;
     const bvh_node *nodes = b->nodes;
@@ -269,8 +268,7 @@ static SIDX_INLINE int stack_walk_with(const sidx_accel *a, const sidx_ray *r, c
     /* the best hit so far: its original id, or with attrs its copy's index */
     uint32_t prim = SIDX_NO_HIT, visited = 0;
     bvh_ray br;
-    if (prep) bvh_ray_setup_prep(&br, r, prep, prep_i); /* the stream entry's: the same values */
-    else bvh_ray_setup(&br, r);
+    bvh_ray_setup(&br, r);
     if (b->num_nodes == 0) {
         SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = SIDX_TERM_MISS_ROOT;
                   e_.count = 0);
@@ -379,13 +377,6 @@ static SIDX_INLINE int stack_walk_with(const sidx_accel *a, const sidx_ray *r, c
             }
         }
     }
-}
-
-/* One ray, its set-up done here (every single-ray query). */
-static SIDX_INLINE int stack_walk(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit,
-                                  const int traced, const int anyhit, const int obb, const int attrs, const int lazy)
-{
-    return stack_walk_with(a, r, q, hit, traced, anyhit, obb, attrs, lazy, NULL, 0);
 }
 
 /* ---- walk tables and entry points (sidx_internal.h §1) --------------------- */
@@ -502,30 +493,29 @@ int sidx__bvh_occluded(const sidx_accel *a, const sidx_ray *r, const sidx_query 
 }
 
 /* ---- the stream walk (bvh_stream.c) ----------------------------------------
- * A chunk of rays, one after another, each through the plain stack walk
- * with the offsets bvh_stream.c prepared: no entry checks, no choice of
- * walk, per ray.  The walk stays a function of its own (one_*), as the
- * single-ray copies do (see above). */
+ * A buffer of rays, one after another, each through the plain stack walk:
+ * no entry checks and no choice of walk per ray, the hit set up and
+ * finished beside the walk.  The walk stays a function of its own (one_*),
+ * as the single-ray copies do (see above). */
 #define STREAM_WALK(name_, anyhit_, attrs_)                                                                    \
     static SIDX_NOINLINE int one_##name_(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,          \
-                                         sidx_hit *hit, const bvh_stream_prep *prep, uint32_t i)               \
+                                         sidx_hit *hit)                                                        \
     {                                                                                                           \
-        if (anyhit_) return stack_walk_with(a, r, q, NULL, 0, 1, 0, 0, 0, prep, i);                            \
+        if (anyhit_) return stack_walk(a, r, q, NULL, 0, 1, 0, 0, 0);                                           \
         *hit = sidx_hit_none(); /* as sidx_accel_intersect hands it to the walk, and finishes it */             \
         hit->t = r->tmax;                                                                                       \
-        (void)stack_walk_with(a, r, q, hit, 0, 0, 0, attrs_, 0, prep, i);                                       \
+        (void)stack_walk(a, r, q, hit, 0, 0, 0, attrs_, 0);                                                     \
         sidx__finish_hit(a, r, q, hit);                                                                         \
         return 0;                                                                                               \
     }                                                                                                           \
-    void name_(const sidx_accel *a, const sidx_query *q, const bvh_stream_chunk *c)                            \
+    void name_(const sidx_accel *a, const sidx_query *q, const bvh_stream_rays *c)                            \
     {                                                                                                           \
         const sidx_ray *rays = c->rays;                                                                         \
         const uint32_t *idx = c->idx;                                                                           \
-        const bvh_stream_prep *prep = c->prep;                                                                  \
         for (uint32_t i = 0, n = c->count; i < n; ++i) {                                                        \
-            const uint32_t j = idx[i];                                                                          \
-            if (anyhit_) c->occluded[j] = one_##name_(a, &rays[j], q, NULL, prep, i);                           \
-            else (void)one_##name_(a, &rays[j], q, &c->hits[j], prep, i);                                       \
+            const uint32_t j = idx ? idx[i] : i;                                                                \
+            if (anyhit_) c->occluded[j] = one_##name_(a, &rays[j], q, NULL);                                    \
+            else (void)one_##name_(a, &rays[j], q, &c->hits[j]);                                                \
         }                                                                                                       \
     }
 STREAM_WALK(sidx__bvh_stream_isect, 0, 0)

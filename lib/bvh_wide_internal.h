@@ -87,7 +87,7 @@ typedef struct wide_kernels {
     wide_occl_fn lazy_occl_traced, lazy_occl_simd, lazy_occl_other;
 } wide_kernels;
 
-/* The stream walks of one (width, instruction set) over a chunk of rays
+/* The stream walks of one (width, instruction set) over a buffer of rays
  * (bvh_stream.c, bvh_internal.h): closest hit with the SIMD watertight
  * test, the same keeping what u, v need, with another test; any hit. */
 typedef struct wide_stream_kernels {

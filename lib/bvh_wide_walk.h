@@ -229,9 +229,8 @@ WNOINL int WFN(occl_other_)(const sidx_accel *a, const sidx_ray *r, const sidx_q
 /* lazy = 1: the copy for lazy trees (bvh_wide.c, "lazy builds"), where a
  * child may be an unbuilt subtree (WIDE_LAZY_BIT); every other copy has
  * lazy = 0 and no trace of that code. */
-WINL int WFN(walk_with_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit, const int anyhit,
-                         const int traced, const int simd_tri, const int keep_uv, const int lazy,
-                         const bvh_stream_prep *prep, uint32_t prep_i)
+WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit, const int anyhit,
+                    const int traced, const int simd_tri, const int keep_uv, const int lazy)
 {
     const wide_bvh *w = a->impl;
     const float *nodes = w->nodes;
@@ -254,8 +253,7 @@ WINL int WFN(walk_with_)(const sidx_accel *a, const sidx_ray *r, const sidx_quer
      * the pop test): a rounded entry an ulp beyond a hit must not drop a
      * box holding a triangle an ulp nearer (bvh_slab says more). */
     const float scale = a->opt.box == SIDX_BOX_ROBUST ? SIDX_ROBUST_TFAR_SCALE : 1.0f;
-    if (prep) WFN(ray_consts_prep_)(&consts, r, prep, prep_i); /* the stream entry's: the same values */
-    else WFN(ray_consts_init_)(&consts, r, scale);
+    WFN(ray_consts_init_)(&consts, r, scale);
     int tri_ready = 0;
     (void)tri_ready;
     float best_s = best * scale; /* the widened bound boxes are clipped to (see bvh_slab) */
@@ -493,13 +491,6 @@ WINL int WFN(walk_with_)(const sidx_accel *a, const sidx_ray *r, const sidx_quer
     }
 }
 
-/* One ray, its set-up done here (every single-ray query). */
-WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit, const int anyhit,
-                    const int traced, const int simd_tri, const int keep_uv, const int lazy)
-{
-    return WFN(walk_with_)(a, r, q, hit, anyhit, traced, simd_tri, keep_uv, lazy, NULL, 0);
-}
-
 /* Each instantiation is its own (not inlined) function, so the untraced
  * walks get the same code, registers and stack frame whether or not the
  * library is built with hooks: the hooks then cost one test per ray here
@@ -581,35 +572,31 @@ const wide_kernels WFN(sidx__wide_kernels_) = {
 #undef lazy_isect_simd_uv_
 
 /* ---- the stream walks (bvh_stream.c) -------------------------------------------
- * A chunk of rays, one after another, each through the untraced eager
- * walk with its constants from what bvh_stream.c prepared
- * (ray_consts_prep_): no entry checks, no choice of walk, no hit set-up
- * per ray.  The walk stays a function of its own (one_*), called from the
- * loop: inlined into the loop it gets its registers allocated worse and
- * runs slower than the single-ray walk (docs/performance.md, "The stream
- * entry"). */
+ * A buffer of rays, one after another, each through the untraced eager
+ * walk: no entry checks and no choice of walk per ray, the hit set up and
+ * finished beside the walk.  The walk stays a function of its own (one_*)
+ * called from the loop: inlined into the loop it ran slower than the
+ * single-ray walk (docs/performance.md, "The stream entry"). */
 #define WSTREAM(name_, anyhit_, simd_tri_, keep_uv_)                                                           \
     static __attribute__((noinline)) WALK_TARGET int WFN(one_##name_)(const sidx_accel *a, const sidx_ray *r,  \
-                                                                      const sidx_query *q, sidx_hit *hit,      \
-                                                                      const bvh_stream_prep *prep, uint32_t i) \
+                                                                      const sidx_query *q, sidx_hit *hit)      \
     {                                                                                                           \
-        if (anyhit_) return WFN(walk_with_)(a, r, q, NULL, 1, 0, simd_tri_, 0, 0, prep, i);                     \
+        if (anyhit_) return WFN(walk_)(a, r, q, NULL, 1, 0, simd_tri_, 0, 0);                                   \
         *hit = sidx_hit_none(); /* as sidx_accel_intersect hands it to the walk, and finishes it */             \
         hit->t = r->tmax;                                                                                       \
-        (void)WFN(walk_with_)(a, r, q, hit, 0, 0, simd_tri_, keep_uv_, 0, prep, i);                             \
+        (void)WFN(walk_)(a, r, q, hit, 0, 0, simd_tri_, keep_uv_, 0);                                           \
         sidx__finish_hit(a, r, q, hit);                                                                         \
         return 0;                                                                                               \
     }                                                                                                           \
     static __attribute__((noinline)) WALK_TARGET void WFN(name_)(const sidx_accel *a, const sidx_query *q,    \
-                                                                 const bvh_stream_chunk *c)                  \
+                                                                 const bvh_stream_rays *c)                  \
     {                                                                                                           \
         const sidx_ray *rays = c->rays;                                                                         \
         const uint32_t *idx = c->idx;                                                                           \
-        const bvh_stream_prep *prep = c->prep;                                                                  \
         for (uint32_t i = 0, n = c->count; i < n; ++i) {                                                        \
-            const uint32_t j = idx[i];                                                                          \
-            if (anyhit_) c->occluded[j] = WFN(one_##name_)(a, &rays[j], q, NULL, prep, i);                      \
-            else (void)WFN(one_##name_)(a, &rays[j], q, &c->hits[j], prep, i);                                  \
+            const uint32_t j = idx ? idx[i] : i;                                                                \
+            if (anyhit_) c->occluded[j] = WFN(one_##name_)(a, &rays[j], q, NULL);                               \
+            else (void)WFN(one_##name_)(a, &rays[j], q, &c->hits[j]);                                           \
         }                                                                                                       \
     }
 WSTREAM(stream_isect_simd_, 0, 1, 0)

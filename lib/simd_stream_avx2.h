@@ -1,58 +1,37 @@
-/* simd_stream_avx2.h — the stream entry's preparation of rays, 8 at a
- * time with AVX2: the same values as simd_stream_scalar.h (integer
- * offsets, one IEEE multiply per far factor, the same clamps).
+/* simd_stream_avx2.h — the stream entry's sort keys, 8 rays at a time
+ * with AVX2: the same values as simd_stream_scalar.h (the same clamps,
+ * the same truncation).
  *
  * Not a normal header: bvh_stream.c includes it once, on x86, and calls
  * it when the CPU has AVX2.  The rays are an array of structures, so each
- * group of 8 gathers its fields with scalar loads; what runs 8 wide is the
- * arithmetic: the sign tests and offset choices, the far factors, and
- * for the sort keys the quantisation and the Morton interleave. */
+ * group of 8 loads its fields lane by lane; what runs 8 wide is the
+ * arithmetic: the sign tests, the quantisation, the Morton interleave. */
 #include <immintrin.h>
 
 #define STREAM_AVX2 __attribute__((target("avx2")))
 
+/* Each ray's field loaded straight into its lane (no store and reload of
+ * a temporary array, which stalls on store forwarding). */
+STREAM_AVX2 static inline uint32_t stream_sign_word(const sidx_ray *r)
+{
+    uint32_t w;
+    memcpy(&w, r->sign, sizeof w); /* sign[0..2] and kx */
+    return w;
+}
 STREAM_AVX2 static inline __m256i stream_sign_words_avx2(const sidx_ray *rays, const uint32_t *idx)
 {
-    uint32_t w[8];
-    for (int l = 0; l < 8; ++l) memcpy(&w[l], rays[idx[l]].sign, sizeof w[l]); /* sign[0..2] and kx */
-    return _mm256_loadu_si256((const __m256i *)(const void *)w);
+    return _mm256_setr_epi32((int)stream_sign_word(&rays[idx[0]]), (int)stream_sign_word(&rays[idx[1]]),
+                             (int)stream_sign_word(&rays[idx[2]]), (int)stream_sign_word(&rays[idx[3]]),
+                             (int)stream_sign_word(&rays[idx[4]]), (int)stream_sign_word(&rays[idx[5]]),
+                             (int)stream_sign_word(&rays[idx[6]]), (int)stream_sign_word(&rays[idx[7]]));
 }
 
 STREAM_AVX2 static inline __m256 stream_gather_avx2(const sidx_ray *rays, const uint32_t *idx, size_t field, int k)
 {
-    float v[8];
-    for (int l = 0; l < 8; ++l) v[l] = ((const float *)(const void *)((const char *)&rays[idx[l]] + field))[k];
-    return _mm256_loadu_ps(v);
-}
-
-STREAM_AVX2 static void stream_prep_avx2(const sidx_ray *rays, const uint32_t *idx, uint32_t count, const uint32_t lo[3],
-                                         const uint32_t hi[3], float scale, bvh_stream_prep *p)
-{
-    const __m256 s = _mm256_set1_ps(scale);
-    const __m256i byte = _mm256_set1_epi32(0xFF), zero = _mm256_setzero_si256();
-    uint32_t i = 0;
-    for (; i + 8 <= count; i += 8) {
-        const __m256i sw = stream_sign_words_avx2(rays, idx + i);
-        for (int k = 0; k < 3; ++k) {
-            /* all ones where sign[k] == 0: the direction is not negative */
-            const __m256i pos = _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_srli_epi32(sw, 8 * k), byte), zero);
-            const __m256i vlo = _mm256_set1_epi32((int)lo[k]), vhi = _mm256_set1_epi32((int)hi[k]);
-            _mm256_storeu_si256((__m256i *)(void *)&p->near_off[k][i], _mm256_blendv_epi8(vhi, vlo, pos));
-            _mm256_storeu_si256((__m256i *)(void *)&p->far_off[k][i], _mm256_blendv_epi8(vlo, vhi, pos));
-            const __m256 inv = stream_gather_avx2(rays, idx + i, offsetof(sidx_ray, inv_dir), k);
-            _mm256_storeu_ps(&p->far[k][i], _mm256_mul_ps(inv, s));
-        }
-    }
-    /* the tail, at most 7 rays, in place */
-    for (; i < count; ++i) {
-        const sidx_ray *r = &rays[idx[i]];
-        const float *inv = sidx_v3_array(&r->inv_dir);
-        for (int k = 0; k < 3; ++k) {
-            p->near_off[k][i] = r->sign[k] ? hi[k] : lo[k];
-            p->far_off[k][i] = r->sign[k] ? lo[k] : hi[k];
-            p->far[k][i] = inv[k] * scale;
-        }
-    }
+#define STREAM_F(l) (((const float *)(const void *)((const char *)&rays[idx[l]] + field))[k])
+    return _mm256_setr_ps(STREAM_F(0), STREAM_F(1), STREAM_F(2), STREAM_F(3), STREAM_F(4), STREAM_F(5), STREAM_F(6),
+                          STREAM_F(7));
+#undef STREAM_F
 }
 
 STREAM_AVX2 static inline __m256i stream_spread3_avx2(__m256i x)

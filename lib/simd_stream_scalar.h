@@ -1,33 +1,11 @@
-/* simd_stream_scalar.h — the stream entry's preparation of rays in plain
- * C: the portable reference simd_stream_avx2.h matches value for value.
+/* simd_stream_scalar.h — the stream entry's sort keys in plain C: the
+ * portable reference simd_stream_avx2.h matches value for value.
  *
  * Not a normal header: bvh_stream.c includes it once.  It defines
- *
- *   stream_prep_scalar   a chunk's plane offsets and far factors
- *                        (bvh_stream_prep, bvh_internal.h): for ray i,
- *                        axis k, near = lo[k] or hi[k] and far the other
- *                        as the ray's sign[k] says — the walks' own
- *                        choice, r->sign[k] ? hi : lo — and far[k] =
- *                        inv_dir[k] · scale, the same multiply as the
- *                        walks' set-up (so the same bits);
- *   stream_keys_scalar   the sort key of each ray for reordering: its
- *                        direction octant (the sign bits) above a Morton
- *                        code of its origin quantised to 9 bits per axis
- *                        over [olo, olo + 511 / oscale]. */
-
-static inline void stream_prep_scalar(const sidx_ray *rays, const uint32_t *idx, uint32_t count, const uint32_t lo[3],
-                                      const uint32_t hi[3], float scale, bvh_stream_prep *p)
-{
-    for (uint32_t i = 0; i < count; ++i) {
-        const sidx_ray *r = &rays[idx[i]];
-        const float *inv = sidx_v3_array(&r->inv_dir);
-        for (int k = 0; k < 3; ++k) {
-            p->near_off[k][i] = r->sign[k] ? hi[k] : lo[k];
-            p->far_off[k][i] = r->sign[k] ? lo[k] : hi[k];
-            p->far[k][i] = inv[k] * scale;
-        }
-    }
-}
+ * stream_keys_scalar, the sort key of each ray for reordering: its
+ * direction octant (bit k: sign[k] != 0, as the walks read it) above a
+ * Morton code of its origin quantised to 9 bits per axis over
+ * [olo, olo + 511 / oscale]. */
 
 /* 9 bits spread to every third bit (bit b to bit 3b). */
 static inline uint32_t stream_spread3(uint32_t x)

@@ -41,21 +41,6 @@ WINL void WFN(ray_consts_init_)(WFN(ray_consts_) * consts, const sidx_ray *r, fl
 }
 
 /* No triangle constants: every block takes the scalar test. */
-/* The same constants from what the stream entry prepared for ray i of a
- * chunk (bvh_stream.c): the same values. */
-WINL void WFN(ray_consts_prep_)(WFN(ray_consts_) * consts, const sidx_ray *r, const bvh_stream_prep *p, uint32_t i)
-{
-    const float *o = sidx_v3_array(&r->org), *inv = sidx_v3_array(&r->inv_dir);
-    for (int k = 0; k < 3; ++k) {
-        consts->near_off[k] = p->near_off[k][i];
-        consts->far_off[k] = p->far_off[k][i];
-        consts->org[k] = o[k];
-        consts->inv[k] = inv[k];
-        consts->inv_far[k] = p->far[k][i];
-    }
-    consts->tmin = r->tmin;
-}
-
 WINL void WFN(tri_consts_init_)(WFN(ray_consts_) * consts, const sidx_ray *r)
 {
     (void)consts;

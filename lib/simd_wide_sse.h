@@ -35,22 +35,6 @@ WINL void WFN(ray_consts_init_)(WFN(ray_consts_) * consts, const sidx_ray *r, fl
     consts->tmin = _mm_set1_ps(r->tmin);
 }
 
-/* The same constants from what the stream entry prepared for ray i of a
- * chunk (bvh_stream.c): the same values. */
-WINL void WFN(ray_consts_prep_)(WFN(ray_consts_) * consts, const sidx_ray *r, const bvh_stream_prep *p, uint32_t i)
-{
-    const float *o = sidx_v3_array(&r->org), *inv = sidx_v3_array(&r->inv_dir);
-    for (int k = 0; k < 3; ++k) {
-        consts->near_off[k] = p->near_off[k][i];
-        consts->far_off[k] = p->far_off[k][i];
-    }
-    consts->org_x = _mm_set1_ps(o[0]); consts->org_y = _mm_set1_ps(o[1]); consts->org_z = _mm_set1_ps(o[2]);
-    consts->inv_x = _mm_set1_ps(inv[0]); consts->inv_y = _mm_set1_ps(inv[1]); consts->inv_z = _mm_set1_ps(inv[2]);
-    consts->far_x = _mm_set1_ps(p->far[0][i]); consts->far_y = _mm_set1_ps(p->far[1][i]);
-    consts->far_z = _mm_set1_ps(p->far[2][i]);
-    consts->tmin = _mm_set1_ps(r->tmin);
-}
-
 WINL void WFN(tri_consts_init_)(WFN(ray_consts_) * consts, const sidx_ray *r) { wide_tri_ray_init(&consts->tri, r); }
 
 /* ---- 4 boxes at once ----------------------------------------------------------

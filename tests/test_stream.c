@@ -11,8 +11,8 @@
  *    (the other walks), with the robust and the plain box test;
  *  - with no attributes, with u, v and the normal, with the precise t and
  *    the point; with and without SIDX_QUERY_REORDER;
- *  - on buffers of 0, 1, 7, 8, 9 and 1000 rays (around the preparation's
- *    groups of 8 and the walk's chunks of 64), on primary, diffuse,
+ *  - on buffers of 0, 1, 7, 8, 9 and 1000 rays (around the sort keys'
+ *    groups of 8; reordering from 64 rays on), on primary, diffuse,
  *    shadow, grazing and axis-parallel rays, with invalid records mixed in
  *    (NaN origin or direction, zero direction, an infinite direction, NaN
  *    tmin, tmin > tmax: fields set by hand past sidx_ray_init) that the

@@ -154,10 +154,10 @@ sidx_status sidx_accel_occluded(const sidx_accel *a, const sidx_ray *r, const si
  * hits[i] is what sidx_accel_intersect gives for rays[i], bit for bit,
  * and a traced query emits each ray's events in turn, exactly as n single
  * queries would.  bvh (and the bvh family but bvh-obb), bvh4 and bvh8 walk
- * an untraced buffer with a walk of its own: the rays' set-up done 8 at a
- * time, the walk chosen and entered once per call / per 64 rays instead
- * of once per ray (docs/performance.md, "The stream entry"), optionally
- * in another order (SIDX_QUERY_REORDER).  rays and hits may be NULL when
+ * an untraced buffer (of an eager tree) with a stream walk: the checks and
+ * the choice of walk made once per call instead of once per ray
+ * (docs/performance.md, "The stream entry"), optionally in another order
+ * (SIDX_QUERY_REORDER).  rays and hits may be NULL when
  * n is 0.  Errors: SIDX_ERR_INVALID_ARG (a NULL structure, or NULL arrays
  * with n > 0: nothing written); on a lazy tree SIDX_ERR_NOMEM when any
  * ray's query returned it (the other rays are answered, that ray's hit
