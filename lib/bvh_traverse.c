@@ -496,7 +496,9 @@ int sidx__bvh_occluded(const sidx_accel *a, const sidx_ray *r, const sidx_query 
  * A buffer of rays, one after another, each through the plain stack walk:
  * no entry checks and no choice of walk per ray, the hit set up and
  * finished beside the walk.  The walk stays a function of its own (one_*),
- * as the single-ray copies do (see above). */
+ * its registers allocated for it alone as the single-ray copies' (see
+ * above): inlined into the loop it measured no faster
+ * (docs/performance.md, "The stream entry"). */
 #define STREAM_WALK(name_, anyhit_, attrs_)                                                                    \
     static SIDX_NOINLINE int one_##name_(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,          \
                                          sidx_hit *hit)                                                        \

@@ -575,8 +575,9 @@ const wide_kernels WFN(sidx__wide_kernels_) = {
  * A buffer of rays, one after another, each through the untraced eager
  * walk: no entry checks and no choice of walk per ray, the hit set up and
  * finished beside the walk.  The walk stays a function of its own (one_*)
- * called from the loop: inlined into the loop it ran slower than the
- * single-ray walk (docs/performance.md, "The stream entry"). */
+ * called from the loop, its registers allocated for it alone as in the
+ * single-ray copies: inlined into the loop it measured no faster
+ * (docs/performance.md, "The stream entry"). */
 #define WSTREAM(name_, anyhit_, simd_tri_, keep_uv_)                                                           \
     static __attribute__((noinline)) WALK_TARGET int WFN(one_##name_)(const sidx_accel *a, const sidx_ray *r,  \
                                                                       const sidx_query *q, sidx_hit *hit)      \
