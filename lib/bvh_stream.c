@@ -43,8 +43,7 @@
 static int cpu_avx2(void)
 {
 #ifdef SIDX_WIDE_X86
-    __builtin_cpu_init();
-    return __builtin_cpu_supports("avx2");
+    return __builtin_cpu_supports("avx2"); /* the CPU model is read at start-up */
 #else
     return 0;
 #endif

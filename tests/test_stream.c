@@ -19,6 +19,8 @@
  *    single query answers too;
  *  - a traced buffer emits, event for event, the events of the single
  *    queries one after another with ray ids q->ray_id + i;
+ *  - two threads streaming through one structure at once (reordered and
+ *    not) get the same answers (make test-tsan runs this suite too);
  *  - NULL arguments are refused, n = 0 takes NULL arrays. */
 #include <stdarg.h>
 #include <stddef.h>
@@ -27,6 +29,7 @@
 #include <cmocka.h>
 
 #include <math.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -259,6 +262,68 @@ static void test_traced_events(void **state)
     sidx_mesh_free(&m);
 }
 
+/* ---- threads sharing a structure ---------------------------------------------- */
+
+typedef struct job {
+    const sidx_accel *a;
+    const sidx_ray *rays;
+    sidx_hit hits[NRAYS];
+    int occ[NRAYS];
+    sidx_status s1, s2;
+} job;
+
+static void *run_job(void *arg)
+{
+    job *j = arg;
+    for (int reorder = 0; reorder < 2; ++reorder) {
+        const sidx_query q = {reorder ? SIDX_QUERY_REORDER : 0u, SIDX_TRAVERSE_DEFAULT, NULL, 0};
+        j->s1 = sidx_accel_intersect_n(j->a, j->rays, NRAYS, &q, j->hits);
+        j->s2 = sidx_accel_occluded_n(j->a, j->rays, NRAYS, &q, j->occ);
+        if (j->s1 != SIDX_OK || j->s2 != SIDX_OK) break;
+    }
+    return NULL;
+}
+
+static void test_threads(void **state)
+{
+    (void)state;
+    static const char *const names[] = {"bvh", "bvh8"};
+    sidx_mesh m = scene("teapot");
+    sidx_ray *rays = make_rays(&m);
+    job *jobs = calloc(2, sizeof *jobs);
+    sidx_hit *one = malloc(NRAYS * sizeof *one);
+    int *occ = malloc(NRAYS * sizeof *occ);
+    assert_non_null(jobs);
+    assert_non_null(one);
+    assert_non_null(occ);
+    for (size_t k = 0; k < 2; ++k) {
+        sidx_accel *a = build(names[k], &m, NULL, NULL);
+        for (size_t i = 0; i < NRAYS; ++i) {
+            assert_int_equal(sidx_accel_intersect(a, &rays[i], NULL, &one[i]), SIDX_OK);
+            assert_int_equal(sidx_accel_occluded(a, &rays[i], NULL, &occ[i]), SIDX_OK);
+        }
+        pthread_t th[2];
+        for (int t = 0; t < 2; ++t) {
+            jobs[t].a = a;
+            jobs[t].rays = rays;
+            assert_int_equal(pthread_create(&th[t], NULL, run_job, &jobs[t]), 0);
+        }
+        for (int t = 0; t < 2; ++t) {
+            pthread_join(th[t], NULL);
+            assert_int_equal(jobs[t].s1, SIDX_OK);
+            assert_int_equal(jobs[t].s2, SIDX_OK);
+            assert_memory_equal(jobs[t].hits, one, NRAYS * sizeof *one);
+            assert_memory_equal(jobs[t].occ, occ, NRAYS * sizeof *occ);
+        }
+        sidx_accel_destroy(a);
+    }
+    free(jobs);
+    free(one);
+    free(occ);
+    free(rays);
+    sidx_mesh_free(&m);
+}
+
 /* ---- arguments ------------------------------------------------------------------ */
 
 static void test_arguments(void **state)
@@ -294,6 +359,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_bit_identical),
         cmocka_unit_test(test_traced_events),
+        cmocka_unit_test(test_threads),
         cmocka_unit_test(test_arguments),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
