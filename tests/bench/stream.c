@@ -147,7 +147,7 @@ int bench_cmd_stream(int argc, char **argv)
     size_t nrays = 100000;
     int rounds = 5, passes = 3;
     uint64_t seed = 1;
-    for (int i = 1; i < argc; ++i) {
+    for (int i = 1; i < argc; i += 2) { /* every option takes a value */
         const char *o = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         if (!strcmp(o, "--help") || !strcmp(o, "-h")) { usage(stdout); return BENCH_OK; }
         if (!v) { usage(stderr); return BENCH_USAGE; }
@@ -159,7 +159,6 @@ int bench_cmd_stream(int argc, char **argv)
         else if (!strcmp(o, "--passes")) passes = atoi(v);
         else if (!strcmp(o, "--seed")) seed = strtoull(v, NULL, 10);
         else { usage(stderr); return BENCH_USAGE; }
-        ++i;
     }
     if (nrays == 0 || nrays > 100000000 || rounds < 1 || rounds > MAX_ROUNDS || passes < 1 || passes > MAX_PASSES) {
         usage(stderr);
