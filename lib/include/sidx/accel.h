@@ -105,8 +105,10 @@ sidx_status sidx_traversal_parse(const char *name, sidx_traversal *out);
 #define SIDX_QUERY_REORDER 16u /* sidx_accel_intersect_n / _occluded_n on bvh, bvh4, bvh8: walk the buffer
                                 sorted by direction octant, then by a Morton code of the origin, so that rays
                                 that go the same way follow each other; answers still in input order, and the
-                                same bits.  It pays on incoherent rays only (docs/performance.md, "The stream
-                                entry"); off unless asked.  Ignored by every other query and structure */
+                                same bits.  Buffers of 64 rays or more; it takes 16 bytes per ray from the
+                                build's allocator for the call (without them: input order, the same answers).
+                                It did not pay on any ray kind measured (docs/performance.md, "The stream
+                                entry"): off unless asked.  Ignored by every other query and structure */
 
 typedef struct sidx_query {
     uint32_t flags;               /* SIDX_QUERY_* */
