@@ -293,14 +293,15 @@ test-run:
 # parallel trace and the worker pool (test_parallel), concurrent queries on
 # every structure (test_threads), threads racing into unbuilt nodes of
 # lazy trees (test_lazy), threads racing into an unbuilt lazy instance
-# (test_lazy_instance).  Only these are built, in build/tsan (TSAN=1),
+# (test_lazy_instance), threads streaming buffers through one structure
+# (test_stream).  Only these are built, in build/tsan (TSAN=1),
 # and run at their smallest sizes, SIDX_FAST_TESTS=2: what ThreadSanitizer
 # checks is how the threads meet, which more rays do not add to
 # (FAST_TESTS=0: the full sizes).
 # die_after_fork=0: test_pool_after_fork forks while the pool's threads
 # run, on purpose (the child must not inherit them); its child only
 # queries serially.  Any report fails the run (exitcode).
-TSAN_TESTS := test_parallel test_threads test_lazy test_lazy_instance
+TSAN_TESTS := test_parallel test_threads test_lazy test_lazy_instance test_stream
 TSAN_FAST := $(if $(filter command line environment,$(origin FAST_TESTS)),$(FAST_TESTS),1)
 test-tsan:
 	@$(MAKE) --no-print-directory $(BUILD_JOBS) TSAN=1 $(TSAN_TESTS:%=$(BUILDDIR)/tsan/tests/%)

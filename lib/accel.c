@@ -164,35 +164,6 @@ sidx_status sidx_accel_auto(const sidx_mesh *mesh, const sidx_build_options *opt
 
 static const sidx_query default_query = {0, SIDX_TRAVERSE_DEFAULT, NULL, 0};
 
-/* The final hit finished once, after the walk: t refined, u, v, the
- * geometric normal and the point, as the query asks (sidx__hit_finish,
- * hit.c).  The hot loop never pays for them ("no u/v or normals unless
- * asked").  A structure that keeps u, v or ng from its own traversal
- * (a->fills_uv, a->fills_ng) has set them already. */
-static SIDX_INLINE void finish_hit(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
-{
-    if (hit->prim == SIDX_NO_HIT) {
-        /* The query set *hit = sidx_hit_none() with t = tmax, and a walk
-         * writes only t and prim when it accepts a hit, and u, v, ng for its
-         * final one: on a miss only t differs from sidx_hit_none(). */
-        hit->t = INFINITY;
-        return;
-    }
-    /* Aggregates (instance.c) set the instance and finish their hit in
-     * world space themselves: their a->mesh is not where the hit lies, so
-     * an instanced hit gets no point. */
-    if (hit->instance != SIDX_NO_HIT) return;
-    /* On request only: the mesh read misses the cache on incoherent rays
-     * (docs/performance.md, "Precision of the closest hit's t"). */
-    const uint32_t own = (a->fills_uv ? SIDX_QUERY_UV : 0u) | (a->fills_ng ? SIDX_QUERY_NORMAL : 0u);
-    /* a call only when there is something to do: a query asking for u, v
-     * from a structure that filled them (bvh, bvh8, kdtree) makes none */
-    if (!(q->flags & (SIDX__QUERY_REFINE_T | SIDX_QUERY_POINT)) &&
-        !(q->flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL) & ~own))
-        return;
-    sidx__hit_finish(a->mesh, a->opt.tri, r, q->flags, own, hit);
-}
-
 /* A traced query: the same steps between its RAY_BEGIN and RAY_END
  * events.  A function of its own so that the untraced call below needs
  * no event on its stack and stays a short frame around the structure's
@@ -205,7 +176,7 @@ static SIDX_NOINLINE void intersect_traced(const sidx_accel *a, const sidx_ray *
     SIDX_EMIT(traced, q->hook, SIDX_EV_RAY_BEGIN, e_.structure = a->name; e_.ray_id = q->ray_id;
               e_.t_near = r->tmin; e_.t_far = r->tmax);
     a->vt->intersect(a, r, q, hit);
-    finish_hit(a, r, q, hit);
+    sidx__finish_hit(a, r, q, hit);
     SIDX_EMIT(traced, q->hook, SIDX_EV_RAY_END, e_.structure = a->name; e_.ray_id = q->ray_id; e_.prim = hit->prim;
               e_.t = hit->t; e_.result = hit->prim != SIDX_NO_HIT);
 }
@@ -224,7 +195,7 @@ static SIDX_NOINLINE sidx_status intersect_lazy(const sidx_accel *a, const sidx_
         intersect_traced(a, r, q, hit);
     } else {
         a->vt->intersect(a, r, q, hit);
-        finish_hit(a, r, q, hit);
+        sidx__finish_hit(a, r, q, hit);
     }
     return lazy_failed ? SIDX_ERR_NOMEM : SIDX_OK;
 }
@@ -241,7 +212,7 @@ sidx_status sidx_accel_intersect(const sidx_accel *a, const sidx_ray *r, const s
         return SIDX_OK;
     }
     a->vt->intersect(a, r, q, hit);
-    finish_hit(a, r, q, hit);
+    sidx__finish_hit(a, r, q, hit);
     return SIDX_OK;
 }
 
@@ -259,16 +230,35 @@ sidx_status sidx_accel_occluded(const sidx_accel *a, const sidx_ray *r, const si
     return a->lazy && lazy_failed ? SIDX_ERR_NOMEM : SIDX_OK;
 }
 
+/* A buffer of rays: the stream walk where the structure has one
+ * (bvh_stream.c), else ray by ray; either way each ray's answer, status
+ * and events are those of a single query with ray id q->ray_id + i. */
 sidx_status sidx_accel_intersect_n(const sidx_accel *a, const sidx_ray *rays, size_t n, const sidx_query *q,
                                    sidx_hit *hits)
 {
     if (!a || (n && (!rays || !hits))) return SIDX_ERR_INVALID_ARG;
     sidx_query qq = q ? *q : default_query;
+    if (n && sidx__bvh_stream(a, rays, n, &qq, hits, NULL)) return SIDX_OK;
     const uint32_t base = qq.ray_id;
     sidx_status st = SIDX_OK;
     for (size_t i = 0; i < n; ++i) {
         qq.ray_id = base + (uint32_t)i;
         if (sidx_accel_intersect(a, &rays[i], &qq, &hits[i]) != SIDX_OK) st = SIDX_ERR_NOMEM;
+    }
+    return st;
+}
+
+sidx_status sidx_accel_occluded_n(const sidx_accel *a, const sidx_ray *rays, size_t n, const sidx_query *q,
+                                  int *occluded)
+{
+    if (!a || (n && (!rays || !occluded))) return SIDX_ERR_INVALID_ARG;
+    sidx_query qq = q ? *q : default_query;
+    if (n && sidx__bvh_stream(a, rays, n, &qq, NULL, occluded)) return SIDX_OK;
+    const uint32_t base = qq.ray_id;
+    sidx_status st = SIDX_OK;
+    for (size_t i = 0; i < n; ++i) {
+        qq.ray_id = base + (uint32_t)i;
+        if (sidx_accel_occluded(a, &rays[i], &qq, &occluded[i]) != SIDX_OK) st = SIDX_ERR_NOMEM;
     }
     return st;
 }

@@ -358,4 +358,25 @@ static inline uint32_t bin_of(float c, float cmin, float scale, uint32_t nb)
     return (uint32_t)f;
 }
 
+/* ---- the stream entry (bvh_stream.c) ---------------------------------------
+ * sidx_accel_intersect_n / _occluded_n on a bvh-family tree, bvh4 or bvh8
+ * (untraced, eager): bvh_stream.c picks the structure's stream walk once
+ * per call, and one call of it runs the buffer's rays one after another,
+ * each through the single-ray walk with no entry checks and no choice of
+ * walk per ray.  Ray i of the walk is rays[idx[i]] (rays[i] when idx is
+ * NULL); its answer goes to hits[] (closest hit: set up and finished as
+ * sidx_accel_intersect does) or occluded[] (any hit) at the same place. */
+typedef struct bvh_stream_rays {
+    const sidx_ray *rays;
+    const uint32_t *idx;
+    uint32_t count;
+    sidx_hit *hits;
+    int *occluded;
+} bvh_stream_rays;
+typedef void (*bvh_stream_fn)(const sidx_accel *a, const sidx_query *q, const bvh_stream_rays *c);
+/* bvh_traverse.c: the stack walk over a buffer (AABB, eager trees). */
+void sidx__bvh_stream_isect(const sidx_accel *a, const sidx_query *q, const bvh_stream_rays *c);
+void sidx__bvh_stream_isect_attrs(const sidx_accel *a, const sidx_query *q, const bvh_stream_rays *c);
+void sidx__bvh_stream_occl(const sidx_accel *a, const sidx_query *q, const bvh_stream_rays *c);
+
 #endif

@@ -491,3 +491,36 @@ int sidx__bvh_occluded(const sidx_accel *a, const sidx_ray *r, const sidx_query 
 {
     return sidx__walk_occluded(walks_for(a, q), a, r, q);
 }
+
+/* ---- the stream walk (bvh_stream.c) ----------------------------------------
+ * A buffer of rays, one after another, each through the plain stack walk:
+ * no entry checks and no choice of walk per ray, the hit set up and
+ * finished beside the walk.  The walk stays a function of its own (one_*),
+ * its registers allocated for it alone as the single-ray copies' (see
+ * above): inlined into the loop it measured no faster
+ * (docs/performance.md, "The stream entry"). */
+#define STREAM_WALK(name_, anyhit_, attrs_)                                                                    \
+    static SIDX_NOINLINE int one_##name_(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,          \
+                                         sidx_hit *hit)                                                        \
+    {                                                                                                           \
+        if (anyhit_) return stack_walk(a, r, q, NULL, 0, 1, 0, 0, 0);                                           \
+        *hit = sidx_hit_none(); /* as sidx_accel_intersect hands it to the walk, and finishes it */             \
+        hit->t = r->tmax;                                                                                       \
+        (void)stack_walk(a, r, q, hit, 0, 0, 0, attrs_, 0);                                                     \
+        sidx__finish_hit(a, r, q, hit);                                                                         \
+        return 0;                                                                                               \
+    }                                                                                                           \
+    void name_(const sidx_accel *a, const sidx_query *q, const bvh_stream_rays *c)                            \
+    {                                                                                                           \
+        const sidx_ray *rays = c->rays;                                                                         \
+        const uint32_t *idx = c->idx;                                                                           \
+        for (uint32_t i = 0, n = c->count; i < n; ++i) {                                                        \
+            const uint32_t j = idx ? idx[i] : i;                                                                \
+            if (anyhit_) c->occluded[j] = one_##name_(a, &rays[j], q, NULL);                                    \
+            else (void)one_##name_(a, &rays[j], q, &c->hits[j]);                                                \
+        }                                                                                                       \
+    }
+STREAM_WALK(sidx__bvh_stream_isect, 0, 0)
+STREAM_WALK(sidx__bvh_stream_isect_attrs, 0, 1)
+STREAM_WALK(sidx__bvh_stream_occl, 1, 0)
+#undef STREAM_WALK

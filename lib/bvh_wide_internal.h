@@ -87,6 +87,13 @@ typedef struct wide_kernels {
     wide_occl_fn lazy_occl_traced, lazy_occl_simd, lazy_occl_other;
 } wide_kernels;
 
+/* The stream walks of one (width, instruction set) over a buffer of rays
+ * (bvh_stream.c, bvh_internal.h): closest hit with the SIMD watertight
+ * test, the same keeping what u, v need, with another test; any hit. */
+typedef struct wide_stream_kernels {
+    bvh_stream_fn isect_simd, isect_simd_uv, isect_other, occl_simd, occl_other;
+} wide_stream_kernels;
+
 /* Lazy trees.  The build stops at every subtree of the binary tree of
  * more than WIDE_MAX_LEAF and at most opt.lazy references
  * (sidx__bvh_build_spatial's placeholders), the collapse makes each one
@@ -170,14 +177,17 @@ static inline sidx_aabb wide_slot_box(const float *n, uint32_t W, uint32_t s)
 /* Traversal entry points, one set per width and instruction set
  * (bvh_wide.c instantiates bvh_wide_walk.h for each). */
 extern const wide_kernels sidx__wide_kernels_4_scalar, sidx__wide_kernels_8_scalar;
+extern const wide_stream_kernels sidx__wide_stream_4_scalar, sidx__wide_stream_8_scalar;
 #if defined(__x86_64__) || defined(__i386__)
 #define SIDX_WIDE_X86 1
 extern const wide_kernels sidx__wide_kernels_4_sse41, sidx__wide_kernels_8_avx2, sidx__wide_kernels_8_avx512;
+extern const wide_stream_kernels sidx__wide_stream_4_sse41, sidx__wide_stream_8_avx2, sidx__wide_stream_8_avx512;
 #elif defined(SIDX_SIMD_SSE2)
 /* WebAssembly SIMD (simd_isa.h): bvh4's SSE4.1 walk, compiled for it and
  * taken without a run-time test; bvh8's AVX2 walk has no counterpart */
 #define SIDX_WIDE_WASM 1
 extern const wide_kernels sidx__wide_kernels_4_sse41;
+extern const wide_stream_kernels sidx__wide_stream_4_sse41;
 #endif
 
 /* The instruction set bvh4/bvh8 pick on this machine: the best the CPU

@@ -571,6 +571,45 @@ const wide_kernels WFN(sidx__wide_kernels_) = {
 #undef isect_simd_uv_
 #undef lazy_isect_simd_uv_
 
+/* ---- the stream walks (bvh_stream.c) -------------------------------------------
+ * A buffer of rays, one after another, each through the untraced eager
+ * walk: no entry checks and no choice of walk per ray, the hit set up and
+ * finished beside the walk.  The walk stays a function of its own (one_*)
+ * called from the loop, its registers allocated for it alone as in the
+ * single-ray copies: inlined into the loop it measured no faster
+ * (docs/performance.md, "The stream entry"). */
+#define WSTREAM(name_, anyhit_, simd_tri_, keep_uv_)                                                           \
+    static __attribute__((noinline)) WALK_TARGET int WFN(one_##name_)(const sidx_accel *a, const sidx_ray *r,  \
+                                                                      const sidx_query *q, sidx_hit *hit)      \
+    {                                                                                                           \
+        if (anyhit_) return WFN(walk_)(a, r, q, NULL, 1, 0, simd_tri_, 0, 0);                                   \
+        *hit = sidx_hit_none(); /* as sidx_accel_intersect hands it to the walk, and finishes it */             \
+        hit->t = r->tmax;                                                                                       \
+        (void)WFN(walk_)(a, r, q, hit, 0, 0, simd_tri_, keep_uv_, 0);                                           \
+        sidx__finish_hit(a, r, q, hit);                                                                         \
+        return 0;                                                                                               \
+    }                                                                                                           \
+    static __attribute__((noinline)) WALK_TARGET void WFN(name_)(const sidx_accel *a, const sidx_query *q,    \
+                                                                 const bvh_stream_rays *c)                  \
+    {                                                                                                           \
+        const sidx_ray *rays = c->rays;                                                                         \
+        const uint32_t *idx = c->idx;                                                                           \
+        for (uint32_t i = 0, n = c->count; i < n; ++i) {                                                        \
+            const uint32_t j = idx ? idx[i] : i;                                                                \
+            if (anyhit_) c->occluded[j] = WFN(one_##name_)(a, &rays[j], q, NULL);                               \
+            else (void)WFN(one_##name_)(a, &rays[j], q, &c->hits[j]);                                           \
+        }                                                                                                       \
+    }
+WSTREAM(stream_isect_simd_, 0, 1, 0)
+WSTREAM(stream_isect_simd_uv_, 0, 1, WALK_TRI4)
+WSTREAM(stream_isect_other_, 0, 0, 0)
+WSTREAM(stream_occl_simd_, 1, 1, 0)
+WSTREAM(stream_occl_other_, 1, 0, 0)
+#undef WSTREAM
+const wide_stream_kernels WFN(sidx__wide_stream_) = {WFN(stream_isect_simd_), WFN(stream_isect_simd_uv_),
+                                                     WFN(stream_isect_other_), WFN(stream_occl_simd_),
+                                                     WFN(stream_occl_other_)};
+
 #undef WJOIN_
 #undef WJOIN
 #undef WFN

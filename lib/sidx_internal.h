@@ -109,6 +109,14 @@ sidx_status sidx__accel_build_with(const char *name, const sidx_accel_vtable *vt
  * per-thread mark, because the walks return no status). */
 void sidx__lazy_note_failure(void);
 
+/* bvh_stream.c: n rays through a bvh-family tree, bvh4 or bvh8 with the
+ * stream walk, closest hit into hits[] or, with hits NULL, any hit into
+ * occluded[]; the same answers as n single queries.  Returns 0, having
+ * done nothing, when the query goes ray by ray instead (other structures,
+ * traced queries, lazy trees, bvh-obb, the naive and ordered walks). */
+int sidx__bvh_stream(const sidx_accel *a, const sidx_ray *rays, size_t n, const sidx_query *q, sidx_hit *hits,
+                     int *occluded);
+
 /* Frees the labels (sidx_accel_destroy). */
 void sidx__labels_free(sidx_accel *a);
 
@@ -391,6 +399,36 @@ static SIDX_INLINE sidx_vec3 sidx__tri_normal(sidx_vec3 p0, sidx_vec3 p1, sidx_v
  * miss. */
 void sidx__hit_finish(const sidx_mesh *m, sidx_tri_method tri, const sidx_ray *r, uint32_t flags, uint32_t own,
                       sidx_hit *hit);
+
+/* The final hit of a closest-hit query finished once, after the walk
+ * (accel.c, and the stream entry, bvh_stream.c): t refined, u, v, the
+ * geometric normal and the point, as the query asks (sidx__hit_finish,
+ * hit.c).  The hot loop never pays for them ("no u/v or normals unless
+ * asked").  A structure that keeps u, v or ng from its own traversal
+ * (a->fills_uv, a->fills_ng) has set them already. */
+static SIDX_INLINE void sidx__finish_hit(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
+{
+    if (hit->prim == SIDX_NO_HIT) {
+        /* The query set *hit = sidx_hit_none() with t = tmax, and a walk
+         * writes only t and prim when it accepts a hit, and u, v, ng for its
+         * final one: on a miss only t differs from sidx_hit_none(). */
+        hit->t = INFINITY;
+        return;
+    }
+    /* Aggregates (instance.c) set the instance and finish their hit in
+     * world space themselves: their a->mesh is not where the hit lies, so
+     * an instanced hit gets no point. */
+    if (hit->instance != SIDX_NO_HIT) return;
+    /* On request only: the mesh read misses the cache on incoherent rays
+     * (docs/performance.md, "Precision of the closest hit's t"). */
+    const uint32_t own = (a->fills_uv ? SIDX_QUERY_UV : 0u) | (a->fills_ng ? SIDX_QUERY_NORMAL : 0u);
+    /* a call only when there is something to do: a query asking for u, v
+     * from a structure that filled them (bvh, bvh8, kdtree) makes none */
+    if (!(q->flags & (SIDX__QUERY_REFINE_T | SIDX_QUERY_POINT)) &&
+        !(q->flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL) & ~own))
+        return;
+    sidx__hit_finish(a->mesh, a->opt.tri, r, q->flags, own, hit);
+}
 
 /* Triangle `tri` of mesh m, tested with method m (t only). */
 static SIDX_INLINE int sidx__mesh_tri_test(const sidx_mesh *mesh, sidx_tri_method m, uint32_t tri,

@@ -91,6 +91,11 @@ double bench_embree_trace(bench_embree *e, const tk_rayrec *rays, size_t n, int 
 /* The same timed the bench_time_passes way. */
 void bench_embree_trace_timed(bench_embree *e, const tk_rayrec *rays, size_t n, int any_hit, int packet, int passes,
                               double budget_ms, sidx_hit *hits, bench_timing *t);
+/* rtcIntersect1M / rtcOccluded1M over the buffer (embree.c); scratch holds
+ * n * bench_embree_stream_scratch() bytes, 16-byte aligned. */
+double bench_embree_trace_stream(bench_embree *e, const tk_rayrec *rays, size_t n, int any_hit, int coherent,
+                                 void *scratch, sidx_hit *hits);
+size_t bench_embree_stream_scratch(void);
 void bench_embree_free(bench_embree *e);
 const char *bench_embree_version(void);
 
@@ -136,6 +141,7 @@ int bench_cmd_rays(int argc, char **argv);
 int bench_cmd_run(int argc, char **argv);
 int bench_cmd_scale(int argc, char **argv);
 int bench_cmd_lazy(int argc, char **argv);
+int bench_cmd_stream(int argc, char **argv); /* stream.c */
 /* scale.c: d x d quads of a sine-wave terrain over x, z in [-1, 1] (2 d^2 triangles). */
 sidx_status bench_make_heightfield(uint32_t d, sidx_mesh *out, sidx_error *err);
 int bench_cmd_extras(int argc, char **argv); /* extras.c */

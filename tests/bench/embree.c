@@ -223,6 +223,46 @@ double bench_embree_trace(bench_embree *e, const tk_rayrec *rays, size_t n, int 
     return bench_clock_ms() - t0;
 }
 
+/* Embree's stream entry, rtcIntersect1M / rtcOccluded1M over the whole
+ * buffer; the rays are written into `scratch` (n RTCRayHit) inside the
+ * timed part, as the single-ray loop above builds its rays per call.
+ * coherent: the context's RTC_INTERSECT_CONTEXT_FLAG_COHERENT (camera
+ * rays), else the default, incoherent. */
+double bench_embree_trace_stream(bench_embree *e, const tk_rayrec *rays, size_t n, int any_hit, int coherent,
+                                 void *scratch, sidx_hit *hits)
+{
+    struct RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    ctx.flags = coherent ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+    struct RTCRayHit *rh = scratch;
+    const double t0 = bench_clock_ms();
+    for (size_t i = 0; i < n; ++i) {
+        const tk_rayrec *r = &rays[i];
+        rh[i].ray = (struct RTCRay){r->o[0], r->o[1], r->o[2], r->tmin, r->d[0], r->d[1], r->d[2], 0.0f,
+                                    r->tmax, 0xffffffffu, (unsigned)i, 0};
+        rh[i].hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        rh[i].hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    }
+    if (any_hit) {
+        /* RTCRay is the head of RTCRayHit: the same array, its stride */
+        rtcOccluded1M(e->scene, &ctx, &rh->ray, (unsigned)n, sizeof *rh);
+        for (size_t i = 0; i < n; ++i) {
+            hits[i] = sidx_hit_none();
+            if (rh[i].ray.tfar == -INFINITY) {
+                hits[i].prim = 0;
+                hits[i].t = 0.0f;
+            }
+        }
+    } else {
+        rtcIntersect1M(e->scene, &ctx, rh, (unsigned)n, sizeof *rh);
+        for (size_t i = 0; i < n; ++i)
+            to_hit(&hits[i], rh[i].hit.geomID, rh[i].hit.primID, rh[i].ray.tfar, rh[i].hit.u, rh[i].hit.v,
+                   rh[i].hit.Ng_x, rh[i].hit.Ng_y, rh[i].hit.Ng_z);
+    }
+    return bench_clock_ms() - t0;
+}
+size_t bench_embree_stream_scratch(void) { return sizeof(struct RTCRayHit); }
+
 typedef struct embree_pass {
     bench_embree *e;
     const tk_rayrec *rays;

@@ -32,6 +32,9 @@ static void usage(FILE *out)
             "        instanced scenes, the light buffer (shadow rays), ray classification's trade-off\n"
             "  lazy [--accel NAME] [--lazy-size N] [--size PX] [--frames N] [--rounds N] [SCENE ...]\n"
             "        time to the first image and over N frames, lazy build against eager\n"
+            "  stream [--scenes DIR] [--scene LIST] [--kinds LIST] [--rays N] [--rounds R] [--passes P]\n"
+            "        single queries against the stream entry (intersect_n, occluded_n), and Embree's\n"
+            "        rtcIntersect1 against rtcIntersect1M, in interleaved rounds\n"
             "  list  registered structures and built-in scenes\n"
             "\n"
             "SCENE is a mesh file (.obj, .ply) or a built-in scene name[:detail].\n"
@@ -107,6 +110,7 @@ int main(int argc, char **argv)
     if (!strcmp(cmd, "scale")) return bench_cmd_scale(argc - 1, argv + 1);
     if (!strcmp(cmd, "extras")) return bench_cmd_extras(argc - 1, argv + 1);
     if (!strcmp(cmd, "lazy")) return bench_cmd_lazy(argc - 1, argv + 1);
+    if (!strcmp(cmd, "stream")) return bench_cmd_stream(argc - 1, argv + 1);
     if (!strcmp(cmd, "list")) return cmd_list();
     fprintf(stderr, "sidx-bench: unknown command '%s'\n", cmd);
     usage(stderr);

@@ -102,6 +102,13 @@ sidx_status sidx_traversal_parse(const char *name, sidx_traversal *out);
 #define SIDX_QUERY_PRECISE_T 8u /* the closest hit's t refined on its triangle's plane where the watertight
                                  test's t is coarse: docs/spawning.md,
                                  "Precision of t"; it reads the hit triangle from the mesh once per ray */
+#define SIDX_QUERY_REORDER 16u /* sidx_accel_intersect_n / _occluded_n on bvh, bvh4, bvh8: walk the buffer
+                                sorted by direction octant, then by a Morton code of the origin, so that rays
+                                that go the same way follow each other; answers still in input order, and the
+                                same bits.  Buffers of 64 rays or more; it takes 16 bytes per ray from the
+                                build's allocator for the call (without them: input order, the same answers).
+                                It did not pay on any ray kind measured (docs/performance.md, "The stream
+                                entry"): off unless asked.  Ignored by every other query and structure */
 
 typedef struct sidx_query {
     uint32_t flags;               /* SIDX_QUERY_* */
@@ -147,9 +154,24 @@ sidx_status sidx_accel_intersect(const sidx_accel *a, const sidx_ray *r, const s
  * Errors as sidx_accel_intersect. */
 sidx_status sidx_accel_occluded(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, int *occluded);
 /* n rays at once (same query for all); ray ids are q->ray_id + i.
- * SIDX_ERR_NOMEM when any ray's query returned it (the others are traced). */
+ * hits[i] is what sidx_accel_intersect gives for rays[i], bit for bit,
+ * and a traced query emits each ray's events in turn, exactly as n single
+ * queries would.  bvh (and the bvh family but bvh-obb), bvh4 and bvh8 walk
+ * an untraced buffer (of an eager tree) with a stream walk: the checks and
+ * the choice of walk made once per call instead of once per ray
+ * (docs/performance.md, "The stream entry"), optionally in another order
+ * (SIDX_QUERY_REORDER).  rays and hits may be NULL when
+ * n is 0.  Errors: SIDX_ERR_INVALID_ARG (a NULL structure, or NULL arrays
+ * with n > 0: nothing written); on a lazy tree SIDX_ERR_NOMEM when any
+ * ray's query returned it (the other rays are answered, that ray's hit
+ * is not to be used). */
 sidx_status sidx_accel_intersect_n(const sidx_accel *a, const sidx_ray *rays, size_t n, const sidx_query *q,
                                    sidx_hit *hits);
+/* n any-hit queries at once: occluded[i] is what sidx_accel_occluded
+ * gives for rays[i] (1 or 0).  Same walk, events, options and errors as
+ * sidx_accel_intersect_n. */
+sidx_status sidx_accel_occluded_n(const sidx_accel *a, const sidx_ray *rays, size_t n, const sidx_query *q,
+                                  int *occluded);
 
 sidx_status sidx_accel_stats_get(const sidx_accel *a, sidx_accel_stats *s);
 /* After moving vertices of the mesh in place: update bounds bottom-up.
