@@ -247,6 +247,58 @@ WINL const wide_tri4 *WFN(fetch_leaf_)(const wide_bvh *w, const wide_bvh *part, 
     return w->blocks + (ref & ~WIDE_LEAF_BIT);
 }
 
+/* Insertion sort of stack[base, len), farthest at the bottom; stable, so
+ * equal entries keep slot order and the lower slot is visited first (the
+ * order the untraced closest-hit copies get from rank_).  The traced copy
+ * moves each entry's exit t, depth and event id with it. */
+WINL void WFN(sort_)(uint32_t *stack, float *stack_t_near, float *stack_t_far, uint32_t *stack_depth,
+                     uint32_t *stack_id, uint32_t base, uint32_t len, const int traced)
+{
+    for (uint32_t i = base + 1; i < len; ++i) {
+        const uint32_t moved = stack[i];
+        const float moved_t_near = stack_t_near[i];
+        float moved_t_far = 0.0f;
+        uint32_t moved_depth = 0, moved_id = 0;
+        if (traced) {
+            moved_t_far = stack_t_far[i];
+            moved_depth = stack_depth[i];
+            moved_id = stack_id[i];
+        }
+        uint32_t j = i;
+        while (j > base && stack_t_near[j - 1] <= moved_t_near) {
+            stack[j] = stack[j - 1];
+            stack_t_near[j] = stack_t_near[j - 1];
+            if (traced) {
+                stack_t_far[j] = stack_t_far[j - 1];
+                stack_depth[j] = stack_depth[j - 1];
+                stack_id[j] = stack_id[j - 1];
+            }
+            --j;
+        }
+        stack[j] = moved;
+        stack_t_near[j] = moved_t_near;
+        if (traced) {
+            stack_t_far[j] = moved_t_far;
+            stack_depth[j] = moved_depth;
+            stack_id[j] = moved_id;
+        }
+    }
+}
+
+/* The traced copy's BOX_TEST event per used slot of a node. */
+WINL void WFN(emit_boxes_)(const sidx_accel *a, const sidx_query *q, const float *node, unsigned hits,
+                           const float *t_near, const float *t_far, uint32_t depth)
+{
+    const uint32_t *child = wide_child(node, WALK_W), *ids = wide_id(node, WALK_W);
+    for (uint32_t slot = 0; slot < WALK_W; ++slot) {
+        if (child[slot] == WIDE_EMPTY) continue;
+        const int res = (int)((hits >> slot) & 1u);
+        SIDX_EMIT(1, q->hook, SIDX_EV_BOX_TEST, e_.ray_id = q->ray_id; e_.node = ids[slot]; e_.depth = depth + 1;
+                  e_.bounds = wide_slot_box(node, WALK_W, slot); e_.result = res;
+                  e_.t_near = res ? t_near[slot] : NAN; e_.t_far = res ? t_far[slot] : NAN);
+    }
+}
+
 /* ---- the walk ------------------------------------------------------------------ */
 
 /* The deck's "traverse one ray, but intersect with many BVs (needs wide
@@ -306,16 +358,7 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
             const float *node = WFN(fetch_node_)(w, nodes, &part, cur, q, kind);
             const uint32_t *child = wide_child(node, WALK_W);
             unsigned hits = WFN(boxes_)(node, &consts, best_s, t_near, t_far, traced);
-            if (traced) {
-                const uint32_t *ids = wide_id(node, WALK_W);
-                for (uint32_t slot = 0; slot < WALK_W; ++slot) {
-                    if (child[slot] == WIDE_EMPTY) continue;
-                    const int res = (int)((hits >> slot) & 1u);
-                    SIDX_EMIT(traced, q->hook, SIDX_EV_BOX_TEST, e_.ray_id = q->ray_id; e_.node = ids[slot];
-                              e_.depth = depth + 1; e_.bounds = wide_slot_box(node, WALK_W, slot); e_.result = res;
-                              e_.t_near = res ? t_near[slot] : NAN; e_.t_far = res ? t_far[slot] : NAN);
-                }
-            }
+            if (traced) WFN(emit_boxes_)(a, q, node, hits, t_near, t_far, depth);
             if (visited == 1) root_hit = hits != 0;
             /* 2. descend into the nearest hit child, the others wait, nearest on top */
             if (hits) {
@@ -393,40 +436,7 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
                     slot = (unsigned)__builtin_ctz(hits);
                     hits &= hits - 1;
                 }
-                if (!anyhit) {
-                    /* Insertion sort, farthest at the bottom; stable, so
-                     * equal entries keep slot order and the lower slot
-                     * is visited first. */
-                    for (uint32_t i = base + 1; i < stack_len; ++i) {
-                        const uint32_t moved = stack[i];
-                        const float moved_t_near = stack_t_near[i];
-                        float moved_t_far = 0.0f;
-                        uint32_t moved_depth = 0, moved_id = 0;
-                        if (traced) {
-                            moved_t_far = stack_t_far[i];
-                            moved_depth = stack_depth[i];
-                            moved_id = stack_id[i];
-                        }
-                        uint32_t j = i;
-                        while (j > base && stack_t_near[j - 1] <= moved_t_near) {
-                            stack[j] = stack[j - 1];
-                            stack_t_near[j] = stack_t_near[j - 1];
-                            if (traced) {
-                                stack_t_far[j] = stack_t_far[j - 1];
-                                stack_depth[j] = stack_depth[j - 1];
-                                stack_id[j] = stack_id[j - 1];
-                            }
-                            --j;
-                        }
-                        stack[j] = moved;
-                        stack_t_near[j] = moved_t_near;
-                        if (traced) {
-                            stack_t_far[j] = moved_t_far;
-                            stack_depth[j] = moved_depth;
-                            stack_id[j] = moved_id;
-                        }
-                    }
-                }
+                if (!anyhit) WFN(sort_)(stack, stack_t_near, stack_t_far, stack_depth, stack_id, base, stack_len, traced);
                 --stack_len; /* the nearest is visited now, the rest wait */
                 for (uint32_t i = base; traced && i < stack_len; ++i)
                     SIDX_EMIT(traced, q->hook, SIDX_EV_STACK_PUSH, e_.ray_id = q->ray_id; e_.node = stack_id[i];
