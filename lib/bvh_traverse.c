@@ -257,19 +257,6 @@ static SIDX_INLINE int recursive_walk(const sidx_accel *a, const sidx_ray *r, co
 
 /* ---- stack: the ordered descent without recursion (the fast path) -------- */
 
-/* The walk runs at the speed of its branch mispredicts, not of its
- * arithmetic: a diffuse ray makes each inner node's near / both / none
- * choice at random, and every mispredict waits for the chain load ->
- * (plane − o)·(1/d) -> min/max -> compare of the boxes just loaded.  So the
- * loop stays this plain scalar one: none of two-box SIMD tests,
- * branch-free choices, per-octant copies, prefetches, SIMD leaves and
- * other node layouts is faster (measured, with the figures:
- * docs/performance.md, Binary BVH).
- *
- * attrs: the query asks for u, v and/or the normal (closest hit only).  A
- * copy of its own, so the walk for plain queries carries no u, v and no
- * triangle index ("no u/v or normals unless asked"). */
-
 #define EMIT_TERMINATE(reason_, t_)                                                                           \
     SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = (reason_); e_.t = (t_);  \
               e_.count = visited)
@@ -286,7 +273,20 @@ static SIDX_INLINE void stack_hit(const sidx_accel *a, const bvh *b, const sidx_
     }
 }
 
-/* The deck's "Better BVH Traversal" (001, the ordered hit()) with its
+/* The walk runs at the speed of its branch mispredicts, not of its
+ * arithmetic: a diffuse ray makes each inner node's near / both / none
+ * choice at random, and every mispredict waits for the chain load ->
+ * (plane − o)·(1/d) -> min/max -> compare of the boxes just loaded.  So the
+ * loop stays this plain scalar one: none of two-box SIMD tests,
+ * branch-free choices, per-octant copies, prefetches, SIMD leaves and
+ * other node layouts is faster (measured, with the figures:
+ * docs/performance.md, Binary BVH).
+ *
+ * attrs: the query asks for u, v and/or the normal (closest hit only).  A
+ * copy of its own, so the walk for plain queries carries no u, v and no
+ * triangle index ("no u/v or normals unless asked").
+ *
+ * The deck's "Better BVH Traversal" (001, the ordered hit()) with its
  * recursion turned into a stack, as tinybvh's BVH::Intersect and pbrt's
  * BVHAggregate::Intersect keep it: at an inner node test both children's
  * boxes, go to the nearer, push the farther with its entry distance; at a

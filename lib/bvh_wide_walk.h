@@ -228,14 +228,14 @@ WINL const float *WFN(fetch_node_)(const wide_bvh *w, const float *nodes, const 
                                    const sidx_query *q, const int kind)
 {
     if (kind & WIDE_WALK_LAZY) {
-        if (ref & WIDE_PART_BIT) return (*part)->nodes + (size_t)(ref & ~WIDE_PART_BIT) * (8u * WALK_W);
-        if (ref & WIDE_LAZY_BIT) {
+        if (ref & WIDE_LAZY_BIT) { /* first: a part's number may have bit 29 set */
             const wide_bvh *p = sidx__lazy_get(&w->lazy->life, ref & ~WIDE_LAZY_BIT,
                                                (kind & WIDE_WALK_TRACED) ? q->hook : NULL);
             if (!p) return sidx__wide_void_node[WALK_W == 8]; /* the query reports it (lazy.c) */
             *part = p;
             return p->nodes;
         }
+        if (ref & WIDE_PART_BIT) return (*part)->nodes + (size_t)(ref & ~WIDE_PART_BIT) * (8u * WALK_W);
     }
     return nodes + (size_t)ref * (8u * WALK_W);
 }
