@@ -42,9 +42,7 @@
  * Nodes are written in depth-first pre-order straight into their final
  * slots, so the id in every BUILD_* event is the node's index in the final
  * array and its left child is always id + 1. */
-#include <sched.h>
 #include "bvh_internal.h"
-#include "simd_isa.h"
 
 /* Events carry the registered name ("bvh-sweep", ...). */
 #define SIDX_STRUCTURE_NAME (B->a->name)
@@ -79,17 +77,17 @@ typedef struct builder {
     /* lazy trees: nodes of at most lazy_max primitives (and more than a
      * leaf's) are left unbuilt, one record each in lazy->recs (up to
      * lazy_cap); 0 = build everything.  An expansion builds node
-     * expand_root's subtree, writing that node itself into root_tmp (it is
-     * published last) and skipping its BUILD_NODE event (sent with the
-     * build); UINT32_MAX otherwise */
-    uint32_t lazy_max, lazy_cap, expand_root, nodes_made;
+     * expand_root's subtree, writing that node itself into *root_out (its
+     * part, bvh_internal.h) and skipping its BUILD_NODE event (sent with
+     * the build); UINT32_MAX otherwise */
+    uint32_t lazy_max, lazy_cap, expand_root;
     bvh_lazy *lazy;
-    bvh_node root_tmp;
+    bvh_node *root_out;
 } builder;
 
 static SIDX_INLINE bvh_node *node_at(builder *B, uint32_t ni)
 {
-    return ni == B->expand_root ? &B->root_tmp : &B->nodes[ni];
+    return ni == B->expand_root ? B->root_out : &B->nodes[ni];
 }
 
 static inline float sah(const builder *B, float al, uint32_t nl, float ar, uint32_t nr, float inv_area)
@@ -362,7 +360,6 @@ static SIDX_NOINLINE void split_middle(builder *B, uint32_t node, uint32_t first
 static uint32_t build_node(builder *B, uint32_t first, uint32_t count, uint32_t parent, uint32_t depth)
 {
     const uint32_t ni = B->num_nodes++;
-    B->nodes_made++;
     sidx_aabb bb = sidx_aabb_empty(), cb = sidx_aabb_empty();
     for (uint32_t i = 0; i < count; ++i) {
         const uint32_t id = B->idx[first + i];
@@ -381,17 +378,15 @@ static uint32_t build_node(builder *B, uint32_t first, uint32_t count, uint32_t 
     if (B->lazy_max && count <= B->lazy_max && count > B->leaf_size && B->lazy->num_recs < B->lazy_cap) {
         /* Lazy: the node waits for a ray, holding idx[first, first + count)
          * in the order this build has them now, and the slots its subtree
-         * may need (bvh_internal.h, bvh_lazy). */
+         * may need (bvh_internal.h, bvh_lazy); lazy.c counts it when
+         * the build is done (sidx__lazy_defer). */
         const uint32_t r = B->lazy->num_recs++;
         bvh_lazy_rec *rec = &B->lazy->recs[r];
-        rec->state = BVH_LAZY_UNBUILT;
         rec->node = ni;
         rec->parent = parent;
         rec->depth = depth;
         rec->first = first;
         rec->count = count;
-        B->lazy->unbuilt++;
-        B->lazy->unbuilt_prims += count;
         B->nodes[ni].left_or_first = first;
         B->nodes[ni].count_axis = BVH_LAZY_MARK | r;
         B->num_nodes += 2u * count - 2u;
@@ -464,6 +459,8 @@ static void bvh_free(const sidx_accel *a, bvh *b)
 {
     if (!b) return;
     if (b->lazy) {
+        for (uint32_t r = 0; r < b->lazy->num_recs; ++r) sidx__free(a, sidx__lazy_peek(&b->lazy->life, r));
+        sidx__free(a, b->lazy->life.parts);
         sidx__free(a, b->lazy->recs);
         sidx__free(a, b->lazy->pbox);
         sidx__free(a, b->lazy->cent);
@@ -475,6 +472,8 @@ static void bvh_free(const sidx_accel *a, bvh *b)
     sidx__free(a, b->obbs);
     sidx__free(a, b);
 }
+
+static void *expand_part(void *owner, uint32_t r, const sidx_hook *hook, sidx__lazy_made *made);
 
 static sidx_status build_tree(sidx_accel *a, sidx_error *err)
 {
@@ -522,7 +521,8 @@ static sidx_status build_tree(sidx_accel *a, sidx_error *err)
     if (sidx__prim_boxes(a, &pbox, &cent) != SIDX_OK) goto fail;
     B->pbox = pbox;
     B->cent = cent;
-    b->prim_id = B->idx = sidx__alloc(a, n, sizeof *B->idx);
+    /* a lazy tree's prim_id[n] and tris[n]: void_leaf's triangle (bvh_lazy) */
+    b->prim_id = B->idx = sidx__alloc(a, lazy ? n + 1u : n, sizeof *B->idx);
     if (lazy) {
         /* Every slot a subtree may take, in the final aligned array: the
          * expansions build in place (bvh_lazy). */
@@ -532,7 +532,8 @@ static sidx_status build_tree(sidx_accel *a, sidx_error *err)
         if (B->lazy_cap > BVH_LAZY_MAX_RECS) B->lazy_cap = BVH_LAZY_MAX_RECS;
         if (!b->nodes_mem || !b->lazy) goto fail;
         b->lazy->recs = sidx__alloc(a, B->lazy_cap, sizeof *b->lazy->recs);
-        if (!b->lazy->recs) goto fail;
+        b->lazy->life.parts = sidx__calloc(a, B->lazy_cap, sizeof *b->lazy->life.parts);
+        if (!b->lazy->recs || !b->lazy->life.parts) goto fail;
         b->nodes = (bvh_node *)(void *)(((uintptr_t)b->nodes_mem + 63u) & ~(uintptr_t)63u);
         B->nodes = b->nodes;
         B->lazy = b->lazy;
@@ -562,16 +563,19 @@ static sidx_status build_tree(sidx_accel *a, sidx_error *err)
     build_node(B, 0, n, UINT32_MAX, 0);
 
     if (lazy) {
-        b->tris = sidx__alloc(a, n, sizeof *b->tris);
+        bvh_lazy *L = b->lazy;
+        b->tris = sidx__alloc(a, n + 1u, sizeof *b->tris);
         if (!b->tris) goto fail;
         b->num_nodes = B->num_nodes; /* the slots in use or reserved */
         b->num_leaves = B->num_leaves;
         b->max_depth = B->max_depth_seen;
-        b->lazy->built_nodes = B->nodes_made;
-        b->lazy->built_leaves = B->num_leaves;
-        b->lazy->max_depth = B->max_depth_seen;
-        b->lazy->pbox = pbox;
-        b->lazy->cent = cent;
+        /* every node made so far is built, the unbuilt ones included (each
+         * stays one node, its part's root, once built) */
+        L->top_nodes = B->num_nodes;
+        for (uint32_t r = 0; r < L->num_recs; ++r) L->top_nodes -= 2u * L->recs[r].count - 2u;
+        L->top_leaves = B->num_leaves;
+        L->pbox = pbox;
+        L->cent = cent;
         pbox = NULL;
         cent = NULL;
         /* The triangle copies of the leaves built here only: an expansion
@@ -579,12 +583,17 @@ static sidx_status build_tree(sidx_accel *a, sidx_error *err)
          * copying the unbuilt ranges now would be done twice, and would
          * touch every page of tris[] before a ray needs it.  The records
          * are in pre-order, so their ranges come in increasing order. */
-        for (uint32_t r = 0, i = 0; r <= b->lazy->num_recs; ++r) {
-            const uint32_t end = r < b->lazy->num_recs ? b->lazy->recs[r].first : n;
+        for (uint32_t r = 0, i = 0; r <= L->num_recs; ++r) {
+            const uint32_t end = r < L->num_recs ? L->recs[r].first : n;
             for (; i < end; ++i)
                 for (int k = 0; k < 3; ++k) b->tris[i].v[k] = sidx_mesh_vertex(m, b->prim_id[i], k);
-            if (r < b->lazy->num_recs) i = end + b->lazy->recs[r].count;
+            if (r < L->num_recs) i = end + L->recs[r].count;
         }
+        memset(&b->tris[n], 0, sizeof b->tris[n]);
+        b->prim_id[n] = SIDX_NO_HIT;
+        L->void_leaf = (bvh_node){{INFINITY, INFINITY, INFINITY}, n, {-INFINITY, -INFINITY, -INFINITY}, 1u};
+        sidx__lazy_init(&L->life, L->life.parts, L->num_recs, expand_part, a);
+        for (uint32_t r = 0; r < L->num_recs; ++r) sidx__lazy_defer(&L->life, r, L->recs[r].count);
         B->nodes = NULL; /* b's own */
         a->lazy = 1;
         goto done;
@@ -636,19 +645,17 @@ fail:
 
 /* ---- lazy expansion (bvh_internal.h, bvh_lazy) ------------------------------ */
 
-static void atomic_max_u32(uint32_t *p, uint32_t v)
+/* lazy.c's expand function (lazy.h): builds part r — record r's subtree,
+ * with the build's own recursion and parameters — and returns its root,
+ * the rest of it in the slots and the run of prim_id / tris the unbuilt
+ * node reserved.  NULL when memory runs out: every allocation comes first,
+ * so nothing is written then.  Called once at a time per part (lazy.c
+ * claims it). */
+static void *expand_part(void *owner, uint32_t r, const sidx_hook *hook, sidx__lazy_made *made)
 {
-    uint32_t cur = __atomic_load_n(p, __ATOMIC_RELAXED);
-    while (cur < v && !__atomic_compare_exchange_n(p, &cur, v, 1, __ATOMIC_RELAXED, __ATOMIC_RELAXED)) {
-    }
-}
-
-/* Builds record rec's subtree in its reserved slots with the build's own
- * recursion and parameters, then publishes it.  Returns the node's new
- * count_axis, or BVH_LAZY_FAILED when the scratch memory could not be
- * had: every allocation comes first, so nothing is written then. */
-static uint32_t expand_build(const sidx_accel *a, bvh *b, const bvh_lazy_rec *rec, const sidx_hook *hook)
-{
+    const sidx_accel *a = owner;
+    bvh *b = a->impl;
+    const bvh_lazy_rec *rec = &b->lazy->recs[r];
     builder Bs;
     builder *B = &Bs;
     memset(B, 0, sizeof *B);
@@ -669,6 +676,7 @@ static uint32_t expand_build(const sidx_accel *a, bvh *b, const bvh_lazy_rec *re
     B->nodes = b->nodes;
     B->expand_root = rec->node;
     B->num_nodes = rec->node;
+    B->root_out = sidx__alloc(a, 1, sizeof *B->root_out);
     const uint32_t c = rec->count;
     int ok;
     if (B->kind == BVH_BINNED) {
@@ -683,50 +691,28 @@ static uint32_t expand_build(const sidx_accel *a, bvh *b, const bvh_lazy_rec *re
         B->right_area = sidx__alloc(a, c, sizeof(float));
         ok = B->keys[0] && B->keys[1] && B->right_area;
     }
+    ok = ok && B->root_out;
     if (ok) {
         SIDX_EMIT(1, hook, SIDX_EV_BUILD_LAZY_EXPAND, e_.node = rec->node; e_.parent = rec->parent;
                   e_.depth = rec->depth; e_.count = c; e_.bounds = bvh_node_box(&b->nodes[rec->node]));
-        build_node(B, rec->first, c, rec->parent, rec->depth);
+        build_node(B, rec->first, c, rec->parent, rec->depth); /* its root into *root_out */
     }
     sidx__free(a, B->keys[0]);
     sidx__free(a, B->keys[1]);
     sidx__free(a, B->right_area);
     sidx__free(a, B->bin_box);
     sidx__free(a, B->bin_count);
-    if (!ok) return BVH_LAZY_FAILED;
+    if (!ok) {
+        sidx__free(a, B->root_out);
+        return NULL;
+    }
     for (uint32_t i = rec->first; i < rec->first + c; ++i)
         for (int k = 0; k < 3; ++k) b->tris[i].v[k] = sidx_mesh_vertex(a->mesh, b->prim_id[i], k);
-    bvh_lazy *L = b->lazy;
-    __atomic_fetch_add(&L->built_nodes, B->nodes_made - 1u, __ATOMIC_RELAXED); /* the node itself was counted */
-    __atomic_fetch_add(&L->built_leaves, B->num_leaves, __ATOMIC_RELAXED);
-    __atomic_fetch_sub(&L->unbuilt, 1u, __ATOMIC_RELAXED);
-    __atomic_fetch_sub(&L->unbuilt_prims, (uint64_t)c, __ATOMIC_RELAXED);
-    atomic_max_u32(&L->max_depth, B->max_depth_seen);
-    bvh_node *n = &b->nodes[rec->node];
-    __atomic_store_n(&n->left_or_first, B->root_tmp.left_or_first, __ATOMIC_RELAXED);
-    __atomic_store_n(&n->count_axis, B->root_tmp.count_axis, __ATOMIC_RELEASE);
-    return B->root_tmp.count_axis;
-}
-
-uint32_t sidx__bvh_lazy_expand(const sidx_accel *a, uint32_t r, const sidx_hook *hook)
-{
-    bvh *b = a->impl;
-    bvh_lazy_rec *rec = &b->lazy->recs[r];
-    for (unsigned spins = 0;; ++spins) {
-        uint32_t st = __atomic_load_n(&rec->state, __ATOMIC_ACQUIRE);
-        if (st == BVH_LAZY_BUILT) return __atomic_load_n(&b->nodes[rec->node].count_axis, __ATOMIC_ACQUIRE);
-        if (st == BVH_LAZY_UNBUILT) {
-            if (!__atomic_compare_exchange_n(&rec->state, &st, BVH_LAZY_BUSY, 0, __ATOMIC_ACQ_REL, __ATOMIC_ACQUIRE))
-                continue;
-            const uint32_t ca = expand_build(a, b, rec, hook);
-            __atomic_store_n(&rec->state, ca == BVH_LAZY_FAILED ? BVH_LAZY_UNBUILT : BVH_LAZY_BUILT, __ATOMIC_RELEASE);
-            if (ca == BVH_LAZY_FAILED) sidx__lazy_note_failure();
-            return ca;
-        }
-        /* BUSY: another thread is building it; wait (bvh_lazy) */
-        if (spins < 64) SIDX_SPIN_PAUSE();
-        else sched_yield();
-    }
+    __atomic_fetch_add(&b->lazy->part_leaves, B->num_leaves, __ATOMIC_RELAXED);
+    made->refs = c;
+    made->bytes = sizeof *B->root_out;
+    made->depth = B->max_depth_seen;
+    return B->root_out;
 }
 
 static void bvh_destroy(sidx_accel *a)
@@ -743,12 +729,15 @@ static void bvh_stats(const sidx_accel *a, sidx_accel_stats *s)
     s->leaves = b->num_leaves;
     s->max_depth = b->max_depth;
     if (b->lazy) {
-        bvh_lazy *L = b->lazy;
-        s->nodes = __atomic_load_n(&L->built_nodes, __ATOMIC_RELAXED);
-        s->leaves = __atomic_load_n(&L->built_leaves, __ATOMIC_RELAXED);
-        s->max_depth = __atomic_load_n(&L->max_depth, __ATOMIC_RELAXED);
-        s->unbuilt = __atomic_load_n(&L->unbuilt, __ATOMIC_RELAXED);
-        s->unbuilt_prims = __atomic_load_n(&L->unbuilt_prims, __ATOMIC_RELAXED);
+        /* a part of L leaves has 2·L − 1 nodes, its root the unbuilt node counted already */
+        const bvh_lazy *L = b->lazy;
+        const sidx__lazy_counts c = sidx__lazy_counts_get(&L->life);
+        const uint32_t part_leaves = __atomic_load_n(&L->part_leaves, __ATOMIC_RELAXED);
+        s->nodes = L->top_nodes + 2u * part_leaves - 2u * c.built;
+        s->leaves = L->top_leaves + part_leaves;
+        s->max_depth = c.max_depth > b->max_depth ? c.max_depth : b->max_depth;
+        s->unbuilt = c.unbuilt;
+        s->unbuilt_prims = c.unbuilt_refs;
     }
     /* lazy: the references of the built leaves, as the wide BVH and the
      * kd-tree count them; the rest are in unbuilt_prims */
@@ -756,8 +745,9 @@ static void bvh_stats(const sidx_accel *a, sidx_accel_stats *s)
     s->bytes = sizeof *b + ((size_t)b->num_nodes + 2u) * sizeof *b->nodes +
                (size_t)b->num_prims * (sizeof *b->prim_id + sizeof *b->tris) +
                (b->obbs ? (size_t)b->num_nodes * sizeof *b->obbs : 0);
-    if (b->lazy) /* every slot reserved, the records, the boxes and centroids kept for the expansions */
-        s->bytes += sizeof *b->lazy + (size_t)b->lazy->num_recs * sizeof *b->lazy->recs +
+    if (b->lazy) /* every slot reserved, the records and parts, the parts' roots, the boxes and centroids kept */
+        s->bytes += sizeof *b->lazy + (size_t)b->lazy->num_recs * (sizeof *b->lazy->recs + sizeof *b->lazy->life.parts) +
+                    sidx__lazy_counts_get(&b->lazy->life).built_bytes + sizeof *b->tris + sizeof *b->prim_id +
                     (size_t)b->num_prims * (sizeof *b->lazy->pbox + sizeof *b->lazy->cent);
     s->sah_cost = b->sah_cost; /* lazy: 0 (not applicable until every node is built) */
     s->mean_leaf_prims = s->leaves ? (double)(b->num_prims - s->unbuilt_prims) / s->leaves : 0.0;

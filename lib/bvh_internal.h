@@ -19,6 +19,7 @@
 #define SIDX_BVH_INTERNAL_H
 
 #include "sidx_internal.h"
+#include "lazy.h"
 
 /* Deepest tree a build may produce; it also sizes the traversal's fixed
  * stack (an ordered descent keeps at most one deferred sibling per level),
@@ -88,50 +89,47 @@ typedef enum bvh_walk_kind {
 } bvh_walk_kind;
 
 /* Lazy trees (opt.lazy).  An unbuilt node keeps its box and holds
- * count_axis = BVH_LAZY_MARK | r, r the index of its record below (axis 3
+ * count_axis = BVH_LAZY_MARK | r for good, r the index of its part (axis 3
  * never occurs on an inner node, and a leaf's count stays below 2^30, so
- * the mark is unambiguous).  The node reserves the 2·count − 2 slots after
- * it in nodes[] (a binary tree over count primitives has at most 2·count − 1
- * nodes) and owns prim_id[first, first + count): its expansion builds the
- * subtree there with the same builder on the same, identically ordered,
- * primitives the eager build would have at that node, so the tree is the
- * eager one, node for node, at other indices.
+ * the mark is unambiguous).  Its life — claim, wait, publish, failure, the
+ * counters — is lazy.c's (lazy.h), one sidx__lazy_part per unbuilt node;
+ * what bvh_build.c hands it is the expand function, which builds the
+ * subtree with the same builder on the same, identically ordered,
+ * primitives the eager build would have at that node (the tree is the
+ * eager one, node for node, at other indices).
  *
- * Publication: the expanding thread writes the subtree's slots, the
- * leaves' prim_id and tris, then the node's left_or_first (relaxed) and
- * count_axis (release), then its record's state (release).  A walk reads
- * count_axis with acquire, so what it reads below a built node was written
- * before.  No lock on built paths: the only cost is that acquire load
- * (a plain load on x86) in the walk copies for lazy trees.
+ * The part: the subtree's root, a node of its own that the expansion
+ * returns and lazy.c publishes.  Below it the subtree fills the 2·count − 2
+ * slots the unbuilt node reserved after itself in nodes[] (a binary tree
+ * over count primitives has at most 2·count − 1 nodes) and its primitives'
+ * run prim_id[first, first + count) and tris[]: memory no walk reads before
+ * it has the root, which it gets through lazy.c's acquire, so nothing the
+ * rest of the tree is read through is written (lazy.h, "build").  The walk
+ * reaches it through its node fetch (bvh_traverse.c): a walk over a lazy
+ * tree is the eager walk with nodes[i] swapped for bvh_lazy_node.
  *
- * One thread expands a node (compare-and-swap of its state from UNBUILT
- * to BUSY); another that arrives meanwhile waits for it (spinning, then
- * yielding) rather than building a private copy: a subtree below the
- * threshold takes well under a millisecond to build, and a private copy
- * would need memory of its own for every waiting thread.  If the memory
- * for the expansion's scratch cannot be had, nothing has been written
- * (every allocation comes before the first write), the state returns to
- * UNBUILT and the walk skips the node and reports SIDX_ERR_NOMEM through
- * the query; a later ray tries again. */
+ * Out of memory: the expansion gives back what it took and writes nothing,
+ * lazy.c puts the part back to unbuilt and marks the query (it returns
+ * SIDX_ERR_NOMEM), and the walk stands on void_leaf instead: one
+ * degenerate triangle at the origin (tris[num_prims]), which every
+ * triangle test misses (zero edges, zero determinant). */
 #define BVH_LAZY_MARK 0xC0000000u
-#define BVH_LAZY_FAILED 0xFFFFFFFFu  /* what sidx__bvh_lazy_expand returns when it could not build */
 #define BVH_LAZY_MAX_RECS 0x3FFFFFFEu
-enum { BVH_LAZY_UNBUILT = 0, BVH_LAZY_BUSY = 1, BVH_LAZY_BUILT = 2 };
 
 typedef struct bvh_lazy_rec {
-    uint32_t state;                 /* BVH_LAZY_*, atomic */
     uint32_t node, parent, depth;   /* the unbuilt node, its parent and depth (for the events) */
     uint32_t first, count;          /* its primitives: prim_id[first, first + count) */
 } bvh_lazy_rec;
 
 typedef struct bvh_lazy {
+    sidx__lazy life;                /* one part per record (lazy.c) */
     bvh_lazy_rec *recs;
     uint32_t num_recs;
     sidx_aabb *pbox;                /* the build's per-triangle boxes and centroids, kept for the expansions */
     sidx_vec3 *cent;
-    /* what is built so far; atomic (expansions add, stats read) */
-    uint32_t built_nodes, built_leaves, max_depth, unbuilt;
-    uint64_t unbuilt_prims;
+    uint32_t top_nodes, top_leaves; /* what the build made before any ray */
+    uint32_t part_leaves;           /* leaves the expansions made (atomic: stats read it) */
+    bvh_node void_leaf;             /* where a walk stands when an expansion failed */
 } bvh_lazy;
 
 typedef struct bvh {
@@ -150,20 +148,15 @@ typedef struct bvh {
     bvh_lazy *lazy;         /* lazy trees only; NULL when every node is built at once */
 } bvh;
 
-/* bvh_build.c: builds the subtree of lazy record r (see bvh_lazy) or waits
- * for the thread building it; returns the node's count_axis once built,
- * BVH_LAZY_FAILED when the memory for it could not be had.  Build events
- * go to hook (the query's; NULL = none). */
-uint32_t sidx__bvh_lazy_expand(const sidx_accel *a, uint32_t r, const sidx_hook *hook);
-
-/* The count_axis of node n as a walk over a lazy tree must read it: with
- * acquire, expanding the node first when it is unbuilt (BVH_LAZY_FAILED
- * when that fails; the query then reports it, sidx__lazy_note_failure). */
-static SIDX_INLINE uint32_t bvh_lazy_count_axis(const sidx_accel *a, const bvh_node *n, const sidx_hook *hook)
+/* The node a walk over a lazy tree stands on when it reaches node n: n
+ * itself, or for an unbuilt node its part's root, built now if no ray
+ * reached it before (lazy.c: one acquire load once built), void_leaf when
+ * that build could not get its memory. */
+static SIDX_INLINE const bvh_node *bvh_lazy_node(const bvh *b, const bvh_node *n, const sidx_hook *hook)
 {
-    const uint32_t ca = __atomic_load_n(&n->count_axis, __ATOMIC_ACQUIRE);
-    if (SIDX_LIKELY(ca < BVH_LAZY_MARK)) return ca;
-    return sidx__bvh_lazy_expand(a, ca & BVH_COUNT_MASK, hook);
+    if (SIDX_LIKELY(n->count_axis < BVH_LAZY_MARK)) return n;
+    const bvh_node *root = sidx__lazy_get(&b->lazy->life, n->count_axis & BVH_COUNT_MASK, hook);
+    return root ? root : &b->lazy->void_leaf;
 }
 
 /* bvh_traverse.c: the vtable's entries, and the choice of walks the

@@ -25,10 +25,28 @@
  * any hit) and for queries asking for u, v or the normal, so the fast path
  * has no per-node branch on any of them.  The build picks the copies that
  * fit its tree once, one walk table per traversal (sidx__bvh_pick_walks,
- * end of file); a query only picks the table. */
+ * end of file); a query only picks the table.
+ *
+ * Lazy trees (opt.lazy) have walks of their own: the same templates with
+ * their node fetch swapped (fetch_node: nodes[i], or bvh_lazy_node, which
+ * builds an unbuilt subtree the first time a ray reaches it), so the walks
+ * themselves hold no trace of laziness and the eager copies compile as if
+ * it did not exist. */
 #include "bvh_internal.h"
 
 #define SIDX_STRUCTURE_NAME (a->name)
+
+/* The node fetch: node i as the walk stands on it.  BVH_FETCH_EAGER reads
+ * nodes[i]; BVH_FETCH_LAZY (lazy trees) goes through bvh_lazy_node, which
+ * puts an unbuilt subtree's root in place of node i, built now if no ray
+ * reached it before (bvh_internal.h, bvh_lazy). */
+enum { BVH_FETCH_EAGER = 0, BVH_FETCH_LAZY = 1 };
+static SIDX_INLINE const bvh_node *fetch_node(const bvh *b, const bvh_node *nodes, uint32_t i, const sidx_query *q,
+                                              const int fetch, const int traced)
+{
+    if (fetch == BVH_FETCH_EAGER) return &nodes[i];
+    return bvh_lazy_node(b, &nodes[i], traced ? q->hook : NULL);
+}
 
 static SIDX_INLINE int node_box(const bvh *b, const bvh_ray *br, const sidx_ray *r, uint32_t i, float tf_scale,
                                 float tmin, float tmax, float *t_near, float *t_far, const int obb)
@@ -44,9 +62,9 @@ static SIDX_INLINE int node_box(const bvh *b, const bvh_ray *br, const sidx_ray 
  * index, from which set_hit finishes the final hit once — the loop
  * keeps one index and no u, v (the tests run without u_out).  Returns 1
  * when an any-hit query may stop. */
-static SIDX_INLINE int leaf_test(const sidx_accel *a, const bvh *b, const bvh_node *n, const sidx_ray *r,
-                                 const sidx_query *q, float *best, uint32_t *id, const int by_copy,
-                                 const int anyhit, const int traced)
+static SIDX_INLINE int leaf_test(const sidx_accel *a, const bvh *b, uint32_t node, const bvh_node *n,
+                                 const sidx_ray *r, const sidx_query *q, float *best, uint32_t *id,
+                                 const int by_copy, const int anyhit, const int traced)
 {
     const sidx_tri_method m = a->opt.tri;
     const uint32_t first = n->left_or_first, end = first + bvh_count(n);
@@ -54,7 +72,7 @@ static SIDX_INLINE int leaf_test(const sidx_accel *a, const bvh *b, const bvh_no
         const bvh_tri *tr = &b->tris[i];
         float t;
         const int h = sidx__tri_test(m, r, tr->v[0], tr->v[1], tr->v[2], *best, &t, NULL, NULL);
-        SIDX_EMIT(traced, q->hook, SIDX_EV_PRIM_TEST, e_.ray_id = q->ray_id; e_.node = (uint32_t)(n - b->nodes);
+        SIDX_EMIT(traced, q->hook, SIDX_EV_PRIM_TEST, e_.ray_id = q->ray_id; e_.node = node;
                   e_.prim = b->prim_id[i]; e_.result = h; e_.t = h ? t : INFINITY);
         if (h) {
             *id = by_copy ? i : b->prim_id[i];
@@ -105,13 +123,11 @@ typedef struct walk {
     int anyhit, obb, lazy;
 } walk;
 
-/* A node's count_axis as a walk reads it: on a lazy tree with acquire,
- * built first if a ray has not entered it yet (bvh_internal.h, bvh_lazy);
- * BVH_LAZY_FAILED when that build could not get its memory. */
-static SIDX_INLINE uint32_t walk_count_axis(const sidx_accel *a, const bvh_node *n, const sidx_query *q,
-                                            const int lazy, const int traced)
+static SIDX_INLINE const bvh_node *walk_node(walk *w, uint32_t i, const int traced)
 {
-    return lazy ? bvh_lazy_count_axis(a, n, traced ? q->hook : NULL) : n->count_axis;
+    const bvh *b = w->b;
+    return w->lazy ? fetch_node(b, b->nodes, i, w->q, BVH_FETCH_LAZY, traced)
+                   : fetch_node(b, b->nodes, i, w->q, BVH_FETCH_EAGER, traced);
 }
 
 static SIDX_INLINE int walk_box(walk *w, uint32_t i, float *t_near, float *t_far)
@@ -120,10 +136,10 @@ static SIDX_INLINE int walk_box(walk *w, uint32_t i, float *t_near, float *t_far
                   : node_box(w->b, &w->br, w->r, i, w->scale, w->r->tmin, w->best, t_near, t_far, 0);
 }
 
-static SIDX_INLINE int walk_leaf(walk *w, const bvh_node *n, const int traced)
+static SIDX_INLINE int walk_leaf(walk *w, uint32_t node, const bvh_node *n, const int traced)
 {
-    return w->anyhit ? leaf_test(w->a, w->b, n, w->r, w->q, &w->best, &w->tri, 1, 1, traced)
-                     : leaf_test(w->a, w->b, n, w->r, w->q, &w->best, &w->tri, 1, 0, traced);
+    return w->anyhit ? leaf_test(w->a, w->b, node, n, w->r, w->q, &w->best, &w->tri, 1, 1, traced)
+                     : leaf_test(w->a, w->b, node, n, w->r, w->q, &w->best, &w->tri, 1, 0, traced);
 }
 
 /* naive_rec0 / naive_rec1: the plain and the traced copy of naive_body
@@ -149,10 +165,8 @@ static SIDX_INLINE int naive_body(walk *w, uint32_t node, uint32_t depth, const 
     ++w->visited;
     SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id; e_.node = node; e_.depth = depth;
               e_.t_near = t_near; e_.t_far = t_far);
-    const bvh_node *n = &b->nodes[node];
-    const uint32_t ca = walk_count_axis(a, n, q, w->lazy, traced);
-    if (ca == BVH_LAZY_FAILED) return 0; /* unbuilt for want of memory: skipped, the query says so */
-    if (ca & BVH_COUNT_MASK) return walk_leaf(w, n, traced);
+    const bvh_node *n = walk_node(w, node, traced);
+    if (bvh_is_leaf(n)) return walk_leaf(w, node, n, traced);
     const uint32_t right = n->left_or_first;
     if (traced ? naive_rec1(w, node + 1, depth + 1) : naive_rec0(w, node + 1, depth + 1)) return 1;
     return traced ? naive_rec1(w, right, depth + 1) : naive_rec0(w, right, depth + 1);
@@ -171,10 +185,8 @@ static SIDX_INLINE int ordered_body(walk *w, uint32_t node, uint32_t depth, floa
     ++w->visited;
     SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id; e_.node = node; e_.depth = depth;
               e_.t_near = t_near; e_.t_far = t_far);
-    const bvh_node *n = &b->nodes[node];
-    const uint32_t ca = walk_count_axis(a, n, q, w->lazy, traced);
-    if (ca == BVH_LAZY_FAILED) return 0; /* unbuilt for want of memory: skipped, the query says so */
-    if (ca & BVH_COUNT_MASK) return walk_leaf(w, n, traced);
+    const bvh_node *n = walk_node(w, node, traced);
+    if (bvh_is_leaf(n)) return walk_leaf(w, node, n, traced);
     /* left and right child until sorted: then the nearer and the farther */
     uint32_t near_child = node + 1, far_child = n->left_or_first;
     float near_t_near, near_t_far, far_t_near, far_t_far;
@@ -245,6 +257,22 @@ static SIDX_INLINE int recursive_walk(const sidx_accel *a, const sidx_ray *r, co
 
 /* ---- stack: the ordered descent without recursion (the fast path) -------- */
 
+#define EMIT_TERMINATE(reason_, t_)                                                                           \
+    SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = (reason_); e_.t = (t_);  \
+              e_.count = visited)
+
+/* The closest hit found, as the query asked for it (attrs: u, v, normal). */
+static SIDX_INLINE void stack_hit(const sidx_accel *a, const bvh *b, const sidx_ray *r, const sidx_query *q,
+                                  float best, uint32_t prim, const int attrs, sidx_hit *hit)
+{
+    if (attrs) {
+        set_hit(a, b, r, q, best, prim, hit);
+    } else {
+        hit->t = best;
+        hit->prim = prim;
+    }
+}
+
 /* The walk runs at the speed of its branch mispredicts, not of its
  * arithmetic: a diffuse ray makes each inner node's near / both / none
  * choice at random, and every mispredict waits for the chain load ->
@@ -256,9 +284,16 @@ static SIDX_INLINE int recursive_walk(const sidx_accel *a, const sidx_ray *r, co
  *
  * attrs: the query asks for u, v and/or the normal (closest hit only).  A
  * copy of its own, so the walk for plain queries carries no u, v and no
- * triangle index ("no u/v or normals unless asked"). */
+ * triangle index ("no u/v or normals unless asked").
+ *
+ * The deck's "Better BVH Traversal" (001, the ordered hit()) with its
+ * recursion turned into a stack, as tinybvh's BVH::Intersect and pbrt's
+ * BVHAggregate::Intersect keep it: at an inner node test both children's
+ * boxes, go to the nearer, push the farther with its entry distance; at a
+ * leaf test its triangles; then pop the next deferred node whose entry is
+ * still before the best hit.  fetch: the node fetch (fetch_node). */
 static SIDX_INLINE int stack_walk(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit,
-                                  const int traced, const int anyhit, const int obb, const int attrs, const int lazy)
+                                  const int traced, const int anyhit, const int obb, const int attrs, const int fetch)
 {
     const bvh *b = a->impl;
     const bvh_node *nodes = b->nodes;
@@ -270,16 +305,14 @@ static SIDX_INLINE int stack_walk(const sidx_accel *a, const sidx_ray *r, const 
     bvh_ray br;
     bvh_ray_setup(&br, r);
     if (b->num_nodes == 0) {
-        SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = SIDX_TERM_MISS_ROOT;
-                  e_.count = 0);
+        EMIT_TERMINATE(SIDX_TERM_MISS_ROOT, INFINITY);
         return 0;
     }
     float t_near, t_far;
     const int hit_root = node_box(b, &br, r, 0, scale, tmin, best, &t_near, &t_far, obb);
     EMIT_BOX(0u, hit_root, t_near, t_far);
     if (!hit_root) {
-        SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = SIDX_TERM_MISS_ROOT;
-                  e_.count = 0);
+        EMIT_TERMINATE(SIDX_TERM_MISS_ROOT, INFINITY);
         return 0;
     }
     /* Deferred far children and their entry distances; depth and exit
@@ -291,18 +324,13 @@ static SIDX_INLINE int stack_walk(const sidx_accel *a, const sidx_ray *r, const 
         ++visited;
         SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id; e_.node = node; e_.depth = depth;
                   e_.t_near = t_near; e_.t_far = t_far);
-        const bvh_node *n = &nodes[node];
-        const uint32_t ca = walk_count_axis(a, n, q, lazy, traced);
-        if (lazy && SIDX_UNLIKELY(ca == BVH_LAZY_FAILED)) {
-            /* unbuilt for want of memory: skipped, the query says so */
-        } else if (ca & BVH_COUNT_MASK) {
-            if (leaf_test(a, b, n, r, q, &best, &prim, attrs, anyhit, traced)) {
-                SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id;
-                          e_.reason = SIDX_TERM_ANY_HIT; e_.count = visited);
+        const bvh_node *n = fetch_node(b, nodes, node, q, fetch, traced);
+        if (bvh_is_leaf(n)) { /* a leaf: its triangles */
+            if (leaf_test(a, b, node, n, r, q, &best, &prim, attrs, anyhit, traced)) {
+                EMIT_TERMINATE(SIDX_TERM_ANY_HIT, INFINITY);
                 return 1;
             }
-        } else {
-            /* Both children's boxes: hit (hit_left, hit_right), entry and exit t. */
+        } else { /* an inner node: both children's boxes, entry and exit t */
             const uint32_t left = node + 1, right = n->left_or_first;
             float left_t_near, left_t_far, right_t_near, right_t_far;
             const int hit_left = node_box(b, &br, r, left, scale, tmin, best, &left_t_near, &left_t_far, obb);
@@ -310,27 +338,21 @@ static SIDX_INLINE int stack_walk(const sidx_accel *a, const sidx_ray *r, const 
             EMIT_BOX(left, hit_left, left_t_near, left_t_far);
             EMIT_BOX(right, hit_right, right_t_near, right_t_far);
             if (hit_left && hit_right) {
-                /* Both: nearer entry first (ties: left), the other waits.
-                 * (A branch-free version of this choice measured no
-                 * faster with gcc -O2; this one reads like the slide.) */
+                /* Both: the nearer entry now (ties: left), the farther waits.
+                 * (A branch-free version of this choice measured no faster
+                 * with gcc -O2; this one reads like the slide.) */
                 uint32_t near_child = left, far_child = right;
                 float far_t_near = right_t_near, far_t_far = right_t_far;
                 t_near = left_t_near;
                 t_far = left_t_far;
                 if (right_t_near < left_t_near) {
-                    near_child = right;
-                    far_child = left;
-                    far_t_near = left_t_near;
-                    far_t_far = left_t_far;
-                    t_near = right_t_near;
-                    t_far = right_t_far;
+                    near_child = right, far_child = left;
+                    far_t_near = left_t_near, far_t_far = left_t_far;
+                    t_near = right_t_near, t_far = right_t_far;
                 }
                 stack[stack_len] = far_child;
                 stack_t_near[stack_len] = far_t_near;
-                if (traced) {
-                    stack_depth[stack_len] = depth + 1;
-                    stack_t_far[stack_len] = far_t_far;
-                }
+                if (traced) stack_depth[stack_len] = depth + 1, stack_t_far[stack_len] = far_t_far;
                 ++stack_len;
                 SIDX_EMIT(traced, q->hook, SIDX_EV_STACK_PUSH, e_.ray_id = q->ray_id; e_.node = far_child;
                           e_.depth = stack_len; e_.t_near = far_t_near; e_.t_far = far_t_far);
@@ -338,7 +360,7 @@ static SIDX_INLINE int stack_walk(const sidx_accel *a, const sidx_ray *r, const 
                 ++depth;
                 continue;
             }
-            if (hit_left | hit_right) {
+            if (hit_left | hit_right) { /* one: go there */
                 node = hit_left ? left : right;
                 t_near = hit_left ? left_t_near : right_t_near;
                 t_far = hit_left ? left_t_far : right_t_far;
@@ -349,16 +371,8 @@ static SIDX_INLINE int stack_walk(const sidx_accel *a, const sidx_ray *r, const 
         /* Pop the next deferred node that can still hold a closer hit. */
         for (;;) {
             if (stack_len == 0) {
-                SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id;
-                          e_.reason = SIDX_TERM_STACK_EMPTY; e_.t = best; e_.count = visited);
-                if (!anyhit && prim != SIDX_NO_HIT) {
-                    if (attrs) {
-                        set_hit(a, b, r, q, best, prim, hit);
-                    } else {
-                        hit->t = best;
-                        hit->prim = prim;
-                    }
-                }
+                EMIT_TERMINATE(SIDX_TERM_STACK_EMPTY, best);
+                if (!anyhit && prim != SIDX_NO_HIT) stack_hit(a, b, r, q, best, prim, attrs, hit);
                 return 0;
             }
             --stack_len;
@@ -369,15 +383,13 @@ static SIDX_INLINE int stack_walk(const sidx_accel *a, const sidx_ray *r, const 
             if (stack_t_near[stack_len] < best * scale) { /* best widened as in bvh_slab */
                 node = stack[stack_len];
                 t_near = stack_t_near[stack_len];
-                if (traced) {
-                    t_far = stack_t_far[stack_len];
-                    depth = stack_depth[stack_len];
-                }
+                if (traced) t_far = stack_t_far[stack_len], depth = stack_depth[stack_len];
                 break;
             }
         }
     }
 }
+#undef EMIT_TERMINATE
 
 /* ---- walk tables and entry points (sidx_internal.h §1) --------------------- */
 
@@ -394,15 +406,15 @@ static SIDX_INLINE int stack_walk(const sidx_accel *a, const sidx_ray *r, const 
     {                                                                                                           \
         return recursive_walk(a, r, q, NULL, 1, ordered_, traced_);                                             \
     }
-#define STACK_INTERSECT(name_, traced_, obb_, attrs_, lazy_)                                                   \
+#define STACK_INTERSECT(name_, traced_, obb_, attrs_, fetch_)                                                  \
     static void name_(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)             \
     {                                                                                                           \
-        (void)stack_walk(a, r, q, hit, traced_, 0, obb_, attrs_, lazy_);                                        \
+        (void)stack_walk(a, r, q, hit, traced_, 0, obb_, attrs_, fetch_);                                       \
     }
-#define STACK_OCCLUDED(name_, traced_, obb_, lazy_)                                                            \
+#define STACK_OCCLUDED(name_, traced_, obb_, fetch_)                                                           \
     static int name_(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)                              \
     {                                                                                                           \
-        return stack_walk(a, r, q, NULL, traced_, 1, obb_, 0, lazy_);                                           \
+        return stack_walk(a, r, q, NULL, traced_, 1, obb_, 0, fetch_);                                          \
     }
 
 /* The recursive walks test the box kind per node (w.obb): teaching paths,
@@ -416,27 +428,27 @@ RECURSIVE_INTERSECT(ordered_intersect_traced, 1, 1)
 RECURSIVE_OCCLUDED(ordered_occluded, 1, 0)
 RECURSIVE_OCCLUDED(ordered_occluded_traced, 1, 1)
 
-STACK_INTERSECT(stack_intersect, 0, 0, 0, 0) /* the hot path: plain closest hit on AABBs */
-STACK_INTERSECT(stack_intersect_traced, 1, 0, 0, 0)
-STACK_INTERSECT(stack_intersect_attrs, 0, 0, 1, 0)
-STACK_INTERSECT(stack_intersect_attrs_traced, 1, 0, 1, 0)
-STACK_OCCLUDED(stack_occluded, 0, 0, 0)
-STACK_OCCLUDED(stack_occluded_traced, 1, 0, 0)
+STACK_INTERSECT(stack_intersect, 0, 0, 0, BVH_FETCH_EAGER) /* the hot path: plain closest hit on AABBs */
+STACK_INTERSECT(stack_intersect_traced, 1, 0, 0, BVH_FETCH_EAGER)
+STACK_INTERSECT(stack_intersect_attrs, 0, 0, 1, BVH_FETCH_EAGER)
+STACK_INTERSECT(stack_intersect_attrs_traced, 1, 0, 1, BVH_FETCH_EAGER)
+STACK_OCCLUDED(stack_occluded, 0, 0, BVH_FETCH_EAGER)
+STACK_OCCLUDED(stack_occluded_traced, 1, 0, BVH_FETCH_EAGER)
 
-STACK_INTERSECT(obb_stack_intersect, 0, 1, 0, 0)
-STACK_INTERSECT(obb_stack_intersect_traced, 1, 1, 0, 0)
-STACK_INTERSECT(obb_stack_intersect_attrs, 0, 1, 1, 0)
-STACK_INTERSECT(obb_stack_intersect_attrs_traced, 1, 1, 1, 0)
-STACK_OCCLUDED(obb_stack_occluded, 0, 1, 0)
-STACK_OCCLUDED(obb_stack_occluded_traced, 1, 1, 0)
+STACK_INTERSECT(obb_stack_intersect, 0, 1, 0, BVH_FETCH_EAGER)
+STACK_INTERSECT(obb_stack_intersect_traced, 1, 1, 0, BVH_FETCH_EAGER)
+STACK_INTERSECT(obb_stack_intersect_attrs, 0, 1, 1, BVH_FETCH_EAGER)
+STACK_INTERSECT(obb_stack_intersect_attrs_traced, 1, 1, 1, BVH_FETCH_EAGER)
+STACK_OCCLUDED(obb_stack_occluded, 0, 1, BVH_FETCH_EAGER)
+STACK_OCCLUDED(obb_stack_occluded_traced, 1, 1, BVH_FETCH_EAGER)
 
-/* lazy trees (AABBs only): every node's count_axis read with acquire */
-STACK_INTERSECT(lazy_stack_intersect, 0, 0, 0, 1)
-STACK_INTERSECT(lazy_stack_intersect_traced, 1, 0, 0, 1)
-STACK_INTERSECT(lazy_stack_intersect_attrs, 0, 0, 1, 1)
-STACK_INTERSECT(lazy_stack_intersect_attrs_traced, 1, 0, 1, 1)
-STACK_OCCLUDED(lazy_stack_occluded, 0, 0, 1)
-STACK_OCCLUDED(lazy_stack_occluded_traced, 1, 0, 1)
+/* lazy trees (AABBs only): the same walk, its node fetch swapped (fetch_node) */
+STACK_INTERSECT(lazy_stack_intersect, 0, 0, 0, BVH_FETCH_LAZY)
+STACK_INTERSECT(lazy_stack_intersect_traced, 1, 0, 0, BVH_FETCH_LAZY)
+STACK_INTERSECT(lazy_stack_intersect_attrs, 0, 0, 1, BVH_FETCH_LAZY)
+STACK_INTERSECT(lazy_stack_intersect_attrs_traced, 1, 0, 1, BVH_FETCH_LAZY)
+STACK_OCCLUDED(lazy_stack_occluded, 0, 0, BVH_FETCH_LAZY)
+STACK_OCCLUDED(lazy_stack_occluded_traced, 1, 0, BVH_FETCH_LAZY)
 
 #undef RECURSIVE_INTERSECT
 #undef RECURSIVE_OCCLUDED

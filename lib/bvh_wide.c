@@ -32,7 +32,6 @@
  * tests compare every copy the CPU can run).  A NOTE event on the build
  * hook says which was picked. */
 #include <math.h>
-#include <sched.h>
 #include <stdlib.h>
 #include <string.h>
 #include "bvh_wide_internal.h"
@@ -42,6 +41,19 @@
 #endif
 
 #define SIDX_STRUCTURE_NAME (a->name)
+
+/* sidx__wide_void_node (bvh_wide_internal.h): +inf lows, -inf highs,
+ * WIDE_EMPTY children and ids, as bits; [0] bvh4's layout, [1] bvh8's. */
+#define VOID4(x) x, x, x, x
+#define VOID8(x) VOID4(x), VOID4(x)
+#define VOID_NODE(R) {R(0x7F800000u), R(0x7F800000u), R(0x7F800000u), R(0xFF800000u), R(0xFF800000u), R(0xFF800000u), \
+                      R(WIDE_EMPTY), R(UINT32_MAX)}
+static _Alignas(64) const union { uint32_t u[32]; float f[32]; } void_node_4 = {.u = VOID_NODE(VOID4)};
+static _Alignas(64) const union { uint32_t u[64]; float f[64]; } void_node_8 = {.u = VOID_NODE(VOID8)};
+const float *const sidx__wide_void_node[2] = {void_node_4.f, void_node_8.f};
+#undef VOID4
+#undef VOID8
+#undef VOID_NODE
 
 /* ---- the traversal, instantiated per width and instruction set --------------
  * bvh_wide_walk.h is the walk; it includes the kernels of WALK_ISA
@@ -533,12 +545,8 @@ static void wide_free(const sidx_accel *a, wide_bvh *w)
 {
     if (!w) return;
     if (w->lazy) {
-        for (uint32_t r = 0; r < w->lazy->num_recs; ++r) {
-            const sidx_accel *shell = w->lazy->recs[r].shell;
-            if (!shell) continue;
-            wide_free(a, shell->impl);
-            sidx__free(a, (void *)(uintptr_t)shell);
-        }
+        for (uint32_t r = 0; r < w->lazy->num_recs; ++r) wide_free(a, sidx__lazy_peek(&w->lazy->life, r));
+        sidx__free(a, w->lazy->life.parts);
         sidx__free(a, w->lazy->recs);
         sidx__sbvh_lazy_free(a, w->lazy->sb);
         sidx__free(a, w->lazy);
@@ -656,6 +664,8 @@ static void bin_free(const sidx_accel *a, bvh *b)
     sidx__free(a, b);
 }
 
+static void *expand_part(void *owner, uint32_t r, const sidx_hook *hook, sidx__lazy_made *made);
+
 static sidx_status wide_build(sidx_accel *a, sidx_error *err)
 {
     const sidx_mesh *m = a->mesh;
@@ -706,7 +716,8 @@ static sidx_status wide_build(sidx_accel *a, sidx_error *err)
         w->lazy->sb = sb;
         sb = NULL;
         w->lazy->recs = sidx__calloc(a, sidx__sbvh_lazy_count(w->lazy->sb), sizeof *w->lazy->recs);
-        if (!w->lazy->recs) goto fail;
+        w->lazy->life.parts = sidx__calloc(a, sidx__sbvh_lazy_count(w->lazy->sb), sizeof *w->lazy->life.parts);
+        if (!w->lazy->recs || !w->lazy->life.parts) goto fail;
         w->lazy->num_recs = sidx__sbvh_lazy_count(w->lazy->sb);
     }
     set_kernels(w, a->opt.tri);
@@ -714,12 +725,14 @@ static sidx_status wide_build(sidx_accel *a, sidx_error *err)
     s = SIDX_ERR_NOMEM;
     if (lazy) {
         wide_lazy *L = w->lazy;
+        /* the parts' marks (WIDE_PART_BIT) need the top's indices below 2^29 */
+        s = SIDX_ERR_LIMIT;
+        if (w->num_inner >= WIDE_PART_BIT || w->num_blocks >= WIDE_PART_BIT) goto fail;
+        s = SIDX_ERR_NOMEM;
+        /* event ids: an unbuilt child has one until built (its part's root keeps it) */
         L->next_id = w->num_inner + w->num_leaves + L->num_recs;
-        L->built_nodes = L->next_id; /* an unbuilt child counts as one node until built */
-        L->built_leaves = w->num_leaves;
-        L->max_depth = w->max_depth;
-        L->unbuilt = L->num_recs;
-        for (uint32_t r = 0; r < L->num_recs; ++r) L->unbuilt_prims += L->recs[r].count;
+        sidx__lazy_init(&L->life, L->life.parts, L->num_recs, expand_part, a);
+        for (uint32_t r = 0; r < L->num_recs; ++r) sidx__lazy_defer(&L->life, r, L->recs[r].count);
         w->sah_cost = 0.0; /* not applicable until every subtree is built */
     } else {
         w->sah_cost = wide_sah(w, opt_or(a->opt.c_trav, 1.0f), opt_or(a->opt.c_tri, 1.0f));
@@ -751,28 +764,35 @@ fail:
     wide_free(a, w);
     sidx__bvh_vtable.destroy(&bin);
     a->impl = NULL;
+    if (s == SIDX_ERR_LIMIT) return sidx__fail(err, s, "%s: the lazy tree's top is too large", a->name);
     return sidx__fail(err, s, "%s: out of memory", a->name);
 }
 
 /* ---- lazy builds ------------------------------------------------------------------ */
 
-/* Builds record r's subtree as a wide tree of its own and its shell;
- * NULL when memory runs out (everything it took is given back). */
-static const sidx_accel *expand_build(const sidx_accel *a, const wide_bvh *w, uint32_t r, const sidx_hook *hook)
+/* lazy.c's expand function (lazy.h): builds part r — record r's subtree,
+ * the eager build's, as a wide tree of its own whose children are marked
+ * WIDE_PART_BIT (bvh_wide_internal.h) — and returns it; NULL when memory
+ * runs out (everything it took is given back).  Called once at a time per
+ * part (lazy.c claims it). */
+static void *expand_part(void *owner, uint32_t r, const sidx_hook *hook, sidx__lazy_made *made)
 {
+    const sidx_accel *a = owner;
+    const wide_bvh *w = a->impl;
     wide_lazy *L = w->lazy;
-    wide_lazy_rec *rec = &L->recs[r];
+    const wide_lazy_rec *rec = &L->recs[r];
     bvh *b = NULL;
     uint32_t *counts = NULL;
-    sidx_accel *shell = sidx__alloc(a, 1, sizeof *shell);
     wide_bvh *sub = sidx__calloc(a, 1, sizeof *sub);
-    if (!shell || !sub || sidx__sbvh_lazy_build(a, L->sb, r, &b) != SIDX_OK) goto fail;
+    if (!sub || sidx__sbvh_lazy_build(a, L->sb, r, &b) != SIDX_OK) goto fail;
     sub->width = w->width;
     sub->isa = w->isa;
     sub->num_prims = b->num_prims;
     sub->bounds = sidx_aabb_empty();
     set_kernels(sub, a->opt.tri);
     if (collapse_into(a, b, sub, NULL) != SIDX_OK) goto fail;
+    /* the marks need its indices below 2^29: far beyond any part's memory */
+    if (sub->num_inner >= WIDE_PART_BIT || sub->num_blocks >= WIDE_PART_BIT) goto fail;
     if (hook && hook->fn && (hook->mask == 0 || (hook->mask & SIDX_EVMASK_BUILD))) {
         counts = sidx__alloc(a, sub->num_inner, sizeof *counts);
         if (!counts) goto fail;
@@ -783,9 +803,9 @@ static const sidx_accel *expand_build(const sidx_accel *a, const wide_bvh *w, ui
     const uint32_t base = __atomic_fetch_add(&L->next_id, sub->num_inner + sub->num_leaves, __ATOMIC_RELAXED);
     for (uint32_t i = 0; i < sub->num_inner; ++i) {
         float *n = sub->nodes + (size_t)i * 8u * sub->width;
-        uint32_t *ch = (uint32_t *)(void *)(n + 6u * sub->width), *id = (uint32_t *)(void *)(n + 7u * sub->width);
+        uint32_t *id = (uint32_t *)(void *)(n + 7u * sub->width);
         for (uint32_t k = 0; k < sub->width; ++k)
-            if (ch[k] != WIDE_EMPTY) id[k] += base;
+            if (wide_child(n, sub->width)[k] != WIDE_EMPTY) id[k] += base;
     }
     sub->sah_cost = wide_sah(sub, opt_or(a->opt.c_trav, 1.0f), opt_or(a->opt.c_tri, 1.0f));
     SIDX_EMIT(1, hook, SIDX_EV_BUILD_LAZY_EXPAND, e_.node = rec->id; e_.parent = rec->parent; e_.depth = rec->depth;
@@ -795,50 +815,25 @@ static const sidx_accel *expand_build(const sidx_accel *a, const wide_bvh *w, ui
         emit_build(a, hook, sub, counts, 0, rec->parent, rec->depth, rec->id, base);
         sidx__free(a, counts);
     }
-    *shell = *a;
-    shell->impl = sub;
-    shell->lazy = 0;
-    shell->labels = NULL;
-    shell->opt.hook = NULL;
-    sidx__sbvh_lazy_release(a, L->sb, r); /* its references are in the blocks now */
-    __atomic_fetch_add(&L->built_nodes, sub->num_inner + sub->num_leaves - 1u, __ATOMIC_RELAXED);
-    __atomic_fetch_add(&L->built_leaves, sub->num_leaves, __ATOMIC_RELAXED);
-    __atomic_fetch_sub(&L->unbuilt, 1u, __ATOMIC_RELAXED);
-    __atomic_fetch_sub(&L->unbuilt_prims, (uint64_t)rec->count, __ATOMIC_RELAXED);
-    const uint32_t depth = rec->depth + sub->max_depth;
-    uint32_t cur = __atomic_load_n(&L->max_depth, __ATOMIC_RELAXED);
-    while (cur < depth && !__atomic_compare_exchange_n(&L->max_depth, &cur, depth, 1, __ATOMIC_RELAXED, __ATOMIC_RELAXED)) {
+    /* the marks, last: what the events above read is the plain tree */
+    for (uint32_t i = 0; i < sub->num_inner; ++i) {
+        uint32_t *ch = (uint32_t *)(void *)(sub->nodes + (size_t)i * 8u * sub->width + 6u * sub->width);
+        for (uint32_t k = 0; k < sub->width; ++k)
+            if (ch[k] != WIDE_EMPTY) ch[k] |= WIDE_PART_BIT;
     }
-    return shell;
+    sidx__sbvh_lazy_release(a, L->sb, r); /* its references are in the blocks now */
+    __atomic_fetch_add(&L->part_leaves, sub->num_leaves, __ATOMIC_RELAXED);
+    made->refs = rec->count;
+    made->bytes = sizeof *sub + (size_t)sub->num_inner * 8u * sub->width * sizeof(float) +
+                  (size_t)sub->num_blocks * sizeof(wide_tri4);
+    made->depth = rec->depth + sub->max_depth;
+    return sub;
 
 fail:
     sidx__free(a, counts);
     bin_free(a, b);
     wide_free(a, sub);
-    sidx__free(a, shell);
     return NULL;
-}
-
-const sidx_accel *sidx__wide_lazy_expand(const sidx_accel *a, uint32_t r, const sidx_hook *hook)
-{
-    const wide_bvh *w = a->impl;
-    wide_lazy_rec *rec = &w->lazy->recs[r];
-    for (unsigned spins = 0;; ++spins) {
-        uint32_t st = __atomic_load_n(&rec->state, __ATOMIC_ACQUIRE);
-        if (st == BVH_LAZY_BUILT) return rec->shell;
-        if (st == BVH_LAZY_UNBUILT) {
-            if (!__atomic_compare_exchange_n(&rec->state, &st, BVH_LAZY_BUSY, 0, __ATOMIC_ACQ_REL, __ATOMIC_ACQUIRE))
-                continue;
-            const sidx_accel *shell = expand_build(a, w, r, hook);
-            rec->shell = shell;
-            __atomic_store_n(&rec->state, shell ? BVH_LAZY_BUILT : BVH_LAZY_UNBUILT, __ATOMIC_RELEASE);
-            if (!shell) sidx__lazy_note_failure();
-            return shell;
-        }
-        /* BUSY: another thread is building it; wait (bvh_wide_internal.h, wide_lazy) */
-        if (spins < 64) SIDX_SPIN_PAUSE();
-        else sched_yield();
-    }
 }
 
 static void wide_destroy(sidx_accel *a)
@@ -855,25 +850,26 @@ static void wide_stats(const sidx_accel *a, sidx_accel_stats *s)
     s->leaves = w->num_leaves;
     s->max_depth = w->max_depth;
     if (w->lazy) {
-        wide_lazy *L = w->lazy;
-        s->nodes = __atomic_load_n(&L->built_nodes, __ATOMIC_RELAXED);
-        s->leaves = __atomic_load_n(&L->built_leaves, __ATOMIC_RELAXED);
-        s->max_depth = __atomic_load_n(&L->max_depth, __ATOMIC_RELAXED);
-        s->unbuilt = __atomic_load_n(&L->unbuilt, __ATOMIC_RELAXED);
-        s->unbuilt_prims = __atomic_load_n(&L->unbuilt_prims, __ATOMIC_RELAXED);
+        /* a part's root is the unbuilt child it replaces, counted already;
+         * every other node it made took an event id */
+        const wide_lazy *L = w->lazy;
+        const sidx__lazy_counts c = sidx__lazy_counts_get(&L->life);
+        s->nodes = __atomic_load_n(&L->next_id, __ATOMIC_RELAXED) - c.built;
+        s->leaves += __atomic_load_n(&L->part_leaves, __ATOMIC_RELAXED);
+        s->max_depth = c.max_depth > w->max_depth ? c.max_depth : w->max_depth;
+        s->unbuilt = c.unbuilt;
+        s->unbuilt_prims = c.unbuilt_refs;
     }
     s->prim_refs = w->num_prims;
     s->bytes = sizeof *w + (size_t)w->num_inner * 8u * w->width * sizeof(float) +
                (size_t)w->num_blocks * sizeof(wide_tri4);
     s->sah_cost = w->sah_cost;
-    if (w->lazy) { /* the records, and the subtrees built so far */
-        s->bytes += sizeof *w->lazy + (size_t)w->lazy->num_recs * sizeof *w->lazy->recs;
+    if (w->lazy) { /* the records and parts, and the subtrees built so far */
+        s->bytes += sizeof *w->lazy + (size_t)w->lazy->num_recs * (sizeof *w->lazy->recs + sizeof *w->lazy->life.parts) +
+                    sidx__lazy_counts_get(&w->lazy->life).built_bytes;
         for (uint32_t r = 0; r < w->lazy->num_recs; ++r) {
-            if (__atomic_load_n(&w->lazy->recs[r].state, __ATOMIC_ACQUIRE) != BVH_LAZY_BUILT) continue;
-            const wide_bvh *sub = w->lazy->recs[r].shell->impl;
-            s->prim_refs += sub->num_prims;
-            s->bytes += sizeof(sidx_accel) + sizeof *sub + (size_t)sub->num_inner * 8u * sub->width * sizeof(float) +
-                        (size_t)sub->num_blocks * sizeof(wide_tri4);
+            const wide_bvh *sub = sidx__lazy_peek(&w->lazy->life, r);
+            if (sub) s->prim_refs += sub->num_prims;
         }
     }
     s->mean_leaf_prims = s->leaves ? (double)s->prim_refs / s->leaves : 0.0;

@@ -58,9 +58,13 @@ typedef tri4_ray wide_tri_ray;
 #define WIDE_LEAF_BIT 0x80000000u
 #define WIDE_EMPTY 0xFFFFFFFFu
 /* Lazy trees (opt.lazy; bvh_wide.c, "lazy builds"): a child WIDE_LAZY_BIT | r
- * is a subtree not built until a ray reaches it, lazy record r (inner
- * node indices stay below 2^30, the build checks it). */
+ * is a subtree not built until a ray reaches it, lazy part r; a child
+ * marked WIDE_PART_BIT (inner: WIDE_PART_BIT | i, leaf: WIDE_LEAF_BIT |
+ * WIDE_PART_BIT | b) is node i or block b of such a part once built, in
+ * arrays of its own.  A lazy tree's node and block indices stay below
+ * 2^29 (the builds check it). */
 #define WIDE_LAZY_BIT 0x40000000u
+#define WIDE_PART_BIT 0x20000000u
 
 /* Closest-hit traversal pushes at most W − 1 deferred children per level
  * and the tree is at most BVH_DEPTH_LIMIT deep: 64 · 7 + 1 < 512. */
@@ -75,6 +79,17 @@ typedef enum wide_isa { WIDE_ISA_SCALAR = 0, WIDE_ISA_SSE41 = 1, WIDE_ISA_AVX2 =
 struct wide_bvh;
 typedef void (*wide_isect_fn)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit);
 typedef int (*wide_occl_fn)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q);
+
+/* What a walk copy is (bvh_wide_walk.h, walk_'s `kind`, a compile-time
+ * constant in each copy): any hit or closest hit, traced, with the SIMD
+ * watertight triangle test, keeping what u, v need, over a lazy tree. */
+enum {
+    WIDE_WALK_ANYHIT = 1,
+    WIDE_WALK_TRACED = 2,
+    WIDE_WALK_SIMD_TRI = 4,
+    WIDE_WALK_KEEP_UV = 8,
+    WIDE_WALK_LAZY = 16
+};
 
 /* The walks of one (width, instruction set): traced, untraced with the
  * SIMD watertight triangle test (and its copy that keeps what u, v need,
@@ -98,32 +113,28 @@ typedef struct wide_stream_kernels {
  * more than WIDE_MAX_LEAF and at most opt.lazy references
  * (sidx__bvh_build_spatial's placeholders), the collapse makes each one
  * child of its own, WIDE_LAZY_BIT | r, and record r says what building it
- * takes.  The first ray to reach it builds the binary subtree (the eager
- * build's, node for node) and collapses it into a wide tree of its own,
- * held by `shell`, an accel whose impl is that tree; the lazy walks walk
- * it with the eager walk of the same kind.
- *
- * Publication, as bvh_lazy (bvh_internal.h) does it: the expanding thread
- * claims the record with a compare-and-swap of state from UNBUILT to BUSY,
- * builds, stores shell, then state = BUILT with release; a walk reads
- * state with acquire (one load on the built path, no lock), and a thread
- * that finds it BUSY waits (spinning, then yielding).  Without memory for
- * the expansion nothing is published, state returns to UNBUILT, the walk
- * skips the child and the query reports SIDX_ERR_NOMEM. */
+ * takes.  Its life — claim, wait, publish, failure, the counters — is
+ * lazy.c's (lazy.h), one sidx__lazy_part per record: the first ray to
+ * reach it builds the binary subtree (the eager build's, node for node)
+ * and collapses it into a wide tree of its own, its part, whose children
+ * are marked WIDE_PART_BIT.  The lazy walks reach it through their node
+ * fetch (bvh_wide_walk.h, fetch_node_): the unbuilt child's place is taken
+ * by the part's root, and a marked child is read from the part's arrays,
+ * so one walk goes on through it as through the eager tree; when its
+ * memory cannot be had, by sidx__wide_void_node (every slot empty) and the
+ * query reports SIDX_ERR_NOMEM. */
 typedef struct wide_lazy_rec {
-    uint32_t state;                 /* BVH_LAZY_*, atomic */
     uint32_t count, parent, depth, id; /* references, parent wide node, depth, event id of the child */
     sidx_aabb box;
-    const sidx_accel *shell;        /* once BUILT */
 } wide_lazy_rec;
 
 typedef struct wide_lazy {
+    sidx__lazy life;                /* one part per record, its wide_bvh (lazy.c) */
     wide_lazy_rec *recs;
     uint32_t num_recs;
     sidx__sbvh_lazy *sb;            /* the binary build's records (bvh_spatial.c) */
-    /* atomic: event ids handed out, and what is built so far */
-    uint32_t next_id, built_nodes, built_leaves, max_depth, unbuilt;
-    uint64_t unbuilt_prims;
+    uint32_t next_id;               /* atomic: event ids handed out */
+    uint32_t part_leaves;           /* atomic: leaves the expansions made */
 } wide_lazy;
 
 typedef struct wide_bvh {
@@ -144,20 +155,10 @@ typedef struct wide_bvh {
     wide_lazy *lazy;       /* lazy trees only; NULL when every node is built at once */
 } wide_bvh;
 
-/* bvh_wide.c: builds lazy record r's subtree, or waits for the thread
- * building it; returns its shell, NULL when its memory could not be had
- * (noted for the query: sidx__lazy_note_failure).  Build events go to
- * hook (the query's; NULL = none). */
-const sidx_accel *sidx__wide_lazy_expand(const sidx_accel *a, uint32_t r, const sidx_hook *hook);
-
-/* The shell of lazy record r as a walk reads it: one acquire load once built. */
-static SIDX_INLINE const sidx_accel *wide_lazy_enter(const sidx_accel *a, const wide_bvh *w, uint32_t r,
-                                                     const sidx_hook *hook)
-{
-    const wide_lazy_rec *rec = &w->lazy->recs[r];
-    if (SIDX_LIKELY(__atomic_load_n(&rec->state, __ATOMIC_ACQUIRE) == BVH_LAZY_BUILT)) return rec->shell;
-    return sidx__wide_lazy_expand(a, r, hook);
-}
+/* A node whose every slot is empty (lo = +inf, hi = -inf, WIDE_EMPTY):
+ * where a lazy walk stands when a part could not be built.  8·8 words,
+ * 64-byte aligned; bvh4 reads the first 8·4 as its own (bvh_wide.c). */
+extern const float *const sidx__wide_void_node[2];
 
 static SIDX_INLINE const float *wide_node(const wide_bvh *w, uint32_t i) { return w->nodes + (size_t)i * 8u * w->width; }
 static SIDX_INLINE const uint32_t *wide_child(const float *n, uint32_t W)

@@ -95,9 +95,14 @@
  * docs/performance.md, "Wide BVHs").  A node is 2 (bvh4) or
  * 4 (bvh8) cache lines, a leaf block 2.5; prefetching a leaf's 4th line
  * is harmless. */
-WINL void WFN(prefetch_)(const wide_bvh *w, const float *nodes, uint32_t ref)
+WINL void WFN(prefetch_)(const wide_bvh *w, const float *nodes, const wide_bvh *part, uint32_t ref, const int kind)
 {
-    const uintptr_t leaf = (uintptr_t)w->blocks + (uintptr_t)(ref & ~WIDE_LEAF_BIT) * sizeof(wide_tri4);
+    const wide_tri4 *blocks = w->blocks;
+    if (kind & WIDE_WALK_LAZY) { /* a lazy tree: an unbuilt child has nothing yet, a part's its own arrays */
+        if ((ref & (WIDE_LEAF_BIT | WIDE_LAZY_BIT)) == WIDE_LAZY_BIT) return;
+        if (ref & WIDE_PART_BIT) nodes = part->nodes, blocks = part->blocks, ref &= ~WIDE_PART_BIT;
+    }
+    const uintptr_t leaf = (uintptr_t)blocks + (uintptr_t)(ref & ~WIDE_LEAF_BIT) * sizeof(wide_tri4);
     const uintptr_t node = (uintptr_t)nodes + (uintptr_t)ref * (8u * WALK_W * sizeof(float));
     const char *line = (const char *)((ref & WIDE_LEAF_BIT) ? leaf : node);
     __builtin_prefetch(line);
@@ -115,14 +120,13 @@ WINL void WFN(prefetch_)(const wide_bvh *w, const float *nodes, uint32_t ref)
  * SysV ABI); more registers do: the AVX-512 copy keeps all the constants
  * in registers.  Figures, and the compiler tricks rejected:
  * docs/performance.md, "Wide BVHs". */
-WINL int WFN(leaf_)(const sidx_accel *a, const wide_bvh *w, uint32_t first_block, const sidx_ray *r,
+WINL int WFN(leaf_)(const sidx_accel *a, const wide_tri4 *block, const sidx_ray *r,
                     const WFN(ray_consts_) * consts, const sidx_query *q, uint32_t node_id, float *best, uint32_t *prim,
                     const wide_tri4 **hit_block, unsigned *hit_lane, float *hit_vw_det, const int anyhit,
                     const int traced, const int simd_tri)
 {
     (void)consts;
     (void)node_id;
-    const wide_tri4 *block = w->blocks + first_block;
     const float *row_x, *row_y, *row_z; /* the block's rows on the ray's permuted axes, for tri4_ */
     WFN(block_rows_)(consts, block, &row_x, &row_y, &row_z);
     for (;; ++block) {
@@ -209,31 +213,108 @@ WINL void WFN(uv_)(const sidx_accel *a, const sidx_ray *r, uint32_t flags, const
     if (flags & SIDX_QUERY_NORMAL) hit->ng = early ? sidx__tri_normal(p0, p1, p2) : wide_lane_normal(block, lane);
 }
 
-/* ---- the walk ----------------------------------------------------------------- */
+/* ---- the node fetch ------------------------------------------------------------ */
 
-/* The untraced and traced walks, declared here for the lazy copies, which
- * walk a subtree built for a ray as a tree of its own (below). */
-#define WNOINL static __attribute__((noinline)) WALK_TARGET
-WNOINL void WFN(isect_traced_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit);
-WNOINL void WFN(isect_simd_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit);
-#if WALK_TRI4
-WNOINL void WFN(isect_simd_uv_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit);
-#else
-#define isect_simd_uv_ isect_simd_ /* no SIMD kernel, nothing to keep: the plain walk does */
-#endif
-WNOINL void WFN(isect_other_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit);
-WNOINL int WFN(occl_traced_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q);
-WNOINL int WFN(occl_simd_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q);
-WNOINL int WFN(occl_other_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q);
-
-/* lazy = 1: the copy for lazy trees (bvh_wide.c, "lazy builds"), where a
- * child may be an unbuilt subtree (WIDE_LAZY_BIT); every other copy has
- * lazy = 0 and no trace of that code. */
-WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit, const int anyhit,
-                    const int traced, const int simd_tri, const int keep_uv, const int lazy)
+/* The node child `ref` names.  An eager tree: nodes[ref].  A lazy tree
+ * (WIDE_WALK_LAZY; bvh_wide_internal.h, wide_lazy) also has unbuilt
+ * children, whose place the root of their part takes — built now if no
+ * ray reached it before (lazy.c), the void node (every slot empty) if its
+ * memory could not be had — and the children of a part, marked
+ * WIDE_PART_BIT, read from *part: the part entered last, for a part is
+ * done before anything deferred before it is popped, so every marked
+ * child on the stack is its own.  That is all a lazy walk does otherwise
+ * than the eager one. */
+WINL const float *WFN(fetch_node_)(const wide_bvh *w, const float *nodes, const wide_bvh **part, uint32_t ref,
+                                   const sidx_query *q, const int kind)
 {
+    if (kind & WIDE_WALK_LAZY) {
+        if (ref & WIDE_LAZY_BIT) { /* first: a part's number may have bit 29 set */
+            const wide_bvh *p = sidx__lazy_get(&w->lazy->life, ref & ~WIDE_LAZY_BIT,
+                                               (kind & WIDE_WALK_TRACED) ? q->hook : NULL);
+            if (!p) return sidx__wide_void_node[WALK_W == 8]; /* the query reports it (lazy.c) */
+            *part = p;
+            return p->nodes;
+        }
+        if (ref & WIDE_PART_BIT) return (*part)->nodes + (size_t)(ref & ~WIDE_PART_BIT) * (8u * WALK_W);
+    }
+    return nodes + (size_t)ref * (8u * WALK_W);
+}
+
+/* The first triangle block of leaf child `ref`, the same way. */
+WINL const wide_tri4 *WFN(fetch_leaf_)(const wide_bvh *w, const wide_bvh *part, uint32_t ref, const int kind)
+{
+    if ((kind & WIDE_WALK_LAZY) && (ref & WIDE_PART_BIT)) return part->blocks + (ref & ~(WIDE_LEAF_BIT | WIDE_PART_BIT));
+    return w->blocks + (ref & ~WIDE_LEAF_BIT);
+}
+
+/* Insertion sort of stack[base, len), farthest at the bottom; stable, so
+ * equal entries keep slot order and the lower slot is visited first (the
+ * order the untraced closest-hit copies get from rank_).  The traced copy
+ * moves each entry's exit t, depth and event id with it. */
+WINL void WFN(sort_)(uint32_t *stack, float *stack_t_near, float *stack_t_far, uint32_t *stack_depth,
+                     uint32_t *stack_id, uint32_t base, uint32_t len, const int traced)
+{
+    for (uint32_t i = base + 1; i < len; ++i) {
+        const uint32_t moved = stack[i];
+        const float moved_t_near = stack_t_near[i];
+        float moved_t_far = 0.0f;
+        uint32_t moved_depth = 0, moved_id = 0;
+        if (traced) {
+            moved_t_far = stack_t_far[i];
+            moved_depth = stack_depth[i];
+            moved_id = stack_id[i];
+        }
+        uint32_t j = i;
+        while (j > base && stack_t_near[j - 1] <= moved_t_near) {
+            stack[j] = stack[j - 1];
+            stack_t_near[j] = stack_t_near[j - 1];
+            if (traced) {
+                stack_t_far[j] = stack_t_far[j - 1];
+                stack_depth[j] = stack_depth[j - 1];
+                stack_id[j] = stack_id[j - 1];
+            }
+            --j;
+        }
+        stack[j] = moved;
+        stack_t_near[j] = moved_t_near;
+        if (traced) {
+            stack_t_far[j] = moved_t_far;
+            stack_depth[j] = moved_depth;
+            stack_id[j] = moved_id;
+        }
+    }
+}
+
+/* The traced copy's BOX_TEST event per used slot of a node. */
+WINL void WFN(emit_boxes_)(const sidx_accel *a, const sidx_query *q, const float *node, unsigned hits,
+                           const float *t_near, const float *t_far, uint32_t depth)
+{
+    const uint32_t *child = wide_child(node, WALK_W), *ids = wide_id(node, WALK_W);
+    for (uint32_t slot = 0; slot < WALK_W; ++slot) {
+        if (child[slot] == WIDE_EMPTY) continue;
+        const int res = (int)((hits >> slot) & 1u);
+        SIDX_EMIT(1, q->hook, SIDX_EV_BOX_TEST, e_.ray_id = q->ray_id; e_.node = ids[slot]; e_.depth = depth + 1;
+                  e_.bounds = wide_slot_box(node, WALK_W, slot); e_.result = res;
+                  e_.t_near = res ? t_near[slot] : NAN; e_.t_far = res ? t_far[slot] : NAN);
+    }
+}
+
+/* ---- the walk ------------------------------------------------------------------ */
+
+/* The deck's "traverse one ray, but intersect with many BVs (needs wide
+ * BVH!)" (000, parallel and SIMD tracing) on the loop of the binary stack
+ * walk (bvh_traverse.c, the ordered hit() of "Better BVH Traversal", 001),
+ * as Wald, Benthin, Boulos 2008 and Embree run it; steps 1–4 are the ones
+ * listed at the top of this file.  kind: what this copy is
+ * (WIDE_WALK_*, a constant in each copy below, so every test of it is
+ * resolved at compile time and no copy carries another's code). */
+WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit, const int kind)
+{
+    const int anyhit = (kind & WIDE_WALK_ANYHIT) != 0, traced = (kind & WIDE_WALK_TRACED) != 0;
+    const int simd_tri = (kind & WIDE_WALK_SIMD_TRI) != 0, keep_uv = (kind & WIDE_WALK_KEEP_UV) != 0;
     const wide_bvh *w = a->impl;
     const float *nodes = w->nodes;
+    const wide_bvh *part = NULL; /* lazy trees: the part entered last (fetch_node_) */
     float best = anyhit ? r->tmax : hit->t;
     uint32_t prim = SIDX_NO_HIT, visited = 0;
     const wide_tri4 *hit_block = NULL;
@@ -255,7 +336,6 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
     const float scale = a->opt.box == SIDX_BOX_ROBUST ? SIDX_ROBUST_TFAR_SCALE : 1.0f;
     WFN(ray_consts_init_)(&consts, r, scale);
     int tri_ready = 0;
-    (void)tri_ready;
     float best_s = best * scale; /* the widened bound boxes are clipped to (see bvh_slab) */
 
     /* Deferred children and their entry distances; exit distance, depth
@@ -269,66 +349,24 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
     uint32_t stack_len = 0, cur = 0, cur_id = 0, depth = 0;
     float cur_t_near = r->tmin, cur_t_far = best;
     int root_hit = 0;
-    sidx_hit sub_hit; /* lazy: the best hit when a subtree's walk found it (hit_block is NULL then) */
-    (void)sub_hit;
-    (void)cur_t_near;
-    (void)cur_t_far;
-    (void)cur_id;
     for (;;) {
         ++visited;
         SIDX_EMIT(traced, q->hook, SIDX_EV_NODE_ENTER, e_.ray_id = q->ray_id; e_.node = cur_id; e_.depth = depth;
                   e_.t_near = cur_t_near; e_.t_far = cur_t_far);
-        if (lazy && SIDX_UNLIKELY((cur & (WIDE_LEAF_BIT | WIDE_LAZY_BIT)) == WIDE_LAZY_BIT)) {
-            /* A subtree built the first time a ray reaches it, a wide
-             * tree of its own: walked with the walk of the same kind, as
-             * the eager walk would walk it (its nodes go on top of the
-             * stack and are done before anything below them is popped). */
-            const sidx_accel *sa = wide_lazy_enter(a, w, cur & ~WIDE_LAZY_BIT, traced ? q->hook : NULL);
-            if (sa && anyhit) {
-                const int o = traced     ? WFN(occl_traced_)(sa, r, q)
-                              : simd_tri ? WFN(occl_simd_)(sa, r, q)
-                                         : WFN(occl_other_)(sa, r, q);
-                if (o) {
-                    SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id;
-                              e_.reason = SIDX_TERM_ANY_HIT; e_.count = visited);
-                    return 1;
-                }
-            } else if (sa) {
-                sidx_hit sh = *hit;
-                sh.t = best;
-                if (traced) WFN(isect_traced_)(sa, r, q, &sh);
-                else if (simd_tri && keep_uv) WFN(isect_simd_uv_)(sa, r, q, &sh);
-                else if (simd_tri) WFN(isect_simd_)(sa, r, q, &sh);
-                else WFN(isect_other_)(sa, r, q, &sh);
-                if (sh.t < best) {
-                    best = sh.t;
-                    prim = sh.prim;
-                    hit_block = NULL;
-                    sub_hit = sh;
-                    best_s = best * scale;
-                }
-            }
-        } else if (!(cur & WIDE_LEAF_BIT)) {
-            const float *node = nodes + (size_t)cur * (8u * WALK_W);
+        if (!(cur & WIDE_LEAF_BIT)) {
+            /* 1. an inner node: slab-test its W children's boxes at once */
+            const float *node = WFN(fetch_node_)(w, nodes, &part, cur, q, kind);
             const uint32_t *child = wide_child(node, WALK_W);
             unsigned hits = WFN(boxes_)(node, &consts, best_s, t_near, t_far, traced);
-            if (traced) {
-                const uint32_t *ids = wide_id(node, WALK_W);
-                for (uint32_t slot = 0; slot < WALK_W; ++slot) {
-                    if (child[slot] == WIDE_EMPTY) continue;
-                    const int res = (int)((hits >> slot) & 1u);
-                    SIDX_EMIT(traced, q->hook, SIDX_EV_BOX_TEST, e_.ray_id = q->ray_id; e_.node = ids[slot];
-                              e_.depth = depth + 1; e_.bounds = wide_slot_box(node, WALK_W, slot); e_.result = res;
-                              e_.t_near = res ? t_near[slot] : NAN; e_.t_far = res ? t_far[slot] : NAN);
-                }
-            }
+            if (traced) WFN(emit_boxes_)(a, q, node, hits, t_near, t_far, depth);
             if (visited == 1) root_hit = hits != 0;
+            /* 2. descend into the nearest hit child, the others wait, nearest on top */
             if (hits) {
                 const unsigned slot0 = (unsigned)__builtin_ctz(hits);
                 hits &= hits - 1;
                 if (!hits) { /* one child: descend, no stack */
                     cur = child[slot0];
-                    if (!traced && WIDE_PREFETCH) WFN(prefetch_)(w, nodes, cur);
+                    if (!traced && WIDE_PREFETCH) WFN(prefetch_)(w, nodes, part, cur, kind);
                     if (traced) {
                         cur_t_near = t_near[slot0];
                         cur_t_far = t_far[slot0];
@@ -343,8 +381,8 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
                     const unsigned slot1 = (unsigned)__builtin_ctz(hits);
                     const float enter0 = t_near[slot0], enter1 = t_near[slot1];
                     if (WIDE_PREFETCH) {
-                        WFN(prefetch_)(w, nodes, child[slot0]);
-                        WFN(prefetch_)(w, nodes, child[slot1]);
+                        WFN(prefetch_)(w, nodes, part, child[slot0], kind);
+                        WFN(prefetch_)(w, nodes, part, child[slot1], kind);
                     }
                     const int first0 = anyhit || enter0 <= enter1;
                     stack[stack_len] = first0 ? child[slot1] : child[slot0];
@@ -374,7 +412,7 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
                         const uint32_t at = top - WFN(rank_)(t_near, slot, hit_mask);
                         stack[at] = child[slot];
                         stack_t_near[at] = t_near[slot];
-                        if (WIDE_PREFETCH) WFN(prefetch_)(w, nodes, child[slot]);
+                        if (WIDE_PREFETCH) WFN(prefetch_)(w, nodes, part, child[slot], kind);
                     } while (pending);
                     stack_len = top; /* the nearest is visited now, the rest wait */
                     cur = stack[top];
@@ -386,7 +424,7 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
                 unsigned slot = slot0;
                 for (;;) {
                     stack[stack_len] = child[slot];
-                    if (!traced && WIDE_PREFETCH) WFN(prefetch_)(w, nodes, child[slot]);
+                    if (!traced && WIDE_PREFETCH) WFN(prefetch_)(w, nodes, part, child[slot], kind);
                     stack_t_near[stack_len] = t_near[slot];
                     if (traced) {
                         stack_t_far[stack_len] = t_far[slot];
@@ -398,40 +436,7 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
                     slot = (unsigned)__builtin_ctz(hits);
                     hits &= hits - 1;
                 }
-                if (!anyhit) {
-                    /* Insertion sort, farthest at the bottom; stable, so
-                     * equal entries keep slot order and the lower slot
-                     * is visited first. */
-                    for (uint32_t i = base + 1; i < stack_len; ++i) {
-                        const uint32_t moved = stack[i];
-                        const float moved_t_near = stack_t_near[i];
-                        float moved_t_far = 0.0f;
-                        uint32_t moved_depth = 0, moved_id = 0;
-                        if (traced) {
-                            moved_t_far = stack_t_far[i];
-                            moved_depth = stack_depth[i];
-                            moved_id = stack_id[i];
-                        }
-                        uint32_t j = i;
-                        while (j > base && stack_t_near[j - 1] <= moved_t_near) {
-                            stack[j] = stack[j - 1];
-                            stack_t_near[j] = stack_t_near[j - 1];
-                            if (traced) {
-                                stack_t_far[j] = stack_t_far[j - 1];
-                                stack_depth[j] = stack_depth[j - 1];
-                                stack_id[j] = stack_id[j - 1];
-                            }
-                            --j;
-                        }
-                        stack[j] = moved;
-                        stack_t_near[j] = moved_t_near;
-                        if (traced) {
-                            stack_t_far[j] = moved_t_far;
-                            stack_depth[j] = moved_depth;
-                            stack_id[j] = moved_id;
-                        }
-                    }
-                }
+                if (!anyhit) WFN(sort_)(stack, stack_t_near, stack_t_far, stack_depth, stack_id, base, stack_len, traced);
                 --stack_len; /* the nearest is visited now, the rest wait */
                 for (uint32_t i = base; traced && i < stack_len; ++i)
                     SIDX_EMIT(traced, q->hook, SIDX_EV_STACK_PUSH, e_.ray_id = q->ray_id; e_.node = stack_id[i];
@@ -446,11 +451,12 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
                 continue;
             }
         } else {
+            /* 3. a leaf: its blocks of four triangles */
             if (!tri_ready) { /* the triangle constants, at the first leaf: a ray that reaches none needs none */
                 WFN(tri_consts_init_)(&consts, r);
                 tri_ready = 1;
             }
-            if (WFN(leaf_)(a, w, cur & ~WIDE_LEAF_BIT, r, &consts, q, cur_id, &best, &prim, &hit_block, &hit_lane,
+            if (WFN(leaf_)(a, WFN(fetch_leaf_)(w, part, cur, kind), r, &consts, q, cur_id, &best, &prim, &hit_block, &hit_lane,
                            hit_vw_det, anyhit, traced, simd_tri)) {
                 SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id; e_.reason = SIDX_TERM_ANY_HIT;
                           e_.count = visited);
@@ -458,15 +464,13 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
             }
             best_s = best * scale; /* best only changes in a leaf */
         }
-        /* Pop the next deferred child that can still hold a closer hit. */
+        /* 4. pop the next deferred child whose entry is still before the best hit */
         for (;;) {
             if (stack_len == 0) {
                 SIDX_EMIT(traced, q->hook, SIDX_EV_TERMINATE, e_.ray_id = q->ray_id;
                           e_.reason = root_hit ? SIDX_TERM_STACK_EMPTY : SIDX_TERM_MISS_ROOT; e_.t = best;
                           e_.count = visited);
-                if (lazy && !anyhit && prim != SIDX_NO_HIT && !hit_block) {
-                    *hit = sub_hit; /* t, prim, u, v, ng from the subtree's walk */
-                } else if (!anyhit && prim != SIDX_NO_HIT) {
+                if (!anyhit && prim != SIDX_NO_HIT) {
                     hit->t = best;
                     hit->prim = prim;
                     if (q && (q->flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL)))
@@ -494,71 +498,44 @@ WINL int WFN(walk_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
 /* Each instantiation is its own (not inlined) function, so the untraced
  * walks get the same code, registers and stack frame whether or not the
  * library is built with hooks: the hooks then cost one test per ray here
- * (the traced copy is much larger and would otherwise share a frame). */
-WNOINL void WFN(isect_traced_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
-{
-    WFN(walk_)(a, r, q, hit, 0, 1, 0, 0, 0);
-}
-WNOINL void WFN(isect_simd_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
-{
-    WFN(walk_)(a, r, q, hit, 0, 0, 1, 0, 0);
-}
+ * (the traced copy is much larger and would otherwise share a frame).
+ * The copies for lazy trees are the same walks with WIDE_WALK_LAZY. */
+#define WNOINL static __attribute__((noinline)) WALK_TARGET
+#define WALK_ISECT(name_, kind_)                                                                                   \
+    WNOINL void WFN(name_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)           \
+    {                                                                                                             \
+        WFN(walk_)(a, r, q, hit, kind_);                                                                          \
+    }
+#define WALK_OCCL(name_, kind_)                                                                                    \
+    WNOINL int WFN(name_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)                           \
+    {                                                                                                             \
+        return WFN(walk_)(a, r, q, NULL, WIDE_WALK_ANYHIT | (kind_));                                             \
+    }
+WALK_ISECT(isect_traced_, WIDE_WALK_TRACED)
+WALK_ISECT(isect_simd_, WIDE_WALK_SIMD_TRI)
 #if WALK_TRI4
-WNOINL void WFN(isect_simd_uv_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
-{
-    WFN(walk_)(a, r, q, hit, 0, 0, 1, 1, 0);
-}
+WALK_ISECT(isect_simd_uv_, WIDE_WALK_SIMD_TRI | WIDE_WALK_KEEP_UV)
+#else
+#define isect_simd_uv_ isect_simd_ /* no SIMD kernel, nothing to keep: the plain walk does */
 #endif
-WNOINL void WFN(isect_other_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
-{
-    WFN(walk_)(a, r, q, hit, 0, 0, 0, 0, 0);
-}
-WNOINL int WFN(occl_traced_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
-{
-    return WFN(walk_)(a, r, q, NULL, 1, 1, 0, 0, 0);
-}
-WNOINL int WFN(occl_simd_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
-{
-    return WFN(walk_)(a, r, q, NULL, 1, 0, 1, 0, 0);
-}
-WNOINL int WFN(occl_other_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
-{
-    return WFN(walk_)(a, r, q, NULL, 1, 0, 0, 0, 0);
-}
+WALK_ISECT(isect_other_, 0)
+WALK_OCCL(occl_traced_, WIDE_WALK_TRACED)
+WALK_OCCL(occl_simd_, WIDE_WALK_SIMD_TRI)
+WALK_OCCL(occl_other_, 0)
 
-/* The copies for lazy trees: the same walks with lazy = 1. */
-WNOINL void WFN(lazy_isect_traced_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
-{
-    WFN(walk_)(a, r, q, hit, 0, 1, 0, 0, 1);
-}
-WNOINL void WFN(lazy_isect_simd_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
-{
-    WFN(walk_)(a, r, q, hit, 0, 0, 1, 0, 1);
-}
+WALK_ISECT(lazy_isect_traced_, WIDE_WALK_LAZY | WIDE_WALK_TRACED)
+WALK_ISECT(lazy_isect_simd_, WIDE_WALK_LAZY | WIDE_WALK_SIMD_TRI)
 #if WALK_TRI4
-WNOINL void WFN(lazy_isect_simd_uv_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
-{
-    WFN(walk_)(a, r, q, hit, 0, 0, 1, 1, 1);
-}
+WALK_ISECT(lazy_isect_simd_uv_, WIDE_WALK_LAZY | WIDE_WALK_SIMD_TRI | WIDE_WALK_KEEP_UV)
 #else
 #define lazy_isect_simd_uv_ lazy_isect_simd_
 #endif
-WNOINL void WFN(lazy_isect_other_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
-{
-    WFN(walk_)(a, r, q, hit, 0, 0, 0, 0, 1);
-}
-WNOINL int WFN(lazy_occl_traced_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
-{
-    return WFN(walk_)(a, r, q, NULL, 1, 1, 0, 0, 1);
-}
-WNOINL int WFN(lazy_occl_simd_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
-{
-    return WFN(walk_)(a, r, q, NULL, 1, 0, 1, 0, 1);
-}
-WNOINL int WFN(lazy_occl_other_)(const sidx_accel *a, const sidx_ray *r, const sidx_query *q)
-{
-    return WFN(walk_)(a, r, q, NULL, 1, 0, 0, 0, 1);
-}
+WALK_ISECT(lazy_isect_other_, WIDE_WALK_LAZY)
+WALK_OCCL(lazy_occl_traced_, WIDE_WALK_LAZY | WIDE_WALK_TRACED)
+WALK_OCCL(lazy_occl_simd_, WIDE_WALK_LAZY | WIDE_WALK_SIMD_TRI)
+WALK_OCCL(lazy_occl_other_, WIDE_WALK_LAZY)
+#undef WALK_ISECT
+#undef WALK_OCCL
 #undef WNOINL
 
 /* bvh_wide.c picks the untraced pair for the structure's triangle test
@@ -578,14 +555,15 @@ const wide_kernels WFN(sidx__wide_kernels_) = {
  * called from the loop, its registers allocated for it alone as in the
  * single-ray copies: inlined into the loop it measured no faster
  * (docs/performance.md, "The stream entry"). */
+#define WSTREAM_KIND(simd_tri_, keep_uv_) (((simd_tri_) ? WIDE_WALK_SIMD_TRI : 0) | ((keep_uv_) ? WIDE_WALK_KEEP_UV : 0))
 #define WSTREAM(name_, anyhit_, simd_tri_, keep_uv_)                                                           \
     static __attribute__((noinline)) WALK_TARGET int WFN(one_##name_)(const sidx_accel *a, const sidx_ray *r,  \
                                                                       const sidx_query *q, sidx_hit *hit)      \
     {                                                                                                           \
-        if (anyhit_) return WFN(walk_)(a, r, q, NULL, 1, 0, simd_tri_, 0, 0);                                   \
+        if (anyhit_) return WFN(walk_)(a, r, q, NULL, WIDE_WALK_ANYHIT | WSTREAM_KIND(simd_tri_, 0));        \
         *hit = sidx_hit_none(); /* as sidx_accel_intersect hands it to the walk, and finishes it */             \
         hit->t = r->tmax;                                                                                       \
-        (void)WFN(walk_)(a, r, q, hit, 0, 0, simd_tri_, keep_uv_, 0);                                           \
+        (void)WFN(walk_)(a, r, q, hit, WSTREAM_KIND(simd_tri_, keep_uv_));                                     \
         sidx__finish_hit(a, r, q, hit);                                                                         \
         return 0;                                                                                               \
     }                                                                                                           \
@@ -606,6 +584,7 @@ WSTREAM(stream_isect_other_, 0, 0, 0)
 WSTREAM(stream_occl_simd_, 1, 1, 0)
 WSTREAM(stream_occl_other_, 1, 0, 0)
 #undef WSTREAM
+#undef WSTREAM_KIND
 const wide_stream_kernels WFN(sidx__wide_stream_) = {WFN(stream_isect_simd_), WFN(stream_isect_simd_uv_),
                                                      WFN(stream_isect_other_), WFN(stream_occl_simd_),
                                                      WFN(stream_occl_other_)};

@@ -30,11 +30,10 @@
  *
  * A walk reaches a part through sidx__lazy_get: one acquire load and a
  * branch when the part is built, the claim / wait / build path in lazy.c
- * (a call) otherwise.  The aggregate's lazy instances (instance.c) use it;
- * the lazy trees (bvh_build.c, kdtree_build.c, bvh_wide.c) still carry
- * their own copies of the same life, written before this module, and can
- * move onto it by keeping one sidx__lazy_part per unbuilt node (lib/README.md,
- * docs/architecture.md "Lazy builds"). */
+ * (a call) otherwise.  Every lazy structure lives on it: the aggregate's
+ * instances (instance.c) and the trees (bvh_build.c, bvh_wide.c,
+ * kdtree_build.c), one sidx__lazy_part per unbuilt node, reached by their
+ * walks' node fetch (docs/architecture.md "Lazy builds"). */
 #ifndef SIDX_LAZY_H
 #define SIDX_LAZY_H
 

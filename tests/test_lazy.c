@@ -733,7 +733,7 @@ static void threads_race_into_the_same_node(void **state)
     sidx_hit *want = malloc(rs.n * sizeof *want), *got = malloc(RACERS * rs.n * sizeof *got);
     assert_true(want && got);
     const int rounds = tk_fast_tests() ? 3 : 10;
-    static const char *const racers[] = {"bvh", "bvh-sweep", "bvh8", "kdtree"};
+    static const char *const racers[] = {"bvh", "bvh-sweep", "bvh4", "bvh8", "kdtree"};
     for (size_t a = 0; a < sizeof racers / sizeof racers[0]; ++a) {
         sidx_accel *eager = build(racers[a], &m, 0, NULL, NULL);
         assert_int_equal(sidx_accel_intersect_n(eager, rs.rays, rs.n, NULL, want), SIDX_OK);
