@@ -144,7 +144,12 @@ sidx_status sidx_accel_build(const char *name, const sidx_mesh *mesh, const sidx
  * why through a NOTE event on opt->hook; same contract as sidx_accel_build. */
 sidx_status sidx_accel_auto(const sidx_mesh *mesh, const sidx_build_options *opt, sidx_accel **out, sidx_error *err);
 
-/* Closest hit in [ray.tmin, ray.tmax).  q may be NULL.  *hit is always
+/* Closest hit in [ray.tmin, ray.tmax).  q may be NULL.  The ray must come
+ * from sidx_ray_init or sidx_ray_spawn(_to), which refuse bad rays and fill
+ * the fields the walks read (1/d, signs, shear): its fields are the
+ * library's, read-only to the caller.  A ray filled in by hand (an all-zero
+ * struct, 1/d that is not the reciprocal of d) is not checked per query —
+ * that would cost every ray — and its answer is undefined.  *hit is always
  * written (sidx_hit_none() on a miss).  Fails on NULL arguments, and on a
  * lazy build (opt.lazy) with SIDX_ERR_NOMEM when the subtree the ray
  * enters cannot be built for want of memory: the hit is then not to be
