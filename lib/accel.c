@@ -3,6 +3,8 @@
  * by sidx__hit_finish, hit.c), statistics and "auto". */
 #include <stdio.h>
 #include "sidx_internal.h"
+#include "hit.h"
+#include "lazy.h"
 
 #define SIDX_STRUCTURE_NAME "accel"
 
@@ -181,23 +183,20 @@ static SIDX_NOINLINE void intersect_traced(const sidx_accel *a, const sidx_ray *
               e_.t = hit->t; e_.result = hit->prim != SIDX_NO_HIT);
 }
 
-/* Set by a failed lazy expansion on this thread during the current query. */
-static _Thread_local unsigned char lazy_failed;
-void sidx__lazy_note_failure(void) { lazy_failed = 1; }
 
 /* A query on a lazy tree: the walk may expand nodes, and an expansion
  * without memory makes the query fail (sidx_internal.h). */
 static SIDX_NOINLINE sidx_status intersect_lazy(const sidx_accel *a, const sidx_ray *r, const sidx_query *q,
                                                 sidx_hit *hit)
 {
-    lazy_failed = 0;
+    sidx__lazy_failed = 0;
     if (SIDX_QUERY_TRACED(q)) {
         intersect_traced(a, r, q, hit);
     } else {
         a->vt->intersect(a, r, q, hit);
         sidx__finish_hit(a, r, q, hit);
     }
-    return lazy_failed ? SIDX_ERR_NOMEM : SIDX_OK;
+    return sidx__lazy_failed ? SIDX_ERR_NOMEM : SIDX_OK;
 }
 
 sidx_status sidx_accel_intersect(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
@@ -223,11 +222,11 @@ sidx_status sidx_accel_occluded(const sidx_accel *a, const sidx_ray *r, const si
     const int traced = SIDX_QUERY_TRACED(q);
     SIDX_EMIT(traced, q->hook, SIDX_EV_RAY_BEGIN, e_.structure = a->name; e_.ray_id = q->ray_id;
               e_.t_near = r->tmin; e_.t_far = r->tmax);
-    if (a->lazy) lazy_failed = 0;
+    if (a->lazy) sidx__lazy_failed = 0;
     *occluded = a->vt->occluded(a, r, q) ? 1 : 0;
     SIDX_EMIT(traced, q->hook, SIDX_EV_RAY_END, e_.structure = a->name; e_.ray_id = q->ray_id;
               e_.result = *occluded);
-    return a->lazy && lazy_failed ? SIDX_ERR_NOMEM : SIDX_OK;
+    return a->lazy && sidx__lazy_failed ? SIDX_ERR_NOMEM : SIDX_OK;
 }
 
 /* A buffer of rays: the stream walk where the structure has one

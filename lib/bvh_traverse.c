@@ -33,6 +33,7 @@
  * themselves hold no trace of laziness and the eager copies compile as if
  * it did not exist. */
 #include "bvh_internal.h"
+#include "hit.h"
 
 #define SIDX_STRUCTURE_NAME (a->name)
 

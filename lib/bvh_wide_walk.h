@@ -70,6 +70,8 @@
 #ifndef WIDE_PREFETCH
 #define WIDE_PREFETCH 1
 #endif
+#include "hit.h"
+
 #define WINL static inline __attribute__((always_inline)) WALK_TARGET
 
 /* ---- the kernels of this instruction set ---------------------------------- */

@@ -5,6 +5,7 @@
  * packet walks (packet.c, packet_wide.c) and the aggregate (instance.c).
  * Nothing here runs inside a traversal. */
 #include "sidx_internal.h"
+#include "hit.h"
 
 /* The closest hit's t recomputed on the triangle's plane in double,
  * t = n·(p0 − o) / n·d with n = (p1 − p0) × (p2 − p0): from float inputs

@@ -21,6 +21,7 @@
  * that instance's own, lazy or eager alike: the two walks are one. */
 #include <stdio.h>
 #include "sidx_internal.h"
+#include "hit.h"
 #include "boxtree.h"
 #include "lazy.h"
 #include "sidx/instance.h"

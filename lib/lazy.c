@@ -2,6 +2,8 @@
  * built part (lazy.h). */
 #include <sched.h>
 #include "lazy.h"
+
+_Thread_local unsigned char sidx__lazy_failed;
 #include "simd_isa.h"
 
 void sidx__lazy_init(sidx__lazy *L, sidx__lazy_part *parts, uint32_t n, sidx__lazy_expand_fn expand, void *owner)
@@ -65,7 +67,7 @@ void *sidx__lazy_claim(sidx__lazy *L, uint32_t index, const sidx_hook *hook)
             if (!part) {
                 /* failure: nothing was kept; unbuilt again for a later query */
                 __atomic_store_n(&p->state, SIDX__LAZY_UNBUILT, __ATOMIC_RELEASE);
-                sidx__lazy_note_failure();
+                sidx__lazy_failed = 1;
                 return NULL;
             }
             count_built(L, &made);

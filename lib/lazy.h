@@ -23,7 +23,7 @@
  *   failure  the expand function returns NULL having kept nothing (it frees
  *            what it had); the part goes back to unbuilt, so a later query
  *            may try again, and the query running on this thread is marked
- *            (sidx__lazy_note_failure, accel.c): it returns SIDX_ERR_NOMEM;
+ *            (sidx__lazy_failed below): it returns SIDX_ERR_NOMEM;
  *   counters parts built / unbuilt and the primitive references they hold,
  *            bytes built and the deepest part, for the stats: relaxed
  *            atomics, exact once the queries are over.
@@ -105,6 +105,12 @@ static SIDX_INLINE void *sidx__lazy_get(sidx__lazy *L, uint32_t index, const sid
 /* Part `index` if it is built, else NULL, without building it (stats,
  * destroy, read-only views). */
 void *sidx__lazy_peek(const sidx__lazy *L, uint32_t index);
+
+/* Set on this thread when an expansion could not get its memory.  The
+ * query running on it (sidx_accel_intersect, _occluded, accel.c) clears
+ * the mark before the walk and returns SIDX_ERR_NOMEM when it is set
+ * after: a per-thread mark, because the walks return no status. */
+extern _Thread_local unsigned char sidx__lazy_failed;
 
 /* The counters as they stand (relaxed loads). */
 sidx__lazy_counts sidx__lazy_counts_get(const sidx__lazy *L);

@@ -19,6 +19,7 @@
  * hits exactly 0 in some lane redoes that lane with the scalar test (which
  * recomputes it in double). */
 #include "bvh_internal.h"
+#include "hit.h"
 #include "bvh_wide_internal.h"
 #include "packet_internal.h"
 #include "simd_isa.h"

@@ -68,6 +68,7 @@
  * (the reference) and simd_packet_wide_avx2.h. */
 #include "bvh_wide_internal.h"
 #include "packet_internal.h"
+#include "hit.h"
 #include "simd_isa.h"
 #if defined(SIDX_SIMD_X86) && defined(SIDX_SIMD_SSE2)
 #define PW_X86 1 /* SSE2 (the set-up, the triangle blocks) always; AVX2 chosen at run time */

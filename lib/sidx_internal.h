@@ -84,7 +84,7 @@ struct sidx_accel {
      * below do not make the structure bigger. */
     unsigned char fills_uv, fills_ng;
     /* 1 for a lazy tree (opt.lazy in effect): the queries then say whether
-     * an expansion failed (sidx__lazy_note_failure). */
+     * an expansion failed (sidx__lazy_failed, lazy.h). */
     unsigned char lazy;
     const sidx_mesh *mesh;
     sidx_build_options opt;    /* copy; opt.hook is only valid during build */
@@ -103,11 +103,6 @@ typedef sidx_status (*sidx__build_fn)(sidx_accel *a, void *arg, sidx_error *err)
 sidx_status sidx__accel_build_with(const char *name, const sidx_accel_vtable *vt, int variant, const sidx_mesh *mesh,
                                    const sidx_build_options *opt, sidx__build_fn build, void *arg, sidx_accel **out,
                                    sidx_error *err);
-/* Lazy trees: an expansion on this thread could not get its memory.  The
- * query running on it (sidx_accel_intersect, _occluded) clears the mark
- * before the walk and returns SIDX_ERR_NOMEM when it is set after (a
- * per-thread mark, because the walks return no status). */
-void sidx__lazy_note_failure(void);
 
 /* bvh_stream.c: n rays through a bvh-family tree, bvh4 or bvh8 with the
  * stream walk, closest hit into hits[] or, with hits NULL, any hit into
@@ -387,48 +382,6 @@ static SIDX_INLINE sidx_vec3 sidx__tri_normal(sidx_vec3 p0, sidx_vec3 p1, sidx_v
  * triangle's plane (the point of SIDX_QUERY_POINT is made from u, v, not
  * t, and does not need it). */
 #define SIDX__QUERY_REFINE_T SIDX_QUERY_PRECISE_T
-/* hit.c: finishes a closest hit on triangle hit->prim of m, found by a
- * walk that set hit->t and hit->prim, as the query's flags ask:
- * SIDX__QUERY_REFINE_T refines t on the triangle's plane; SIDX_QUERY_UV
- * and SIDX_QUERY_NORMAL recompute u, v (by test method tri on ray r) and
- * the geometric normal from the mesh, except what `own` (the same bits)
- * says the walk set already; SIDX_QUERY_POINT sets hit->p and hit->p_err
- * (and u, v, ng unless `own` and the flags both name them).  The one
- * finish every query path calls once per hit ray: sidx_accel_intersect,
- * the packet walks, the aggregate (on its local ray).  Never called on a
- * miss. */
-void sidx__hit_finish(const sidx_mesh *m, sidx_tri_method tri, const sidx_ray *r, uint32_t flags, uint32_t own,
-                      sidx_hit *hit);
-
-/* The final hit of a closest-hit query finished once, after the walk
- * (accel.c, and the stream entry, bvh_stream.c): t refined, u, v, the
- * geometric normal and the point, as the query asks (sidx__hit_finish,
- * hit.c).  The hot loop never pays for them ("no u/v or normals unless
- * asked").  A structure that keeps u, v or ng from its own traversal
- * (a->fills_uv, a->fills_ng) has set them already. */
-static SIDX_INLINE void sidx__finish_hit(const sidx_accel *a, const sidx_ray *r, const sidx_query *q, sidx_hit *hit)
-{
-    if (hit->prim == SIDX_NO_HIT) {
-        /* The query set *hit = sidx_hit_none() with t = tmax, and a walk
-         * writes only t and prim when it accepts a hit, and u, v, ng for its
-         * final one: on a miss only t differs from sidx_hit_none(). */
-        hit->t = INFINITY;
-        return;
-    }
-    /* Aggregates (instance.c) set the instance and finish their hit in
-     * world space themselves: their a->mesh is not where the hit lies, so
-     * an instanced hit gets no point. */
-    if (hit->instance != SIDX_NO_HIT) return;
-    /* On request only: the mesh read misses the cache on incoherent rays
-     * (docs/performance.md, "Precision of the closest hit's t"). */
-    const uint32_t own = (a->fills_uv ? SIDX_QUERY_UV : 0u) | (a->fills_ng ? SIDX_QUERY_NORMAL : 0u);
-    /* a call only when there is something to do: a query asking for u, v
-     * from a structure that filled them (bvh, bvh8, kdtree) makes none */
-    if (!(q->flags & (SIDX__QUERY_REFINE_T | SIDX_QUERY_POINT)) &&
-        !(q->flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL) & ~own))
-        return;
-    sidx__hit_finish(a->mesh, a->opt.tri, r, q->flags, own, hit);
-}
 
 /* Triangle `tri` of mesh m, tested with method m (t only). */
 static SIDX_INLINE int sidx__mesh_tri_test(const sidx_mesh *mesh, sidx_tri_method m, uint32_t tri,
