@@ -42,7 +42,9 @@
 //   - a long build in a worker (rayclass twice over a 20,480-triangle
 //     icosphere): keys answered meanwhile, a progress bar, cancel
 //     keeps the view before; a build the worker finishes (kdtree-median over
-//     the teapot): its walks, a new ray and its build mode as sidx-step's;
+//     the teapot): its walks and a new ray as sidx-step's, l on its first
+//     leaf, its build mode's limit stated; with max_depth 10 the build
+//     mode's events from the worker as sidx-step --build's;
 //   - the stack's t-intervals drawn along the ray (the canvas's pixels);
 //     l / L and t / T in 2D, 3D and the build mode;
 //   - every lesson preset against sidx-step, PageDown and PageUp;
@@ -872,17 +874,17 @@ async function main() {
             s = await until(p, 'the build mode', (x) => x.mode === 'build');
             const info = await p.eval(`document.getElementById('info').textContent`);
             if (s.count !== 0 || !/build has \d+ events: the build mode replays at most \d+/.test(info)) return `the build mode of ${build.length} events: ${s.count} steps, '${info}'`;
-            // rayclass over the teapot (6134 build events), also built in the worker: its build mode has sidx-step's events
-            const rc = native(['--accel', 'rayclass', 'teapot', '--build', '--json']).split('\n').filter((l) => l.includes('"build_')).length;
-            await p.eval(`sidxLab.openLink('#scene=teapot&accel=rayclass&mode=build'), 0`);
-            s = await until(p, 'rayclass\'s build mode with the worker\'s events', (x) => !x.job && x.accel === 'rayclass' && x.count > 0, 60000);
-            if (!s.remote || s.count !== rc) return `rayclass: remote ${s.remote}, the build mode has ${s.count} steps, sidx-step --build ${rc} events`;
+            // with max_depth 10 (5094 build events), also built in the worker: its build mode has sidx-step's events
+            const rc = native(['--accel', 'kdtree-median', 'teapot', '--build', '--json', '--max-depth', '10']).split('\n').filter((l) => l.includes('"build_')).length;
+            await p.eval(`sidxLab.openLink('#scene=teapot&accel=kdtree-median&max_depth=10&mode=build'), 0`);
+            s = await until(p, 'the build mode with the worker\'s events', (x) => !x.job && x.knobs.max_depth === 10 && x.count > 0, 60000);
+            if (!s.remote || s.count !== rc) return `max_depth 10: remote ${s.remote}, the build mode has ${s.count} steps, sidx-step --build ${rc} events`;
             await press(p, 'Home');
             await press(p, 'l');
             s = await until(p, 'l in the build mode', (x) => x.cur > 0);
             if (s.curType !== 'build_leaf') return `l in the build mode lands on ${s.curType} (${s.curLine})`;
             console.log(`        teapot, kdtree-median built in the worker: two rays as sidx-step's; l -> step ${first + 1} (leaf node ${leafNode}); ` +
-                `its build mode states its limit; rayclass's: ${s.count} build steps, l -> ${s.cur}`);
+                `its build mode states its limit; with max_depth 10: ${s.count} build steps, l -> ${s.cur}`);
             await p.eval(`sidxLab.openLink('#scene=kd-slide&accel=kdtree')`);
             return null;
         });
