@@ -5,7 +5,10 @@
 // a 10 ms heartbeat on the page's thread, and how long a key pressed
 // 0.5 s into the work waited (the page's own timings().key).  With
 // "cancel", Esc is pressed 1 s in and the time back to the view before is
-// measured.  The figures go to docs/performance.md, "The web lab".
+// measured.  A case steps:ACCEL opens the OBJ with ACCEL and then times
+// three keys (Home, End, Left) on the walk shown: each key's wait and
+// handling, the walk redrawn.  The figures go to docs/performance.md,
+// "The web lab".
 //
 //   node docs/web_freeze_bench.js PAGE OBJ [CASES] [cancel]
 //     PAGE   build/web/sidx-lab.html
@@ -35,7 +38,7 @@ async function key(p, k, vk) {
     try {
         for (const c of (process.argv[4] || 'obj:kdtree-median,obj:rayclass,obj:bvh,link:icosphere:5:rayclass').split(',')) {
             const [kind, ...rest] = c.split(':');
-            const accel = kind === 'obj' ? rest[0] : null;
+            const accel = kind === 'obj' || kind === 'steps' ? rest[0] : null;
             const p = await b.newPage(null);
             await p.goto(PAGE + '#scene=teapot&accel=bvh&mode=3d');
             await p.eval('sidxLab.ready', 60000);
@@ -65,6 +68,17 @@ async function key(p, k, vk) {
             }
             const wall = Date.now() - t0;
             await sleep(200);
+            if (kind === 'steps') {
+                const keys = [];
+                for (const [k, vk] of [['Home', 36], ['End', 35], ['ArrowLeft', 37]]) {
+                    await key(p, k, vk);
+                    await sleep(500);
+                    keys.push(Math.round(await p.eval('sidxLab.timings().key')));
+                }
+                console.log(`${c}: ${s.events.length} events; Home, End, Left took ${keys.join(', ')} ms`);
+                await p.send('Target.closeTarget', { targetId: p.targetId }).catch(() => null);
+                continue;
+            }
             const gap = await p.eval('window.__gap'), t = await p.eval('sidxLab.timings()');
             const lt = (await p.eval('window.__lt.slice()')).sort((x, y) => y - x).slice(0, 3);
             console.log(`${c}${esc ? ' (Esc at 1 s)' : ''}: ${wall} ms to ${s.scene} with ${s.accel}; the page's thread held at most ` +
