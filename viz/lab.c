@@ -266,6 +266,8 @@ const char *sidx_lab_scene_json(void)
     return done(b);
 }
 
+int sidx_lab_scene_triangles(void) { return lab.has_scene ? (int)lab.mesh.num_triangles : -1; }
+
 const char *sidx_lab_scene_obj(void)
 {
     viz_json *b = answer(OUT_OBJ);

@@ -63,6 +63,11 @@ int sidx_lab_open_obj(const char *bytes, int len, const char *file_name);
  * max xyz],"pos":[x,y,z,...],"idx":[a,b,c,...]}; "null" when none. */
 const char *sidx_lab_scene_json(void);
 
+/* The open scene's triangle count, -1 when none: what the page asks to
+ * decide whether a build over it runs in a Web Worker, before it asks
+ * for the whole mesh. */
+int sidx_lab_scene_triangles(void);
+
 /* The open scene as OBJ text ("v x y z" with 9 significant digits, which
  * read back to the same floats, and "f a b c"), so a program (sidx-step,
  * sidx-view) can open exactly the page's triangles; "" when none. */

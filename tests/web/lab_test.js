@@ -39,6 +39,14 @@
 //     that does not apply or is out of range): a message each, no script error;
 //   - the heat map in a worker: keys answered while a 1024 x 1024 map
 //     counts, coarse to fine, cancel; the worker's map = the page's;
+//   - a long build in a worker (rayclass twice over a 20,480-triangle
+//     icosphere): keys answered meanwhile, a progress bar, cancel
+//     keeps the view before; a build the worker finishes (kdtree-median over
+//     the teapot): its walks and a new ray as sidx-step's, l on its first
+//     leaf, its build mode's limit stated; with max_depth 10 the build
+//     mode's events from the worker as sidx-step --build's;
+//   - the stack's t-intervals drawn along the ray (the canvas's pixels);
+//     l / L and t / T in 2D, 3D and the build mode;
 //   - every lesson preset against sidx-step, PageDown and PageUp;
 //   - random addresses and OBJ files (tests/web/fuzz_gen.js) through the
 //     page: no script error, no stuck stepper.
@@ -192,7 +200,8 @@ async function dragRay(p, fx0, fy0, fx1, fy1) {
 // A key pressed and released as the keyboard sends it (Input.dispatchKeyEvent).
 const KEYCODES = { ArrowLeft: ['ArrowLeft', 37], ArrowRight: ['ArrowRight', 39], Home: ['Home', 36], End: ['End', 35],
                    Escape: ['Escape', 27], p: ['KeyP', 80], '?': ['Slash', 191, 8], PageUp: ['PageUp', 33],
-                   PageDown: ['PageDown', 34] };
+                   PageDown: ['PageDown', 34], l: ['KeyL', 76], L: ['KeyL', 76, 8], t: ['KeyT', 84], '1': ['Digit1', 49],
+                   '2': ['Digit2', 50], '3': ['Digit3', 51] };
 async function press(p, key) {
     const [code, vk, mod] = KEYCODES[key];
     const base = { key, code, windowsVirtualKeyCode: vk, modifiers: mod || 0 };
@@ -796,6 +805,137 @@ async function main() {
             console.log(`        keys answered in ${worst.join(', ')} ms (round trips ${trips.join(', ')} ms) while the 1024 x 1024 map counted; the coarse round ${s.heatPartial || 'seen'}; ` +
                 `cancel back to 3D; the worker's 64 x 64 map = the page's (max ${inPlace.max}, total ${inPlace.total})`);
             await p.eval(`sidxLab.openLink('#scene=kd-slide&accel=kdtree&mode=2d')`);
+            return null;
+        });
+
+        await check('long build in a worker: the page answers while it builds, cancel keeps the view before', async () => {
+            let s = await p.eval(`sidxLab.openLink('#scene=kd-slide&accel=kdtree&ray=0,4.2,0,1,0.15,0&step=6')`);
+            const before = { events: JSON.stringify(s.events), ray: JSON.stringify(s.ray) };
+            // the icosphere at detail 5 (20,480 triangles) with rayclass twice: some 7 s of building, cancelled after 1 s or so
+            await p.eval(`sidxLab.openLink('#scene=icosphere:5&accel=rayclass&accel2=rayclass'), 0`);
+            s = await state(p);
+            if (!s.job || s.scene !== 'kd-slide') return `no job in a worker for rayclass over icosphere:5: job ${JSON.stringify(s.job)}, scene ${s.scene}, mode ${s.mode}`;
+            // the view before answers the keys meanwhile: the page's own measure, from the key's arrival to the walk redrawn
+            const worst = [];
+            for (const [key, want] of [['End', s.count], ['Home', 0], ['ArrowRight', 1]]) {
+                await press(p, key);
+                const t0 = Date.now();
+                while (!new RegExp('[#&]step=' + want + '(&|$)').test(await p.eval('location.hash'))) {
+                    if (Date.now() - t0 > 5000) return `${key} was not answered in 5 s while the structures build`;
+                    await sleep(20);
+                }
+                worst.push(Math.round(await p.eval('sidxLab.timings().key')));
+            }
+            s = await until(p, 'the progress bar', (x) => x.job && x.job.shown);
+            const bar = await p.eval(`[getComputedStyle(document.getElementById('progress')).display, document.getElementById('progress-text').textContent]`);
+            if (bar[0] === 'none' || !/rayclass|icosphere/.test(bar[1])) return `the progress bar shows ${JSON.stringify(bar)}`;
+            const bc = await p.box('#b-cancel');
+            await p.click(bc.x + bc.w / 2, bc.y + bc.h / 2);
+            s = await until(p, 'cancel', (x) => !x.job);
+            await shot(p, 'build-cancelled');
+            if (s.scene !== 'kd-slide' || s.accel !== 'kdtree' || s.accel2 || s.step !== 1 || JSON.stringify(s.events) !== before.events ||
+                JSON.stringify(s.ray) !== before.ray || s.error || s.caught.length || !s.notes.some((t) => /^cancelled/.test(t)))
+                return `after cancel: ${s.scene} ${s.accel} ${s.accel2} step ${s.step}, error '${s.error}', notes ${JSON.stringify(s.notes)} ${s.caught}`;
+            if (!/scene=kd-slide/.test(await p.eval('location.hash'))) return 'the address does not name the view kept';
+            await press(p, 'End');
+            s = await until(p, 'End after cancel', (x) => x.step === x.count);
+            const why = await compareTrace(p, s);
+            if (why) return 'after cancel: ' + why;
+            if (Math.max(...worst) > 500) return `keys took ${worst.join(', ')} ms while the structures built (over 500)`;
+            console.log(`        keys answered in ${worst.join(', ')} ms while rayclass built twice over icosphere:5; ` +
+                `bar '${bar[1]}'; cancel kept kd-slide with kdtree`);
+            return null;
+        });
+
+        await check('long build done in the worker: its walks, a new ray and the build mode as sidx-step\'s; l lands on a leaf', async () => {
+            await p.eval(`sidxLab.openLink('#scene=teapot&accel=kdtree-median&mode=3d'), 0`);
+            let s = await until(p, 'kdtree-median over the teapot from the worker', (x) => !x.job && x.accel === 'kdtree-median', 60000);
+            if (!s.remote || s.error) return `remote ${s.remote}, error '${s.error}'`;
+            let why = await compareTrace(p, s);
+            if (why) return why;
+            // a new ray: traced by the worker that holds the tree
+            const ray = [-2.5, 1.2, 0.4, 1, -0.05, -0.1];
+            await p.eval(`sidxLab.setRay(${JSON.stringify(ray)})`);
+            s = await until(p, 'the new ray traced', (x) => !x.tracing && JSON.stringify(x.ray) === JSON.stringify(ray.map(Math.fround)));
+            why = await compareTrace(p, s);
+            if (why) return 'new ray: ' + why;
+            // the first leaf the walk enters, by l, against the native build's leaves
+            const build = native(['--accel', 'kdtree-median', 'teapot', '--build', '--json']).split('\n').filter((l) => l.includes('"build_'));
+            const leaves = new Set(build.filter((l) => l.includes('"build_leaf"')).map((l) => JSON.parse(l).node));
+            await press(p, 'Home');
+            await until(p, 'Home', (x) => x.step === 0);
+            await press(p, 'l');
+            s = await until(p, 'l: a leaf', (x) => x.step > 0);
+            const first = s.events.findIndex((e) => e.type === 'node_enter' && leaves.has(e.node));
+            if (s.curType !== 'node_enter' || s.step !== first + 1) return `l went to step ${s.step} (${s.curLine}), the first leaf entered is step ${first + 1}`;
+            const leafNode = s.events[first].node;
+            // the build mode: over its limit of events, it says so
+            await press(p, '2');
+            s = await until(p, 'the build mode', (x) => x.mode === 'build');
+            const info = await p.eval(`document.getElementById('info').textContent`);
+            if (s.count !== 0 || !/build has \d+ events: the build mode replays at most \d+/.test(info)) return `the build mode of ${build.length} events: ${s.count} steps, '${info}'`;
+            // with max_depth 10 (5094 build events), also built in the worker: its build mode has sidx-step's events
+            const rc = native(['--accel', 'kdtree-median', 'teapot', '--build', '--json', '--max-depth', '10']).split('\n').filter((l) => l.includes('"build_')).length;
+            await p.eval(`sidxLab.openLink('#scene=teapot&accel=kdtree-median&max_depth=10&mode=build'), 0`);
+            s = await until(p, 'the build mode with the worker\'s events', (x) => !x.job && x.knobs.max_depth === 10 && x.count > 0, 60000);
+            if (!s.remote || s.count !== rc) return `max_depth 10: remote ${s.remote}, the build mode has ${s.count} steps, sidx-step --build ${rc} events`;
+            await press(p, 'Home');
+            await press(p, 'l');
+            s = await until(p, 'l in the build mode', (x) => x.cur > 0);
+            if (s.curType !== 'build_leaf') return `l in the build mode lands on ${s.curType} (${s.curLine})`;
+            console.log(`        teapot, kdtree-median built in the worker: two rays as sidx-step's; l -> step ${first + 1} (leaf node ${leafNode}); ` +
+                `its build mode states its limit; with max_depth 10: ${s.count} build steps, l -> ${s.cur}`);
+            await p.eval(`sidxLab.openLink('#scene=kd-slide&accel=kdtree')`);
+            return null;
+        });
+
+        await check('the stack\'s t-intervals drawn along the ray; jumps by leaf and by event type in every mode', async () => {
+            let s = await p.eval(`sidxLab.openLink('#scene=kd-slide&accel=kdtree&mode=2d&ray=0,4.2,0,1,0.15,0&step=13')`);
+            if (s.stack.length !== 2 || s.intervals.length !== 2) return `at step 13: stack ${JSON.stringify(s.stack)}, intervals drawn ${s.intervals.length}`;
+            for (let k = 0; k < 2; ++k) {
+                const iv = s.intervals[k], st = s.stack[s.stack.length - 1 - k];
+                if (iv.node !== st.node || iv.t_near !== st.t_near || iv.t_far !== st.t_far) return `interval ${k}: ${JSON.stringify(iv)}, the stack's ${JSON.stringify(st)}`;
+                // the bar's colour on the canvas, halfway along it
+                const px = await p.eval(`(() => { const c = document.getElementById('view'), d = c.width / c.getBoundingClientRect().width;
+                    return [...c.getContext('2d').getImageData(Math.round(${(iv.x0 + iv.x1) / 2} * d), Math.round(${(iv.y0 + iv.y1) / 2} * d), 1, 1).data]; })()`);
+                const want = [1, 3, 5].map((i) => parseInt(iv.color.slice(i, i + 2), 16));
+                if (want.some((v, i) => Math.abs(v - px[i]) > 40)) return `interval ${k} (node ${iv.node}): the canvas has rgb ${px.slice(0, 3)} halfway along it, not ${iv.color}`;
+            }
+            await shot(p, 'stack-intervals');
+            const keys = await p.eval(`document.getElementById('keys').textContent`);
+            if (!/l \/ L .*leaf/.test(keys) || !/t \/ T .*type/.test(keys)) return 'the keys\' list does not name l / L and t / T';
+            // l and L in 2D and 3D: the leaves L2 and L4 of the slide's tree, and back
+            const seen = [];
+            for (const mode of ['1', '3']) {
+                await press(p, mode);
+                await press(p, 'Home');
+                await until(p, 'Home', (x) => x.step === 0);
+                for (const [key, want] of [['l', 5], ['l', 13], ['L', 5]]) {
+                    await press(p, key);
+                    s = await until(p, `${key} to step ${want}`, (x) => x.step === want);
+                    if (s.curType !== 'node_enter' || !/\[L\d\]/.test(s.curLine)) return `${key} in mode ${s.mode} lands on '${s.curLine}'`;
+                }
+                seen.push(s.mode);
+            }
+            // t by a chosen type: a triangle test in 3D, a split in the build mode
+            await choose(p, '#evtype', 'prim_test');
+            await press(p, 'Home');
+            await until(p, 'Home', (x) => x.step === 0);
+            await press(p, 't');
+            s = await until(p, 't', (x) => x.step > 0);
+            if (s.curType !== 'prim_test' || s.step !== 6) return `t (prim_test) in 3D went to step ${s.step}: ${s.curLine}`;
+            await press(p, '2');
+            await until(p, 'build mode', (x) => x.mode === 'build');
+            await choose(p, '#evtype', 'build_split');
+            await press(p, 'Home');
+            await press(p, 't');
+            s = await until(p, 't in the build mode', (x) => x.cur > 0);
+            if (s.curType !== 'build_split' || !/split node 0/.test(s.curLine)) return `t (build_split) in the build mode: ${s.curType} '${s.curLine}'`;
+            await press(p, 'l');
+            s = await until(p, 'l in the build mode', (x) => x.curType === 'build_leaf');
+            console.log(`        at step 13 the stack's two intervals drawn, their colours on the canvas; l, l, L -> 5, 13, 5 in ${seen.join(' and ')}; ` +
+                `t -> prim_test at 6; in the build mode t -> a split, l -> '${s.curLine}'`);
+            await p.eval(`sidxLab.openLink('#scene=kd-slide&accel=kdtree')`);
             return null;
         });
 
