@@ -39,15 +39,13 @@
 /* Below this many rays a sort has nothing to gather. */
 #define STREAM_REORDER_MIN 64u
 
+#ifdef SIDX_WIDE_X86
 /* 1 when the CPU has AVX2 for the sort keys. */
 static int cpu_avx2(void)
 {
-#ifdef SIDX_WIDE_X86
     return __builtin_cpu_supports("avx2"); /* the CPU model is read at start-up */
-#else
-    return 0;
-#endif
 }
+#endif
 
 /* What a call walks with. */
 typedef struct stream_plan {
@@ -132,6 +130,8 @@ static uint32_t *reorder(const sidx_accel *a, const sidx_ray *rays, size_t n, in
 #ifdef SIDX_WIDE_X86
     if (avx2 && cpu_avx2()) stream_keys_avx2(rays, n, lo, scale, key);
     else
+#else
+    (void)avx2; /* no AVX2 kernel on this target */
 #endif
         stream_keys_scalar(rays, n, lo, scale, key);
     for (size_t i = 0; i < n; ++i) ord[i] = (uint32_t)i;

@@ -527,9 +527,10 @@ int sidx__bvh_occluded(const sidx_accel *a, const sidx_ray *r, const sidx_query 
     {                                                                                                           \
         const sidx_ray *rays = c->rays;                                                                         \
         const uint32_t *idx = c->idx;                                                                           \
+        sidx_hit unused; /* an any-hit walk writes no hit */                                                    \
         for (uint32_t i = 0, n = c->count; i < n; ++i) {                                                        \
             const uint32_t j = idx ? idx[i] : i;                                                                \
-            if (anyhit_) c->occluded[j] = one_##name_(a, &rays[j], q, NULL);                                    \
+            if (anyhit_) c->occluded[j] = one_##name_(a, &rays[j], q, &unused);                                 \
             else (void)one_##name_(a, &rays[j], q, &c->hits[j]);                                                \
         }                                                                                                       \
     }

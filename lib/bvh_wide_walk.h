@@ -574,9 +574,10 @@ const wide_kernels WFN(sidx__wide_kernels_) = {
     {                                                                                                           \
         const sidx_ray *rays = c->rays;                                                                         \
         const uint32_t *idx = c->idx;                                                                           \
+        sidx_hit unused; /* an any-hit walk writes no hit */                                                    \
         for (uint32_t i = 0, n = c->count; i < n; ++i) {                                                        \
             const uint32_t j = idx ? idx[i] : i;                                                                \
-            if (anyhit_) c->occluded[j] = WFN(one_##name_)(a, &rays[j], q, NULL);                               \
+            if (anyhit_) c->occluded[j] = WFN(one_##name_)(a, &rays[j], q, &unused);                            \
             else (void)WFN(one_##name_)(a, &rays[j], q, &c->hits[j]);                                           \
         }                                                                                                       \
     }
