@@ -668,19 +668,19 @@ done:
  * same; the order stays top-down (a child after its parent), which
  * refit and the event pass rely on.  In place (one cycle walk per
  * array): a second copy of a 16.8M-triangle tree would add its size to
- * the build's peak.  Used from WIDE_ORDER_MIN nodes (the size rule, and
- * what it bought: docs/performance.md, "Node order at scale"); the
- * environment variable SIDX_WIDE_ORDER=depth-first|treelets overrides
- * it (tests, measurements). */
+ * the build's peak.
+ *
+ * Not the default: it cuts the 4 KB pages a ray touches by a fifth to a
+ * quarter, but not one cache line, and with the arrays on 2 MB pages
+ * (alloc_array) it bought no time at 1M, 4.2M or 16.8M triangles
+ * (docs/performance.md, "Node order at scale").  SIDX_WIDE_ORDER=treelets
+ * in the environment turns it on (measurements, tests). */
 #define WIDE_TREELET_BYTES 4096u
-#define WIDE_ORDER_MIN ((uint32_t)1u << 16)
 
-static int want_order(uint32_t num_inner)
+static int want_order(void)
 {
     const char *env = getenv("SIDX_WIDE_ORDER");
-    if (env && !strcmp(env, "depth-first")) return 0;
-    if (env && !strcmp(env, "treelets")) return 1;
-    return num_inner >= WIDE_ORDER_MIN;
+    return env && !strcmp(env, "treelets");
 }
 
 /* Moves the n items of `size` bytes in arr so that item i goes to
@@ -850,7 +850,7 @@ static sidx_status wide_build(sidx_accel *a, sidx_error *err)
     set_kernels(w, a->opt.tri);
     if ((s = collapse_into(a, b, w, lazy ? w->lazy->recs : NULL)) != SIDX_OK) goto fail;
     /* a lazy top stays depth-first: its unbuilt children are filled in by parent index */
-    if (!lazy && w->num_inner && want_order(w->num_inner) && (s = wide_order(a, w)) != SIDX_OK) goto fail;
+    if (!lazy && w->num_inner && want_order() && (s = wide_order(a, w)) != SIDX_OK) goto fail;
     s = SIDX_ERR_NOMEM;
     if (lazy) {
         wide_lazy *L = w->lazy;

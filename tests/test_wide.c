@@ -551,9 +551,9 @@ static void hash_fn(const sidx_event *ev, void *user)
 }
 
 /* The treelet order (SIDX_WIDE_ORDER=treelets) moves nodes and blocks but
- * nothing a caller sees: on trees far below its size rule, forced on,
- * the storage must differ from the depth-first one while hits (with u,
- * v, Ng), shadow answers and every build and walk event are the same. */
+ * nothing a caller sees: the storage must differ from the depth-first
+ * one while hits (with u, v, Ng), shadow answers and every build and
+ * walk event are the same. */
 static void test_treelet_order(void **state)
 {
     (void)state;
