@@ -670,8 +670,8 @@ done:
  * array): a second copy of a 16.8M-triangle tree would add its size to
  * the build's peak.
  *
- * Not the default: it cuts the 4 KB pages a ray touches by a fifth to a
- * quarter, but not one cache line, and with the arrays on 2 MB pages
+ * Not the default: it cuts the 4 KB pages a ray touches by 17 to 26%,
+ * but not one cache line, and with the arrays on 2 MB pages
  * (alloc_array) it bought no time at 1M, 4.2M or 16.8M triangles
  * (docs/performance.md, "Node order at scale").  SIDX_WIDE_ORDER=treelets
  * in the environment turns it on (measurements, tests). */
