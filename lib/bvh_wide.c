@@ -415,10 +415,6 @@ static sidx_aabb leaf_box(const wide_bvh *w, uint32_t first_block)
     }
 }
 
-/* The event id of wide node i: root_id for the root, base + i otherwise
- * (a lazy tree's subtrees number their nodes after everything before them,
- * their root being the unbuilt child it replaces). */
-static SIDX_INLINE uint32_t node_id(uint32_t i, uint32_t root_id, uint32_t base) { return i ? base + i : root_id; }
 
 static sidx_aabb node_box(const wide_bvh *w, uint32_t i)
 {
@@ -429,12 +425,12 @@ static sidx_aabb node_box(const wide_bvh *w, uint32_t i)
     return bb;
 }
 
+/* me: node i's event id (its parent slot's id; the root's: root_id). */
 static void emit_build(const sidx_accel *a, const sidx_hook *h, const wide_bvh *w, const uint32_t *count, uint32_t i,
-                       uint32_t parent, uint32_t depth, uint32_t root_id, uint32_t base)
+                       uint32_t me, uint32_t parent, uint32_t depth)
 {
     const uint32_t W = w->width;
     const float *n = wide_node(w, i);
-    const uint32_t me = node_id(i, root_id, base);
     SIDX_EMIT(1, h, SIDX_EV_BUILD_NODE, e_.node = me; e_.parent = parent; e_.depth = depth;
               e_.bounds = node_box(w, i); e_.count = count[i]);
     for (uint32_t s = 0; s < W; ++s) {
@@ -446,7 +442,7 @@ static void emit_build(const sidx_accel *a, const sidx_hook *h, const wide_bvh *
             continue;
         }
         if (!(c & WIDE_LEAF_BIT)) {
-            emit_build(a, h, w, count, c, me, depth + 1, root_id, base);
+            emit_build(a, h, w, count, c, id, me, depth + 1);
             continue;
         }
         const uint32_t np = leaf_prims(w, c & ~WIDE_LEAF_BIT);
@@ -655,6 +651,137 @@ done:
     return s;
 }
 
+/* ---- node order for large trees ---------------------------------------------------
+ *
+ * make_node stores the nodes depth-first: a node's first child follows
+ * it, but its other children lie past whole subtrees, so at millions of
+ * triangles a ray's path steps to a new 4 KB page (and DRAM row) at
+ * almost every level.  wide_order regroups them into treelets of
+ * WIDE_TREELET_BYTES (one 4 KB page): from a treelet's root it keeps
+ * taking, among the children of the nodes taken, the one of largest
+ * surface area (the most likely to be entered: the SAH's probability),
+ * as in Yoon & Manocha 2006 ("Cache-efficient layouts of bounding volume
+ * hierarchies"); the children left over root the next treelets, laid out
+ * depth-first.  The leaf blocks then follow the new node order, in slot
+ * order, so the leaves of a treelet share its pages too.  Only storage
+ * moves: boxes, slots and event ids stay, so every hit and event is the
+ * same; the order stays top-down (a child after its parent), which
+ * refit and the event pass rely on.  In place (one cycle walk per
+ * array): a second copy of a 16.8M-triangle tree would add its size to
+ * the build's peak.
+ *
+ * Not the default: it cuts the 4 KB pages a ray touches by 17 to 26%,
+ * but not one cache line, and with the arrays on 2 MB pages
+ * (alloc_array) it bought no time at 1M, 4.2M or 16.8M triangles
+ * (docs/performance.md, "Node order at scale").  SIDX_WIDE_ORDER=treelets
+ * in the environment turns it on (measurements, tests). */
+#define WIDE_TREELET_BYTES 4096u
+
+static int want_order(void)
+{
+    const char *env = getenv("SIDX_WIDE_ORDER");
+    return env && !strcmp(env, "treelets");
+}
+
+/* Moves the n items of `size` bytes in arr so that item i goes to
+ * to[i]; done[] (n bytes, zero) marks the items placed; tmp holds two. */
+static void permute(void *arr, size_t size, uint32_t n, const uint32_t *to, uint8_t *done, unsigned char *tmp)
+{
+    unsigned char *A = arr, *hold = tmp, *spare = tmp + size;
+    for (uint32_t i = 0; i < n; ++i) {
+        if (done[i] || to[i] == i) continue;
+        memcpy(hold, A + (size_t)i * size, size);
+        uint32_t j = i;
+        do { /* hold is item j: put it at to[j], pick up what was there */
+            const uint32_t d = to[j];
+            memcpy(spare, A + (size_t)d * size, size);
+            memcpy(A + (size_t)d * size, hold, size);
+            done[j] = 1;
+            unsigned char *t = hold;
+            hold = spare;
+            spare = t;
+            j = d;
+        } while (j != i);
+    }
+}
+
+/* Reorders w's nodes into treelets and its blocks after them (above).
+ * SIDX_ERR_NOMEM leaves w as it was. */
+static sidx_status wide_order(const sidx_accel *a, wide_bvh *w)
+{
+    const uint32_t W = w->width, n = w->num_inner, nb = w->num_blocks;
+    const uint32_t K = WIDE_TREELET_BYTES / (8u * W * (uint32_t)sizeof(float)); /* nodes per treelet */
+    const size_t node_bytes = 8u * W * sizeof(float);
+    uint32_t *to = sidx__alloc(a, (size_t)n + nb, sizeof *to), *stack = sidx__alloc(a, n, sizeof *stack);
+    uint32_t *front = sidx__alloc(a, (size_t)K * W, sizeof *front);
+    float *front_area = sidx__alloc(a, (size_t)K * W, sizeof *front_area);
+    uint8_t *done = sidx__alloc(a, (size_t)(n > nb ? n : nb), 1);
+    unsigned char *tmp = sidx__alloc(a, 2, node_bytes > sizeof(wide_tri4) ? node_bytes : sizeof(wide_tri4));
+    if (!to || !stack || !front || !front_area || !done || !tmp) {
+        sidx__free(a, to); sidx__free(a, stack); sidx__free(a, front); sidx__free(a, front_area);
+        sidx__free(a, done); sidx__free(a, tmp);
+        return SIDX_ERR_NOMEM;
+    }
+    uint32_t *bto = to + n;
+    /* nodes: treelets, depth-first (a stack of treelet roots) */
+    uint32_t next = 0, sp = 0, bnext = 0;
+    stack[sp++] = 0;
+    while (sp) {
+        uint32_t nf = 1, taken = 0;
+        front[0] = stack[--sp];
+        front_area[0] = 0.0f; /* alone: taken whatever its area */
+        while (nf && taken < K) {
+            uint32_t best = 0; /* the frontier node of largest area */
+            float best_area = -1.0f;
+            for (uint32_t f = 0; f < nf; ++f)
+                if (front_area[f] > best_area) { best_area = front_area[f]; best = f; }
+            const uint32_t v = front[best];
+            --nf;
+            front[best] = front[nf];
+            front_area[best] = front_area[nf];
+            to[v] = next++;
+            ++taken;
+            const float *vn = wide_node(w, v);
+            const uint32_t *ch = wide_child(vn, W);
+            for (uint32_t s = 0; s < W; ++s)
+                if (ch[s] != WIDE_EMPTY && !(ch[s] & (WIDE_LEAF_BIT | WIDE_LAZY_BIT))) {
+                    front_area[nf] = sidx_aabb_area(wide_slot_box(vn, W, s)); /* the child's box */
+                    front[nf++] = ch[s];
+                }
+        }
+        /* the rest root treelets of their own; pushed last-first so the walk meets them in slot order */
+        while (nf) stack[sp++] = front[--nf];
+    }
+    /* blocks: each leaf's run in the new node order, slot by slot */
+    uint32_t *by_new = stack; /* old index of the node at each new place (the stack is empty now) */
+    for (uint32_t i = 0; i < n; ++i) by_new[to[i]] = i;
+    for (uint32_t k = 0; k < n; ++k) {
+        const uint32_t *ch = wide_child(wide_node(w, by_new[k]), W);
+        for (uint32_t s = 0; s < W; ++s) {
+            if (ch[s] == WIDE_EMPTY || !(ch[s] & WIDE_LEAF_BIT)) continue;
+            for (uint32_t b = ch[s] & ~WIDE_LEAF_BIT;; ++b) {
+                bto[b] = bnext++;
+                if (w->blocks[b].prim[0] & WIDE_LAST_BLOCK) break;
+            }
+        }
+    }
+    /* the children's references, then the two arrays */
+    for (uint32_t i = 0; i < n; ++i) {
+        uint32_t *ch = (uint32_t *)(void *)(w->nodes + (size_t)i * 8u * W + 6u * W);
+        for (uint32_t s = 0; s < W; ++s) {
+            if (ch[s] == WIDE_EMPTY || (!(ch[s] & WIDE_LEAF_BIT) && (ch[s] & WIDE_LAZY_BIT))) continue;
+            ch[s] = (ch[s] & WIDE_LEAF_BIT) ? WIDE_LEAF_BIT | bto[ch[s] & ~WIDE_LEAF_BIT] : to[ch[s]];
+        }
+    }
+    memset(done, 0, n);
+    permute(w->nodes, node_bytes, n, to, done, tmp);
+    memset(done, 0, nb);
+    permute(w->blocks, sizeof(wide_tri4), nb, bto, done, tmp);
+    sidx__free(a, to); sidx__free(a, stack); sidx__free(a, front); sidx__free(a, front_area);
+    sidx__free(a, done); sidx__free(a, tmp);
+    return SIDX_OK;
+}
+
 static void bin_free(const sidx_accel *a, bvh *b)
 {
     if (!b) return;
@@ -722,6 +849,8 @@ static sidx_status wide_build(sidx_accel *a, sidx_error *err)
     }
     set_kernels(w, a->opt.tri);
     if ((s = collapse_into(a, b, w, lazy ? w->lazy->recs : NULL)) != SIDX_OK) goto fail;
+    /* a lazy top stays depth-first: its unbuilt children are filled in by parent index */
+    if (!lazy && w->num_inner && want_order() && (s = wide_order(a, w)) != SIDX_OK) goto fail;
     s = SIDX_ERR_NOMEM;
     if (lazy) {
         wide_lazy *L = w->lazy;
@@ -741,7 +870,7 @@ static sidx_status wide_build(sidx_accel *a, sidx_error *err)
         counts = sidx__alloc(a, w->num_inner, sizeof *counts);
         if (!counts) goto fail;
         inner_counts(w, counts);
-        emit_build(a, hook, w, counts, 0, UINT32_MAX, 0, 0, 0);
+        emit_build(a, hook, w, counts, 0, 0, UINT32_MAX, 0);
     }
     SIDX_EMIT(1, hook, SIDX_EV_NOTE,
               e_.text = w->isa == WIDE_ISA_AVX512 ? "wide BVH: AVX-512 kernels (8 boxes per pass, 4 triangles per pass)"
@@ -812,7 +941,7 @@ static void *expand_part(void *owner, uint32_t r, const sidx_hook *hook, sidx__l
               e_.count = rec->count; e_.bounds = rec->box);
     if (counts) {
         inner_counts(sub, counts);
-        emit_build(a, hook, sub, counts, 0, rec->parent, rec->depth, rec->id, base);
+        emit_build(a, hook, sub, counts, 0, rec->id, rec->parent, rec->depth);
         sidx__free(a, counts);
     }
     /* the marks, last: what the events above read is the plain tree */

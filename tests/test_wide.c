@@ -314,6 +314,7 @@ typedef struct walkstate {
     leafref *refs;     /* every reference (spatial splits) */
     size_t nrefs, cap;
     uint32_t leaves;
+    int treelets;      /* nodes stored in treelets (SIDX_WIDE_ORDER): slot ids need not be indices */
 } walkstate;
 
 static void check_node(const wide_bvh *w, uint32_t i, uint32_t depth, walkstate *ws)
@@ -368,8 +369,9 @@ static void check_node(const wide_bvh *w, uint32_t i, uint32_t depth, walkstate 
                 if (B->prim[0] & WIDE_LAST_BLOCK) break;
             }
         } else {
-            assert_true(c > i && c < w->num_inner); /* pre-order */
-            assert_int_equal(wide_id(n, W)[s], c);
+            assert_true(c > i && c < w->num_inner); /* top-down: refit runs backwards */
+            if (ws->treelets) assert_true(wide_id(n, W)[s] > 0 && wide_id(n, W)[s] < w->num_inner);
+            else assert_int_equal(wide_id(n, W)[s], c); /* pre-order */
             const float *cn = wide_node(w, c);
             for (uint32_t k = 0; k < W; ++k)
                 if (wide_child(cn, W)[k] != WIDE_EMPTY) assert_true(box_inside(sb, wide_slot_box(cn, W, k)));
@@ -434,7 +436,7 @@ static void test_structure(void **state)
                 sidx_accel *a = build(wides[w], &m, &o, 1);
                 const wide_bvh *wb = a->impl;
                 assert_int_equal(wb->width, w ? 8u : 4u);
-                walkstate ws = {whole, m.num_triangles, calloc(m.num_triangles, sizeof(uint32_t)), NULL, 0, 0, 0};
+                walkstate ws = {whole, m.num_triangles, calloc(m.num_triangles, sizeof(uint32_t)), NULL, 0, 0, 0, 0};
                 assert_non_null(ws.seen);
                 check_node(wb, 0, 0, &ws);
                 uint64_t refs = 0;
@@ -519,6 +521,90 @@ static void test_event_ids(void **state)
         free(rays);
         free(r.built);
         sidx_accel_destroy(a);
+    }
+    sidx_mesh_free(&m);
+}
+
+/* ---- node order ------------------------------------------------------------------- */
+
+/* Every event of a build and of traced walks, folded into one hash (FNV-1a
+ * over the fields the events carry), and how many there were. */
+typedef struct evhash {
+    uint64_t h, n;
+} evhash;
+
+static void hash_bytes(evhash *e, const void *p, size_t len)
+{
+    const unsigned char *b = p;
+    for (size_t i = 0; i < len; ++i) e->h = (e->h ^ b[i]) * 1099511628211ull;
+}
+
+static void hash_fn(const sidx_event *ev, void *user)
+{
+    evhash *e = user;
+    const uint32_t f[5] = {(uint32_t)ev->type, ev->node, ev->parent, ev->depth, ev->count};
+    hash_bytes(e, f, sizeof f);
+    hash_bytes(e, &ev->bounds, sizeof ev->bounds);
+    const float t[3] = {ev->t_near, ev->t_far, ev->t};
+    hash_bytes(e, t, sizeof t);
+    e->n++;
+}
+
+/* The treelet order (SIDX_WIDE_ORDER=treelets) moves nodes and blocks but
+ * nothing a caller sees: the storage must differ from the depth-first
+ * one while hits (with u, v, Ng), shadow answers and every build and
+ * walk event are the same. */
+static void test_treelet_order(void **state)
+{
+    (void)state;
+    sidx_mesh m = scene("soup");
+    for (int w = 0; w < NWIDES; ++w) {
+        sidx_accel *a[2];
+        evhash eh[2] = {{14695981039346656037ull, 0}, {14695981039346656037ull, 0}};
+        sidx_ray *rays;
+        const size_t n = make_rays(&m, per_kind(400), 11, &rays);
+        sidx_hit *hits[2];
+        for (int k = 0; k < 2; ++k) {
+            setenv("SIDX_WIDE_ORDER", k ? "treelets" : "depth-first", 1);
+            const sidx_hook hook = {hash_fn, &eh[k], 0};
+            sidx_build_options o;
+            memset(&o, 0, sizeof o);
+            o.hook = &hook;
+            a[k] = build(wides[w], &m, &o, 1);
+            hits[k] = calloc(2 * n, sizeof *hits[k]);
+            assert_non_null(hits[k]);
+            const sidx_query traced = {0, SIDX_TRAVERSE_DEFAULT, &hook, 0};
+            const sidx_query uv = {SIDX_QUERY_UV, SIDX_TRAVERSE_DEFAULT, NULL, 0};
+            for (size_t i = 0; i < n; ++i) {
+                sidx_accel_intersect(a[k], &rays[i], i % 4 ? &uv : &traced, &hits[k][i]);
+                int occ = -1;
+                assert_int_equal(sidx_accel_occluded(a[k], &rays[i], i % 4 ? NULL : &traced, &occ), SIDX_OK);
+                hits[k][n + i].prim = (uint32_t)occ;
+            }
+        }
+        unsetenv("SIDX_WIDE_ORDER");
+        const wide_bvh *d = a[0]->impl, *t = a[1]->impl;
+        assert_int_equal(d->num_inner, t->num_inner);
+        assert_int_equal(d->num_blocks, t->num_blocks);
+        assert_true(d->num_inner > 64u); /* several treelets */
+        const size_t nb = (size_t)d->num_inner * 8u * d->width * sizeof(float);
+        assert_true(memcmp(d->nodes, t->nodes, nb) != 0);
+        assert_true(memcmp(d->blocks, t->blocks, (size_t)d->num_blocks * sizeof *d->blocks) != 0);
+        walkstate ws = {0, m.num_triangles, calloc(m.num_triangles, sizeof(uint32_t)), NULL, 0, 0, 0, 1};
+        assert_non_null(ws.seen);
+        check_node(t, 0, 0, &ws);
+        check_coverage(&m, &ws);
+        assert_int_equal(ws.leaves, t->num_leaves);
+        assert_memory_equal(hits[0], hits[1], 2 * n * sizeof *hits[0]);
+        assert_true(eh[0].n > n && eh[0].n == eh[1].n);
+        assert_true(eh[0].h == eh[1].h);
+        free(ws.seen);
+        free(ws.refs);
+        for (int k = 0; k < 2; ++k) {
+            free(hits[k]);
+            sidx_accel_destroy(a[k]);
+        }
+        free(rays);
     }
     sidx_mesh_free(&m);
 }
@@ -680,7 +766,7 @@ int main(void)
         cmocka_unit_test(test_simd_equals_scalar), cmocka_unit_test(test_match_brute),
         cmocka_unit_test(test_uv_matches_core),
         cmocka_unit_test(test_no_leaks_icosphere), cmocka_unit_test(test_structure),
-        cmocka_unit_test(test_event_ids),          cmocka_unit_test(test_refit_matches_rebuild),
+        cmocka_unit_test(test_event_ids),          cmocka_unit_test(test_treelet_order),          cmocka_unit_test(test_refit_matches_rebuild),
         cmocka_unit_test(test_alloc_failures),     cmocka_unit_test(test_tiny_and_empty),
         cmocka_unit_test(test_huge_arrays),
     };

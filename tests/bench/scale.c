@@ -83,7 +83,9 @@ static void scale_usage(FILE *out)
             "  --max-tris N       largest size (default 4200000)\n"
             "  --budget-ms MS     a structure whose build takes longer skips the larger sizes\n"
             "                     (default 20000)\n"
-            "  --rays N           primary rays per size (default 20000; counters on 2000)\n"
+            "  --rays N           rays per size (default 20000; counters on 2000)\n"
+            "  --kind primary|diffuse  camera rays, or random origins in the box with uniform\n"
+            "                     random directions (default primary; stadium: its camera)\n"
             "  --passes N         Mrays/s: the best of up to N warm passes (default %d) after a cold\n"
             "                     one, sidx and Embree alike; the cold pass stops after 3 s (the rays\n"
             "                     it reached are the ones timed), the warm passes once they spent 3 s\n"
@@ -329,6 +331,7 @@ int bench_cmd_scale(int argc, char **argv)
     double min_tris = 1000, max_tris = 4200000, budget = 20000;
     int passes = BENCH_PASSES;
     size_t nrays = 20000;
+    int diffuse = 0;
     for (int i = 1; i < argc; ++i) {
         const char *a = argv[i], *val = i + 1 < argc ? argv[i + 1] : NULL;
         if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
@@ -346,6 +349,10 @@ int bench_cmd_scale(int argc, char **argv)
         else if (!strcmp(a, "--accel")) accel_list = val;
         else if (!strcmp(a, "--csv")) csv = val;
         else if (!strcmp(a, "--plot")) plot = val;
+        else if (!strcmp(a, "--kind")) {
+            if (strcmp(val, "primary") && strcmp(val, "diffuse")) goto bad;
+            diffuse = !strcmp(val, "diffuse");
+        }
         else if (!strcmp(a, "--min-tris")) { min_tris = strtod(val, &end); if (*end || !(min_tris > 0)) goto bad; }
         else if (!strcmp(a, "--max-tris")) { max_tris = strtod(val, &end); if (*end || !(max_tris > 0)) goto bad; }
         else if (!strcmp(a, "--budget-ms")) { budget = strtod(val, &end); if (*end || !(budget > 0)) goto bad; }
@@ -433,7 +440,7 @@ int bench_cmd_scale(int argc, char **argv)
                "Mrays/s: the best of up to %d warm passes after a cold one (thread CPU time)\n"
                "MB: the structure; peak_MB: resident peak of the build above the loaded mesh (mesh not\n"
                "included; Embree's includes its copy of vertices and indices); heap_MB: sidx allocator peak\n",
-            scene, nrays, stadium ? "camera-at-the-teapot" : "primary", budget, bench_embree_version(), passes);
+            scene, nrays, stadium ? "camera-at-the-teapot" : diffuse ? "diffuse" : "primary", budget, bench_embree_version(), passes);
     fprintf(f, "%-14s %10s %10s %9s %8s %8s %9s %9s %9s\n", "accel", "tris", "build_ms", "Mrays/s", "steps", "prims",
             "MB", "peak_MB", "heap_MB");
     int rc = BENCH_OK;
@@ -456,7 +463,7 @@ int bench_cmd_scale(int argc, char **argv)
         bench_progress_done();
         fprintf(f, "-- %s: %u triangles, mesh_MB %.2f\n", spec, m.num_triangles, mesh_bytes / 1048576.0);
         if (stadium) teapot_rays(nrays, rec);
-        else tk_make_rays(&m, TK_RAYS_PRIMARY, nrays, 7, rec);
+        else tk_make_rays(&m, diffuse ? TK_RAYS_DIFFUSE : TK_RAYS_PRIMARY, nrays, 7, rec);
         bench_rays br;
         if (!bench_rays_prepare(rec, nrays, &br)) {
             sidx_mesh_free(&m);
