@@ -229,7 +229,7 @@ int bench_cmd_stream(int argc, char **argv)
                     best[t][r] = b;
                 }
             for (int t = 0; t < NTRACER; ++t) {
-                double v[MAX_ROUNDS], ratio[MAX_ROUNDS], self[MAX_ROUNDS], lo, hi, slo = 0, shi = 0;
+                double v[MAX_ROUNDS] = {0}, ratio[MAX_ROUNDS] = {0}, self[MAX_ROUNDS] = {0}, lo, hi, slo = 0, shi = 0;
                 for (int r = 0; r < rounds; ++r) {
                     v[r] = best[t][r];
                     ratio[r] = best[T_EMBREE1][r] / best[t][r];
