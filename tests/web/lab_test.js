@@ -812,7 +812,8 @@ async function main() {
             let s = await p.eval(`sidxLab.openLink('#scene=kd-slide&accel=kdtree&ray=0,4.2,0,1,0.15,0&step=6')`);
             const before = { events: JSON.stringify(s.events), ray: JSON.stringify(s.ray) };
             // the icosphere at detail 5 (20,480 triangles) with rayclass twice: some 7 s of building, cancelled after 1 s or so
-            await p.eval(`sidxLab.openLink('#scene=icosphere:5&accel=rayclass&accel2=rayclass'), 0`);
+            // the build's answer held until the check is over: cancelled however fast the machine builds
+            await p.eval(`sidxLab._holdJobs(true), sidxLab.openLink('#scene=icosphere:5&accel=rayclass&accel2=rayclass'), 0`);
             s = await state(p);
             if (!s.job || s.scene !== 'kd-slide') return `no job in a worker for rayclass over icosphere:5: job ${JSON.stringify(s.job)}, scene ${s.scene}, mode ${s.mode}`;
             // the view before answers the keys meanwhile: the page's own measure, from the key's arrival to the walk redrawn
@@ -832,6 +833,7 @@ async function main() {
             const bc = await p.box('#b-cancel');
             await p.click(bc.x + bc.w / 2, bc.y + bc.h / 2);
             s = await until(p, 'cancel', (x) => !x.job);
+            await p.eval('sidxLab._holdJobs(false), 0');
             await shot(p, 'build-cancelled');
             if (s.scene !== 'kd-slide' || s.accel !== 'kdtree' || s.accel2 || s.step !== 1 || JSON.stringify(s.events) !== before.events ||
                 JSON.stringify(s.ray) !== before.ray || s.error || s.caught.length || !s.notes.some((t) => /^cancelled/.test(t)))
@@ -848,7 +850,7 @@ async function main() {
         });
 
         await check('long build done in the worker: its walks, a new ray and the build mode as sidx-step\'s; l lands on a leaf', async () => {
-            await p.eval(`sidxLab.openLink('#scene=teapot&accel=kdtree-median&mode=3d'), 0`);
+            await p.eval(`sidxLab._holdJobs(false), sidxLab.openLink('#scene=teapot&accel=kdtree-median&mode=3d'), 0`);
             let s = await until(p, 'kdtree-median over the teapot from the worker', (x) => !x.job && x.accel === 'kdtree-median', 60000);
             if (!s.remote || s.error) return `remote ${s.remote}, error '${s.error}'`;
             let why = await compareTrace(p, s);
