@@ -704,25 +704,6 @@ static void root_unbuilt_and_stats(void **state)
 
 #define RACERS 4
 
-typedef struct racer {
-    const sidx_accel *a;
-    const sidx_ray *rays;
-    size_t n;
-    sidx_hit *hits;
-    pthread_barrier_t *start;
-    sidx_status st;
-} racer;
-
-static void *race(void *arg)
-{
-    racer *r = arg;
-    pthread_barrier_wait(r->start);
-    r->st = SIDX_OK;
-    for (size_t i = 0; i < r->n; ++i)
-        if (sidx_accel_intersect(r->a, &r->rays[i], NULL, &r->hits[i]) != SIDX_OK) r->st = SIDX_ERR_NOMEM;
-    return NULL;
-}
-
 static void threads_race_into_the_same_node(void **state)
 {
     (void)state;
@@ -748,19 +729,9 @@ static void threads_race_into_the_same_node(void **state)
                 sidx_accel_destroy(one);
             }
             sidx_accel *lazy = build(racers[a], &m, size, NULL, NULL);
-            pthread_barrier_t start;
-            pthread_barrier_init(&start, NULL, RACERS);
-            pthread_t th[RACERS];
-            racer rc[RACERS];
+            /* every thread starts on the same ray, then goes its own way through the set */
+            assert_int_equal(tk_race_intersect(lazy, rs.rays, rs.n, RACERS, got), SIDX_OK);
             for (int t = 0; t < RACERS; ++t) {
-                /* every thread starts on the same ray, then goes its own way through the set */
-                rc[t] = (racer){lazy, rs.rays, rs.n, got + (size_t)t * rs.n, &start, SIDX_OK};
-                assert_int_equal(pthread_create(&th[t], NULL, race, &rc[t]), 0);
-            }
-            for (int t = 0; t < RACERS; ++t) pthread_join(th[t], NULL);
-            pthread_barrier_destroy(&start);
-            for (int t = 0; t < RACERS; ++t) {
-                assert_int_equal(rc[t].st, SIDX_OK);
                 for (size_t i = 0; i < rs.n; ++i)
                     if (!same_hit(&want[i], &got[(size_t)t * rs.n + i]) &&
                         !(is_wide(racers[a]) && is_tie(&m, &rs.rays[i], &want[i], &got[(size_t)t * rs.n + i])))

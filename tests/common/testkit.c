@@ -796,3 +796,53 @@ void tk_bin_dir(const char *argv0, char *out, size_t size)
     else
         snprintf(out, size, "bin");
 }
+
+/* ---- threads racing into one structure ------------------------------------ */
+
+typedef struct tk_racer {
+    const sidx_accel *a;
+    const sidx_ray *rays;
+    size_t n;
+    sidx_hit *hits;
+    pthread_barrier_t *start;
+    sidx_status st;
+} tk_racer;
+
+static void *tk_race(void *arg)
+{
+    tk_racer *r = arg;
+    pthread_barrier_wait(r->start);
+    r->st = SIDX_OK;
+    for (size_t i = 0; i < r->n; ++i) {
+        const sidx_status st = sidx_accel_intersect(r->a, &r->rays[i], NULL, &r->hits[i]);
+        if (st != SIDX_OK && r->st == SIDX_OK) r->st = st;
+    }
+    return NULL;
+}
+
+sidx_status tk_race_intersect(const sidx_accel *a, const sidx_ray *rays, size_t n, unsigned threads, sidx_hit *hits)
+{
+    enum { MAX_RACERS = 64 };
+    if (threads == 0 || threads > MAX_RACERS) return SIDX_ERR_INVALID_ARG;
+    pthread_barrier_t start;
+    pthread_barrier_init(&start, NULL, threads);
+    pthread_t th[MAX_RACERS];
+    tk_racer rc[MAX_RACERS];
+    sidx_status st = SIDX_OK;
+    unsigned started = 0;
+    for (unsigned t = 0; t < threads; ++t) {
+        rc[t] = (tk_racer){a, rays, n, hits + (size_t)t * n, &start, SIDX_ERR_NOMEM};
+        if (pthread_create(&th[t], NULL, tk_race, &rc[t]) != 0) break;
+        ++started;
+    }
+    if (started < threads) {
+        /* the barrier waits for `threads`: without them, nobody may start */
+        fprintf(stderr, "tk_race_intersect: only %u of %u threads started\n", started, threads);
+        abort();
+    }
+    for (unsigned t = 0; t < threads; ++t) pthread_join(th[t], NULL);
+    pthread_barrier_destroy(&start);
+    for (unsigned t = 0; t < threads; ++t)
+        if (rc[t].st != SIDX_OK && st == SIDX_OK) st = rc[t].st;
+    return st;
+}

@@ -110,6 +110,12 @@ void tk_ref_intersect(const sidx_mesh *m, const tk_rayrec *ray, sidx_hit *out);
 /* The same for every ray, split over `threads` pthreads (0 or 1 = this one). */
 void tk_ref_intersect_all(const sidx_mesh *m, const tk_rayrec *rays, size_t n, sidx_hit *out, unsigned threads);
 
+/* Threads racing into one structure: `threads` pthreads (at most 64) meet
+ * at a barrier, then each traces rays[0, n) with sidx_accel_intersect into
+ * hits + t * n.  SIDX_OK when every query of every thread returned it, else
+ * the first other status (a thread that could not start: SIDX_ERR_NOMEM). */
+sidx_status tk_race_intersect(const sidx_accel *a, const sidx_ray *rays, size_t n, unsigned threads, sidx_hit *hits);
+
 /* ---- comparison ----------------------------------------------------------- */
 
 #define TK_T_TOL 1e-5
