@@ -695,6 +695,26 @@ async function main() {
             return null;
         });
 
+        await check('2D: past 8,000 tested triangles one in k is drawn, and the drawing says so', async () => {
+            // brute force over 12,000 flat triangles tests them all: one in 2 drawn, every hit kept
+            await p.eval(`sidxLab.openLink('#scene=flat2d:12000&accel=brute&mode=2d')`);
+            let s = await until(p, 'brute over flat2d:12000', (x) => !x.job && !x.tracing && x.accel === 'brute' && x.mode === '2d' && x.count > 0, 60000);
+            const fill = '#8fb3e8';   // a tested triangle's fill (page_common.js FILL[1], the key's 'prim tested')
+            const count = (svg) => svg.split(`fill="${fill}"`).length - 1;
+            let svg = await p.eval('sidxLab.svg()');
+            const note = /(\d+) triangles tested so far: one in (\d+) drawn/.exec(svg), drawn = count(svg);
+            if (!note || note[1] !== '12000' || note[2] !== '2') return `the drawing says ${note ? note[0] : 'nothing of the tested triangles'}`;
+            if (drawn < 5000 || drawn > 6000) return `${drawn} tested triangles drawn of 12,000 (one in 2 wanted)`;
+            // under the limit: every tested triangle drawn, no note
+            await p.eval(`sidxLab.openLink('#scene=flat2d:2000&accel=brute&mode=2d')`);
+            s = await until(p, 'brute over flat2d:2000', (x) => !x.job && !x.tracing && x.scene === 'flat2d:2000' && x.count > 0, 60000);
+            svg = await p.eval('sidxLab.svg()');
+            if (/tested so far/.test(svg) || count(svg) < 1900) return `flat2d:2000: ${count(svg)} tested triangles drawn, note ${/tested so far/.test(svg)}`;
+            console.log(`        brute over flat2d:12000 in 2D: ${drawn} tested triangles drawn, '${note[0]}'; flat2d:2000: ${count(svg)} drawn, no note`);
+            await p.eval(`sidxLab.openLink('#scene=kd-slide&accel=kdtree&mode=2d')`);
+            return null;
+        });
+
         await check('bad input: the +-3e38 OBJ, a % in the address, a zero direction, unknown names: a message each, no script error', async () => {
             const ex0 = p.exceptions.length;
             const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'sidx-lab-'));
@@ -808,6 +828,24 @@ async function main() {
             return null;
         });
 
+        await check('heat map over 10 minutes: refused with its estimate, the 3D view kept', async () => {
+            // a link to a scene over the page's limit says why it shows another
+            let s = await p.eval(`sidxLab.openLink('#scene=icosphere:6&accel=bvh&mode=3d')`);
+            if (s.scene !== 'kd-slide' || !/81920 triangles; the page holds at most 50000/.test(s.error) || s.caught.length)
+                return `a link to icosphere:6 (81,920 triangles): scene ${s.scene}, error '${s.error}' ${s.caught}`;
+            // brute force twice over icosphere:5 walks all 2 x 20,480 triangles a ray: 1024 x 1024 of them is some 14 minutes
+            await p.eval(`sidxLab.openLink('#scene=icosphere:5&accel=brute&accel2=brute&mode=heat&heat=steps,1024')`);
+            s = await until(p, 'the heat map refused', (x) => !x.job && !x.tracing && x.scene === 'icosphere:5' &&
+                x.notes.some((t) => /^heat map 1024/.test(t)), 60000);
+            const note = s.notes.find((t) => /^heat map 1024/.test(t)), min = /about (\d+) min/.exec(note);
+            if (!min || +min[1] <= 10 || !/at most 10 min/.test(note)) return `the note says '${note}'`;
+            if (s.mode !== '3d' || s.heatJob || s.heat || s.error || s.caught.length)
+                return `after the refusal: mode ${s.mode}, heat job ${JSON.stringify(s.heatJob)}, map ${!!s.heat}, error '${s.error}' ${s.caught}`;
+            console.log(`        a link to icosphere:6 says why kd-slide is shown; brute twice over icosphere:5 at 1024 x 1024: '${note.slice(0, 44)}...', back to 3D, nothing counted`);
+            await p.eval(`sidxLab.openLink('#scene=kd-slide&accel=kdtree&mode=2d')`);
+            return null;
+        });
+
         await check('long build in a worker: the page answers while it builds, cancel keeps the view before', async () => {
             let s = await p.eval(`sidxLab.openLink('#scene=kd-slide&accel=kdtree&ray=0,4.2,0,1,0.15,0&step=6')`);
             const before = { events: JSON.stringify(s.events), ray: JSON.stringify(s.ray) };
@@ -885,8 +923,22 @@ async function main() {
             await press(p, 'l');
             s = await until(p, 'l in the build mode', (x) => x.cur > 0);
             if (s.curType !== 'build_leaf') return `l in the build mode lands on ${s.curType} (${s.curLine})`;
+            const buildSteps = s.count, buildLeaf = s.cur;
+            // a ray set while a rebuild runs (the build's answer held until it is set) is the
+            // one shown when the rebuild is done, traced through the new tree
+            const ray2 = [-2.5, 1.0, -0.3, 1, 0.02, 0.08], want2 = JSON.stringify(ray2.map(Math.fround));
+            await p.eval(`sidxLab._holdJobs(true), sidxLab.openLink('#scene=teapot&accel=kdtree-median&max_depth=12&mode=3d'), 0`);
+            await until(p, 'the rebuild under way', (x) => x.job);
+            await p.eval(`sidxLab.setRay(${JSON.stringify(ray2)})`);
+            await until(p, 'the ray traced through the tree kept meanwhile', (x) => !x.tracing && JSON.stringify(x.ray) === want2);
+            await p.eval('sidxLab._holdJobs(false), 0');
+            s = await until(p, 'the rebuild done', (x) => !x.job && !x.tracing && x.knobs.max_depth === 12, 60000);
+            if (JSON.stringify(s.ray) !== want2) return `the ray set during the rebuild, ${want2}, was replaced by ${JSON.stringify(s.ray)}`;
+            why = await compareTrace(p, s);
+            if (why) return 'the ray set during the rebuild: ' + why;
             console.log(`        teapot, kdtree-median built in the worker: two rays as sidx-step's; l -> step ${first + 1} (leaf node ${leafNode}); ` +
-                `its build mode states its limit; with max_depth 10: ${s.count} build steps, l -> ${s.cur}`);
+                `its build mode states its limit; with max_depth 10: ${buildSteps} build steps, l -> ${buildLeaf}; ` +
+                `a ray set during a rebuild kept and traced through the new tree`);
             await p.eval(`sidxLab.openLink('#scene=kd-slide&accel=kdtree')`);
             return null;
         });
