@@ -237,7 +237,7 @@ static void touch(int t)
     const unsigned char *a = (const unsigned char *)rec, *b = (const unsigned char *)srays;
     for (size_t i = 0; i < n_rays * sizeof *rec; i += 64) sink = sink + a[i];
     for (size_t i = 0; i < n_rays * sizeof *srays; i += 64) sink = sink + b[i];
-    std::memset(out[t], 0, n_rays * sizeof(sidx_hit));
+    std::fill(out[t], out[t] + n_rays, sidx_hit{});
     (void)sink;
 }
 
