@@ -171,45 +171,6 @@ static sidx_status make_stadium_sweep(uint32_t detail, sidx_mesh *out, sidx_erro
     return rc;
 }
 
-/* The height field: d x d quads over x, z in [-1, 1], y a sum of two
- * sine waves (0.1 high), two triangles per quad: a terrain-like mesh of
- * any size with no file (2 d^2 triangles, (d+1)^2 vertices). */
-sidx_status bench_make_heightfield(uint32_t d, sidx_mesh *out, sidx_error *err)
-{
-    const size_t nv = ((size_t)d + 1) * ((size_t)d + 1), nt = 2 * (size_t)d * d;
-    float *xyz = malloc(nv * 3 * sizeof *xyz);
-    uint32_t *idx = malloc(nt * 3 * sizeof *idx);
-    if (!xyz || !idx || nv > UINT32_MAX || nt > UINT32_MAX) {
-        free(xyz);
-        free(idx);
-        if (err) {
-            err->status = SIDX_ERR_NOMEM;
-            snprintf(err->message, sizeof err->message, "out of memory");
-        }
-        return SIDX_ERR_NOMEM;
-    }
-    for (size_t j = 0; j <= d; ++j)
-        for (size_t i = 0; i <= d; ++i) {
-            float *v = xyz + 3 * (j * (d + 1) + i);
-            const double x = -1.0 + 2.0 * (double)i / d, z = -1.0 + 2.0 * (double)j / d;
-            v[0] = (float)x;
-            v[1] = (float)(0.06 * sin(7.0 * x + 1.3) * cos(5.0 * z) + 0.04 * sin(23.0 * (x + z)));
-            v[2] = (float)z;
-        }
-    uint32_t *t = idx;
-    for (uint32_t j = 0; j < d; ++j)
-        for (uint32_t i = 0; i < d; ++i) {
-            const uint32_t v00 = j * (d + 1) + i, v10 = v00 + 1, v01 = v00 + d + 1, v11 = v01 + 1;
-            const uint32_t q[6] = {v00, v01, v11, v00, v11, v10};
-            memcpy(t, q, sizeof q);
-            t += 6;
-        }
-    const sidx_status rc = sidx_mesh_from_arrays(out, xyz, (uint32_t)nv, idx, (uint32_t)nt, err);
-    free(xyz);
-    free(idx);
-    return rc;
-}
-
 /* Camera rays at the teapot (lesson 08's view): eye 2.3 units away, a
  * square image of about n pixels covering the teapot and some floor. */
 static void teapot_rays(size_t n, tk_rayrec *out)
@@ -450,9 +411,8 @@ int bench_cmd_scale(int argc, char **argv)
         sidx_mesh m = {0};
         sidx_error err = {SIDX_OK, ""};
         bench_progress("scale: making %s", spec);
-        const sidx_status made = stadium  ? make_stadium_sweep(details[si], &m, &err)
-                                 : hfield ? bench_make_heightfield(details[si], &m, &err)
-                                          : sidx_scene_open(spec, &m, &err);
+        const sidx_status made =
+            stadium ? make_stadium_sweep(details[si], &m, &err) : sidx_scene_open(spec, &m, &err);
         if (made != SIDX_OK) {
             bench_progress_done();
             fprintf(stderr, "sidx-bench scale: %s: %s\n", spec, err.message);
