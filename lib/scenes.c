@@ -714,6 +714,39 @@ static void make_grid(builder *b, unsigned n)
         }
 }
 
+/* ---- height field ----------------------------------------------------------------------- */
+
+/* detail x detail quads over x, z in [-1, 1], y a sum of two sine waves
+ * (|y| <= 0.1), two triangles per quad: a terrain-like mesh of any size
+ * (2 detail^2 triangles, (detail + 1)^2 vertices), the surface of
+ * `sidx-bench scale --scene heightfield` and `sidx-bench lazy`.  Unlike
+ * the circles of teapot and stadium, the waves come from libm's sin and
+ * cos in double, rounded to float once: these are the vertices the
+ * height-field figures in docs/performance.md were measured on, and a
+ * libm whose double sine differs in the last bit changes a float only
+ * when the value lies on a float rounding boundary. */
+static void make_heightfield(builder *b, unsigned n)
+{
+    /* exact sizes up front: at detail 8192 the doubling builder would
+     * hold up to twice the 2.4 GB the mesh needs */
+    const size_t nv = ((size_t)n + 1) * ((size_t)n + 1), nt = 2 * (size_t)n * n;
+    b->pos = malloc(nv * sizeof *b->pos);
+    b->idx = malloc(nt * 3 * sizeof *b->idx);
+    b->cap_v = b->pos ? nv : 0;
+    b->cap_t = b->idx ? nt : 0;
+    for (size_t j = 0; j <= n; ++j)
+        for (size_t i = 0; i <= n; ++i) {
+            const double x = -1.0 + 2.0 * (double)i / n, z = -1.0 + 2.0 * (double)j / n;
+            vtx(b, (float)x, (float)(0.06 * sin(7.0 * x + 1.3) * cos(5.0 * z) + 0.04 * sin(23.0 * (x + z))),
+                (float)z);
+        }
+    for (unsigned j = 0; j < n; ++j)
+        for (unsigned i = 0; i < n; ++i) {
+            const uint32_t v00 = j * (n + 1) + i, v10 = v00 + 1, v01 = v00 + n + 1, v11 = v01 + 1;
+            quad(b, v00, v01, v11, v10); /* (+z) x (+x) = +y, as grid */
+        }
+}
+
 /* ---- city ---------------------------------------------------------------------------------------- */
 
 /* One building of the city, in its own space (footprint centred on the
@@ -855,7 +888,7 @@ typedef struct {
 static const scene_info scenes[] = {
     {"icosphere", 3, 0, 10},    {"teapot", 40, 8, 1024},   {"stadium", 128, 8, 65536}, {"soup", 2000, 1, 1u << 26},
     {"menger", 2, 0, 5},        {"flat2d", 16, 1, 100000}, {"cornell", 1, 0, UINT32_MAX},       {"grid", 64, 1, 4096},
-    {"kd-slide", 1, 0, UINT32_MAX}, {"city", 1, 1, 4096},
+    {"kd-slide", 1, 0, UINT32_MAX}, {"city", 1, 1, 4096},     {"heightfield", 32, 1, 8192},
 };
 #define NUM_SCENES (sizeof scenes / sizeof scenes[0])
 
@@ -863,7 +896,7 @@ const char *const *sidx_scene_names(void)
 {
     static const char *const names[NUM_SCENES + 1] = {"icosphere", "teapot",  "stadium", "soup",     "menger",
                                                       "flat2d",    "cornell", "grid",    "kd-slide", "city",
-                                                      NULL};
+                                                      "heightfield", NULL};
     return names;
 }
 
@@ -875,7 +908,7 @@ sidx_status sidx_scene_make(const char *name, uint32_t detail, sidx_mesh *out, s
         if (strcmp(scenes[i].name, name) == 0) si = &scenes[i];
     if (!si)
         return sidx__fail(err, SIDX_ERR_INVALID_ARG,
-                          "no built-in scene '%s' (try icosphere, teapot, stadium, soup, menger, flat2d, cornell, grid, kd-slide, city)",
+                          "no built-in scene '%s' (try icosphere, teapot, stadium, soup, menger, flat2d, cornell, grid, kd-slide, city, heightfield)",
                           name);
     const unsigned d = detail ? detail : si->def;
     if (d < si->min || d > si->max)
@@ -892,6 +925,7 @@ sidx_status sidx_scene_make(const char *name, uint32_t detail, sidx_mesh *out, s
     case 6: make_cornell(&b); break;
     case 8: make_kd_slide(&b); break;
     case 9: make_city(&b, d); break;
+    case 10: make_heightfield(&b, d); break;
     default: make_grid(&b, d); break;
     }
     return builder_finish(&b, name, out, err);
@@ -919,7 +953,7 @@ sidx_status sidx_scene_open(const char *spec, sidx_mesh *out, sidx_error *err)
             return sidx__fail(err, SIDX_ERR_IO, "%s: %s", spec, strerror(open_errno));
         return sidx__fail(err, SIDX_ERR_INVALID_ARG,
                           "'%s' is neither a file nor a built-in scene (icosphere, teapot, stadium, soup, menger, "
-                          "flat2d, cornell, grid, kd-slide, city; optionally name:detail)",
+                          "flat2d, cornell, grid, kd-slide, city, heightfield; optionally name:detail)",
                           spec);
     }
     memcpy(name, spec, n);

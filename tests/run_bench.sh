@@ -9,7 +9,8 @@
 # headline (mrays_per_s) is the best warm pass, that the best is at least
 # the median (the same passes, sorted), that the hits written do not
 # depend on the number of passes, that a bad --passes exits 2, and that `run` and `scale` take
-# --passes and report it (run's CSV: mrays_median, mrays_cold, passes).
+# --passes and report it (run's CSV: mrays_median, mrays_cold, passes); that
+# `scale --scene FILE` subdivides the mesh level by level.
 # Times themselves are never checked.  Without sidx-bench (no Embree) it
 # says so in one line and passes.  Run from the repository root.
 
@@ -82,6 +83,43 @@ if "$BENCH" scale --accel bvh8,embree --max-tris 2000 --rays 500 --passes 2 >"$T
 else
     fail "scale --passes 2 exits $?: $(tail -3 "$TMP/scale.txt")"
 fi
+
+# scale --scene FILE: the mesh swept by midpoint subdivision, four times
+# the triangles per level, a midpoint shared by the two triangles of its
+# edge (a closed cube keeps V = T/2 + 2: 8, 26, 98 vertices); a missing or
+# malformed file exits 2 naming it
+cat >"$TMP/cube.obj" <<'EOF_OBJ'
+v 0 0 0
+v 1 0 0
+v 1 1 0
+v 0 1 0
+v 0 0 1
+v 1 0 1
+v 1 1 1
+v 0 1 1
+f 1 4 3 2
+f 5 6 7 8
+f 1 2 6 5
+f 2 3 7 6
+f 3 4 8 7
+f 4 1 5 8
+EOF_OBJ
+if "$BENCH" scale --scene "$TMP/cube.obj" --accel bvh8 --min-tris 1 --max-tris 200 --rays 400 --passes 1 >"$TMP/scalef.txt" 2>&1; then
+    for want in "level 0: 12 triangles, 8 vertices" "level 1: 48 triangles, 26 vertices" "level 2: 192 triangles, 98 vertices"; do
+        grep -q "$want" "$TMP/scalef.txt" || fail "scale --scene FILE: no \"$want\" in $(cat "$TMP/scalef.txt")"
+    done
+    grep -q "level 3" "$TMP/scalef.txt" && fail "scale --scene FILE went past --max-tris: $(cat "$TMP/scalef.txt")"
+    [ "$(grep -c '^bvh8 ' "$TMP/scalef.txt")" = 4 ] || fail "scale --scene FILE: not 3 sizes of bvh8 and its growth: $(cat "$TMP/scalef.txt")"
+else
+    fail "scale --scene FILE exits $?: $(tail -3 "$TMP/scalef.txt")"
+fi
+printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n' >"$TMP/bad.obj"
+for f in "$TMP/none.obj" "$TMP/bad.obj"; do
+    "$BENCH" scale --scene "$f" --accel bvh8 >"$TMP/scaleb.txt" 2>&1
+    rc=$?
+    [ $rc = 2 ] || fail "scale --scene $f exits $rc, not 2"
+    grep -q "$f" "$TMP/scaleb.txt" || fail "scale --scene $f: the message does not name it: $(cat "$TMP/scaleb.txt")"
+done
 
 # lazy: both kinds of first image (bounce and shadow), their ratios, and
 # the lazy hits equal to the eager ones (a small terrain, one round)

@@ -330,6 +330,7 @@ static uint32_t small_detail(const char *name)
 {
     static const struct { const char *name; uint32_t detail; } d[] = {
         {"icosphere", 2}, {"teapot", 8}, {"stadium", 8}, {"soup", 300}, {"menger", 1}, {"flat2d", 4}, {"grid", 8},
+        {"heightfield", 8},
     };
     for (size_t i = 0; i < sizeof d / sizeof d[0]; ++i)
         if (!strcmp(d[i].name, name)) return d[i].detail;

@@ -797,7 +797,7 @@ static void scenes_build_and_validate(void **state)
         sidx_mesh_free(&a);
         sidx_mesh_free(&b);
     }
-    assert_int_equal(count, 10);
+    assert_int_equal(count, 11);
 }
 
 static uint32_t tri_count(const char *name, uint32_t detail)
@@ -825,6 +825,8 @@ static void scene_counts(void **state)
     assert_int_equal(tri_count("menger", 3), 8000 * 12);
     assert_int_equal(tri_count("grid", 0), 64 * 64 * 2);
     assert_int_equal(tri_count("grid", 3), 18);
+    assert_int_equal(tri_count("heightfield", 0), 32 * 32 * 2);
+    assert_int_equal(tri_count("heightfield", 3), 18);
     assert_int_equal(tri_count("soup", 0), 2000);
     assert_int_equal(tri_count("soup", 7), 7);
     assert_int_equal(tri_count("cornell", 0), 36);
@@ -859,6 +861,51 @@ static void scenes_same_bits_everywhere(void **state)
     assert_true(scene_vertex_hash("teapot", 0) == 0x548390498dc77460ull);
     assert_true(scene_vertex_hash("teapot", 13) == 0x2c6c29b52e418173ull);
     assert_true(scene_vertex_hash("stadium", 0) == 0x9a2ea8b6b4c63191ull);
+}
+
+/* FNV-1a over a built-in scene's triangle indices. */
+static uint64_t scene_index_hash(const char *name, uint32_t detail)
+{
+    sidx_mesh m;
+    assert_int_equal(sidx_scene_make(name, detail, &m, NULL), SIDX_OK);
+    uint64_t h = 1469598103934665603ull;
+    const unsigned char *bytes = (const unsigned char *)m.indices;
+    for (size_t i = 0; i < 3 * (size_t)m.num_triangles * sizeof *m.indices; ++i) h = (h ^ bytes[i]) * 1099511628211ull;
+    sidx_mesh_free(&m);
+    return h;
+}
+
+/* "heightfield" is the surface `sidx-bench scale --scene heightfield` has
+ * swept since before it was a built-in scene: the hashes are the vertex
+ * bits and the index order of that generator at details 24 and 32 (libm's
+ * double sin and cos on glibc, rounded to float), so the figures in
+ * docs/performance.md stay reproducible.  Its shape: x and z span exactly
+ * [-1, 1] on a regular lattice, |y| <= 0.1, every triangle faces +y. */
+static void scene_heightfield(void **state)
+{
+    (void)state;
+    assert_true(scene_vertex_hash("heightfield", 24) == 0xa84854d1fe3edaf6ull);
+    assert_true(scene_index_hash("heightfield", 24) == 0x3c93f1edf469160dull);
+    assert_true(scene_vertex_hash("heightfield", 0) == 0x9e5bcf8e2553fddcull);
+    assert_true(scene_index_hash("heightfield", 0) == 0x4750304fc8cce24full);
+    sidx_mesh m;
+    assert_int_equal(sidx_scene_make("heightfield", 5, &m, NULL), SIDX_OK);
+    assert_int_equal(m.num_vertices, 6 * 6);
+    const sidx_aabb bb = sidx_mesh_bounds(&m);
+    assert_true(bb.min.x == -1.0f && bb.max.x == 1.0f && bb.min.z == -1.0f && bb.max.z == 1.0f);
+    assert_true(bb.min.y >= -0.1f && bb.max.y <= 0.1f && bb.max.y > bb.min.y);
+    for (uint32_t v = 0; v < m.num_vertices; ++v) {
+        assert_true(m.positions[v].x == (float)(-1.0 + 2.0 * (double)(v % 6) / 5));
+        assert_true(m.positions[v].z == (float)(-1.0 + 2.0 * (double)(v / 6) / 5));
+    }
+    for (uint32_t t = 0; t < m.num_triangles; ++t) {
+        const sidx_vec3 p = sidx_mesh_vertex(&m, t, 0), q = sidx_mesh_vertex(&m, t, 1), r = sidx_mesh_vertex(&m, t, 2);
+        assert_true(sidx_v3_cross(sidx_v3_sub(q, p), sidx_v3_sub(r, p)).y > 0.0f);
+    }
+    sidx_mesh_free(&m);
+    sidx_error e = {0};
+    assert_int_equal(sidx_scene_make("heightfield", 8193, &m, &e), SIDX_ERR_LIMIT);
+    assert_int_equal(sidx_scene_open("heightfield:8193", &m, &e), SIDX_ERR_LIMIT);
 }
 
 static void scenes_closed_and_outward(void **state)
@@ -1023,6 +1070,7 @@ int main(void)
         cmocka_unit_test(scenes_closed_and_outward),
         cmocka_unit_test(scene_shapes),
         cmocka_unit_test(scenes_same_bits_everywhere),
+        cmocka_unit_test(scene_heightfield),
         cmocka_unit_test(scene_errors_and_open),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -142,8 +142,6 @@ int bench_cmd_run(int argc, char **argv);
 int bench_cmd_scale(int argc, char **argv);
 int bench_cmd_lazy(int argc, char **argv);
 int bench_cmd_stream(int argc, char **argv); /* stream.c */
-/* scale.c: d x d quads of a sine-wave terrain over x, z in [-1, 1] (2 d^2 triangles). */
-sidx_status bench_make_heightfield(uint32_t d, sidx_mesh *out, sidx_error *err);
 int bench_cmd_extras(int argc, char **argv); /* extras.c */
 
 /* The memory of a build (mem.c).  bench_mem_begin just before the build,

@@ -312,8 +312,7 @@ static int open_scene(const char *spec, sidx_mesh *m, cam *c)
         return 1;
     }
     if (!strncmp(spec, "heightfield:", 12)) {
-        const long d = strtol(spec + 12, NULL, 10);
-        if (d < 1 || d > 4096 || bench_make_heightfield((uint32_t)d, m, &err) != SIDX_OK) goto fail;
+        if (sidx_scene_open(spec, m, &err) != SIDX_OK) goto fail;
         /* low over one edge, looking along the terrain */
         c->eye = sidx_v3(0.0f, 0.12f, 1.05f);
         c->at = sidx_v3(0.0f, 0.0f, 0.6f);

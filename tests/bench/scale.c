@@ -14,7 +14,15 @@
  * view).  The uniform grid's resolution follows n over the whole stadium
  * volume, so the teapot stays in a few cells and the tests per ray grow
  * about linearly with n (exponent near 1); the nested and irregular grids
- * refine where the triangles are and stay near constant (exponent ~0). */
+ * refine where the triangles are and stay near constant (exponent ~0).
+ *
+ * --scene FILE sweeps a mesh file by midpoint subdivision: each level
+ * splits every triangle into four similar ones (make_subdivided), so a
+ * real scene's long thin triangles stay long and thin at every size —
+ * Sponza's 66,454 triangles become 17.0M at level 4, a Sponza-like scene
+ * at the size of the 16.8M height field.  Its primary rays come from a
+ * camera inside the mesh's box looking along its longer horizontal axis
+ * (interior_rays: Sponza's atrium seen from one end). */
 #include <errno.h>
 #include <math.h>
 #include <stdlib.h>
@@ -69,14 +77,20 @@ static void scale_usage(FILE *out)
             "through the build's allocator.  Embree rows (embree: build quality MEDIUM, embree-hq:\n"
             "HIGH) build on a \"threads=1\" device and trace with rtcIntersect1.\n"
             "options:\n"
-            "  --scene icosphere|grid|heightfield|soup|stadium  icosphere: levels (20 x 4^k\n"
-            "                     triangles); grid: d x d flat quads (2 d^2); heightfield: the same\n"
-            "                     quads on a rolling surface (1024 x 4^k triangles: 16.8M at\n"
-            "                     --max-tris 17e6); soup: random triangles of fixed size; stadium:\n"
-            "                     teapot in a stadium, the stadium fixed (770 triangles, 2200 units\n"
-            "                     across), the teapot (1 unit) growing in detail, rays from a camera\n"
-            "                     looking at the teapot: the uniform grid's tests per ray grow ~n,\n"
-            "                     the nested and irregular grids' stay flat (default icosphere)\n"
+            "  --scene icosphere|grid|heightfield|soup|stadium|FILE  icosphere: levels (20 x 4^k\n"
+            "                     triangles); grid: d x d flat quads (2 d^2); heightfield: the\n"
+            "                     built-in scene heightfield:d, the same quads on a rolling surface\n"
+            "                     (1024 x 4^k triangles: 16.8M at --max-tris 17e6); soup: random\n"
+            "                     triangles of fixed size; stadium: teapot in a stadium, the stadium\n"
+            "                     fixed (770 triangles, 2200 units across), the teapot (1 unit)\n"
+            "                     growing in detail, rays from a camera looking at the teapot: the\n"
+            "                     uniform grid's tests per ray grow ~n, the nested and irregular\n"
+            "                     grids' stay flat; FILE (.obj, .ply): the mesh, each level splitting\n"
+            "                     every triangle into 4 similar ones at its edge midpoints (T x 4^k\n"
+            "                     triangles: Sponza's 66,454 are 17.0M at level 4), primary rays from\n"
+            "                     a camera inside its box, a fifth of the way along its longer\n"
+            "                     horizontal axis and a fifth of the way up, looking along that axis\n"
+            "                     (Sponza's atrium from one end) (default icosphere)\n"
             "  --accel LIST       structures (default: every registered one but brute, and embree,\n"
             "                     embree-hq)\n"
             "  --min-tris N       smallest size (default 1000)\n"
@@ -85,7 +99,8 @@ static void scale_usage(FILE *out)
             "                     (default 20000)\n"
             "  --rays N           rays per size (default 20000; counters on 2000)\n"
             "  --kind primary|diffuse  camera rays, or random origins in the box with uniform\n"
-            "                     random directions (default primary; stadium: its camera)\n"
+            "                     random directions (default primary; stadium: its camera; FILE:\n"
+            "                     primary is the camera inside its box)\n"
             "  --passes N         Mrays/s: the best of up to N warm passes (default %d) after a cold\n"
             "                     one, sidx and Embree alike; the cold pass stops after 3 s (the rays\n"
             "                     it reached are the ones timed), the warm passes once they spent 3 s\n"
@@ -171,43 +186,134 @@ static sidx_status make_stadium_sweep(uint32_t detail, sidx_mesh *out, sidx_erro
     return rc;
 }
 
-/* The height field: d x d quads over x, z in [-1, 1], y a sum of two
- * sine waves (0.1 high), two triangles per quad: a terrain-like mesh of
- * any size with no file (2 d^2 triangles, (d+1)^2 vertices). */
-sidx_status bench_make_heightfield(uint32_t d, sidx_mesh *out, sidx_error *err)
+/* One level of midpoint subdivision of in: every triangle (a b c) becomes
+ * (a ab ca), (ab b bc), (ca bc c) and (ab bc ca), each similar to it at
+ * half the size (Loop 1987's split without the smoothing), so the shapes
+ * of the triangles — Sponza's long thin ones too — are the same at every
+ * level.  A midpoint is shared by the triangles on both sides of its edge
+ * (an open-addressing table keyed by the edge's two vertex ids), so the
+ * mesh stays connected where the file's was; (p + q) / 2 is the same
+ * float whichever way round the edge is met. */
+static sidx_status subdivide_once(const sidx_mesh *in, sidx_mesh *out, sidx_error *err)
 {
-    const size_t nv = ((size_t)d + 1) * ((size_t)d + 1), nt = 2 * (size_t)d * d;
-    float *xyz = malloc(nv * 3 * sizeof *xyz);
-    uint32_t *idx = malloc(nt * 3 * sizeof *idx);
-    if (!xyz || !idx || nv > UINT32_MAX || nt > UINT32_MAX) {
-        free(xyz);
+    const uint64_t nt = 4ull * in->num_triangles, max_nv = (uint64_t)in->num_vertices + 3ull * in->num_triangles;
+    if (nt > UINT32_MAX / 3u || max_nv > UINT32_MAX) {
+        if (err) {
+            err->status = SIDX_ERR_LIMIT;
+            snprintf(err->message, sizeof err->message, "%llu triangles: more than 32-bit indices address",
+                     (unsigned long long)nt);
+        }
+        return SIDX_ERR_LIMIT;
+    }
+    size_t cap = 64;
+    while (cap < 3u * (size_t)in->num_triangles + (size_t)in->num_triangles / 2u) cap *= 2;
+    uint64_t *key = malloc(cap * sizeof *key);
+    uint32_t *val = malloc(cap * sizeof *val);
+    sidx_vec3 *pos = malloc((size_t)max_nv * sizeof *pos);
+    uint32_t *idx = malloc((size_t)nt * 3 * sizeof *idx);
+    if (!key || !val || !pos || !idx) {
+        free(key);
+        free(val);
+        free(pos);
         free(idx);
+        if (err) {
+            err->status = SIDX_ERR_NOMEM;
+            snprintf(err->message, sizeof err->message, "out of memory subdividing %u triangles", in->num_triangles);
+        }
+        return SIDX_ERR_NOMEM;
+    }
+    memset(key, 0xff, cap * sizeof *key); /* no edge has both ids UINT32_MAX */
+    memcpy(pos, in->positions, (size_t)in->num_vertices * sizeof *pos);
+    uint32_t nv = in->num_vertices;
+    uint32_t *o = idx;
+    for (uint32_t t = 0; t < in->num_triangles; ++t) {
+        const uint32_t *c = in->indices + 3 * (size_t)t;
+        uint32_t mid[3]; /* mid[k]: the midpoint of edge c[k] c[k+1] */
+        for (int k = 0; k < 3; ++k) {
+            const uint32_t p = c[k], q = c[(k + 1) % 3], lo = p < q ? p : q, hi = p < q ? q : p;
+            const uint64_t e = (uint64_t)lo << 32 | hi;
+            size_t h = (size_t)((e * 0x9E3779B97F4A7C15ull) >> 20) & (cap - 1);
+            while (key[h] != e && key[h] != UINT64_MAX) h = (h + 1) & (cap - 1);
+            if (key[h] == UINT64_MAX) {
+                key[h] = e;
+                val[h] = nv;
+                pos[nv++] = sidx_v3_scale(sidx_v3_add(in->positions[lo], in->positions[hi]), 0.5f);
+            }
+            mid[k] = val[h];
+        }
+        const uint32_t q[12] = {c[0], mid[0], mid[2], mid[0], c[1], mid[1], mid[2], mid[1], c[2], mid[0], mid[1], mid[2]};
+        memcpy(o, q, sizeof q);
+        o += 12;
+    }
+    free(key);
+    free(val);
+    sidx_vec3 *fit_pos = realloc(pos, (size_t)nv * sizeof *pos); /* give back the unused midpoints' room */
+    sidx_mesh m = {fit_pos ? fit_pos : pos, idx, nv, (uint32_t)nt};
+    const sidx_status rc = sidx_mesh_validate(&m, err);
+    if (rc != SIDX_OK) {
+        sidx_mesh_free(&m);
+        return rc;
+    }
+    *out = m;
+    return SIDX_OK;
+}
+
+/* base subdivided `levels` times into *out (levels 0: a copy). */
+static sidx_status make_subdivided(const sidx_mesh *base, uint32_t levels, sidx_mesh *out, sidx_error *err)
+{
+    sidx_mesh cur = {0};
+    sidx_status rc = SIDX_OK;
+    cur.positions = malloc((size_t)base->num_vertices * sizeof *cur.positions + 1);
+    cur.indices = malloc((size_t)base->num_triangles * 3 * sizeof *cur.indices + 1);
+    if (!cur.positions || !cur.indices) {
+        sidx_mesh_free(&cur);
         if (err) {
             err->status = SIDX_ERR_NOMEM;
             snprintf(err->message, sizeof err->message, "out of memory");
         }
         return SIDX_ERR_NOMEM;
     }
-    for (size_t j = 0; j <= d; ++j)
-        for (size_t i = 0; i <= d; ++i) {
-            float *v = xyz + 3 * (j * (d + 1) + i);
-            const double x = -1.0 + 2.0 * (double)i / d, z = -1.0 + 2.0 * (double)j / d;
-            v[0] = (float)x;
-            v[1] = (float)(0.06 * sin(7.0 * x + 1.3) * cos(5.0 * z) + 0.04 * sin(23.0 * (x + z)));
-            v[2] = (float)z;
-        }
-    uint32_t *t = idx;
-    for (uint32_t j = 0; j < d; ++j)
-        for (uint32_t i = 0; i < d; ++i) {
-            const uint32_t v00 = j * (d + 1) + i, v10 = v00 + 1, v01 = v00 + d + 1, v11 = v01 + 1;
-            const uint32_t q[6] = {v00, v01, v11, v00, v11, v10};
-            memcpy(t, q, sizeof q);
-            t += 6;
-        }
-    const sidx_status rc = sidx_mesh_from_arrays(out, xyz, (uint32_t)nv, idx, (uint32_t)nt, err);
-    free(xyz);
-    free(idx);
+    memcpy(cur.positions, base->positions, (size_t)base->num_vertices * sizeof *cur.positions);
+    memcpy(cur.indices, base->indices, (size_t)base->num_triangles * 3 * sizeof *cur.indices);
+    cur.num_vertices = base->num_vertices;
+    cur.num_triangles = base->num_triangles;
+    for (uint32_t l = 0; l < levels && rc == SIDX_OK; ++l) {
+        sidx_mesh next = {0};
+        rc = subdivide_once(&cur, &next, err);
+        sidx_mesh_free(&cur);
+        cur = next;
+    }
+    if (rc == SIDX_OK) *out = cur;
     return rc;
+}
+
+/* Camera rays inside a mesh's box b (an interior: Sponza's atrium): the
+ * eye a fifth of the way along the longer horizontal axis (x or z; y is
+ * up) and a fifth of the way up, centred across, looking along that axis
+ * at the far wall three tenths of the way up; a square image of about n
+ * pixels, 64 degrees across (tan 0.625).  On Sponza (x in [-17.4, 17.4],
+ * y in [-0.9, 15.7]) the eye stands at (-10.4, 2.4, 0) on the ground
+ * floor of one end, seeing the floor, both arcades and the far end. */
+static void interior_rays(sidx_aabb b, size_t n, tk_rayrec *out)
+{
+    const sidx_vec3 e = sidx_aabb_extent(b), c = sidx_aabb_centroid(b);
+    const int along_x = e.x >= e.z;
+    const float y_eye = b.min.y + 0.2f * e.y, y_at = b.min.y + 0.3f * e.y;
+    const sidx_vec3 eye = along_x ? sidx_v3(b.min.x + 0.2f * e.x, y_eye, c.z) : sidx_v3(c.x, y_eye, b.min.z + 0.2f * e.z);
+    const sidx_vec3 look = along_x ? sidx_v3(b.max.x, y_at, c.z) : sidx_v3(c.x, y_at, b.max.z);
+    sidx_vec3 fwd = sidx_v3_sub(look, eye);
+    fwd = sidx_v3_scale(fwd, 1.0f / sidx_v3_length(fwd));
+    sidx_vec3 right = sidx_v3_cross(fwd, sidx_v3(0, 1, 0));
+    right = sidx_v3_scale(right, 1.0f / sidx_v3_length(right));
+    const sidx_vec3 up = sidx_v3_cross(right, fwd);
+    size_t w = 1;
+    while ((w + 1) * (w + 1) <= n) ++w;
+    for (size_t i = 0; i < n; ++i) {
+        const float u = (((float)(i % w) + 0.5f) / (float)w * 2.0f - 1.0f) * 0.625f;
+        const float v = (1.0f - ((float)((i / w) % w) + 0.5f) / (float)w * 2.0f) * 0.625f;
+        const sidx_vec3 d = sidx_v3_add(fwd, sidx_v3_add(sidx_v3_scale(right, u), sidx_v3_scale(up, v)));
+        out[i] = (tk_rayrec){{eye.x, eye.y, eye.z}, {d.x, d.y, d.z}, 0.0f, INFINITY};
+    }
 }
 
 /* Camera rays at the teapot (lesson 08's view): eye 2.3 units away, a
@@ -374,9 +480,25 @@ int bench_cmd_scale(int argc, char **argv)
         return BENCH_USAGE;
     }
     const int stadium = !strcmp(scene, "stadium"), hfield = !strcmp(scene, "heightfield");
-    if (strcmp(scene, "icosphere") && strcmp(scene, "grid") && strcmp(scene, "soup") && !stadium && !hfield) {
-        fprintf(stderr, "sidx-bench scale: --scene must be icosphere, grid, heightfield, soup or stadium\n");
-        return BENCH_USAGE;
+    /* any other name is a mesh file, swept by subdivision */
+    const int file = strcmp(scene, "icosphere") && strcmp(scene, "grid") && strcmp(scene, "soup") && !stadium && !hfield;
+    sidx_mesh base = {0};
+    sidx_aabb base_box = {{0, 0, 0}, {0, 0, 0}};
+    if (file) {
+        sidx_error lerr = {SIDX_OK, ""};
+        if (sidx_mesh_load(scene, &base, &lerr) != SIDX_OK) {
+            fprintf(stderr,
+                    "sidx-bench scale: --scene %s: %s\n(--scene is icosphere, grid, heightfield, soup, stadium or a "
+                    "mesh file)\n",
+                    scene, lerr.message);
+            return BENCH_USAGE;
+        }
+        if (base.num_triangles == 0) {
+            fprintf(stderr, "sidx-bench scale: --scene %s: the file has no triangles\n", scene);
+            sidx_mesh_free(&base);
+            return BENCH_USAGE;
+        }
+        base_box = sidx_mesh_bounds(&base);
     }
     /* the sizes: details of the scene */
     uint32_t details[32];
@@ -387,6 +509,9 @@ int bench_cmd_scale(int argc, char **argv)
         if (!strcmp(scene, "icosphere")) {
             d = (uint32_t)k;
             tris = 20.0 * pow(4.0, k);
+        } else if (file) {
+            d = (uint32_t)k; /* subdivision levels */
+            tris = base.num_triangles * pow(4.0, k);
         } else if (stadium) {
             /* teapot detail 8·2^(k/2): about twice the triangles per size
              * (a teapot of detail d has about 8.3 d^2 triangles) */
@@ -420,6 +545,7 @@ int bench_cmd_scale(int argc, char **argv)
         }
     if (na == 0) {
         fprintf(stderr, "sidx-bench scale: no structure selected\n");
+        sidx_mesh_free(&base);
         return BENCH_USAGE;
     }
     scale_pt *pts = calloc((size_t)na * (size_t)(nsizes ? nsizes : 1), sizeof *pts);
@@ -432,6 +558,7 @@ int bench_cmd_scale(int argc, char **argv)
         free(pts);
         free(hits);
         free(rec);
+        sidx_mesh_free(&base);
         return BENCH_FAIL;
     }
     bench_cpu_time = 1;
@@ -440,19 +567,25 @@ int bench_cmd_scale(int argc, char **argv)
                "Mrays/s: the best of up to %d warm passes after a cold one (thread CPU time)\n"
                "MB: the structure; peak_MB: resident peak of the build above the loaded mesh (mesh not\n"
                "included; Embree's includes its copy of vertices and indices); heap_MB: sidx allocator peak\n",
-            scene, nrays, stadium ? "camera-at-the-teapot" : diffuse ? "diffuse" : "primary", budget, bench_embree_version(), passes);
+            scene, nrays,
+            stadium    ? "camera-at-the-teapot"
+            : diffuse  ? "diffuse"
+            : file     ? "primary (inside the box)"
+                       : "primary",
+            budget, bench_embree_version(), passes);
     fprintf(f, "%-14s %10s %10s %9s %8s %8s %9s %9s %9s\n", "accel", "tris", "build_ms", "Mrays/s", "steps", "prims",
             "MB", "peak_MB", "heap_MB");
     int rc = BENCH_OK;
     for (int si = 0; si < nsizes; ++si) {
-        char spec[64];
-        snprintf(spec, sizeof spec, "%s:%u", scene, details[si]);
+        char spec[1100];
+        if (file) snprintf(spec, sizeof spec, "%s level %u", scene, details[si]);
+        else snprintf(spec, sizeof spec, "%s:%u", scene, details[si]);
         sidx_mesh m = {0};
         sidx_error err = {SIDX_OK, ""};
         bench_progress("scale: making %s", spec);
-        const sidx_status made = stadium  ? make_stadium_sweep(details[si], &m, &err)
-                                 : hfield ? bench_make_heightfield(details[si], &m, &err)
-                                          : sidx_scene_open(spec, &m, &err);
+        const sidx_status made = stadium ? make_stadium_sweep(details[si], &m, &err)
+                                 : file  ? make_subdivided(&base, details[si], &m, &err)
+                                         : sidx_scene_open(spec, &m, &err);
         if (made != SIDX_OK) {
             bench_progress_done();
             fprintf(stderr, "sidx-bench scale: %s: %s\n", spec, err.message);
@@ -461,8 +594,10 @@ int bench_cmd_scale(int argc, char **argv)
         }
         const double mesh_bytes = (double)bench_mesh_bytes(&m);
         bench_progress_done();
-        fprintf(f, "-- %s: %u triangles, mesh_MB %.2f\n", spec, m.num_triangles, mesh_bytes / 1048576.0);
+        fprintf(f, "-- %s: %u triangles, %u vertices, mesh_MB %.2f\n", spec, m.num_triangles, m.num_vertices,
+                mesh_bytes / 1048576.0);
         if (stadium) teapot_rays(nrays, rec);
+        else if (file && !diffuse) interior_rays(base_box, nrays, rec);
         else tk_make_rays(&m, diffuse ? TK_RAYS_DIFFUSE : TK_RAYS_PRIMARY, nrays, 7, rec);
         bench_rays br;
         if (!bench_rays_prepare(rec, nrays, &br)) {
@@ -626,5 +761,6 @@ int bench_cmd_scale(int argc, char **argv)
     free(pts);
     free(hits);
     free(rec);
+    sidx_mesh_free(&base);
     return rc;
 }
