@@ -6,9 +6,14 @@
  *
  *   cc -std=gnu11 -O2 -ffp-contract=off -mavx2 -mfma -mpopcnt -Ilib/include -Ilib -Itests \
  *      tests/bench/probe/quantised.c tests/common/testkit.c build/lib/libsidx.a -lm -pthread -o quantised
+ *   (add -mavx512f -mavx512vl for the AVX-512 build: 32 vector registers,
+ *   as the library's AVX-512 copy, and a third walk, quantised-512, which
+ *   decodes both planes of an axis in one 16-lane pass; valgrind runs
+ *   only the AVX2 build)
  *   ./quantised D primary|diffuse time [ROUNDS]   hit check, then per round
- *       float / quantised / library walks interleaved (thread CPU time of
- *       the 100000 rays, warm-up pass then 5 passes: best and median)
+ *       (3 by default) a warm-up pass of each walk and 5 passes of float,
+ *       quantised, (quantised-512,) library in turn (thread CPU time of
+ *       the 100000 rays): ratios of the best and of the median passes
  *   ./quantised D primary|diffuse lines            hit check, then per ray:
  *       distinct 64-byte lines, 4 KB and 2 MB pages of the nodes and
  *       blocks each probe walk reads (2000 rays, every 50th)
@@ -21,9 +26,10 @@
  *
  * D is the height field's detail (724: 1M, 1448: 4.2M, 2896: 16.8M
  * triangles); the rays are the scale command's 100000 (tk_make_rays, seed
- * 7).  Every mode first checks the hits (not under callgrind): every
- * ray's (t bits, prim) from both probe walks must equal
- * sidx_accel_intersect's, else it says which rays differ and exits 1.
+ * 7).  Every mode but cg first checks the conversion and the hits: every
+ * decoded plane must lie on or outside its float plane, and every ray's
+ * (t bits, prim) from each probe walk must equal sidx_accel_intersect's,
+ * else it says how many planes and which rays differ and exits 1.
  * -DPROBE_BREAK=1 or 2 breaks the conversion on purpose (the checks must
  * then fail): 1 moves every box's x hi plane one step in, 2 rounds each q
  * to nearest.  -ffp-contract=off: the triangle kernel's
@@ -39,10 +45,13 @@
  * lies outside the float box, so a decoded box contains the box the float
  * node holds.  The slab test (the library's AVX2 kernel, simd_wide_avx2.h:
  * fl(fl(b − o)·inv), far planes with 1/d times Ize's 1 + 2γ₃) is monotone
- * in b — every step is a rounded subtraction or a multiply by a constant
- * — so a wider box gives an entry no later and an exit no earlier, and
- * the walk reaches every leaf the float walk reaches: the same triangles
- * tested with a bound no smaller, the same closest hit.  Empty slots are
+ * in b — every step is a rounded subtraction or a multiply by a constant,
+ * and a NaN slab value (0·∞) never narrows the interval — so a wider box
+ * gives an entry no later and an exit no earlier, and the walk reaches
+ * every leaf the float walk reaches: every triangle that can give the hit
+ * is tested, the same closest t.  The prim could differ only where two
+ * triangles in different leaves give the same float t and the changed
+ * order keeps the other one; the check would show it.  Empty slots are
  * cut by a mask byte.  The walks are one function (walk) with a
  * compile-time flag, the float copy reading the library's own nodes, so
  * quantised / float isolates the layout and the decode. */
@@ -103,7 +112,8 @@ static sidx_status bench_make_heightfield(uint32_t d, sidx_mesh *out, sidx_error
 typedef struct qnode {
     float origin[3];   /* per axis: the node's lower corner */
     float step[3];     /* per axis: 2^e */
-    uint8_t q[6][8];   /* lo_x, lo_y, lo_z, hi_x, hi_y, hi_z of the 8 children */
+    uint8_t q[6][8];   /* lo_x, hi_x, lo_y, hi_y, lo_z, hi_z of the 8 children (the two planes
+                        * of an axis side by side: one 16-byte load for the 512-bit decode) */
     uint32_t child[8]; /* as the float node's (WIDE_LEAF_BIT | block, node index, WIDE_EMPTY) */
     uint8_t valid;     /* bit s: slot s holds a child */
     uint8_t pad[23];
@@ -146,7 +156,7 @@ static int quantise_node(const float *n, qnode *out)
             const float step = ldexpf(1.0f, e);
             int ok = 1;
             for (int s = 0; s < 8 && ok; ++s) {
-                uint8_t *ql = &out->q[k][s], *qh = &out->q[3 + k][s];
+                uint8_t *ql = &out->q[2 * k][s], *qh = &out->q[2 * k + 1][s];
                 if (!(out->valid >> s & 1)) {
                     *ql = 255, *qh = 0; /* masked anyway */
                     continue;
@@ -177,7 +187,7 @@ static int quantise_node(const float *n, qnode *out)
 #if PROBE_BREAK == 1
     /* deliberately wrong: the x hi plane of every box one step inward */
     for (int s = 0; s < 8; ++s)
-        if (out->q[3][s] > out->q[0][s]) --out->q[3][s];
+        if (out->q[1][s] > out->q[0][s]) --out->q[1][s];
 #endif
     return 1;
 }
@@ -189,24 +199,55 @@ static int quantise_node(const float *n, qnode *out)
 typedef struct consts {
     __m256 org_x, org_y, org_z, inv_x, inv_y, inv_z, far_x, far_y, far_z, tmin;
     tri4_ray tri;
-    uint32_t near_off[3], far_off[3]; /* plane k of a node: floats (float) or bytes (quantised) from b / q */
+    uint32_t near_off[3], far_off[3];   /* the planes of axis k: floats from b (float node) */
+    uint32_t qnear_off[3], qfar_off[3]; /* and bytes from q (quantised node) */
+#ifdef __AVX512F__
+    __m512 org5[3], mul5[3]; /* walk 2: origin; 1/d in the lo half, 1/d·S in the hi (swapped for d < 0) */
+    __m512i perm5[3];        /* walk 2: puts the entry plane's half low (identity, or the halves swapped) */
+#endif
 } consts_t;
 
-/* Plane `off` of a node on axis k: 8 floats read, or 8 bytes decoded. */
-WINL __m256 plane(const void *node, uint32_t off, int k, const int quant)
+/* A plane of a node on axis k: 8 floats read at off, or 8 bytes at qoff decoded. */
+WINL __m256 plane(const void *node, uint32_t off, uint32_t qoff, int k, const int quant)
 {
     if (!quant) return _mm256_load_ps((const float *)node + off);
     const qnode *n = node;
-    const __m256 q = _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(_mm_loadl_epi64((const __m128i *)(const void *)(n->q[0] + off))));
+    const __m256 q = _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(_mm_loadl_epi64((const __m128i *)(const void *)(n->q[0] + qoff))));
     return _mm256_fmadd_ps(q, _mm256_broadcast_ss(&n->step[k]), _mm256_broadcast_ss(&n->origin[k]));
 }
+
+#ifdef __AVX512F__
+/* Walk 2 (quantised, AVX-512 builds only): both planes of an axis decoded
+ * in one 16-lane pass, entry planes in the low half, exit planes in the
+ * high; the same operations per lane, in the same order, as boxes()
+ * below: fl(fl(b − o)·inv) and fl(fl(b − o)·inv·S), max (slab value
+ * first) into the entry half, min into the exit half.  So the same bits. */
+WINL unsigned boxes512(const qnode *n, const consts_t *c, float best, float *t_near)
+{
+    __m512 acc = _mm512_mask_mov_ps(_mm512_set1_ps(best), 0x00FF, _mm512_castps256_ps512(c->tmin));
+    for (int k = 0; k < 3; ++k) {
+        const __m512 q = _mm512_cvtepi32_ps(_mm512_cvtepu8_epi32(_mm_loadu_si128((const __m128i *)(const void *)n->q[2 * k])));
+        const __m512 b = _mm512_fmadd_ps(q, _mm512_set1_ps(n->step[k]), _mm512_set1_ps(n->origin[k]));
+        const __m512 t = _mm512_permutexvar_ps(c->perm5[k], _mm512_mul_ps(_mm512_sub_ps(b, c->org5[k]), c->mul5[k]));
+        acc = _mm512_mask_max_ps(acc, 0x00FF, t, acc);
+        acc = _mm512_mask_min_ps(acc, 0xFF00, t, acc);
+    }
+    const __m256 t_enter = _mm512_castps512_ps256(acc);
+    const __m256 t_exit = _mm256_castpd_ps(_mm512_extractf64x4_pd(_mm512_castps_pd(acc), 1));
+    _mm256_store_ps(t_near, t_enter);
+    return (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(t_enter, t_exit, _CMP_LE_OQ)) & n->valid;
+}
+#endif
 
 /* simd_wide_avx2.h's boxes_, the planes from plane(). */
 WINL unsigned boxes(const void *node, const consts_t *c, float best, float *t_near, const int quant)
 {
-    const __m256 lo_x = plane(node, c->near_off[0], 0, quant), hi_x = plane(node, c->far_off[0], 0, quant);
-    const __m256 lo_y = plane(node, c->near_off[1], 1, quant), hi_y = plane(node, c->far_off[1], 1, quant);
-    const __m256 lo_z = plane(node, c->near_off[2], 2, quant), hi_z = plane(node, c->far_off[2], 2, quant);
+#ifdef __AVX512F__
+    if (quant == 2) return boxes512(node, c, best, t_near);
+#endif
+    const __m256 lo_x = plane(node, c->near_off[0], c->qnear_off[0], 0, quant), hi_x = plane(node, c->far_off[0], c->qfar_off[0], 0, quant);
+    const __m256 lo_y = plane(node, c->near_off[1], c->qnear_off[1], 1, quant), hi_y = plane(node, c->far_off[1], c->qfar_off[1], 1, quant);
+    const __m256 lo_z = plane(node, c->near_off[2], c->qnear_off[2], 2, quant), hi_z = plane(node, c->far_off[2], c->qfar_off[2], 2, quant);
     const __m256 near_x = _mm256_mul_ps(_mm256_sub_ps(lo_x, c->org_x), c->inv_x);
     const __m256 near_y = _mm256_mul_ps(_mm256_sub_ps(lo_y, c->org_y), c->inv_y);
     const __m256 near_z = _mm256_mul_ps(_mm256_sub_ps(lo_z, c->org_z), c->inv_z);
@@ -236,6 +277,7 @@ WINL uint32_t rank(const float *t_near, unsigned slot, unsigned hit_mask)
 typedef struct touched {
     uintptr_t lines[1 << 14], pages[1 << 12], pages2[1 << 10];
     size_t nl, np, np2;
+    size_t nodes, blocks; /* visits */
 } touched;
 static void add(uintptr_t *arr, size_t *n, size_t cap, uintptr_t v)
 {
@@ -289,7 +331,20 @@ WINL void walk(const tree *tr, const sidx_ray *r, float *t_out, uint32_t *prim_o
     for (int k = 0; k < 3; ++k) {
         c.near_off[k] = (uint32_t)((r->sign[k] ? 3 + k : k) * 8);
         c.far_off[k] = (uint32_t)((r->sign[k] ? k : 3 + k) * 8);
+        c.qnear_off[k] = (uint32_t)((r->sign[k] ? 2 * k + 1 : 2 * k) * 8);
+        c.qfar_off[k] = (uint32_t)((r->sign[k] ? 2 * k : 2 * k + 1) * 8);
     }
+#ifdef __AVX512F__
+    if (quant == 2)
+        for (int k = 0; k < 3; ++k) {
+            const __m512 in = _mm512_set1_ps(inv[k]), fa = _mm512_set1_ps(inv[k] * scale);
+            c.org5[k] = _mm512_set1_ps(o[k]);
+            /* lanes 0-7 hold the lo planes, 8-15 the hi: d < 0 enters through hi */
+            c.mul5[k] = r->sign[k] ? _mm512_mask_mov_ps(in, 0x00FF, fa) : _mm512_mask_mov_ps(in, 0xFF00, fa);
+            c.perm5[k] = r->sign[k] ? _mm512_setr_epi32(8, 9, 10, 11, 12, 13, 14, 15, 0, 1, 2, 3, 4, 5, 6, 7)
+                                    : _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+        }
+#endif
     c.org_x = _mm256_set1_ps(o[0]), c.org_y = _mm256_set1_ps(o[1]), c.org_z = _mm256_set1_ps(o[2]);
     c.inv_x = _mm256_set1_ps(inv[0]), c.inv_y = _mm256_set1_ps(inv[1]), c.inv_z = _mm256_set1_ps(inv[2]);
     c.far_x = _mm256_set1_ps(inv[0] * scale), c.far_y = _mm256_set1_ps(inv[1] * scale);
@@ -305,7 +360,7 @@ WINL void walk(const tree *tr, const sidx_ray *r, float *t_out, uint32_t *prim_o
         if (!(cur & WIDE_LEAF_BIT)) {
             const void *node = quant ? (const void *)(tr->qn + cur) : (const void *)(w->nodes + (size_t)cur * 64u);
             const uint32_t *child = quant ? ((const qnode *)node)->child : wide_child(node, 8);
-            if (count) touch(tc, node, quant ? 128 : 256);
+            if (count) touch(tc, node, quant ? 128 : 256), ++tc->nodes;
             unsigned hits = boxes(node, &c, best_s, t_near, quant);
             if (hits) {
                 const unsigned slot0 = (unsigned)__builtin_ctz(hits);
@@ -352,7 +407,7 @@ WINL void walk(const tree *tr, const sidx_ray *r, float *t_out, uint32_t *prim_o
             const float *row_x = &block->v[0][0][0] + c.tri.kx4, *row_y = &block->v[0][0][0] + c.tri.ky4,
                         *row_z = &block->v[0][0][0] + c.tri.kz4;
             for (;; ++block) {
-                if (count) touch(tc, block, sizeof *block);
+                if (count) touch(tc, block, sizeof *block), ++tc->blocks;
                 float t;
                 unsigned lane;
                 const int hit = tri4_test_axes(row_x, row_y, row_z, &c.tri, best, &t, &lane, NULL);
@@ -396,6 +451,25 @@ static __attribute__((noinline)) void walk_quant(const tree *tr, const sidx_ray 
 {
     walk(tr, r, t, prim, NULL, 1, 0);
 }
+#ifdef __AVX512F__
+#define WALKS 3 /* float, quantised, quantised with the 512-bit decode */
+static __attribute__((noinline)) void walk_quant512(const tree *tr, const sidx_ray *r, float *t, uint32_t *prim)
+{
+    walk(tr, r, t, prim, NULL, 2, 0);
+}
+#else
+#define WALKS 2
+#endif
+static const char *const walk_name[3] = {"float", "quantised", "quantised-512"};
+/* probe walk `which` (0 float, 1 quantised, 2 quantised with the 512-bit decode) */
+static void walk_any(int which, const tree *tr, const sidx_ray *r, float *t, uint32_t *prim)
+{
+    if (which == 0) walk_float(tr, r, t, prim);
+    else if (which == 1) walk_quant(tr, r, t, prim);
+#ifdef __AVX512F__
+    else walk_quant512(tr, r, t, prim);
+#endif
+}
 static __attribute__((noinline)) void walk_float_count(const tree *tr, const sidx_ray *r, touched *tc)
 {
     float t;
@@ -420,7 +494,7 @@ static double cpu_now(void)
 
 static volatile float sink;
 
-/* One pass of walk `which` (0 float, 1 quantised, 2 library) over n rays: seconds. */
+/* One pass of walk `which` (walk_any's, WALKS: the library) over n rays: seconds. */
 static double pass(const tree *tr, const sidx_ray *r, size_t n, int which)
 {
     float s = 0.0f;
@@ -428,8 +502,7 @@ static double pass(const tree *tr, const sidx_ray *r, size_t n, int which)
     for (size_t i = 0; i < n; ++i) {
         float t;
         uint32_t p;
-        if (which == 0) walk_float(tr, &r[i], &t, &p);
-        else if (which == 1) walk_quant(tr, &r[i], &t, &p);
+        if (which < WALKS) walk_any(which, tr, &r[i], &t, &p);
         else {
             sidx_hit h;
             sidx_accel_intersect(tr->a, &r[i], NULL, &h);
@@ -486,8 +559,8 @@ int main(int argc, char **argv)
             if (!(qn[i].valid >> s & 1)) continue;
             for (int k = 0; k < 3; ++k) {
                 planes += 2;
-                inward += decode(qn[i].origin[k], qn[i].step[k], qn[i].q[k][s]) > n[k * 8 + s];
-                inward += decode(qn[i].origin[k], qn[i].step[k], qn[i].q[3 + k][s]) < n[(3 + k) * 8 + s];
+                inward += decode(qn[i].origin[k], qn[i].step[k], qn[i].q[2 * k][s]) > n[k * 8 + s];
+                inward += decode(qn[i].origin[k], qn[i].step[k], qn[i].q[2 * k + 1][s]) < n[(3 + k) * 8 + s];
             }
         }
     }
@@ -532,17 +605,16 @@ int main(int argc, char **argv)
     for (size_t i = 0; i < N; ++i) {
         sidx_hit h;
         sidx_accel_intersect(a, &r[i], NULL, &h);
-        for (int quant = 0; quant < 2; ++quant) {
+        for (int which = 0; which < WALKS; ++which) {
             float t;
             uint32_t p;
-            if (quant) walk_quant(&tr, &r[i], &t, &p);
-            else walk_float(&tr, &r[i], &t, &p);
+            walk_any(which, &tr, &r[i], &t, &p);
             uint32_t tb, hb;
             memcpy(&tb, &t, 4);
             memcpy(&hb, &h.t, 4);
             if (tb != hb || p != h.prim) {
                 if (bad < 10)
-                    printf("MISMATCH ray %zu %s walk: t %a prim %u, library t %a prim %u\n", i, quant ? "quantised" : "float",
+                    printf("MISMATCH ray %zu %s walk: t %a prim %u, library t %a prim %u\n", i, walk_name[which],
                            (double)t, p, (double)h.t, h.prim);
                 ++bad;
             }
@@ -550,43 +622,57 @@ int main(int argc, char **argv)
     }
     printf("D %u (%u tris), %s: %u nodes, float %.1f MB, quantised %.1f MB; hit check over %zu rays: %zu mismatches\n", d,
            m.num_triangles, argv[2], w->num_inner, w->num_inner * 256.0 / 1048576, w->num_inner * 128.0 / 1048576, N, bad);
-    if (bad) return 1;
+    if (bad || inward) return 1;
     if (!strcmp(mode, "lines")) {
         static touched tc;
         for (int quant = 0; quant < 2; ++quant) {
             double ln = 0, pg = 0, pg2 = 0;
+            tc.nodes = tc.blocks = 0;
             for (size_t i = 0; i < n_cg; ++i) {
                 tc.nl = tc.np = tc.np2 = 0;
                 if (quant) walk_quant_count(&tr, &r[i * (N / n_cg)], &tc);
                 else walk_float_count(&tr, &r[i * (N / n_cg)], &tc);
                 ln += tc.nl, pg += tc.np, pg2 += tc.np2;
             }
-            printf("%s: per ray %.1f lines, %.2f 4K pages, %.2f 2M pages\n", quant ? "quantised" : "float", ln / n_cg,
-                   pg / n_cg, pg2 / n_cg);
+            printf("%s: per ray %.1f lines, %.2f 4K pages, %.2f 2M pages; %.2f nodes and %.2f blocks visited\n",
+                   quant ? "quantised" : "float", ln / n_cg, pg / n_cg, pg2 / n_cg, (double)tc.nodes / n_cg,
+                   (double)tc.blocks / n_cg);
         }
         return 0;
     }
-    /* time: rounds of float, quantised, library, each a warm-up pass then 5 */
+    /* time: rounds; in each a warm-up pass of every walk, then 5 passes
+     * of float, quantised, library in turn (interleaved pass by pass, so
+     * a change in the machine's load falls on all three alike) */
     const int rounds = argc > 4 ? atoi(argv[4]) : 3;
-    double ratio_best[64], ratio_med[64], ratio_lib[64];
-    for (int rd = 0; rd < rounds && rd < 64; ++rd) {
-        double best[3], med[3];
-        for (int which = 0; which < 3; ++which) {
-            double p[5];
-            (void)pass(&tr, r, N, which);
-            for (int k = 0; k < 5; ++k) p[k] = pass(&tr, r, N, which);
-            qsort(p, 5, sizeof *p, cmp_d);
-            best[which] = p[0], med[which] = p[2];
+    if (rounds < 1 || rounds > 64) return 2;
+    double ratio_best[2][64], ratio_med[2][64];
+    for (int rd = 0; rd < rounds; ++rd) {
+        double p[WALKS + 1][5], best[WALKS + 1], med[WALKS + 1];
+        for (int which = 0; which <= WALKS; ++which) (void)pass(&tr, r, N, which);
+        for (int k = 0; k < 5; ++k)
+            for (int which = 0; which <= WALKS; ++which) p[which][k] = pass(&tr, r, N, which);
+        for (int which = 0; which <= WALKS; ++which) {
+            qsort(p[which], 5, sizeof(double), cmp_d);
+            best[which] = p[which][0], med[which] = p[which][2];
         }
-        ratio_best[rd] = best[1] / best[0], ratio_med[rd] = med[1] / med[0], ratio_lib[rd] = best[0] / best[2];
-        printf("round %d: Mrays/s best float %.2f quantised %.2f library %.2f; quantised/float time best %.3f median %.3f; "
-               "float/library %.3f\n",
-               rd + 1, N / best[0] * 1e-6, N / best[1] * 1e-6, N / best[2] * 1e-6, ratio_best[rd], ratio_med[rd],
-               ratio_lib[rd]);
+        printf("round %d: Mrays/s best", rd + 1);
+        for (int which = 0; which <= WALKS; ++which)
+            printf(" %s %.2f", which < WALKS ? walk_name[which] : "library", N / best[which] * 1e-6);
+        for (int which = 1; which < WALKS; ++which) {
+            ratio_best[which - 1][rd] = best[which] / best[0], ratio_med[which - 1][rd] = med[which] / med[0];
+            printf("; %s/float time best %.3f median %.3f", walk_name[which], ratio_best[which - 1][rd],
+                   ratio_med[which - 1][rd]);
+        }
+        printf("; float/library %.3f\n", best[0] / best[WALKS]);
         fflush(stdout);
     }
-    qsort(ratio_best, (size_t)rounds, sizeof(double), cmp_d);
-    printf("quantised/float (best of 5 per round), median [min..max] over %d rounds: %.3f [%.3f..%.3f]\n", rounds,
-           ratio_best[rounds / 2], ratio_best[0], ratio_best[rounds - 1]);
+    for (int which = 1; which < WALKS; ++which) {
+        double *rb = ratio_best[which - 1], *rm = ratio_med[which - 1];
+        qsort(rb, (size_t)rounds, sizeof(double), cmp_d);
+        qsort(rm, (size_t)rounds, sizeof(double), cmp_d);
+        printf("%s/float over %d rounds, median [min..max]: best passes %.3f [%.3f..%.3f], median passes %.3f "
+               "[%.3f..%.3f]\n",
+               walk_name[which], rounds, rb[rounds / 2], rb[0], rb[rounds - 1], rm[rounds / 2], rm[0], rm[rounds - 1]);
+    }
     return 0;
 }
