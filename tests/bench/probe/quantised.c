@@ -245,6 +245,7 @@ WINL unsigned boxes(const void *node, const consts_t *c, float best, float *t_ne
 #ifdef __AVX512F__
     if (quant == 2) return boxes512(node, c, best, t_near);
 #endif
+    /* cppcheck-suppress ctuuninitvar ; walk() sets every field read here */
     const __m256 lo_x = plane(node, c->near_off[0], c->qnear_off[0], 0, quant), hi_x = plane(node, c->far_off[0], c->qfar_off[0], 0, quant);
     const __m256 lo_y = plane(node, c->near_off[1], c->qnear_off[1], 1, quant), hi_y = plane(node, c->far_off[1], c->qfar_off[1], 1, quant);
     const __m256 lo_z = plane(node, c->near_off[2], c->qnear_off[2], 2, quant), hi_z = plane(node, c->far_off[2], c->qfar_off[2], 2, quant);
