@@ -32,7 +32,8 @@
  * else it says how many planes and which rays differ and exits 1.
  * -DPROBE_BREAK=1 or 2 breaks the conversion on purpose (the checks must
  * then fail): 1 moves every box's x hi plane one step in, 2 rounds each q
- * to nearest.  -ffp-contract=off: the triangle kernel's
+ * to nearest.  -DPROBE_PREFETCH=0: neither probe walk prefetches.
+ * -ffp-contract=off: the triangle kernel's
  * multiplies and subtractions must not be fused, as in the library.
  *
  * The quantised node (Mahovsky 2005; Ylitie, Karras, Laine 2017 "Efficient
@@ -68,6 +69,9 @@
 
 #ifndef PROBE_BREAK
 #define PROBE_BREAK 0
+#endif
+#ifndef PROBE_PREFETCH
+#define PROBE_PREFETCH 1 /* 0: neither probe walk prefetches hit children */
 #endif
 
 /* the scale command's height field (tests/bench/scale.c) */
@@ -306,6 +310,7 @@ typedef struct tree {
  * whichever node array points to it). */
 WINL void prefetch(const tree *tr, uint32_t ref, const int quant)
 {
+    if (!PROBE_PREFETCH) return;
     const uintptr_t leaf = (uintptr_t)tr->w->blocks + (uintptr_t)(ref & ~WIDE_LEAF_BIT) * sizeof(wide_tri4);
     const uintptr_t node = quant ? (uintptr_t)(tr->qn + ref) : (uintptr_t)tr->w->nodes + (uintptr_t)ref * 256u;
     const char *line = (const char *)((ref & WIDE_LEAF_BIT) ? leaf : node);
