@@ -24,7 +24,7 @@
  *       totals): 20000 other rays of the set warm the caches, then 2000
  *       rays (every 50th) are counted, as layout.c does
  *
- * D is the height field's detail (724: 1M, 1448: 4.2M, 2896: 16.8M
+ * D is the detail of the built-in scene heightfield (724: 1M, 1448: 4.2M, 2896: 16.8M
  * triangles); the rays are the scale command's 100000 (tk_make_rays, seed
  * 7).  Every mode but cg first checks the conversion and the hits: every
  * decoded plane must lie on or outside its float plane, and every ray's
@@ -73,43 +73,6 @@
 #ifndef PROBE_PREFETCH
 #define PROBE_PREFETCH 1 /* 0: neither probe walk prefetches hit children */
 #endif
-
-/* the scale command's height field (tests/bench/scale.c) */
-static sidx_status bench_make_heightfield(uint32_t d, sidx_mesh *out, sidx_error *err)
-{
-    const size_t nv = ((size_t)d + 1) * ((size_t)d + 1), nt = 2 * (size_t)d * d;
-    float *xyz = malloc(nv * 3 * sizeof *xyz);
-    uint32_t *idx = malloc(nt * 3 * sizeof *idx);
-    if (!xyz || !idx || nv > UINT32_MAX || nt > UINT32_MAX) {
-        free(xyz);
-        free(idx);
-        if (err) {
-            err->status = SIDX_ERR_NOMEM;
-            snprintf(err->message, sizeof err->message, "out of memory");
-        }
-        return SIDX_ERR_NOMEM;
-    }
-    for (size_t j = 0; j <= d; ++j)
-        for (size_t i = 0; i <= d; ++i) {
-            float *v = xyz + 3 * (j * (d + 1) + i);
-            const double x = -1.0 + 2.0 * (double)i / d, z = -1.0 + 2.0 * (double)j / d;
-            v[0] = (float)x;
-            v[1] = (float)(0.06 * sin(7.0 * x + 1.3) * cos(5.0 * z) + 0.04 * sin(23.0 * (x + z)));
-            v[2] = (float)z;
-        }
-    uint32_t *t = idx;
-    for (uint32_t j = 0; j < d; ++j)
-        for (uint32_t i = 0; i < d; ++i) {
-            const uint32_t v00 = j * (d + 1) + i, v10 = v00 + 1, v01 = v00 + d + 1, v11 = v01 + 1;
-            const uint32_t q[6] = {v00, v01, v11, v00, v11, v10};
-            memcpy(t, q, sizeof q);
-            t += 6;
-        }
-    const sidx_status rc = sidx_mesh_from_arrays(out, xyz, (uint32_t)nv, idx, (uint32_t)nt, err);
-    free(xyz);
-    free(idx);
-    return rc;
-}
 
 /* ---- the quantised node: 128 bytes, 2 lines ---------------------------------- */
 
@@ -539,7 +502,8 @@ int main(int argc, char **argv)
     const int cg = !strcmp(mode, "cg");
     sidx_mesh m;
     sidx_error err;
-    if (bench_make_heightfield(d, &m, &err) != SIDX_OK) return 1;
+    /* the scale command's height field: the built-in scene heightfield:D */
+    if (sidx_scene_make("heightfield", d, &m, &err) != SIDX_OK) { fprintf(stderr, "%s\n", err.message); return 1; }
     sidx_accel *a = NULL;
     if (sidx_accel_build("bvh8", &m, NULL, &a, &err) != SIDX_OK) {
         fprintf(stderr, "%s\n", err.message);
