@@ -9,13 +9,13 @@
  *      tests/bench/probe/inflight.c tests/common/testkit.c build/lib/libsidx.a -lm -pthread -o inflight
  *   ./inflight D|FILE primary|diffuse time [ROUNDS]   hit check, then per
  *       round (7 by default) a warm-up pass of each walk and 5 passes of
- *       single, K = 2, 4, 8, library in turn (thread CPU time of the 100000
+ *       single, K = 2, 4, 8, 16, library in turn (thread CPU time of the 100000
  *       rays): ratios K / single of the best passes, per round and
  *       median [min..max] over the rounds
  *   ./inflight D|FILE primary|diffuse check           the hit check alone
  *   valgrind --tool=callgrind --instr-atstart=no ./inflight D|FILE primary|diffuse cg
- *       the single walk, then K = 2, 4, 8, each dumped as a part of its own
- *       (callgrind.out.PID.1 .. .4; callgrind_annotate gives the totals):
+ *       the single walk, then K = 2, 4, 8, 16, each dumped as a part of its own
+ *       (callgrind.out.PID.1 .. .5; callgrind_annotate gives the totals):
  *       20000 other rays of the set warm the caches, then 2000 rays (every
  *       50th) are counted, as quantised.c does
  *
@@ -348,7 +348,7 @@ WINL int step(const tree *tr, slot *s)
  * t_out, prim_out at the rays' places. */
 WINL void walk_k(const tree *tr, const sidx_ray *r, size_t n, float *t_out, uint32_t *prim_out, const unsigned K)
 {
-    static _Alignas(64) slot s[8];
+    static _Alignas(64) slot s[16];
     size_t next = 0;
     unsigned live = 0;
     for (unsigned k = 0; k < K && next < n; ++k, ++next) {
@@ -387,9 +387,13 @@ static __attribute__((noinline)) void walk_k8(const tree *tr, const sidx_ray *r,
 {
     walk_k(tr, r, n, t, p, 8);
 }
+static __attribute__((noinline)) void walk_k16(const tree *tr, const sidx_ray *r, size_t n, float *t, uint32_t *p)
+{
+    walk_k(tr, r, n, t, p, 16);
+}
 
-#define WALKS 4 /* single, K = 2, 4, 8; WALKS: the library */
-static const char *const walk_name[WALKS + 1] = {"single", "K=2", "K=4", "K=8", "library"};
+#define WALKS 5 /* single, K = 2, 4, 8, 16; WALKS: the library */
+static const char *const walk_name[WALKS + 1] = {"single", "K=2", "K=4", "K=8", "K=16", "library"};
 
 /* Walk `which` over the n rays of r, answers to t, p. */
 static void run(int which, const tree *tr, const sidx_ray *r, size_t n, float *t, uint32_t *p)
@@ -401,6 +405,7 @@ static void run(int which, const tree *tr, const sidx_ray *r, size_t n, float *t
     case 1: walk_k2(tr, r, n, t, p); break;
     case 2: walk_k4(tr, r, n, t, p); break;
     case 3: walk_k8(tr, r, n, t, p); break;
+    case 4: walk_k16(tr, r, n, t, p); break;
     default:
         for (size_t i = 0; i < n; ++i) {
             sidx_hit h;
