@@ -7,6 +7,8 @@
  *
  *   cc -std=gnu11 -O2 -ffp-contract=off -mavx2 -mfma -mpopcnt -Ilib/include -Ilib -Itests \
  *      tests/bench/probe/inflight.c tests/common/testkit.c build/lib/libsidx.a -lm -pthread -o inflight
+ *   (add -mavx512f -mavx512vl for the AVX-512 build: 32 vector registers,
+ *   as the library's AVX-512 copy; valgrind runs only the AVX2 build)
  *   ./inflight D|FILE primary|diffuse time [ROUNDS]   hit check, then per
  *       round (7 by default) a warm-up pass of each walk and 5 passes of
  *       single, K = 2, 4, 8, 16, library in turn (thread CPU time of the 100000
