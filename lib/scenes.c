@@ -719,12 +719,9 @@ static void make_grid(builder *b, unsigned n)
 /* detail x detail quads over x, z in [-1, 1], y a sum of two sine waves
  * (|y| <= 0.1), two triangles per quad: a terrain-like mesh of any size
  * (2 detail^2 triangles, (detail + 1)^2 vertices), the surface of
- * `sidx-bench scale --scene heightfield` and `sidx-bench lazy`.  Unlike
- * the circles of teapot and stadium, the waves come from libm's sin and
- * cos in double, rounded to float once: these are the vertices the
- * height-field figures in docs/performance.md were measured on, and a
- * libm whose double sine differs in the last bit changes a float only
- * when the value lies on a float rounding boundary. */
+ * `sidx-bench scale --scene heightfield` and `sidx-bench lazy`.  The
+ * waves come from scene_sincos, as the teapot's circles do, so the mesh is
+ * the same floats natively and in the WebAssembly lab. */
 static void make_heightfield(builder *b, unsigned n)
 {
     /* exact sizes up front: at detail 8192 the doubling builder would
@@ -736,9 +733,12 @@ static void make_heightfield(builder *b, unsigned n)
     b->cap_t = b->idx ? nt : 0;
     for (size_t j = 0; j <= n; ++j)
         for (size_t i = 0; i <= n; ++i) {
-            const double x = -1.0 + 2.0 * (double)i / n, z = -1.0 + 2.0 * (double)j / n;
-            vtx(b, (float)x, (float)(0.06 * sin(7.0 * x + 1.3) * cos(5.0 * z) + 0.04 * sin(23.0 * (x + z))),
-                (float)z);
+            const float x = (float)(-1.0 + 2.0 * (double)i / n), z = (float)(-1.0 + 2.0 * (double)j / n);
+            float s1, c1, s2, c2, s3, c3;
+            scene_sincos(7.0f * x + 1.3f, &s1, &c1);
+            scene_sincos(5.0f * z, &s2, &c2);
+            scene_sincos(23.0f * (x + z), &s3, &c3);
+            vtx(b, x, 0.06f * s1 * c2 + 0.04f * s3, z);
         }
     for (unsigned j = 0; j < n; ++j)
         for (unsigned i = 0; i < n; ++i) {
