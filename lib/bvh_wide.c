@@ -677,6 +677,27 @@ done:
  * in the environment turns it on (measurements, tests). */
 #define WIDE_TREELET_BYTES 4096u
 
+/* Several rays in flight in the stream entry (bvh_wide_walk.h, the
+ * flight_ walks): they pay where the walk waits on memory and cost where
+ * the tree is in cache (docs/performance.md, "Several rays in flight"),
+ * so they are taken for a tree whose nodes and blocks take at least
+ * WIDE_INFLIGHT_BYTES: 32 MiB, a last-level cache of today's desktop and
+ * server CPUs.  Measured, the bunny (69k triangles, about 5 MB) is 1.3×
+ * slower with them and stays below; the 1M-triangle height field (about
+ * 60 MB) is 1.3–2× faster and is above.  Only bvh8 was measured; bvh4
+ * takes them when asked.  SIDX_STREAM_INFLIGHT=on|off in the environment
+ * at build forces the choice (tests, measurements). */
+#define WIDE_INFLIGHT_BYTES (32u << 20)
+
+static int want_inflight(const wide_bvh *w)
+{
+    const char *env = getenv("SIDX_STREAM_INFLIGHT");
+    if (env && !strcmp(env, "on")) return 1;
+    if (env && !strcmp(env, "off")) return 0;
+    const size_t bytes = (size_t)w->num_inner * (8u * w->width * sizeof(float)) + (size_t)w->num_blocks * sizeof(wide_tri4);
+    return w->width == 8 && bytes >= WIDE_INFLIGHT_BYTES;
+}
+
 static int want_order(void)
 {
     const char *env = getenv("SIDX_WIDE_ORDER");
@@ -851,6 +872,7 @@ static sidx_status wide_build(sidx_accel *a, sidx_error *err)
     if ((s = collapse_into(a, b, w, lazy ? w->lazy->recs : NULL)) != SIDX_OK) goto fail;
     /* a lazy top stays depth-first: its unbuilt children are filled in by parent index */
     if (!lazy && w->num_inner && want_order() && (s = wide_order(a, w)) != SIDX_OK) goto fail;
+    w->inflight = !lazy && want_inflight(w);
     s = SIDX_ERR_NOMEM;
     if (lazy) {
         wide_lazy *L = w->lazy;
