@@ -681,13 +681,14 @@ done:
  * flight_ walks): they pay where the walk waits on memory and cost where
  * the tree is in cache (docs/performance.md, "Several rays in flight"),
  * so they are taken for a tree whose nodes and blocks take at least
- * WIDE_INFLIGHT_BYTES: 32 MiB, a last-level cache of today's desktop and
- * server CPUs.  Measured, the bunny (69k triangles, about 5 MB) is 1.3×
- * slower with them and stays below; the 1M-triangle height field (about
- * 60 MB) is 1.3–2× faster and is above.  Only bvh8 was measured; bvh4
- * takes them when asked.  SIDX_STREAM_INFLIGHT=on|off in the environment
- * at build forces the choice (tests, measurements). */
-#define WIDE_INFLIGHT_BYTES (32u << 20)
+ * WIDE_INFLIGHT_BYTES.  Measured with bvh8, the crossover lies between
+ * the trees of Sponza (4.7 MiB) and the bunny (3.6 MiB), whose primary
+ * rays are slower in flight, and that of the 262k-triangle height field
+ * (13.3 MiB), where both ray kinds are faster: 8 MiB between them, a few
+ * times the L2 caches.  Only bvh8 was measured; bvh4 takes
+ * them when asked.  SIDX_STREAM_INFLIGHT=on or off in the environment at
+ * build forces the choice (tests, measurements). */
+#define WIDE_INFLIGHT_BYTES (8u << 20)
 
 static int want_inflight(const wide_bvh *w)
 {

@@ -166,12 +166,11 @@ sidx_status sidx_accel_occluded(const sidx_accel *a, const sidx_ray *r, const si
  * the choice of walk made once per call instead of once per ray
  * (docs/performance.md, "The stream entry"), optionally in another order
  * (SIDX_QUERY_REORDER).  On a bvh8 tree whose nodes and triangle blocks
- * take 32 MiB or more, closest-hit buffers with the watertight test
+ * take 8 MiB or more, closest-hit buffers with the watertight test
  * (the default) are walked 8 rays at a time, each advanced one node or
  * leaf in turn so that one ray's wait on memory overlaps the others'
- * work: the same hits, bit for bit, about twice as fast on trees far out
- * of cache, slower on trees in cache (docs/performance.md, "Several rays
- * in flight").  SIDX_STREAM_INFLIGHT=on or off in the environment when
+ * work: the same hits, bit for bit, faster on trees out of cache, slower
+ * on trees in cache (docs/performance.md, "Several rays in flight").  SIDX_STREAM_INFLIGHT=on or off in the environment when
  * the tree is built forces the choice (bvh4 and bvh8; tests and
  * measurements).  rays and hits may be NULL when
  * n is 0.  Errors: SIDX_ERR_INVALID_ARG (a NULL structure, or NULL arrays
