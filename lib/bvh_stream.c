@@ -10,6 +10,11 @@
  * ray through the single-ray walk — the same code, so the same hits, bit
  * for bit — and sets up and finishes each hit beside it.
  *
+ * Where the tree is out of cache, the closest-hit walks with the SIMD
+ * watertight test keep 8 rays in flight instead (bvh_wide_walk.h, the
+ * flight_ walks; the same hits, bit for bit): the build decides by tree
+ * size (bvh_wide.c, want_inflight), this picks what it decided.
+ *
  * What does not pay, measured (docs/performance.md, "The stream entry"):
  * the walk inlined into the loop over rays (its registers allocated
  * worse), and the rays' set-up (plane offsets from the signs, far
@@ -92,6 +97,7 @@ static int plan_for(const sidx_accel *a, const sidx_query *q, int anyhit, stream
         const int simd_tri = a->opt.tri == SIDX_TRI_WATERTIGHT;
         if (anyhit) p->walk = simd_tri ? k->occl_simd : k->occl_other;
         else if (!simd_tri) p->walk = k->isect_other;
+        else if (w->inflight) p->walk = (q->flags & SIDX_QUERY_UV) ? k->flight_simd_uv : k->flight_simd;
         else p->walk = (q->flags & SIDX_QUERY_UV) ? k->isect_simd_uv : k->isect_simd;
         return 1;
     }

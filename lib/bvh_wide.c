@@ -677,6 +677,28 @@ done:
  * in the environment turns it on (measurements, tests). */
 #define WIDE_TREELET_BYTES 4096u
 
+/* Several rays in flight in the stream entry (bvh_wide_walk.h, the
+ * flight_ walks): they pay where the walk waits on memory and cost where
+ * the tree is in cache (docs/performance.md, "Several rays in flight"),
+ * so they are taken for a tree whose nodes and blocks take at least
+ * WIDE_INFLIGHT_BYTES.  Measured with bvh8, the crossover lies between
+ * the trees of Sponza (4.7 MiB) and the bunny (3.6 MiB), whose primary
+ * rays are slower in flight, and that of the 262k-triangle height field
+ * (13.3 MiB), where both ray kinds are faster: 8 MiB between them, a few
+ * times the L2 caches.  Only bvh8 was measured; bvh4 takes
+ * them when asked.  SIDX_STREAM_INFLIGHT=on or off in the environment at
+ * build forces the choice (tests, measurements). */
+#define WIDE_INFLIGHT_BYTES (8u << 20)
+
+static int want_inflight(const wide_bvh *w)
+{
+    const char *env = getenv("SIDX_STREAM_INFLIGHT");
+    if (env && !strcmp(env, "on")) return 1;
+    if (env && !strcmp(env, "off")) return 0;
+    const size_t bytes = (size_t)w->num_inner * (8u * w->width * sizeof(float)) + (size_t)w->num_blocks * sizeof(wide_tri4);
+    return w->width == 8 && bytes >= WIDE_INFLIGHT_BYTES;
+}
+
 static int want_order(void)
 {
     const char *env = getenv("SIDX_WIDE_ORDER");
@@ -851,6 +873,7 @@ static sidx_status wide_build(sidx_accel *a, sidx_error *err)
     if ((s = collapse_into(a, b, w, lazy ? w->lazy->recs : NULL)) != SIDX_OK) goto fail;
     /* a lazy top stays depth-first: its unbuilt children are filled in by parent index */
     if (!lazy && w->num_inner && want_order() && (s = wide_order(a, w)) != SIDX_OK) goto fail;
+    w->inflight = !lazy && want_inflight(w);
     s = SIDX_ERR_NOMEM;
     if (lazy) {
         wide_lazy *L = w->lazy;

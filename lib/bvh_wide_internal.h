@@ -107,6 +107,8 @@ typedef struct wide_kernels {
  * test, the same keeping what u, v need, with another test; any hit. */
 typedef struct wide_stream_kernels {
     bvh_stream_fn isect_simd, isect_simd_uv, isect_other, occl_simd, occl_other;
+    /* isect_simd and isect_simd_uv with several rays in flight (bvh_wide_walk.h) */
+    bvh_stream_fn flight_simd, flight_simd_uv;
 } wide_stream_kernels;
 
 /* Lazy trees.  The build stops at every subtree of the binary tree of
@@ -153,6 +155,7 @@ typedef struct wide_bvh {
      * triangle test, fixed at build. */
     sidx__walk_table walks[2];
     wide_lazy *lazy;       /* lazy trees only; NULL when every node is built at once */
+    int inflight;          /* the stream entry walks several rays in flight (bvh_wide.c, want_inflight) */
 } wide_bvh;
 
 /* A node whose every slot is empty (lo = +inf, hi = -inf, WIDE_EMPTY):

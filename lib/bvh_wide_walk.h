@@ -588,9 +588,201 @@ WSTREAM(stream_occl_simd_, 1, 1, 0)
 WSTREAM(stream_occl_other_, 1, 0, 0)
 #undef WSTREAM
 #undef WSTREAM_KIND
+
+/* ---- the stream walks with several rays in flight ------------------------------
+ * Where the tree is out of cache, a ray's walk is a chain of dependent
+ * loads: each node is known only when its parent has arrived, and the
+ * walk waits for it.  These walks keep WALK_FLIGHT rays in slots, each
+ * slot holding all walk_ keeps in registers and on its stack (the ray's
+ * constants, its stack of children and entry distances, its bound and
+ * best hit), and advance them round-robin one step at a time: one node,
+ * or one leaf and the pops after it.  While one ray waits for its node
+ * the others work — software pipelining of independent pointer chases
+ * (Kocberber, Falsafi, Grot 2015; Psaropoulos et al. 2017).  A step is
+ * walk_'s untraced eager closest-hit code, in the same order on the same
+ * values (children, ties, bounds), and what runs between two steps of a
+ * ray touches nothing of its slot: so every hit is walk_'s bit for bit.
+ * Where the tree fits in the cache the bookkeeping (each step loads
+ * and stores its slot) makes it slower, so the build picks it by tree
+ * size (bvh_wide.c, want_inflight; docs/performance.md, "Several rays in
+ * flight").
+ *
+ * The slots live on this function's frame, no allocation: each holds a
+ * full WIDE_STACK (the bound of walk_'s own stack), 8 slots about 37 KB,
+ * well inside any thread's stack. */
+#define WALK_FLIGHT 8 /* K: 16 gains little more out of cache (docs/performance.md) */
+
+/* One ray between two steps. */
+typedef struct WFN(flight_) {
+    WFN(ray_consts_) consts;
+    const sidx_ray *r;
+    sidx_hit *out;                /* where its answer goes */
+    const wide_tri4 *hit_block;   /* the best hit's block and lane (for u, v, ng) */
+    float best, best_s;           /* walk_'s best and best_s */
+    uint32_t prim, cur, stack_len;
+    unsigned hit_lane;
+    int tri_ready;
+    float vw_det[12];             /* keep_uv: the kernel's V, W, det (walk_'s vw_det_buf) */
+    uint32_t stack[WIDE_STACK];
+    float stack_t_near[WIDE_STACK];
+} WFN(flight_);
+
+/* A ray into slot s: walk_'s set-up, and the root asked for. */
+WINL void WFN(flight_start_)(const sidx_accel *a, WFN(flight_) * s, const sidx_ray *r, sidx_hit *out, float scale)
+{
+    s->r = r;
+    s->out = out;
+    WFN(ray_consts_init_)(&s->consts, r, scale);
+    s->best = r->tmax;
+    s->best_s = s->best * scale;
+    s->prim = SIDX_NO_HIT;
+    s->cur = 0;
+    s->stack_len = 0;
+    s->tri_ready = 0;
+    s->hit_block = NULL;
+    s->hit_lane = 0;
+    if (WIDE_PREFETCH) WFN(prefetch_)(a->impl, ((const wide_bvh *)a->impl)->nodes, NULL, 0, 0);
+}
+
+/* One step of walk_ for the ray in s (steps 1–4 at the top of this
+ * file, untraced, eager, closest hit); the node or block it reads next
+ * is asked for.  1 when the ray has finished (its stack empty). */
+WINL int WFN(flight_step_)(const sidx_accel *a, const sidx_query *q, WFN(flight_) * s, float scale, const int kind)
+{
+    const int simd_tri = (kind & WIDE_WALK_SIMD_TRI) != 0, keep_uv = (kind & WIDE_WALK_KEEP_UV) != 0;
+    const wide_bvh *w = a->impl;
+    const float *nodes = w->nodes;
+    uint32_t cur = s->cur, stack_len = s->stack_len;
+    if (!(cur & WIDE_LEAF_BIT)) {
+        /* 1. an inner node: its W boxes */
+        _Alignas(32) float t_near[8];
+        _Alignas(32) float t_far[8];
+        const float *node = nodes + (size_t)cur * (8u * WALK_W);
+        const uint32_t *child = wide_child(node, WALK_W);
+        unsigned hits = WFN(boxes_)(node, &s->consts, s->best_s, t_near, t_far, 0);
+        /* 2. the nearest hit child next, the others deferred, as walk_ */
+        if (hits) {
+            const unsigned slot0 = (unsigned)__builtin_ctz(hits);
+            hits &= hits - 1;
+            if (!hits) { /* one child */
+                s->cur = child[slot0];
+                if (WIDE_PREFETCH) WFN(prefetch_)(w, nodes, NULL, s->cur, 0);
+                return 0;
+            }
+            if (!(hits & (hits - 1))) { /* two: ties to the lower slot */
+                const unsigned slot1 = (unsigned)__builtin_ctz(hits);
+                const float enter0 = t_near[slot0], enter1 = t_near[slot1];
+                if (WIDE_PREFETCH) {
+                    WFN(prefetch_)(w, nodes, NULL, child[slot0], 0);
+                    WFN(prefetch_)(w, nodes, NULL, child[slot1], 0);
+                }
+                const int first0 = enter0 <= enter1;
+                s->stack[stack_len] = first0 ? child[slot1] : child[slot0];
+                s->stack_t_near[stack_len] = first0 ? enter1 : enter0;
+                s->stack_len = stack_len + 1;
+                s->cur = first0 ? child[slot0] : child[slot1];
+                return 0;
+            }
+            /* several: each straight to its place by rank_, nearest on top */
+            const unsigned hit_mask = hits | (1u << slot0);
+            const uint32_t top = stack_len + WFN(popc_)(hit_mask) - 1u;
+            unsigned pending = hit_mask;
+            do {
+                const unsigned slot = (unsigned)__builtin_ctz(pending);
+                pending &= pending - 1;
+                const uint32_t at = top - WFN(rank_)(t_near, slot, hit_mask);
+                s->stack[at] = child[slot];
+                s->stack_t_near[at] = t_near[slot];
+                if (WIDE_PREFETCH) WFN(prefetch_)(w, nodes, NULL, child[slot], 0);
+            } while (pending);
+            s->stack_len = top;
+            s->cur = s->stack[top];
+            return 0;
+        }
+    } else {
+        /* 3. a leaf: its blocks, the bound shrinking with each hit */
+        if (!s->tri_ready) {
+            WFN(tri_consts_init_)(&s->consts, s->r);
+            s->tri_ready = 1;
+        }
+        (void)WFN(leaf_)(a, WFN(fetch_leaf_)(w, NULL, cur, 0), s->r, &s->consts, q, 0, &s->best, &s->prim,
+                         &s->hit_block, &s->hit_lane, keep_uv ? s->vw_det : NULL, 0, 0, simd_tri);
+        s->best_s = s->best * scale;
+    }
+    /* 4. pop the next deferred child still before the best hit */
+    const float best_s = s->best_s;
+    for (;;) {
+        if (stack_len == 0) return 1;
+        --stack_len;
+        if (s->stack_t_near[stack_len] < best_s) {
+            cur = s->stack[stack_len];
+            break;
+        }
+    }
+    s->cur = cur;
+    s->stack_len = stack_len;
+    if (WIDE_PREFETCH) WFN(prefetch_)(w, nodes, NULL, cur, 0); /* pushed, maybe long ago: ask again */
+    return 0;
+}
+
+/* The answer of a finished slot, as one_* and sidx_accel_intersect give it. */
+WINL void WFN(flight_finish_)(const sidx_accel *a, const sidx_query *q, WFN(flight_) * s, const int keep_uv)
+{
+    sidx_hit *hit = s->out;
+    *hit = sidx_hit_none();
+    hit->t = s->r->tmax;
+    if (s->prim != SIDX_NO_HIT) {
+        hit->t = s->best;
+        hit->prim = s->prim;
+        if (q->flags & (SIDX_QUERY_UV | SIDX_QUERY_NORMAL))
+            WFN(uv_)(a, s->r, q->flags, s->hit_block, s->hit_lane, keep_uv ? s->vw_det : NULL, hit);
+    }
+    sidx__finish_hit(a, s->r, q, hit);
+}
+
+#define WFLIGHT(name_, plain_, keep_uv_)                                                                      \
+    static __attribute__((noinline)) WALK_TARGET void WFN(name_)(const sidx_accel *a, const sidx_query *q,    \
+                                                                 const bvh_stream_rays *c)                  \
+    {                                                                                                           \
+        const int kind = WIDE_WALK_SIMD_TRI | ((keep_uv_) ? WIDE_WALK_KEEP_UV : 0);                             \
+        const wide_bvh *w = a->impl;                                                                            \
+        if (w->num_inner == 0) { /* nothing to walk: the ray-by-ray walk answers */                             \
+            WFN(plain_)(a, q, c);                                                                               \
+            return;                                                                                             \
+        }                                                                                                       \
+        const float scale = a->opt.box == SIDX_BOX_ROBUST ? SIDX_ROBUST_TFAR_SCALE : 1.0f;                     \
+        const uint32_t *idx = c->idx, n = c->count;                                                             \
+        WFN(flight_) s[WALK_FLIGHT];                                                                            \
+        /* fill the slots with the first rays */                                                                \
+        uint32_t next = 0;                                                                                      \
+        unsigned live = 0;                                                                                      \
+        for (unsigned k = 0; k < WALK_FLIGHT && next < n; ++k, ++next) {                                        \
+            const uint32_t j = idx ? idx[next] : next;                                                          \
+            WFN(flight_start_)(a, &s[k], &c->rays[j], &c->hits[j], scale);                                      \
+            live |= 1u << k;                                                                                    \
+        }                                                                                                       \
+        /* round-robin, one step per live slot; a finished slot answers and takes the next ray */               \
+        for (unsigned k = 0; live; k = k + 1 == WALK_FLIGHT ? 0 : k + 1) {                                      \
+            if (!(live >> k & 1u) || !WFN(flight_step_)(a, q, &s[k], scale, kind)) continue;                  \
+            WFN(flight_finish_)(a, q, &s[k], keep_uv_);                                                         \
+            if (next < n) {                                                                                     \
+                const uint32_t j = idx ? idx[next] : next;                                                      \
+                WFN(flight_start_)(a, &s[k], &c->rays[j], &c->hits[j], scale);                                  \
+                ++next;                                                                                         \
+            } else {                                                                                            \
+                live &= ~(1u << k);                                                                             \
+            }                                                                                                   \
+        }                                                                                                       \
+    }
+WFLIGHT(flight_isect_simd_, stream_isect_simd_, 0)
+WFLIGHT(flight_isect_simd_uv_, stream_isect_simd_uv_, WALK_TRI4)
+#undef WFLIGHT
+#undef WALK_FLIGHT
+
 const wide_stream_kernels WFN(sidx__wide_stream_) = {WFN(stream_isect_simd_), WFN(stream_isect_simd_uv_),
                                                      WFN(stream_isect_other_), WFN(stream_occl_simd_),
-                                                     WFN(stream_occl_other_)};
+                                                     WFN(stream_occl_other_), WFN(flight_isect_simd_),
+                                                     WFN(flight_isect_simd_uv_)};
 
 #undef WJOIN_
 #undef WJOIN

@@ -19,8 +19,11 @@
  *    single query answers too;
  *  - a traced buffer emits, event for event, the events of the single
  *    queries one after another with ray ids q->ray_id + i;
+ *  - the same with several rays in flight (SIDX_STREAM_INFLIGHT=on at
+ *    build), bvh8 and bvh4, best and scalar kernels;
  *  - two threads streaming through one structure at once (reordered and
- *    not) get the same answers (make test-tsan runs this suite too);
+ *    not, rays in flight or not) get the same answers (make test-tsan
+ *    runs this suite too);
  *  - NULL arguments are refused, n = 0 takes NULL arrays. */
 #include <stdarg.h>
 #include <stddef.h>
@@ -47,15 +50,23 @@ static sidx_mesh scene(const char *name)
     return m;
 }
 
-static sidx_accel *build(const char *name, const sidx_mesh *m, const sidx_build_options *opt, const char *simd)
+static sidx_accel *build_with(const char *name, const sidx_mesh *m, const sidx_build_options *opt, const char *simd,
+                              int inflight)
 {
     if (simd) setenv("SIDX_SIMD", simd, 1);
+    if (inflight) setenv("SIDX_STREAM_INFLIGHT", "on", 1);
     sidx_accel *a = NULL;
     sidx_error err;
     const sidx_status s = sidx_accel_build(name, m, opt, &a, &err);
     unsetenv("SIDX_SIMD");
+    unsetenv("SIDX_STREAM_INFLIGHT");
     if (s != SIDX_OK) fail_msg("build %s: %s", name, err.message);
     return a;
+}
+
+static sidx_accel *build(const char *name, const sidx_mesh *m, const sidx_build_options *opt, const char *simd)
+{
+    return build_with(name, m, opt, simd, 0);
 }
 
 /* NRAYS rays of every kind in turn, with invalid records every 37th
@@ -172,6 +183,37 @@ static void test_bit_identical(void **state)
         free(rays);
         sidx_mesh_free(&m);
     }
+}
+
+/* Several rays in flight (SIDX_STREAM_INFLIGHT=on; by default only for
+ * trees too large for a test): bvh8 and bvh4, best and scalar kernels,
+ * robust and plain boxes, every size, flag set and order of
+ * check_accel.  Only the watertight test has these walks; the others and
+ * any hit are the ray-by-ray walks test_bit_identical checks. */
+static void test_inflight(void **state)
+{
+    (void)state;
+    sidx_mesh m = scene("teapot");
+    sidx_ray *rays = make_rays(&m);
+    static const struct {
+        const char *name, *simd;
+        int box;
+    } cases[] = {{"bvh8", NULL, 0}, {"bvh8", "scalar", 0}, {"bvh8", NULL, 1}, {"bvh4", NULL, 0}, {"bvh4", "scalar", 0}};
+    const size_t ncases = tk_tiny_tests() ? 1 : sizeof cases / sizeof cases[0];
+    for (size_t c = 0; c < ncases; ++c) {
+        sidx_build_options opt;
+        memset(&opt, 0, sizeof opt);
+        opt.tri = SIDX_TRI_WATERTIGHT;
+        opt.box = cases[c].box ? SIDX_BOX_PLAIN : SIDX_BOX_ROBUST;
+        sidx_accel *a = build_with(cases[c].name, &m, &opt, cases[c].simd, 1);
+        char what[96];
+        snprintf(what, sizeof what, "%s in flight (%s kernels, %s boxes)", cases[c].name,
+                 cases[c].simd ? "scalar" : "best", cases[c].box ? "plain" : "robust");
+        check_accel(a, rays, what);
+        sidx_accel_destroy(a);
+    }
+    free(rays);
+    sidx_mesh_free(&m);
 }
 
 /* ---- events --------------------------------------------------------------------- */
@@ -291,7 +333,7 @@ static void *run_job(void *arg)
 static void test_threads(void **state)
 {
     (void)state;
-    static const char *const names[] = {"bvh", "bvh8"};
+    static const char *const names[] = {"bvh", "bvh8", "bvh8"}; /* the last with rays in flight */
     sidx_mesh m = scene("teapot");
     sidx_ray *rays = make_rays(&m);
     job *jobs = calloc(2, sizeof *jobs);
@@ -300,8 +342,8 @@ static void test_threads(void **state)
     assert_non_null(jobs);
     assert_non_null(one);
     assert_non_null(occ);
-    for (size_t k = 0; k < 2; ++k) {
-        sidx_accel *a = build(names[k], &m, NULL, NULL);
+    for (size_t k = 0; k < 3; ++k) {
+        sidx_accel *a = build_with(names[k], &m, NULL, NULL, k == 2);
         for (size_t i = 0; i < NRAYS; ++i) {
             assert_int_equal(sidx_accel_intersect(a, &rays[i], NULL, &one[i]), SIDX_OK);
             assert_int_equal(sidx_accel_occluded(a, &rays[i], NULL, &occ[i]), SIDX_OK);
@@ -362,6 +404,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_bit_identical),
+        cmocka_unit_test(test_inflight),
         cmocka_unit_test(test_traced_events),
         cmocka_unit_test(test_threads),
         cmocka_unit_test(test_arguments),

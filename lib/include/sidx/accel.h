@@ -165,7 +165,14 @@ sidx_status sidx_accel_occluded(const sidx_accel *a, const sidx_ray *r, const si
  * an untraced buffer (of an eager tree) with a stream walk: the checks and
  * the choice of walk made once per call instead of once per ray
  * (docs/performance.md, "The stream entry"), optionally in another order
- * (SIDX_QUERY_REORDER).  rays and hits may be NULL when
+ * (SIDX_QUERY_REORDER).  On a bvh8 tree whose nodes and triangle blocks
+ * take 8 MiB or more, closest-hit buffers with the watertight test
+ * (the default) are walked 8 rays at a time, each advanced one node or
+ * leaf in turn so that one ray's wait on memory overlaps the others'
+ * work: the same hits, bit for bit, faster on trees out of cache, slower
+ * on trees in cache (docs/performance.md, "Several rays in flight").  SIDX_STREAM_INFLIGHT=on or off in the environment when
+ * the tree is built forces the choice (bvh4 and bvh8; tests and
+ * measurements).  rays and hits may be NULL when
  * n is 0.  Errors: SIDX_ERR_INVALID_ARG (a NULL structure, or NULL arrays
  * with n > 0: nothing written); on a lazy tree SIDX_ERR_NOMEM when any
  * ray's query returned it (the other rays are answered, that ray's hit
