@@ -97,7 +97,7 @@ int main(int argc, char **argv)
             return 1;
         }
     }
-    double on_off[64], def_off[64], off_mrays[64];
+    double on_off[64] = {0}, def_off[64] = {0}, off_mrays[64] = {0};
     for (int round = 0; round < rounds; ++round) {
         double best[3] = {1e30, 1e30, 1e30};
         for (int k = 0; k < 3; ++k) sidx_accel_intersect_n(acc[k], r, N, NULL, many);
