@@ -287,6 +287,26 @@ static sidx_status make_subdivided(const sidx_mesh *base, uint32_t levels, sidx_
     return rc;
 }
 
+/* A pinhole camera's rays, a square image of about n pixels: from eye
+ * towards look, up the world's +y; u and v span [-1, 1] times half_u and
+ * half_v (a negative half_v turns the image's rows over). */
+static void camera_rays(sidx_vec3 eye, sidx_vec3 look, float half_u, float half_v, size_t n, tk_rayrec *out)
+{
+    sidx_vec3 fwd = sidx_v3_sub(look, eye);
+    fwd = sidx_v3_scale(fwd, 1.0f / sidx_v3_length(fwd));
+    sidx_vec3 right = sidx_v3_cross(fwd, sidx_v3(0, 1, 0));
+    right = sidx_v3_scale(right, 1.0f / sidx_v3_length(right));
+    const sidx_vec3 up = sidx_v3_cross(right, fwd);
+    size_t w = 1;
+    while ((w + 1) * (w + 1) <= n) ++w;
+    for (size_t i = 0; i < n; ++i) {
+        const float u = (((float)(i % w) + 0.5f) / (float)w * 2.0f - 1.0f) * half_u;
+        const float v = (((float)((i / w) % w) + 0.5f) / (float)w * 2.0f - 1.0f) * half_v;
+        const sidx_vec3 d = sidx_v3_add(fwd, sidx_v3_add(sidx_v3_scale(right, u), sidx_v3_scale(up, v)));
+        out[i] = (tk_rayrec){{eye.x, eye.y, eye.z}, {d.x, d.y, d.z}, 0.0f, INFINITY};
+    }
+}
+
 /* Camera rays inside a mesh's box b (an interior: Sponza's atrium): the
  * eye a fifth of the way along the longer horizontal axis (x or z; y is
  * up) and a fifth of the way up, centred across, looking along that axis
@@ -301,39 +321,14 @@ static void interior_rays(sidx_aabb b, size_t n, tk_rayrec *out)
     const float y_eye = b.min.y + 0.2f * e.y, y_at = b.min.y + 0.3f * e.y;
     const sidx_vec3 eye = along_x ? sidx_v3(b.min.x + 0.2f * e.x, y_eye, c.z) : sidx_v3(c.x, y_eye, b.min.z + 0.2f * e.z);
     const sidx_vec3 look = along_x ? sidx_v3(b.max.x, y_at, c.z) : sidx_v3(c.x, y_at, b.max.z);
-    sidx_vec3 fwd = sidx_v3_sub(look, eye);
-    fwd = sidx_v3_scale(fwd, 1.0f / sidx_v3_length(fwd));
-    sidx_vec3 right = sidx_v3_cross(fwd, sidx_v3(0, 1, 0));
-    right = sidx_v3_scale(right, 1.0f / sidx_v3_length(right));
-    const sidx_vec3 up = sidx_v3_cross(right, fwd);
-    size_t w = 1;
-    while ((w + 1) * (w + 1) <= n) ++w;
-    for (size_t i = 0; i < n; ++i) {
-        const float u = (((float)(i % w) + 0.5f) / (float)w * 2.0f - 1.0f) * 0.625f;
-        const float v = (1.0f - ((float)((i / w) % w) + 0.5f) / (float)w * 2.0f) * 0.625f;
-        const sidx_vec3 d = sidx_v3_add(fwd, sidx_v3_add(sidx_v3_scale(right, u), sidx_v3_scale(up, v)));
-        out[i] = (tk_rayrec){{eye.x, eye.y, eye.z}, {d.x, d.y, d.z}, 0.0f, INFINITY};
-    }
+    camera_rays(eye, look, 0.625f, -0.625f, n, out); /* rows top down: (1 - x) 0.625 = (x - 1) (-0.625) exactly */
 }
 
 /* Camera rays at the teapot (lesson 08's view): eye 2.3 units away, a
  * square image of about n pixels covering the teapot and some floor. */
 static void teapot_rays(size_t n, tk_rayrec *out)
 {
-    const sidx_vec3 look = sidx_v3(0.0f, 0.3f, 0.0f), eye = sidx_v3(0.66f, 1.07f, 2.2f);
-    sidx_vec3 fwd = sidx_v3_sub(look, eye);
-    fwd = sidx_v3_scale(fwd, 1.0f / sidx_v3_length(fwd));
-    sidx_vec3 right = sidx_v3_cross(fwd, sidx_v3(0, 1, 0));
-    right = sidx_v3_scale(right, 1.0f / sidx_v3_length(right));
-    const sidx_vec3 up = sidx_v3_cross(right, fwd);
-    size_t w = 1;
-    while ((w + 1) * (w + 1) <= n) ++w;
-    for (size_t i = 0; i < n; ++i) {
-        const float u = (((float)(i % w) + 0.5f) / (float)w * 2.0f - 1.0f) * 0.35f;
-        const float v = (((float)((i / w) % w) + 0.5f) / (float)w * 2.0f - 1.0f) * 0.35f;
-        const sidx_vec3 d = sidx_v3_add(fwd, sidx_v3_add(sidx_v3_scale(right, u), sidx_v3_scale(up, v)));
-        out[i] = (tk_rayrec){{eye.x, eye.y, eye.z}, {d.x, d.y, d.z}, 0.0f, INFINITY};
-    }
+    camera_rays(sidx_v3(0.66f, 1.07f, 2.2f), sidx_v3(0.0f, 0.3f, 0.0f), 0.35f, 0.35f, n, out);
 }
 
 /* v / scale printed with fmt, "-" when v < 0 (not measured). */
